@@ -1,0 +1,89 @@
+//! Reading a model file: RON parsing with positions, then compilation.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use ron::extensions::Extensions;
+
+use crate::compile::compile;
+use crate::diag::{LoadError, ModelError};
+use crate::source::{offset_of, with_positions, Span};
+use crate::syntax::SystemDef;
+use crate::system::System;
+
+/// The `ron` options every model file is read with (MODEL.md: `implicit_some` and
+/// `unwrap_newtypes` are on).
+pub fn ron_options() -> ron::Options {
+    ron::Options::default()
+        .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_NEWTYPES)
+}
+
+/// Reads a file's text. Errors name the file.
+pub fn read_model_file(path: &Path) -> Result<String, LoadError> {
+    std::fs::read_to_string(path).map_err(|source| LoadError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Parses a model's text into its file-format types, without compiling it.
+pub fn parse_str(name: &str, text: &str) -> Result<SystemDef, LoadError> {
+    let shared = Arc::new(text.to_string());
+    parse_shared(name, &shared)
+}
+
+fn parse_shared(name: &str, text: &Arc<String>) -> Result<SystemDef, LoadError> {
+    if is_blank(text) {
+        return Err(LoadError::model(
+            name,
+            text,
+            vec![ModelError::new("the file is empty", Span::NONE)
+                .with_help("a model file holds one `System(name: \"…\", …)`")],
+        ));
+    }
+    with_positions(text, || ron_options().from_str::<SystemDef>(text)).map_err(|e| {
+        let start = offset_of(text, e.span.start.line, e.span.start.col);
+        let end = offset_of(text, e.span.end.line, e.span.end.col).max(start);
+        let mut err = ModelError::new(e.code.to_string(), Span::new(start, end));
+        if let ron::Error::NoSuchStructField { .. } | ron::Error::MissingStructField { .. } = e.code {
+            err = err.with_help("see docs/model.md for the fields of each part of a model");
+        }
+        LoadError::model(name, text, vec![err])
+    })
+}
+
+/// Parses and compiles a model's text; `name` is how diagnostics call the file.
+pub fn load_str(name: &str, text: &str) -> Result<System, LoadError> {
+    let shared = Arc::new(text.to_string());
+    let def = parse_shared(name, &shared)?;
+    compile_def(name, &shared, &def)
+}
+
+/// Compiles parsed file-format types; `text` is the file they came from (for positions).
+pub fn compile_def(name: &str, text: &Arc<String>, def: &SystemDef) -> Result<System, LoadError> {
+    compile(def).map_err(|errors| LoadError::model(name, text, errors))
+}
+
+/// Reads, parses and compiles a model file.
+pub fn load_file(path: impl AsRef<Path>) -> Result<System, LoadError> {
+    let path = path.as_ref();
+    let text = read_model_file(path)?;
+    load_str(&path.display().to_string(), &text)
+}
+
+/// True if the text holds nothing but whitespace and comments.
+fn is_blank(text: &str) -> bool {
+    let mut rest = text.trim_start();
+    loop {
+        if let Some(r) = rest.strip_prefix("//") {
+            rest = r.split_once('\n').map_or("", |(_, after)| after).trim_start();
+        } else if let Some(r) = rest.strip_prefix("/*") {
+            match r.find("*/") {
+                Some(end) => rest = r[end + 2..].trim_start(),
+                None => return false,
+            }
+        } else {
+            return rest.is_empty();
+        }
+    }
+}

@@ -1,0 +1,445 @@
+//! The step relation of MODEL.md ("Semantics (one step)"): the enabled steps of a state and
+//! the firing of a step. This is the one implementation the verifier, the simulator and the
+//! engine share.
+//!
+//! Steps are collected into a reusable [`Steps`] buffer so that computing them allocates
+//! nothing once the buffer has grown to the model's needs.
+
+use crate::eval::{Env, EvalError};
+use crate::state::State;
+use crate::system::{Assign, RangeError, RangeErrorKind, System, Target};
+
+/// What a step is: an internal transition of one component, or an interaction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Label {
+    Internal { component: u32 },
+    Interaction(u32),
+}
+
+/// One transition of one component taking part in a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Pick {
+    pub component: u32,
+    pub transition: u32,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct StepEntry {
+    label: Label,
+    picks_start: u32,
+    picks_end: u32,
+}
+
+/// A step: its label and the transitions of its participants, in port order (for a
+/// broadcast: the trigger and the receivers that join).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Step<'a> {
+    pub label: Label,
+    pub picks: &'a [Pick],
+}
+
+impl Step<'_> {
+    /// An owned copy, for keeping a step beyond the buffer's next use.
+    pub fn to_owned(&self) -> OwnedStep {
+        OwnedStep {
+            label: self.label,
+            picks: self.picks.to_vec(),
+        }
+    }
+}
+
+/// A step that owns its picks.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct OwnedStep {
+    pub label: Label,
+    pub picks: Vec<Pick>,
+}
+
+impl OwnedStep {
+    pub fn as_step(&self) -> Step<'_> {
+        Step {
+            label: self.label,
+            picks: &self.picks,
+        }
+    }
+}
+
+/// A reusable buffer of enabled steps.
+#[derive(Clone, Debug, Default)]
+pub struct Steps {
+    entries: Vec<StepEntry>,
+    picks: Vec<Pick>,
+    /// Scratch: enabled transitions per port of the interaction being expanded.
+    choices: Vec<Pick>,
+    bounds: Vec<(u32, u32)>,
+    cursor: Vec<u32>,
+    /// Scratch: which interactions are enabled before priorities, and which of those are
+    /// suppressed (one bit each).
+    enabled: Vec<u64>,
+    suppressed: Vec<u64>,
+}
+
+impl Steps {
+    pub fn new() -> Steps {
+        Steps::default()
+    }
+
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    pub fn get(&self, i: usize) -> Step<'_> {
+        let e = &self.entries[i];
+        Step {
+            label: e.label,
+            picks: &self.picks[e.picks_start as usize..e.picks_end as usize],
+        }
+    }
+
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = Step<'_>> + '_ {
+        (0..self.entries.len()).map(move |i| self.get(i))
+    }
+
+    fn clear(&mut self) {
+        self.entries.clear();
+        self.picks.clear();
+    }
+
+    fn push(&mut self, label: Label, picks: impl IntoIterator<Item = Pick>) {
+        let start = self.picks.len() as u32;
+        self.picks.extend(picks);
+        self.entries.push(StepEntry {
+            label,
+            picks_start: start,
+            picks_end: self.picks.len() as u32,
+        });
+    }
+}
+
+impl System {
+    /// Every step enabled in `state` (after priorities), into `out`.
+    ///
+    /// A guard that cannot be evaluated (division by zero, an index out of its family)
+    /// is a range error of the state.
+    pub fn enabled_steps(&self, state: &State, out: &mut Steps) -> Result<(), RangeError> {
+        out.clear();
+        self.push_internal_steps(state, out)?;
+        for i in 0..self.interactions.len() as u32 {
+            self.push_interaction_steps(state, i, out)?;
+        }
+        if !self.priorities.is_empty() {
+            self.apply_priorities(state, out)?;
+        }
+        Ok(())
+    }
+
+    /// True if no step is enabled in `state`.
+    pub fn is_deadlock(&self, state: &State, scratch: &mut Steps) -> Result<bool, RangeError> {
+        self.enabled_steps(state, scratch)?;
+        Ok(scratch.is_empty())
+    }
+
+    fn push_internal_steps(&self, state: &State, out: &mut Steps) -> Result<(), RangeError> {
+        let slots = state.slots();
+        for (c, comp) in self.components.iter().enumerate() {
+            let atom = &self.atoms[comp.atom as usize];
+            let loc = slots[comp.slot as usize] as u32;
+            for t in atom.transitions_from(loc, None) {
+                if self.transition_guard(state, c as u32, t)? {
+                    out.push(
+                        Label::Internal {
+                            component: c as u32,
+                        },
+                        [Pick {
+                            component: c as u32,
+                            transition: t,
+                        }],
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn transition_guard(&self, state: &State, c: u32, t: u32) -> Result<bool, RangeError> {
+        let comp = &self.components[c as usize];
+        let atom = &self.atoms[comp.atom as usize];
+        match &atom.transitions[t as usize].guard {
+            None => Ok(true),
+            Some(g) => g
+                .holds(&mut Env::new(state.slots(), comp.slot + 1))
+                .map_err(|e| self.range_error(e, &format!("guard of {}", self.describe_transition(c, t)))),
+        }
+    }
+
+    /// Pushes the steps of interaction `i` in `state` (before priorities): one per
+    /// combination of enabled transitions of its participants.
+    pub fn push_interaction_steps(
+        &self,
+        state: &State,
+        i: u32,
+        out: &mut Steps,
+    ) -> Result<(), RangeError> {
+        let inter = &self.interactions[i as usize];
+        let slots = state.slots();
+        out.choices.clear();
+        out.bounds.clear();
+        for (k, pr) in inter.ports.iter().enumerate() {
+            let comp = &self.components[pr.component as usize];
+            let atom = &self.atoms[comp.atom as usize];
+            let loc = slots[comp.slot as usize] as u32;
+            let start = out.choices.len() as u32;
+            for t in atom.transitions_from(loc, Some(pr.port)) {
+                if self.transition_guard(state, pr.component, t)? {
+                    out.choices.push(Pick {
+                        component: pr.component,
+                        transition: t,
+                    });
+                }
+            }
+            let len = out.choices.len() as u32 - start;
+            if len == 0 {
+                let optional = inter.trigger.is_some_and(|tr| tr as usize != k);
+                if !optional {
+                    return Ok(()); // a required port is not enabled
+                }
+                continue; // a broadcast receiver that does not join
+            }
+            out.bounds.push((start, len));
+        }
+        if let Some(g) = &inter.guard {
+            let ok = g
+                .holds(&mut Env::new(slots, 0))
+                .map_err(|e| self.range_error(e, &format!("guard of {}", inter.name)))?;
+            if !ok {
+                return Ok(());
+            }
+        }
+        // every combination of one enabled transition per joining port, in port order
+        out.cursor.clear();
+        out.cursor.resize(out.bounds.len(), 0);
+        loop {
+            let start = out.picks.len() as u32;
+            for (k, &(s, _)) in out.bounds.iter().enumerate() {
+                let pick = out.choices[(s + out.cursor[k]) as usize];
+                out.picks.push(pick);
+            }
+            out.entries.push(StepEntry {
+                label: Label::Interaction(i),
+                picks_start: start,
+                picks_end: out.picks.len() as u32,
+            });
+            // advance the odometer, last port fastest
+            let mut k = out.bounds.len();
+            loop {
+                if k == 0 {
+                    return Ok(());
+                }
+                k -= 1;
+                out.cursor[k] += 1;
+                if out.cursor[k] < out.bounds[k].1 {
+                    break;
+                }
+                out.cursor[k] = 0;
+            }
+        }
+    }
+
+    /// Removes the steps of interactions suppressed by a priority rule.
+    fn apply_priorities(&self, state: &State, out: &mut Steps) -> Result<(), RangeError> {
+        let words = self.interactions.len().div_ceil(64);
+        out.enabled.clear();
+        out.enabled.resize(words, 0);
+        for e in &out.entries {
+            if let Label::Interaction(i) = e.label {
+                out.enabled[i as usize / 64] |= 1 << (i % 64);
+            }
+        }
+        out.suppressed.clear();
+        out.suppressed.resize(words, 0);
+        let mut any = false;
+        let mut last = None;
+        for e in &out.entries {
+            let Label::Interaction(i) = e.label else { continue };
+            // steps of one interaction are adjacent: decide once per interaction
+            if last == Some(i) {
+                continue;
+            }
+            last = Some(i);
+            if self.is_suppressed(state, i, &out.enabled)? {
+                out.suppressed[i as usize / 64] |= 1 << (i % 64);
+                any = true;
+            }
+        }
+        if any {
+            let suppressed = &out.suppressed;
+            out.entries.retain(|e| match e.label {
+                Label::Interaction(i) => suppressed[i as usize / 64] >> (i % 64) & 1 == 0,
+                Label::Internal { .. } => true,
+            });
+        }
+        Ok(())
+    }
+
+    /// True if interaction `i` is suppressed in `state`, given the set of interactions
+    /// enabled before priorities.
+    pub fn is_suppressed(&self, state: &State, i: u32, enabled: &[u64]) -> Result<bool, RangeError> {
+        for &r in &self.rules_by_low[i as usize] {
+            let rule = &self.priorities[r as usize];
+            if !any_bit(enabled, rule.high.clone()) {
+                continue;
+            }
+            let mut all = true;
+            for w in &rule.when {
+                let holds = w
+                    .holds(&mut Env::new(state.slots(), 0))
+                    .map_err(|e| self.range_error(e, &format!("priority {}", rule.origin)))?;
+                if !holds {
+                    all = false;
+                    break;
+                }
+            }
+            if all {
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
+
+    /// Fires `step` from `from`, writing the successor into `to` (which is overwritten; it
+    /// must have the system's number of slots). The connector action runs first, then each
+    /// participant's transition action in port order; then the participants move.
+    ///
+    /// On a range error, `to` holds a partial result and must not be used as a state.
+    pub fn fire(&self, from: &State, step: Step<'_>, to: &mut State) -> Result<(), RangeError> {
+        to.copy_from(from);
+        if let Label::Interaction(i) = step.label {
+            let inter = &self.interactions[i as usize];
+            self.run_action(&inter.action, 0, to)
+                .map_err(|e| self.name_error(e, &format!("action of {}", inter.name)))?;
+        }
+        for p in step.picks {
+            let comp = &self.components[p.component as usize];
+            let atom = &self.atoms[comp.atom as usize];
+            let t = &atom.transitions[p.transition as usize];
+            self.run_action(&t.action, comp.slot + 1, to).map_err(|e| {
+                self.name_error(
+                    e,
+                    &format!("action of {}", self.describe_transition(p.component, p.transition)),
+                )
+            })?;
+        }
+        for p in step.picks {
+            let comp = &self.components[p.component as usize];
+            let atom = &self.atoms[comp.atom as usize];
+            to.slots_mut()[comp.slot as usize] = i64::from(atom.transitions[p.transition as usize].to);
+        }
+        Ok(())
+    }
+
+    /// Runs assignments left to right on `state`, each seeing the ones before it.
+    fn run_action(&self, action: &[Assign], base: u32, state: &mut State) -> Result<(), ActionError> {
+        for a in action {
+            let v = a
+                .value
+                .eval(&mut Env::new(state.slots(), base))
+                .map_err(ActionError::Eval)?;
+            let slot = match a.target {
+                Target::Local(n) => base + n,
+                Target::Slot(s) => s,
+            };
+            let (lo, hi) = self.slot_ranges[slot as usize];
+            if v < lo || v > hi {
+                return Err(ActionError::OutOfRange { slot, value: v });
+            }
+            state.slots_mut()[slot as usize] = v;
+        }
+        Ok(())
+    }
+
+    fn name_error(&self, e: ActionError, context: &str) -> RangeError {
+        match e {
+            ActionError::Eval(e) => self.range_error(e, context),
+            ActionError::OutOfRange { slot, value } => {
+                let (lo, hi) = self.slot_ranges[slot as usize];
+                RangeError {
+                    context: context.to_string(),
+                    kind: RangeErrorKind::OutOfRange {
+                        var: self.slot_name(slot),
+                        value,
+                        lo,
+                        hi,
+                    },
+                }
+            }
+        }
+    }
+
+    /// The successors of `state` with the steps that lead to them, for tests, tools and
+    /// small explorations (the verifier uses `enabled_steps` and `fire` directly).
+    pub fn successors(&self, state: &State) -> Result<Vec<(OwnedStep, State)>, RangeError> {
+        let mut steps = Steps::new();
+        self.enabled_steps(state, &mut steps)?;
+        let mut out = Vec::with_capacity(steps.len());
+        for s in steps.iter() {
+            let mut next = state.clone();
+            self.fire(state, s, &mut next)?;
+            out.push((s.to_owned(), next));
+        }
+        Ok(out)
+    }
+
+    /// The name a trace gives a step: the interaction's name, or `comp.internal`.
+    pub fn label_name(&self, label: Label) -> String {
+        match label {
+            Label::Internal { component } => {
+                format!("{}.internal", self.components[component as usize].name)
+            }
+            Label::Interaction(i) => self.interactions[i as usize].name.clone(),
+        }
+    }
+}
+
+enum ActionError {
+    Eval(EvalError),
+    OutOfRange { slot: u32, value: i64 },
+}
+
+fn any_bit(bits: &[u64], range: std::ops::Range<u32>) -> bool {
+    let (mut i, end) = (range.start, range.end);
+    while i < end {
+        let word = bits[i as usize / 64];
+        if i % 64 == 0 && end - i >= 64 {
+            if word != 0 {
+                return true;
+            }
+            i += 64;
+            continue;
+        }
+        if word >> (i % 64) & 1 == 1 {
+            return true;
+        }
+        i += 1;
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::any_bit;
+
+    #[test]
+    fn any_bit_scans_ranges_across_words() {
+        let mut bits = vec![0u64; 3];
+        bits[1] |= 1 << 5; // bit 69
+        assert!(any_bit(&bits, 0..192));
+        assert!(any_bit(&bits, 69..70));
+        assert!(!any_bit(&bits, 0..69));
+        assert!(!any_bit(&bits, 70..192));
+        assert!(any_bit(&bits, 64..128));
+    }
+}

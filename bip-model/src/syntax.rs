@@ -1,0 +1,265 @@
+//! The model file format: what a user writes in a `.ron` file (MODEL.md), as serde types.
+//!
+//! These types hold the text as written (names and expressions are strings with their
+//! positions); `compile` resolves them into a [`crate::System`]. They also serialize back
+//! to RON, which is how `bip expand` prints an expanded model.
+
+use std::fmt;
+
+use serde::de::{self, Deserialize, Deserializer, EnumAccess, MapAccess, VariantAccess, Visitor};
+use serde::ser::{Serialize, SerializeStructVariant, Serializer};
+
+use crate::source::{ident_has_parens, ConstExpr, OrderedMap, Spanned};
+
+pub type Text = Spanned<String>;
+
+/// A whole model file: one `System(...)`.
+#[derive(Clone, Debug, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename = "System", deny_unknown_fields)]
+pub struct SystemDef {
+    pub name: Text,
+    /// Real-time length of one model tick in milliseconds (used by the engine's clock).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tick_ms: Option<ConstExpr>,
+    #[serde(default, skip_serializing_if = "OrderedMap::is_empty")]
+    pub constants: OrderedMap<Text, ConstExpr>,
+    #[serde(default, skip_serializing_if = "OrderedMap::is_empty")]
+    pub atoms: OrderedMap<Text, AtomDef>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub components: Vec<ComponentDef>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub connectors: Vec<ConnectorDef>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub priorities: Vec<PriorityDef>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub properties: Vec<PropertyDef>,
+}
+
+/// An atom type: an automaton with ports and bounded data.
+#[derive(Clone, Debug, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename = "Atom", deny_unknown_fields)]
+pub struct AtomDef {
+    pub locations: Vec<Text>,
+    pub initial: Text,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ports: Vec<Text>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub vars: Vec<VarDef>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub transitions: Vec<TransitionDef>,
+}
+
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct VarDef {
+    pub name: Text,
+    pub ty: TypeDef,
+    /// Initial value; defaults to the lower bound of an `Int` and `false` for a `Bool`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub init: Option<ConstExpr>,
+}
+
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+pub enum TypeDef {
+    Bool,
+    /// `Int(lo, hi)`, both bounds included; bounds may be constant expressions.
+    Int(ConstExpr, ConstExpr),
+}
+
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransitionDef {
+    pub from: Text,
+    /// Absent for an internal transition.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub port: Option<Text>,
+    pub to: Text,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub guard: Option<Text>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub action: Option<Text>,
+}
+
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ComponentDef {
+    pub name: Text,
+    pub atom: Text,
+    /// Number of instances `name[0]`..`name[count-1]`; absent for a single instance `name`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub count: Option<ConstExpr>,
+    /// Per-family initial values, overriding the atom's; may use `self_index`.
+    #[serde(default, skip_serializing_if = "OrderedMap::is_empty")]
+    pub vars_init: OrderedMap<Text, ConstExpr>,
+}
+
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConnectorDef {
+    pub name: Text,
+    /// `"i in a..b"`: one connector instance `name[i]` per value.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub forall: Option<Text>,
+    pub ports: Vec<Text>,
+    #[serde(default, skip_serializing_if = "ConnectorKindDef::is_rendezvous")]
+    pub kind: ConnectorKindDef,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub guard: Option<Text>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub action: Option<Text>,
+}
+
+#[derive(Clone, Debug, Default, serde::Deserialize, serde::Serialize)]
+pub enum ConnectorKindDef {
+    #[default]
+    Rendezvous,
+    Broadcast {
+        trigger: Text,
+    },
+}
+
+impl ConnectorKindDef {
+    fn is_rendezvous(&self) -> bool {
+        matches!(self, ConnectorKindDef::Rendezvous)
+    }
+}
+
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PriorityDef {
+    pub low: Text,
+    pub high: Text,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub when: Option<Text>,
+}
+
+/// A property to verify. `DeadlockFree` may be written bare or with a `terminal` condition.
+#[derive(Clone, Debug)]
+pub enum PropertyDef {
+    DeadlockFree { terminal: Option<Text> },
+    Invariant { name: Text, expr: Text },
+    Reachable { name: Text, expr: Text },
+}
+
+impl PropertyDef {
+    /// The property's name as reports show it.
+    pub fn name(&self) -> &str {
+        match self {
+            PropertyDef::DeadlockFree { .. } => "DeadlockFree",
+            PropertyDef::Invariant { name, .. } | PropertyDef::Reachable { name, .. } => name,
+        }
+    }
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NamedExprDef {
+    name: Text,
+    expr: Text,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TerminalDef {
+    #[serde(default)]
+    terminal: Option<Text>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(variant_identifier)]
+enum PropertyTag {
+    DeadlockFree,
+    Invariant,
+    Reachable,
+}
+
+const PROPERTY_VARIANTS: &[&str] = &["DeadlockFree", "Invariant", "Reachable"];
+
+impl<'de> Deserialize<'de> for PropertyDef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct PropertyVisitor;
+        impl<'de> Visitor<'de> for PropertyVisitor {
+            type Value = PropertyDef;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("DeadlockFree, Invariant(name, expr) or Reachable(name, expr)")
+            }
+            fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<PropertyDef, A::Error> {
+                let (tag, variant) = data.variant::<PropertyTag>()?;
+                match tag {
+                    PropertyTag::DeadlockFree => {
+                        if ident_has_parens("DeadlockFree") {
+                            let t: TerminalDef = variant.struct_variant(&["terminal"], fields())?;
+                            Ok(PropertyDef::DeadlockFree {
+                                terminal: t.terminal,
+                            })
+                        } else {
+                            variant.unit_variant()?;
+                            Ok(PropertyDef::DeadlockFree { terminal: None })
+                        }
+                    }
+                    PropertyTag::Invariant => {
+                        let n: NamedExprDef = variant.struct_variant(&["name", "expr"], fields())?;
+                        Ok(PropertyDef::Invariant {
+                            name: n.name,
+                            expr: n.expr,
+                        })
+                    }
+                    PropertyTag::Reachable => {
+                        let n: NamedExprDef = variant.struct_variant(&["name", "expr"], fields())?;
+                        Ok(PropertyDef::Reachable {
+                            name: n.name,
+                            expr: n.expr,
+                        })
+                    }
+                }
+            }
+        }
+        d.deserialize_enum("Property", PROPERTY_VARIANTS, PropertyVisitor)
+    }
+}
+
+/// Deserializes the fields of a struct variant into the derived struct `T`.
+struct FieldsVisitor<T>(std::marker::PhantomData<T>);
+
+fn fields<T>() -> FieldsVisitor<T> {
+    FieldsVisitor(std::marker::PhantomData)
+}
+
+impl<'de, T: Deserialize<'de>> Visitor<'de> for FieldsVisitor<T> {
+    type Value = T;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("named fields")
+    }
+    fn visit_map<M: MapAccess<'de>>(self, map: M) -> Result<T, M::Error> {
+        T::deserialize(de::value::MapAccessDeserializer::new(map))
+    }
+}
+
+impl Serialize for PropertyDef {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            PropertyDef::DeadlockFree { terminal: None } => {
+                s.serialize_unit_variant("Property", 0, "DeadlockFree")
+            }
+            PropertyDef::DeadlockFree {
+                terminal: Some(term),
+            } => {
+                let mut v = s.serialize_struct_variant("Property", 0, "DeadlockFree", 1)?;
+                v.serialize_field("terminal", term)?;
+                v.end()
+            }
+            PropertyDef::Invariant { name, expr } => {
+                let mut v = s.serialize_struct_variant("Property", 1, "Invariant", 2)?;
+                v.serialize_field("name", name)?;
+                v.serialize_field("expr", expr)?;
+                v.end()
+            }
+            PropertyDef::Reachable { name, expr } => {
+                let mut v = s.serialize_struct_variant("Property", 2, "Reachable", 2)?;
+                v.serialize_field("name", name)?;
+                v.serialize_field("expr", expr)?;
+                v.end()
+            }
+        }
+    }
+}

@@ -1,0 +1,49 @@
+//! `bip check FILE...`: load, validate and summarise models.
+
+use std::path::PathBuf;
+
+use crate::{exit, report};
+
+pub fn run(files: &[PathBuf]) -> u8 {
+    let mut code = exit::OK;
+    for path in files {
+        match bip_model::load_file(path) {
+            Ok(system) => print_summary(path, &system),
+            Err(e) => {
+                report::load_error(&e);
+                code = exit::ERROR;
+            }
+        }
+    }
+    code
+}
+
+fn print_summary(path: &std::path::Path, system: &bip_model::System) {
+    let s = system.summary();
+    println!("{}: ok, system `{}`", path.display(), system.name);
+    println!(
+        "  components    {} ({} families of {} atom types)",
+        s.components, s.families, s.atoms
+    );
+    println!(
+        "  interactions  {} ({} connectors), {} internal transitions",
+        s.interactions, s.connectors, s.internal_transitions
+    );
+    println!("  locations     {} (summed over components)", s.locations);
+    println!("  variables     {}", s.variables);
+    println!(
+        "  priorities    {} declared, {} after transitive closure",
+        s.priorities_declared, s.priority_rules
+    );
+    let names: Vec<&str> = system.properties.iter().map(|p| p.name.as_str()).collect();
+    if names.is_empty() {
+        println!("  properties    0 (verify checks deadlock freedom)");
+    } else {
+        println!("  properties    {}: {}", s.properties, names.join(", "));
+    }
+    println!(
+        "  state         {} bits ({} bytes packed)",
+        s.bits_per_state,
+        s.bits_per_state.div_ceil(8)
+    );
+}
