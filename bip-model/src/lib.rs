@@ -9,6 +9,7 @@
 //! - [`StateLayout`] packs states into the fewest bits; [`Trace`] is the shared trace format.
 
 mod compile;
+mod deadlock;
 pub mod diag;
 pub mod eval;
 pub mod expr;
@@ -21,12 +22,13 @@ mod system;
 pub mod trace;
 
 pub use compile::{compile, Ty};
+pub use deadlock::{Liveness, LivenessChecker};
 pub use diag::{LoadError, ModelError};
 pub use load::{compile_def, load_file, load_str, parse_str, read_model_file, ron_options};
 pub use state::{State, StateLayout};
 pub use step::{Label, OwnedStep, Pick, Step, Steps};
 pub use system::{
     Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule, Property,
-    PropertyKind, RangeError, RangeErrorKind, Summary, System, Target, Transition, Var, VarType,
+    PropertyKind, RangeError, RangeErrorKind, Role, Summary, System, Target, Transition, Var, VarType,
 };
 pub use trace::{Trace, TraceStep, TraceValue, Verdict};

@@ -103,6 +103,9 @@ pub struct ConnectorDef {
     pub ports: Vec<Text>,
     #[serde(default, skip_serializing_if = "ConnectorKindDef::is_rendezvous")]
     pub kind: ConnectorKindDef,
+    /// What the connector's steps stand for, for deadlock detection (docs/model.md).
+    #[serde(default, skip_serializing_if = "Role::is_progress")]
+    pub role: Role,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub guard: Option<Text>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -121,6 +124,29 @@ pub enum ConnectorKindDef {
 impl ConnectorKindDef {
     fn is_rendezvous(&self) -> bool {
         matches!(self, ConnectorKindDef::Rendezvous)
+    }
+}
+
+/// The role of a connector's steps in deadlock detection.
+///
+/// A model with a clock can always let time pass, and a model open to its environment can
+/// always receive a request; neither is progress of the system itself. `DeadlockFree` is
+/// therefore checked against progress steps: a state is a deadlock when no progress step is
+/// enabled in it, nor in any state reached from it by `Time` steps alone (docs/model.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize, serde::Serialize)]
+pub enum Role {
+    /// The system's own work (the default; every internal transition is progress).
+    #[default]
+    Progress,
+    /// The passage of time (a clock tick).
+    Time,
+    /// A stimulus the environment may give at any time (a request); not progress.
+    Environment,
+}
+
+impl Role {
+    fn is_progress(&self) -> bool {
+        *self == Role::Progress
     }
 }
 

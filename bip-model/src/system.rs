@@ -7,6 +7,7 @@
 use std::ops::Range;
 
 use crate::eval::{Env, EvalError, Expr};
+pub use crate::syntax::Role;
 use crate::state::{State, StateLayout};
 
 /// A compiled model.
@@ -136,6 +137,7 @@ pub struct Connector {
     pub name: String,
     pub interactions: Range<u32>,
     pub broadcast: bool,
+    pub role: Role,
     /// The `forall` variable's values, one per interaction; empty without `forall`.
     pub indices: Vec<i64>,
 }
@@ -344,6 +346,22 @@ impl System {
     pub fn component_of_slot(&self, slot: u32) -> u32 {
         let i = self.components.partition_point(|c| c.slot <= slot);
         (i - 1) as u32
+    }
+
+    /// The role of a step's interaction (internal transitions are progress).
+    pub fn role(&self, label: crate::step::Label) -> Role {
+        match label {
+            crate::step::Label::Internal { .. } => Role::Progress,
+            crate::step::Label::Interaction(i) => {
+                let c = self.interactions[i as usize].connector;
+                self.connectors[c as usize].role
+            }
+        }
+    }
+
+    /// True if the system has connectors with the `Time` role.
+    pub fn has_time(&self) -> bool {
+        self.connectors.iter().any(|c| c.role == Role::Time)
     }
 
     /// Human description of a transition: `phil[0]: thinking -take_left-> hungry`.

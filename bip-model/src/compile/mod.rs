@@ -629,6 +629,7 @@ impl Compiler {
             name: cd.name.value.clone(),
             interactions: start..self.interactions.len() as u32,
             broadcast: trigger.is_some(),
+            role: cd.role,
             indices,
         });
         Ok(())
