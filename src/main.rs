@@ -5,6 +5,7 @@
 //! 2 the model or the command is wrong, 3 the result is inconclusive.
 
 mod check;
+mod expand;
 mod report;
 
 use std::path::PathBuf;
@@ -13,7 +14,11 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "bip", version, about = "A formally checked behaviour engine for robot functional layers")]
+#[command(
+    name = "bip",
+    version,
+    about = "A formally checked behaviour engine for robot functional layers"
+)]
 struct Cli {
     /// More log output (-v: info, -vv: debug, -vvv: trace); RUST_LOG overrides.
     #[arg(short, long, action = clap::ArgAction::Count, global = true)]
@@ -30,6 +35,12 @@ enum Command {
         #[arg(required = true)]
         files: Vec<PathBuf>,
     },
+    /// Print a model with its GenoM layer expanded into BIP core (RON that `bip check`
+    /// reads back).
+    Expand {
+        /// Model file (RON).
+        file: PathBuf,
+    },
 }
 
 /// Exit codes shared by every command.
@@ -45,6 +56,7 @@ fn main() -> ExitCode {
     init_logging(cli.verbose);
     let code = match cli.command {
         Command::Check { files } => check::run(&files),
+        Command::Expand { file } => expand::run(&file),
     };
     ExitCode::from(code)
 }

@@ -45,7 +45,8 @@ fn parse_shared(name: &str, text: &Arc<String>) -> Result<SystemDef, LoadError> 
         let start = offset_of(text, e.span.start.line, e.span.start.col);
         let end = offset_of(text, e.span.end.line, e.span.end.col).max(start);
         let mut err = ModelError::new(e.code.to_string(), Span::new(start, end));
-        if let ron::Error::NoSuchStructField { .. } | ron::Error::MissingStructField { .. } = e.code {
+        if let ron::Error::NoSuchStructField { .. } | ron::Error::MissingStructField { .. } = e.code
+        {
             err = err.with_help("see docs/model.md for the fields of each part of a model");
         }
         LoadError::model(name, text, vec![err])
@@ -57,6 +58,28 @@ pub fn load_str(name: &str, text: &str) -> Result<System, LoadError> {
     let shared = Arc::new(text.to_string());
     let def = parse_shared(name, &shared)?;
     compile_def(name, &shared, &def)
+}
+
+/// Parses a model and expands its GenoM layer into BIP core (a model without one comes
+/// back as written). The expanded model is compiled too, so that it is known to load.
+pub fn expand_str(name: &str, text: &str) -> Result<SystemDef, LoadError> {
+    let shared = Arc::new(text.to_string());
+    let def = parse_shared(name, &shared)?;
+    if !def.has_genom_layer() {
+        compile_def(name, &shared, &def)?;
+        return Ok(def);
+    }
+    let expansion =
+        crate::genom::expand(&def).map_err(|errors| LoadError::model(name, &shared, errors))?;
+    compile_def(name, &shared, &def)?;
+    Ok(expansion.def)
+}
+
+/// Reads a model file and expands its GenoM layer (see [`expand_str`]).
+pub fn expand_file(path: impl AsRef<Path>) -> Result<SystemDef, LoadError> {
+    let path = path.as_ref();
+    let text = read_model_file(path)?;
+    expand_str(&path.display().to_string(), &text)
 }
 
 /// Compiles parsed file-format types; `text` is the file they came from (for positions).
@@ -76,7 +99,10 @@ fn is_blank(text: &str) -> bool {
     let mut rest = text.trim_start();
     loop {
         if let Some(r) = rest.strip_prefix("//") {
-            rest = r.split_once('\n').map_or("", |(_, after)| after).trim_start();
+            rest = r
+                .split_once('\n')
+                .map_or("", |(_, after)| after)
+                .trim_start();
         } else if let Some(r) = rest.strip_prefix("/*") {
             match r.find("*/") {
                 Some(end) => rest = r[end + 2..].trim_start(),

@@ -7,8 +7,8 @@
 use std::ops::Range;
 
 use crate::eval::{Env, EvalError, Expr};
-pub use crate::syntax::Role;
 use crate::state::{State, StateLayout};
+pub use crate::syntax::Role;
 
 /// A compiled model.
 #[derive(Clone, Debug)]
@@ -33,6 +33,9 @@ pub struct System {
     pub(crate) rules_by_low: Vec<Vec<u32>>,
     /// For each slot, the range of values it may hold.
     pub(crate) slot_ranges: Vec<(i64, i64)>,
+    /// The GenoM layer the system was expanded from, if any: what the engine binds codels
+    /// and sends requests with (docs/genom.md, "The engine's map").
+    pub genom: Option<crate::genom::GenomMap>,
 }
 
 /// An atom type: locations, ports, variables and transitions.
@@ -369,7 +372,9 @@ impl System {
         let comp = &self.components[component as usize];
         let atom = &self.atoms[comp.atom as usize];
         let t = &atom.transitions[transition as usize];
-        let port = t.port.map_or("internal", |p| atom.ports[p as usize].as_str());
+        let port = t
+            .port
+            .map_or("internal", |p| atom.ports[p as usize].as_str());
         format!(
             "{}: {} -{}-> {}",
             comp.name, atom.locations[t.from as usize], port, atom.locations[t.to as usize]
@@ -437,7 +442,9 @@ impl System {
             components: self.components.len(),
             connectors: self.connectors.len(),
             interactions: self.interactions.len(),
-            internal_transitions: per_comp(&|a| a.transitions.iter().filter(|t| t.port.is_none()).count()),
+            internal_transitions: per_comp(&|a| {
+                a.transitions.iter().filter(|t| t.port.is_none()).count()
+            }),
             locations: per_comp(&|a| a.locations.len()),
             variables: per_comp(&|a| a.vars.len()),
             priorities_declared: self.declared_priorities,

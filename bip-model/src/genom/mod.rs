@@ -1,0 +1,119 @@
+//! The GenoM layer (MODEL.md section 4): GenoM3-style modules and constraints, expanded
+//! into BIP core so that the verifier and the engine only ever see atoms, connectors and
+//! priorities. docs/genom.md describes the expansion and its generated names.
+//!
+//! - `syntax`: the file format of modules and constraints;
+//! - `check`: validation with positions;
+//! - `names`: the generated names and the rewriting of GenoM names in expressions;
+//! - `build`: the expansion itself;
+//! - `map`: the engine's map of the layer ([`GenomMap`]), kept in [`crate::System::genom`].
+
+mod build;
+mod check;
+pub mod map;
+mod names;
+pub mod syntax;
+
+#[cfg(test)]
+mod tests;
+
+use std::collections::HashMap;
+
+pub use build::Expansion;
+pub use map::{
+    AgeMap, CodelMap, Condition, GenomMap, ModuleMap, PortMap, Reason, ServiceMap, TaskMap,
+    YieldMap,
+};
+
+use crate::compile::{compile_core, Constants};
+use crate::diag::{Errors, ModelError};
+use crate::syntax::{PropertyDef, SystemDef};
+use crate::system::System;
+use build::UserTexts;
+use check::ConstraintKind;
+
+/// Expands the GenoM layer of `def` into BIP core. The result has no `modules` or
+/// `constraints`; a model without them comes back unchanged.
+pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
+    let (consts, mut const_errors) = Constants::new(def);
+    let layer = check::check(def, &consts).map_err(|mut e| {
+        const_errors.append(&mut e);
+        const_errors.clone()
+    })?;
+    let mut errors = Errors::default();
+    for e in const_errors {
+        errors.push(e);
+    }
+    let mut rw = names::Rewriter::new(&layer, &consts);
+    let mut user = UserTexts {
+        guards: HashMap::new(),
+        connector_guards: HashMap::new(),
+        connector_actions: HashMap::new(),
+        priority_whens: HashMap::new(),
+        properties: HashMap::new(),
+    };
+    for (k, c) in layer.constraints.iter().enumerate() {
+        match &c.kind {
+            ConstraintKind::Guard { when, .. } => {
+                if let Some(t) = rw.expr(&mut errors, when) {
+                    user.guards.insert(k, t);
+                }
+            }
+            ConstraintKind::Fresh { port, max_age, .. } => rw.note_age(*port, *max_age),
+            _ => {}
+        }
+    }
+    for (k, c) in def.connectors.iter().enumerate() {
+        if let Some(g) = &c.guard {
+            if let Some(t) = rw.expr(&mut errors, g) {
+                user.connector_guards.insert(k, t);
+            }
+        }
+        if let Some(a) = &c.action {
+            if let Some(t) = rw.action(&mut errors, a) {
+                user.connector_actions.insert(k, t);
+            }
+        }
+    }
+    for (k, p) in def.priorities.iter().enumerate() {
+        if let Some(w) = &p.when {
+            if let Some(t) = rw.expr(&mut errors, w) {
+                user.priority_whens.insert(k, t);
+            }
+        }
+    }
+    for (k, p) in def.properties.iter().enumerate() {
+        let text = match p {
+            PropertyDef::DeadlockFree { terminal } => terminal.as_ref(),
+            PropertyDef::Invariant { expr, .. } | PropertyDef::Reachable { expr, .. } => Some(expr),
+        };
+        if let Some(t) = text {
+            if let Some(t) = rw.expr(&mut errors, t) {
+                user.properties.insert(k, t);
+            }
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors.list);
+    }
+    let ages = std::mem::take(&mut rw.ages);
+    build::build(&layer, def, ages, user)
+}
+
+/// Expands and compiles a model with a GenoM layer; the system carries its [`GenomMap`].
+pub(crate) fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
+    let expansion = expand(def)?;
+    let texts = expansion.recipe.condition_texts();
+    let (mut system, exprs) = compile_core(&expansion.def, &texts)?;
+    let map = expansion.recipe.resolve(&system, exprs).map_err(|m| {
+        vec![ModelError::new(
+            format!(
+                "internal error: the expansion lost `{}` (please report)",
+                m.0
+            ),
+            crate::source::Span::NONE,
+        )]
+    })?;
+    system.genom = Some(map);
+    Ok(system)
+}
