@@ -13,7 +13,11 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "bip", version, about = "A formally checked behaviour engine for robot functional layers")]
+#[command(
+    name = "bip",
+    version,
+    about = "A formally checked behaviour engine for robot functional layers"
+)]
 struct Cli {
     /// More log output (-v: info, -vv: debug, -vvv: trace); RUST_LOG overrides.
     #[arg(short, long, action = clap::ArgAction::Count, global = true)]

@@ -170,17 +170,29 @@ fn type_errors() {
     assert_error(&text, "expected a boolean, found an integer", "uses + 1");
     // a boolean where an integer is needed
     let text = ok_model().replace("uses = uses + 1", "uses = uses + (uses > 2)");
-    assert_error(&text, "`+` needs an integer, but this is a boolean", "(uses > 2)");
+    assert_error(
+        &text,
+        "`+` needs an integer, but this is a boolean",
+        "(uses > 2)",
+    );
     let text = ok_model().replace("uses = uses + 1", "uses = uses > 2");
     assert_error(&text, "expected an integer, found a boolean", "uses > 2");
     let text = ok_model().replace("uses = uses + 1", "uses = uses == true");
-    assert_error(&text, "cannot compare an integer with a boolean", "uses == true");
+    assert_error(
+        &text,
+        "cannot compare an integer with a boolean",
+        "uses == true",
+    );
 }
 
 #[test]
 fn init_outside_its_range() {
     let text = ok_model().replace("init: 0)", "init: 9)");
-    assert_error(&text, "initial value 9 of `uses` is outside its range 0..=5", "9");
+    assert_error(
+        &text,
+        "initial value 9 of `uses` is outside its range 0..=5",
+        "9",
+    );
     let text = ok_model().replace(
         r#"(name: "fork", atom: "Fork", count: "N")"#,
         r#"(name: "fork", atom: "Fork", count: "N", vars_init: { "uses": "self_index * 3" })"#,
@@ -209,7 +221,10 @@ fn non_constant_count_and_forall_bound() {
 fn component_twice_in_one_connector() {
     let text = ok_model().replace("\"fork[(i+1)%N].take\"", "\"fork[(i+3)%N].release\"");
     let (msg, covered, _) = first_error(&text);
-    assert!(msg.contains("component `fork[0]` appears twice in connector `pair`"), "{msg}");
+    assert!(
+        msg.contains("component `fork[0]` appears twice in connector `pair`"),
+        "{msg}"
+    );
     assert!(msg.contains("i = 0"), "names the instance: {msg}");
     assert_eq!(covered, "fork[(i+3)%N].release");
 }
@@ -228,7 +243,11 @@ fn priority_cycle_is_printed() {
     let e = &err.errors()[0];
     assert!(e.message.contains("cycle"), "{}", e.message);
     for p in ["a < b", "b < c[2]", "c < a"] {
-        assert!(e.message.contains(p), "the cycle lists `{p}`: {}", e.message);
+        assert!(
+            e.message.contains(p),
+            "the cycle lists `{p}`: {}",
+            e.message
+        );
     }
     assert_eq!(e.notes.len(), 2, "the other two priorities are pointed at");
 }
@@ -239,9 +258,14 @@ fn empty_and_missing_files() {
     assert!(msg.contains("empty"), "{msg}");
     let (msg, _, _) = first_error("  // just a comment\n /* and another */ \n");
     assert!(msg.contains("empty"), "{msg}");
-    let err = load_file("/nonexistent/dir/model.ron").err().expect("missing");
+    let err = load_file("/nonexistent/dir/model.ron")
+        .err()
+        .expect("missing");
     assert!(matches!(err, LoadError::Io { .. }));
-    assert!(err.to_string().contains("/nonexistent/dir/model.ron"), "{err}");
+    assert!(
+        err.to_string().contains("/nonexistent/dir/model.ron"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -282,7 +306,11 @@ fn pathological_nesting_is_an_error() {
     );
     let (msg, _, _) = first_error(&text);
     assert!(msg.contains("nested"), "{msg}");
-    let ron_deep = format!("System(name: \"x\", components: {}{})", "[".repeat(10_000), "]".repeat(10_000));
+    let ron_deep = format!(
+        "System(name: \"x\", components: {}{})",
+        "[".repeat(10_000),
+        "]".repeat(10_000)
+    );
     let (msg, _, _) = first_error(&ron_deep);
     assert!(!msg.is_empty());
 }

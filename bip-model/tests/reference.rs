@@ -123,7 +123,12 @@ struct Gen {
     prios: Vec<Prio>,
 }
 
-fn gen_int(r: &mut Rng, depth: u32, leaf: &mut dyn FnMut(&mut Rng, bool) -> Option<Ex>, arith: &[&'static str]) -> Ex {
+fn gen_int(
+    r: &mut Rng,
+    depth: u32,
+    leaf: &mut dyn FnMut(&mut Rng, bool) -> Option<Ex>,
+    arith: &[&'static str],
+) -> Ex {
     if depth == 0 || r.chance(40) {
         if let Some(e) = leaf(r, false) {
             if r.chance(70) {
@@ -148,7 +153,12 @@ fn gen_int(r: &mut Rng, depth: u32, leaf: &mut dyn FnMut(&mut Rng, bool) -> Opti
     }
 }
 
-fn gen_bool(r: &mut Rng, depth: u32, leaf: &mut dyn FnMut(&mut Rng, bool) -> Option<Ex>, arith: &[&'static str]) -> Ex {
+fn gen_bool(
+    r: &mut Rng,
+    depth: u32,
+    leaf: &mut dyn FnMut(&mut Rng, bool) -> Option<Ex>,
+    arith: &[&'static str],
+) -> Ex {
     if depth == 0 || r.chance(30) {
         if let Some(e) = leaf(r, true) {
             if r.chance(80) {
@@ -188,22 +198,35 @@ fn generate(seed: u64) -> Gen {
         let vars: Vec<Var> = (0..r.below(3))
             .map(|_| {
                 if r.chance(30) {
-                    Var { lo: 0, hi: 1, is_bool: true, init: r.range(0, 1) }
+                    Var {
+                        lo: 0,
+                        hi: 1,
+                        is_bool: true,
+                        init: r.range(0, 1),
+                    }
                 } else {
                     let lo = r.range(-1, 1);
                     let hi = lo + r.range(0, 3);
-                    Var { lo, hi, is_bool: false, init: r.range(lo, hi) }
+                    Var {
+                        lo,
+                        hi,
+                        is_bool: false,
+                        init: r.range(lo, hi),
+                    }
                 }
             })
             .collect();
         let mut trans = Vec::new();
         for _ in 0..r.below(7) {
             let mut leaf = |r: &mut Rng, want_bool: bool| -> Option<Ex> {
-                let candidates: Vec<usize> =
-                    (0..vars.len()).filter(|&v| vars[v].is_bool == want_bool).collect();
+                let candidates: Vec<usize> = (0..vars.len())
+                    .filter(|&v| vars[v].is_bool == want_bool)
+                    .collect();
                 (!candidates.is_empty()).then(|| Ex::Local(candidates[r.below(candidates.len())]))
             };
-            let guard = r.chance(50).then(|| gen_bool(&mut r, 2, &mut leaf, GUARD_OPS));
+            let guard = r
+                .chance(50)
+                .then(|| gen_bool(&mut r, 2, &mut leaf, GUARD_OPS));
             let mut action = Vec::new();
             for v in 0..vars.len() {
                 if r.chance(40) {
@@ -217,23 +240,41 @@ fn generate(seed: u64) -> Gen {
             }
             trans.push(Tr {
                 from: r.below(locs),
-                port: if r.chance(20) { None } else { Some(r.below(ports)) },
+                port: if r.chance(20) {
+                    None
+                } else {
+                    Some(r.below(ports))
+                },
                 to: r.below(locs),
                 guard,
                 action,
             });
         }
-        atoms.push(Atom { locs, initial: r.below(locs), ports, vars, trans });
+        atoms.push(Atom {
+            locs,
+            initial: r.below(locs),
+            ports,
+            vars,
+            trans,
+        });
     }
     let families: Vec<Family> = (0..1 + r.below(3))
         .map(|_| Family {
             atom: r.below(atoms.len()),
-            count: if r.chance(50) { Some(1 + r.below(3)) } else { None },
+            count: if r.chance(50) {
+                Some(1 + r.below(3))
+            } else {
+                None
+            },
         })
         .collect();
     let mut conns = Vec::new();
     for _ in 0..1 + r.below(4) {
-        let forall = if r.chance(40) { Some(1 + r.below(3)) } else { None };
+        let forall = if r.chance(40) {
+            Some(1 + r.below(3))
+        } else {
+            None
+        };
         let mut ports = Vec::new();
         for _ in 0..1 + r.below(3) {
             let f = r.below(families.len());
@@ -254,16 +295,25 @@ fn generate(seed: u64) -> Gen {
                 fams_in[r.below(fams_in.len())]
             } else {
                 let f = r.below(families.len());
-                (f, families[f].count.map_or(Idx::Single, |c| Idx::Const(r.below(c))))
+                (
+                    f,
+                    families[f]
+                        .count
+                        .map_or(Idx::Single, |c| Idx::Const(r.below(c))),
+                )
             };
             let atom = &atoms[families[f].atom];
             if r.chance(25) {
                 return want_bool.then(|| Ex::At(f, idx, r.below(atom.locs)));
             }
-            let c: Vec<usize> = (0..atom.vars.len()).filter(|&v| atom.vars[v].is_bool == want_bool).collect();
+            let c: Vec<usize> = (0..atom.vars.len())
+                .filter(|&v| atom.vars[v].is_bool == want_bool)
+                .collect();
             (!c.is_empty()).then(|| Ex::Var(f, idx, c[r.below(c.len())]))
         };
-        let guard = r.chance(40).then(|| gen_bool(&mut r, 2, &mut leaf, GUARD_OPS));
+        let guard = r
+            .chance(40)
+            .then(|| gen_bool(&mut r, 2, &mut leaf, GUARD_OPS));
         let mut action = Vec::new();
         if r.chance(40) {
             let (f, idx, _) = ports[r.below(ports.len())];
@@ -278,17 +328,31 @@ fn generate(seed: u64) -> Gen {
                 action.push((f, idx, v, e));
             }
         }
-        conns.push(Conn { forall, ports, trigger, guard, action });
+        conns.push(Conn {
+            forall,
+            ports,
+            trigger,
+            guard,
+            action,
+        });
     }
     // a component may take part once per connector instance: drop connectors that break it
-    let gen = Gen { atoms, families, conns, prios: Vec::new() };
+    let gen = Gen {
+        atoms,
+        families,
+        conns,
+        prios: Vec::new(),
+    };
     let conns: Vec<Conn> = gen
         .conns
         .iter()
         .filter(|c| {
             instances(c).all(|i| {
-                let mut comps: Vec<usize> =
-                    c.ports.iter().map(|&(f, idx, _)| gen.component(f, idx, i)).collect();
+                let mut comps: Vec<usize> = c
+                    .ports
+                    .iter()
+                    .map(|&(f, idx, _)| gen.component(f, idx, i))
+                    .collect();
                 comps.sort();
                 comps.windows(2).all(|w| w[0] != w[1])
             })
@@ -316,15 +380,21 @@ fn generate(seed: u64) -> Gen {
         let atoms = gen.atoms.clone();
         let mut leaf = |r: &mut Rng, want_bool: bool| -> Option<Ex> {
             let f = r.below(families.len());
-            let idx = families[f].count.map_or(Idx::Single, |c| Idx::Const(r.below(c)));
+            let idx = families[f]
+                .count
+                .map_or(Idx::Single, |c| Idx::Const(r.below(c)));
             let atom = &atoms[families[f].atom];
             if want_bool && r.chance(40) {
                 return Some(Ex::At(f, idx, r.below(atom.locs)));
             }
-            let c: Vec<usize> = (0..atom.vars.len()).filter(|&v| atom.vars[v].is_bool == want_bool).collect();
+            let c: Vec<usize> = (0..atom.vars.len())
+                .filter(|&v| atom.vars[v].is_bool == want_bool)
+                .collect();
             (!c.is_empty()).then(|| Ex::Var(f, idx, c[r.below(c.len())]))
         };
-        let when = r.chance(50).then(|| gen_bool(&mut r, 1, &mut leaf, GUARD_OPS));
+        let when = r
+            .chance(50)
+            .then(|| gen_bool(&mut r, 1, &mut leaf, GUARD_OPS));
         gen.prios.push(Prio { low, high, when });
     }
     gen
@@ -341,7 +411,10 @@ fn instances(c: &Conn) -> impl Iterator<Item = Option<usize>> {
 impl Gen {
     /// Global component number of family `f` at `idx` in instance `i` of a connector.
     fn component(&self, f: usize, idx: Idx, i: Option<usize>) -> usize {
-        let base: usize = self.families[..f].iter().map(|fam| fam.count.unwrap_or(1)).sum();
+        let base: usize = self.families[..f]
+            .iter()
+            .map(|fam| fam.count.unwrap_or(1))
+            .sum();
         base + match (idx, self.families[f].count) {
             (Idx::Single, _) => 0,
             (Idx::Const(k), _) => k,
@@ -399,7 +472,10 @@ impl Gen {
                 if v.is_bool {
                     s += &format!("(name: \"v{vi}\", ty: Bool, init: {}), ", v.init == 1);
                 } else {
-                    s += &format!("(name: \"v{vi}\", ty: Int({}, {}), init: {}), ", v.lo, v.hi, v.init);
+                    s += &format!(
+                        "(name: \"v{vi}\", ty: Int({}, {}), init: {}), ",
+                        v.lo, v.hi, v.init
+                    );
                 }
             }
             s += "],\n      transitions: [\n";
@@ -412,8 +488,11 @@ impl Gen {
                     s += &format!(", guard: \"{}\"", self.show(g, None));
                 }
                 if !t.action.is_empty() {
-                    let act: Vec<String> =
-                        t.action.iter().map(|(v, e)| format!("v{v} = {}", self.show(e, None))).collect();
+                    let act: Vec<String> = t
+                        .action
+                        .iter()
+                        .map(|(v, e)| format!("v{v} = {}", self.show(e, None)))
+                        .collect();
                     s += &format!(", action: \"{}\"", act.join("; "));
                 }
                 s += "),\n";
@@ -433,7 +512,9 @@ impl Gen {
             let ports: Vec<String> = c
                 .ports
                 .iter()
-                .map(|&(f, idx, p)| format!("\"{}.p{p}\"", self.show_comp(f, idx, c.forall.is_some())))
+                .map(|&(f, idx, p)| {
+                    format!("\"{}.p{p}\"", self.show_comp(f, idx, c.forall.is_some()))
+                })
                 .collect();
             s += &format!("    (name: \"c{ci}\", ports: [{}]", ports.join(", "));
             if let Some(n) = c.forall {
@@ -497,10 +578,14 @@ impl Gen {
             Ex::Int(i) => i.to_string(),
             Ex::Bool(b) => b.to_string(),
             Ex::Local(v) => format!("v{v}"),
-            Ex::Var(f, idx, v) => format!("{}.v{v}", self.show_comp(*f, *idx, global == Some(true))),
+            Ex::Var(f, idx, v) => {
+                format!("{}.v{v}", self.show_comp(*f, *idx, global == Some(true)))
+            }
             Ex::At(f, idx, l) => format!("{}@l{l}", self.show_comp(*f, *idx, global == Some(true))),
             Ex::Not(a) => format!("!({})", self.show(a, global)),
-            Ex::Bin(op, a, b) => format!("({} {op} {})", self.show(a, global), self.show(b, global)),
+            Ex::Bin(op, a, b) => {
+                format!("({} {op} {})", self.show(a, global), self.show(b, global))
+            }
             Ex::Ite(c, a, b) => format!(
                 "({} ? {} : {})",
                 self.show(c, global),
@@ -575,7 +660,12 @@ impl Gen {
 
     /// "a port is enabled if its component has a transition from its current location on
     /// that port whose guard holds": the list of such transitions.
-    fn enabled_on(&self, s: &RState, comp: usize, port: Option<usize>) -> Result<Vec<usize>, Failure> {
+    fn enabled_on(
+        &self,
+        s: &RState,
+        comp: usize,
+        port: Option<usize>,
+    ) -> Result<Vec<usize>, Failure> {
         let a = self.atom_of(comp);
         let mut out = Vec::new();
         for (k, t) in a.trans.iter().enumerate() {
@@ -594,12 +684,19 @@ impl Gen {
 
     /// The enabled steps: (name, connector instance or None, [(component, transition)]).
     #[allow(clippy::type_complexity)]
-    fn steps(&self, s: &RState) -> Result<Vec<(String, Option<(usize, Option<usize>)>, Vec<(usize, usize)>)>, Failure> {
+    fn steps(
+        &self,
+        s: &RState,
+    ) -> Result<Vec<(String, Option<(usize, Option<usize>)>, Vec<(usize, usize)>)>, Failure> {
         let mut out = Vec::new();
         // 1. each enabled internal transition of any component (fires alone)
         for c in 0..self.component_count() {
             for t in self.enabled_on(s, c, None)? {
-                out.push((format!("{}.internal", self.component_name(c)), None, vec![(c, t)]));
+                out.push((
+                    format!("{}.internal", self.component_name(c)),
+                    None,
+                    vec![(c, t)],
+                ));
             }
         }
         // 2. each connector interaction whose ports are all enabled and whose guard holds;
@@ -720,7 +817,12 @@ impl Gen {
 
     /// "Firing a step runs the actions and moves the participants": the connector action
     /// first, then each participant's transition action in port order.
-    fn fire(&self, s: &RState, conn: Option<(usize, Option<usize>)>, picks: &[(usize, usize)]) -> Result<RState, Failure> {
+    fn fire(
+        &self,
+        s: &RState,
+        conn: Option<(usize, Option<usize>)>,
+        picks: &[(usize, usize)],
+    ) -> Result<RState, Failure> {
         let mut n = s.clone();
         let assign = |n: &mut RState, comp: usize, v: usize, value: i64| -> Result<(), Failure> {
             let var = &self.atom_of(comp).vars[v];
@@ -766,7 +868,11 @@ fn to_ref(sys: &System, s: &State) -> RState {
 }
 
 /// Successors by the compiled relation, as (name, reference state or error) sorted.
-fn compiled_successors(sys: &System, s: &State, steps: &mut Steps) -> Result<Vec<(String, Option<RState>)>, Failure> {
+fn compiled_successors(
+    sys: &System,
+    s: &State,
+    steps: &mut Steps,
+) -> Result<Vec<(String, Option<RState>)>, Failure> {
     sys.enabled_steps(s, steps).map_err(|_| Failure)?;
     let mut out: Vec<(String, Option<RState>)> = steps
         .iter()
@@ -794,9 +900,18 @@ fn reference_successors(g: &Gen, s: &RState) -> Result<Vec<(String, Option<RStat
 fn check_system(seed: u64) -> Result<usize, TestCaseError> {
     let g = generate(seed);
     let text = g.to_ron();
-    let sys = load_str("generated.ron", &text)
-        .map_err(|e| TestCaseError::fail(format!("generated model does not load: {}\n{text}", e.summary())))?;
-    prop_assert_eq!(to_ref(&sys, &sys.initial_state()), g.initial(), "initial states\n{}", text);
+    let sys = load_str("generated.ron", &text).map_err(|e| {
+        TestCaseError::fail(format!(
+            "generated model does not load: {}\n{text}",
+            e.summary()
+        ))
+    })?;
+    prop_assert_eq!(
+        to_ref(&sys, &sys.initial_state()),
+        g.initial(),
+        "initial states\n{}",
+        text
+    );
     let mut rng = Rng(seed ^ 0x5555);
     let mut steps = Steps::new();
     let mut compared = 0;
@@ -817,7 +932,8 @@ fn check_system(seed: u64) -> Result<usize, TestCaseError> {
                     // continue from a random non-failing successor (via the compiled steps)
                     let pick = rng.below(ok.len());
                     let target = ok[pick].clone();
-                    sys.enabled_steps(&s, &mut steps).map_err(|e| TestCaseError::fail(e.to_string()))?;
+                    sys.enabled_steps(&s, &mut steps)
+                        .map_err(|e| TestCaseError::fail(e.to_string()))?;
                     let mut next = s.clone();
                     let mut found = false;
                     for st in steps.iter() {
@@ -832,10 +948,10 @@ fn check_system(seed: u64) -> Result<usize, TestCaseError> {
                 (Err(_), Err(_)) => break,
                 (c, r) => {
                     return Err(TestCaseError::fail(format!(
-                        "one side fails to evaluate in {rs:?}: compiled {:?}, reference {:?}\n{text}",
-                        c.is_ok(),
-                        r.is_ok()
-                    )))
+                    "one side fails to evaluate in {rs:?}: compiled {:?}, reference {:?}\n{text}",
+                    c.is_ok(),
+                    r.is_ok()
+                )))
                 }
             }
         }
@@ -870,13 +986,20 @@ fn generator_covers_every_rule() {
         forall += g.conns.iter().filter(|c| c.forall.is_some()).count();
         priorities += g.prios.len();
         when += g.prios.iter().filter(|p| p.when.is_some()).count();
-        internal += g.atoms.iter().flat_map(|a| &a.trans).filter(|t| t.port.is_none()).count();
+        internal += g
+            .atoms
+            .iter()
+            .flat_map(|a| &a.trans)
+            .filter(|t| t.port.is_none())
+            .count();
         nondeterministic += g
             .atoms
             .iter()
             .filter(|a| {
                 a.trans.iter().enumerate().any(|(i, t)| {
-                    a.trans[..i].iter().any(|u| u.from == t.from && u.port == t.port)
+                    a.trans[..i]
+                        .iter()
+                        .any(|u| u.from == t.from && u.port == t.port)
                 })
             })
             .count();

@@ -85,7 +85,10 @@ fn internal_transitions_fire_alone_and_guards_read_own_variables() {
     let sys = load(PAIR);
     let s = state_after(&sys, &["solo"]);
     // a is at l1 with x = 0: its internal transition is enabled; `back` needs b at l1
-    assert_eq!(steps_of(&sys, &s), vec!["a.internal => a=l0 a.x=0 b=l0 b.x=0"]);
+    assert_eq!(
+        steps_of(&sys, &s),
+        vec!["a.internal => a=l0 a.x=0 b=l0 b.x=0"]
+    );
 }
 
 #[test]
@@ -132,7 +135,9 @@ System(
 fn broadcast_takes_every_enabled_receiver_and_never_waits_for_one() {
     let sys = load(BROADCAST);
     let steps = steps_of(&sys, &sys.initial_state());
-    assert!(steps.contains(&"tick => clock=on r[0]=got r[0].n=1 r[1]=got r[1].n=1 r[2]=got r[2].n=1".to_string()));
+    assert!(steps.contains(
+        &"tick => clock=on r[0]=got r[0].n=1 r[1]=got r[1].n=1 r[2]=got r[2].n=1".to_string()
+    ));
     // after r[1] heard alone, the broadcast goes on without it
     let s = state_after(&sys, &["reset1"]);
     let steps = steps_of(&sys, &s);
@@ -217,7 +222,11 @@ fn priorities_suppress_when_a_higher_interaction_is_enabled() {
     // k = 3: cc suppresses cb, and ca through the closure ca < cb < cc (when k >= 1)
     s2.slots_mut()[1] = 3;
     assert_eq!(names(&s2), vec!["cc"]);
-    assert_eq!(sys.priorities.len(), 3, "ca<cb, cb<cc and the derived ca<cc");
+    assert_eq!(
+        sys.priorities.len(),
+        3,
+        "ca<cb, cb<cc and the derived ca<cc"
+    );
 }
 
 #[test]
@@ -232,7 +241,8 @@ fn priority_on_one_instance_of_a_family() {
     )"#,
     );
     let mut steps = Steps::new();
-    sys.enabled_steps(&sys.initial_state(), &mut steps).unwrap_or_else(|e| panic!("{e}"));
+    sys.enabled_steps(&sys.initial_state(), &mut steps)
+        .unwrap_or_else(|e| panic!("{e}"));
     let names: Vec<String> = steps.iter().map(|s| sys.label_name(s.label)).collect();
     // go[0] and go[1] are below go[2]
     assert_eq!(names, vec!["go[2]"]);
@@ -256,8 +266,13 @@ fn range_errors_are_values_with_their_place() {
     let mut steps = Steps::new();
     sys.enabled_steps(&s, &mut steps).expect("guards are fine");
     let mut next = s.clone();
-    let inc = steps.iter().find(|st| sys.label_name(st.label) == "inc").expect("inc");
-    let err = sys.fire(&s, inc, &mut next).expect_err("n = 3 is out of range");
+    let inc = steps
+        .iter()
+        .find(|st| sys.label_name(st.label) == "inc")
+        .expect("inc");
+    let err = sys
+        .fire(&s, inc, &mut next)
+        .expect_err("n = 3 is out of range");
     assert_eq!(
         err.kind,
         RangeErrorKind::OutOfRange {
@@ -267,8 +282,14 @@ fn range_errors_are_values_with_their_place() {
             hi: 2
         }
     );
-    assert!(err.to_string().contains("c.n = 3 is outside 0..=2"), "{err}");
-    let div = steps.iter().find(|st| sys.label_name(st.label) == "div").expect("div");
+    assert!(
+        err.to_string().contains("c.n = 3 is outside 0..=2"),
+        "{err}"
+    );
+    let div = steps
+        .iter()
+        .find(|st| sys.label_name(st.label) == "div")
+        .expect("div");
     let err = sys.fire(&s, div, &mut next).expect_err("division by zero");
     assert_eq!(err.kind, RangeErrorKind::DivisionByZero);
 }
@@ -287,9 +308,18 @@ fn guard_that_cannot_be_evaluated_is_a_range_error_of_the_state() {
     );
     let s = state_after(&sys, &["go", "go"]); // c.i = 2, f has 2 members
     let mut steps = Steps::new();
-    let err = sys.enabled_steps(&s, &mut steps).expect_err("index 2 out of f[0..2]");
+    let err = sys
+        .enabled_steps(&s, &mut steps)
+        .expect_err("index 2 out of f[0..2]");
     assert!(
-        matches!(err.kind, RangeErrorKind::IndexOutOfBounds { index: 2, count: 2, .. }),
+        matches!(
+            err.kind,
+            RangeErrorKind::IndexOutOfBounds {
+                index: 2,
+                count: 2,
+                ..
+            }
+        ),
         "{err:?}"
     );
     assert!(err.context.contains("guard of go"), "{}", err.context);
@@ -304,10 +334,15 @@ fn deadlock_is_no_enabled_step_without_time() {
     sys.enabled_steps(&s, &mut steps).expect("ok");
     assert!(steps.is_empty());
     let mut checker = LivenessChecker::default();
-    assert_eq!(sys.liveness(&s, &steps, &mut checker).expect("ok"), Liveness::Deadlock);
-    sys.enabled_steps(&sys.initial_state(), &mut steps).expect("ok");
     assert_eq!(
-        sys.liveness(&sys.initial_state(), &steps, &mut checker).expect("ok"),
+        sys.liveness(&s, &steps, &mut checker).expect("ok"),
+        Liveness::Deadlock
+    );
+    sys.enabled_steps(&sys.initial_state(), &mut steps)
+        .expect("ok");
+    assert_eq!(
+        sys.liveness(&sys.initial_state(), &steps, &mut checker)
+            .expect("ok"),
         Liveness::Progress
     );
 }
@@ -347,20 +382,29 @@ fn deadlock_looks_through_time_and_ignores_the_environment() {
         sys.liveness(s, &steps, &mut checker).expect("ok")
     };
     // waiting: only the tick is enabled, but after two ticks `go` is
-    assert_eq!(check(&sys.initial_state()), Liveness::AfterTime { ticks: 2 });
+    assert_eq!(
+        check(&sys.initial_state()),
+        Liveness::AfterTime { ticks: 2 }
+    );
     // working: a request may come, time may pass, but the system itself can do nothing
     let s = state_after(&sys, &["tick", "tick", "go"]);
     assert_eq!(check(&s), Liveness::Deadlock);
     let s = state_after(&sys, &["tick", "tick", "go", "req"]);
     assert_eq!(check(&s), Liveness::Deadlock);
     // a state remembered live answers at once
-    assert!(matches!(check(&sys.initial_state()), Liveness::AfterTime { .. }));
+    assert!(matches!(
+        check(&sys.initial_state()),
+        Liveness::AfterTime { .. }
+    ));
 }
 
 #[test]
 fn labels_name_internal_steps_and_interactions() {
     let sys = load(PAIR);
-    assert_eq!(sys.label_name(Label::Internal { component: 1 }), "b.internal");
+    assert_eq!(
+        sys.label_name(Label::Internal { component: 1 }),
+        "b.internal"
+    );
     assert_eq!(sys.label_name(Label::Interaction(0)), "sync");
 }
 
@@ -382,9 +426,21 @@ fn initial_values_defaults_and_self_index() {
     assert_eq!(
         vals,
         vec![
-            "c[0]=l", "c[0].x=0", "c[0].y=5", "c[0].f=false", "c[0].g=true", "c[1]=l", "c[1].x=2",
-            "c[1].y=5", "c[1].f=false", "c[1].g=true", "c[2]=l", "c[2].x=4", "c[2].y=5",
-            "c[2].f=false", "c[2].g=true",
+            "c[0]=l",
+            "c[0].x=0",
+            "c[0].y=5",
+            "c[0].f=false",
+            "c[0].g=true",
+            "c[1]=l",
+            "c[1].x=2",
+            "c[1].y=5",
+            "c[1].f=false",
+            "c[1].g=true",
+            "c[2]=l",
+            "c[2].x=4",
+            "c[2].y=5",
+            "c[2].f=false",
+            "c[2].g=true",
         ]
     );
 }

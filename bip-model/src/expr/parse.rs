@@ -307,8 +307,7 @@ impl Parser {
     /// Precedence climbing over the binary operators with precedence >= `min`.
     fn binary(&mut self, min: u8) -> PResult<Expr> {
         let mut lhs = self.unary()?;
-        loop {
-            let Tok::Op(op) = *self.peek() else { break };
+        while let Tok::Op(op) = *self.peek() {
             let p = op.precedence();
             if p < min {
                 break;
