@@ -50,6 +50,8 @@ pub fn parse_range(text: &str) -> PResult<Range> {
     let mut p = Parser::new(text)?;
     let r = p.range()?;
     p.expect_end()?;
+    check_depth(&r.lo)?;
+    check_depth(&r.hi)?;
     Ok(r)
 }
 
