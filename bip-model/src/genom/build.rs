@@ -1257,7 +1257,12 @@ impl<'a, 'd> Builder<'a, 'd> {
             .filter_map(|s| s.component.as_ref())
             .map(|c| format!("{c}@{ETHER} && !{c}.{REQ}"))
             .collect();
-        let idle = if open { conj(&idle) } else { None };
+        // with no activity at all, nothing is ever outstanding
+        let idle = match (open, conj(&idle)) {
+            (false, _) => None,
+            (true, None) => Some("true".to_string()),
+            (true, some) => some,
+        };
         self.recipe.idle = idle.clone();
         self.def
             .properties
