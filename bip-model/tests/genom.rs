@@ -76,17 +76,30 @@ fn the_base_model_is_good() {
 
 #[test]
 fn a_codel_yielding_to_an_undeclared_state() {
-    let text = bad(r#"yields: ["pause::move", "ether"]"#, r#"yields: ["pause::mvoe", "ether"]"#);
-    assert_error(&text, "yields to `mvoe`, which is not a codel state", "pause::mvoe");
+    let text = bad(
+        r#"yields: ["pause::move", "ether"]"#,
+        r#"yields: ["pause::mvoe", "ether"]"#,
+    );
+    assert_error(
+        &text,
+        "yields to `mvoe`, which is not a codel state",
+        "pause::mvoe",
+    );
     let (_, _, (line, col)) = first_error(&text);
     assert_eq!((line, col), (25, 49));
 }
 
 #[test]
 fn no_path_to_ether() {
-    let text = bad(r#"(state: "move",  yields: ["pause::move", "ether"]),"#, r#"(state: "move",  yields: ["pause::move"]),"#);
+    let text = bad(
+        r#"(state: "move",  yields: ["pause::move", "ether"]),"#,
+        r#"(state: "move",  yields: ["pause::move"]),"#,
+    );
     assert_error(&text, "no path from `start` to `ether`", "start");
-    let text = bad(r#"(state: "stop",  yields: ["ether"]),"#, r#"(state: "stop",  yields: ["pause::stop"]),"#);
+    let text = bad(
+        r#"(state: "stop",  yields: ["ether"]),"#,
+        r#"(state: "stop",  yields: ["pause::stop"]),"#,
+    );
     assert_error(&text, "no path from `stop` to `ether`", "stop");
 }
 
@@ -112,24 +125,74 @@ fn a_task_period_of_zero() {
 fn codel_automaton_errors() {
     let cases = [
         // missing start
-        (r#"(state: "start", yields: ["move"]),"#, "", "has no `start` codel", "GoTo"),
+        (
+            r#"(state: "start", yields: ["move"]),"#,
+            "",
+            "has no `start` codel",
+            "GoTo",
+        ),
         // pause::ether
-        (r#"yields: ["pause::move", "ether"]"#, r#"yields: ["pause::ether"]"#, "`pause::ether` is not a yield", "pause::ether"),
+        (
+            r#"yields: ["pause::move", "ether"]"#,
+            r#"yields: ["pause::ether"]"#,
+            "`pause::ether` is not a yield",
+            "pause::ether",
+        ),
         // a loop without a pause stops time
-        (r#"yields: ["pause::move", "ether"]"#, r#"yields: ["move", "ether"]"#, "loop without a pause", "move"),
+        (
+            r#"yields: ["pause::move", "ether"]"#,
+            r#"yields: ["move", "ether"]"#,
+            "loop without a pause",
+            "move",
+        ),
         // a codel nobody reaches
-        (r#"(state: "stop",  yields: ["ether"]),"#, r#"(state: "stop",  yields: ["ether"]), (state: "lost", yields: ["ether"]),"#, "never reached", "lost"),
+        (
+            r#"(state: "stop",  yields: ["ether"]),"#,
+            r#"(state: "stop",  yields: ["ether"]), (state: "lost", yields: ["ether"]),"#,
+            "never reached",
+            "lost",
+        ),
         // a codel state named like a generated port
-        (r#"(state: "stop",  yields: ["ether"]),"#, r#"(state: "stop",  yields: ["ether", "tick"]), (state: "tick", yields: ["ether"]),"#, "cannot be named `tick`", "tick"),
+        (
+            r#"(state: "stop",  yields: ["ether"]),"#,
+            r#"(state: "stop",  yields: ["ether", "tick"]), (state: "tick", yields: ["ether"]),"#,
+            "cannot be named `tick`",
+            "tick",
+        ),
         // duplicate yields and codel states
-        (r#"yields: ["pause::move", "ether"]"#, r#"yields: ["ether", "ether"]"#, "duplicate yield", "ether"),
+        (
+            r#"yields: ["pause::move", "ether"]"#,
+            r#"yields: ["ether", "ether"]"#,
+            "duplicate yield",
+            "ether",
+        ),
         // an activity without task, a task that does not exist
-        (r#"kind: Activity, task: "nav", after"#, r#"kind: Activity, after"#, "has no `task`", "GoTo"),
-        (r#"kind: Activity, task: "nav", after"#, r#"kind: Activity, task: "navi", after"#, "no task `navi`", "navi"),
+        (
+            r#"kind: Activity, task: "nav", after"#,
+            r#"kind: Activity, after"#,
+            "has no `task`",
+            "GoTo",
+        ),
+        (
+            r#"kind: Activity, task: "nav", after"#,
+            r#"kind: Activity, task: "navi", after"#,
+            "no task `navi`",
+            "navi",
+        ),
         // functions have no codels or tasks
-        (r#"(name: "Init", kind: Function)"#, r#"(name: "Init", kind: Function, codels: [(state: "start", yields: ["ether"])])"#, "not an activity; it has no codel states", "start"),
+        (
+            r#"(name: "Init", kind: Function)"#,
+            r#"(name: "Init", kind: Function, codels: [(state: "start", yields: ["ether"])])"#,
+            "not an activity; it has no codel states",
+            "start",
+        ),
         // a written port that does not exist
-        (r#"writes: ["scan"]"#, r#"writes: ["scna"]"#, "no out port `scna`", "scna"),
+        (
+            r#"writes: ["scan"]"#,
+            r#"writes: ["scna"]"#,
+            "no out port `scna`",
+            "scna",
+        ),
     ];
     for (from, to, words, covered) in cases {
         assert_error(&bad(from, to), words, covered);
@@ -139,9 +202,24 @@ fn codel_automaton_errors() {
 #[test]
 fn service_reference_errors() {
     let cases = [
-        (r#"after: ["Init"]"#, r#"after: ["Inti"]"#, "module `ndd` has no service `Inti`", "Inti"),
-        (r#"interrupts: ["Scan"]"#, r#"interrupts: ["Stop"]"#, "`Stop` is not an activity", "Stop"),
-        (r#"active: ["sick.Scan"]"#, r#"active: ["sick.Stop"]"#, "`sick.Stop` is not an activity", "sick.Stop"),
+        (
+            r#"after: ["Init"]"#,
+            r#"after: ["Inti"]"#,
+            "module `ndd` has no service `Inti`",
+            "Inti",
+        ),
+        (
+            r#"interrupts: ["Scan"]"#,
+            r#"interrupts: ["Stop"]"#,
+            "`Stop` is not an activity",
+            "Stop",
+        ),
+        (
+            r#"active: ["sick.Scan"]"#,
+            r#"active: ["sick.Stop"]"#,
+            "`sick.Stop` is not an activity",
+            "sick.Stop",
+        ),
         (
             r#"Requires(service: "ndd.GoTo", active: ["sick.Scan"]),"#,
             r#"Fresh(service: "ndd.GoTo", port: "sick.pose", max_age: 2),"#,
@@ -173,9 +251,21 @@ fn genom_names_in_expressions() {
         ("ndd.GoTo@mvoe", "has no codel state `mvoe`", "mvoe"),
         ("ndd.GoTo@start", "never rests at `start`", "start"),
         ("active(ndd.Init)", "`ndd.Init` is not an activity", "Init"),
-        ("active(ndd.Goto)", "module `ndd` has no service `Goto`", "Goto"),
-        ("age(sick.scan) + 1 > 2", "may only be compared with a constant", "age(sick.scan)"),
-        ("age(sick.scan) < ndd_GoTo.req", "may only be compared with a constant", "ndd_GoTo.req"),
+        (
+            "active(ndd.Goto)",
+            "module `ndd` has no service `Goto`",
+            "Goto",
+        ),
+        (
+            "age(sick.scan) + 1 > 2",
+            "may only be compared with a constant",
+            "age(sick.scan)",
+        ),
+        (
+            "age(sick.scan) < ndd_GoTo.req",
+            "may only be compared with a constant",
+            "ndd_GoTo.req",
+        ),
         ("age(sick.scna) < 2", "no out port `scna`", "scna"),
         ("sick.Scan", "is a service, not a value", "Scan"),
         ("sick.scan > 0", "is a port, not a value", "scan"),
@@ -194,7 +284,11 @@ fn generated_names_are_reserved() {
     components: [(name: "sick", atom: "A")],
     properties: ["#,
     );
-    assert_error(&text, "component `sick` has the name generated for module `sick`", "sick");
+    assert_error(
+        &text,
+        "component `sick` has the name generated for module `sick`",
+        "sick",
+    );
     // two generated names that collide: module `a_b` service `C` and module `a` service `b_C`
     let collide = r#"System(name: "c", modules: [
         (name: "a_b", tasks: [(name: "t", period: 1)], services: [
@@ -209,7 +303,11 @@ fn generated_names_are_reserved() {
         r#"    connectors: [(name: "sneak", ports: ["ndd_GoTo.move"])],
     properties: ["#,
     );
-    assert_error(&text, "`ndd_GoTo.move` is a generated port", "ndd_GoTo.move");
+    assert_error(
+        &text,
+        "`ndd_GoTo.move` is a generated port",
+        "ndd_GoTo.move",
+    );
     // but aborting an activity is open to any component
     let text = bad(
         "    properties: [",
@@ -251,20 +349,30 @@ fn reachable(sys: &System) -> HashSet<State> {
 fn the_expanded_model_reloads_with_the_same_behaviour() {
     for (name, text) in [
         ("good", GOOD.to_string()),
-        ("mini", include_str!("../../robots/tests/mini.ron").to_string()),
+        (
+            "mini",
+            include_str!("../../robots/tests/mini.ron").to_string(),
+        ),
     ] {
         let sys = load_str(name, &text).unwrap_or_else(|e| panic!("{}", e.summary()));
         let expanded = expand_str(name, &text).expect("expands");
         assert!(expanded.modules.is_empty() && expanded.constraints.is_empty());
         let printed = expanded.to_ron().expect("prints");
-        let again = load_str("expanded.ron", &printed).unwrap_or_else(|e| panic!("{}\n{printed}", e.summary()));
+        let again = load_str("expanded.ron", &printed)
+            .unwrap_or_else(|e| panic!("{}\n{printed}", e.summary()));
         assert!(again.genom.is_none(), "the printed model is plain core");
         assert_eq!(again.slot_ranges(), sys.slot_ranges());
         let (a, b) = (reachable(&sys), reachable(&again));
         assert!(a.len() > 50, "{name}: {} states", a.len());
         assert_eq!(a, b, "{name}: the same reachable states");
         // and printing is stable
-        assert_eq!(parse_str("x", &printed).expect("parses").to_ron().expect("prints"), printed);
+        assert_eq!(
+            parse_str("x", &printed)
+                .expect("parses")
+                .to_ron()
+                .expect("prints"),
+            printed
+        );
     }
 }
 
@@ -275,25 +383,44 @@ fn the_engine_map_names_every_codel_and_yield() {
     assert_eq!(map.modules.len(), 2);
     assert_eq!(sys.interactions[map.tick as usize].name, "tick");
     let goto = map.service("ndd", "GoTo").expect("GoTo");
-    assert_eq!(map.module("ndd").expect("ndd").tasks[goto.task.expect("task")].period, 2);
-    assert_eq!(sys.interactions[goto.request as usize].name, "ndd_GoTo_request");
+    assert_eq!(
+        map.module("ndd").expect("ndd").tasks[goto.task.expect("task")].period,
+        2
+    );
+    assert_eq!(
+        sys.interactions[goto.request as usize].name,
+        "ndd_GoTo_request"
+    );
     let comp = goto.component.expect("an activity has a component");
     let atom = sys.atom_of(comp);
     for c in &goto.codels {
-        assert_eq!(sys.interactions[c.run as usize].name, format!("ndd_GoTo_{}", c.state));
+        assert_eq!(
+            sys.interactions[c.run as usize].name,
+            format!("ndd_GoTo_{}", c.state)
+        );
         for y in &c.yields {
             assert!(!y.transitions.is_empty());
             for &t in &y.transitions {
                 let tr = &atom.transitions[t as usize];
                 assert_eq!(atom.ports[tr.port.expect("a port") as usize], c.state);
                 let target = y.target.strip_prefix("pause::").unwrap_or(&y.target);
-                assert_eq!(atom.locations[tr.to as usize], target, "{} yields {}", c.state, y.target);
+                assert_eq!(
+                    atom.locations[tr.to as usize], target,
+                    "{} yields {}",
+                    c.state, y.target
+                );
                 // `pause::` is the yield that sets `paused`
                 let pauses = tr.action.iter().any(|a| {
                     matches!(a.target, bip_model::Target::Local(v) if atom.vars[v as usize].name == "paused")
                         && a.value.is_const()
                 });
-                assert_eq!(pauses, y.target.starts_with("pause::"), "{} yields {}", c.state, y.target);
+                assert_eq!(
+                    pauses,
+                    y.target.starts_with("pause::"),
+                    "{} yields {}",
+                    c.state,
+                    y.target
+                );
             }
         }
     }
@@ -301,9 +428,18 @@ fn the_engine_map_names_every_codel_and_yield() {
     assert_eq!(goto.codels[0].yields[0].transitions.len(), 1);
     let held = map.codel("ndd", "GoTo", "move").expect("move");
     assert_eq!(held.holds.len(), 1);
-    assert!(held.holds[0].text.contains("sick_Scan@ether"), "{}", held.holds[0].text);
+    assert!(
+        held.holds[0].text.contains("sick_Scan@ether"),
+        "{}",
+        held.holds[0].text
+    );
     // a fresh system: GoTo is refused (Init has not run), Init is accepted
     let s = sys.initial_state();
     assert_eq!(goto.refused_by(&sys, &s).expect("evaluates").len(), 1);
-    assert!(map.service("ndd", "Init").expect("Init").refused_by(&sys, &s).expect("evaluates").is_empty());
+    assert!(map
+        .service("ndd", "Init")
+        .expect("Init")
+        .refused_by(&sys, &s)
+        .expect("evaluates")
+        .is_empty());
 }

@@ -1246,9 +1246,22 @@ impl<'a, 'd> Builder<'a, 'd> {
     }
 
     /// The user's properties with GenoM names rewritten; `DeadlockFree` excuses the states
-    /// where no activity has work outstanding, if requests come from the environment.
+    /// where no activity has work outstanding, if every request comes from the environment
+    /// (once a component of the model sends requests, it is responsible for the layer's
+    /// progress, and an idle layer may be a supervisor stuck: the user says when it is not
+    /// with `terminal`).
     fn properties(&mut self, connectors: &[ConnectorDef], user: &UserTexts) -> Vec<PropertyDef> {
-        let open = connectors.iter().any(|c| c.role == Role::Environment);
+        let requests: HashSet<&str> = self
+            .recipe
+            .modules
+            .iter()
+            .flat_map(|m| m.services.iter().map(|s| s.request.as_str()))
+            .collect();
+        let open = !requests.is_empty()
+            && connectors
+                .iter()
+                .filter(|c| requests.contains(c.name.as_str()))
+                .all(|c| c.role == Role::Environment);
         let idle: Vec<String> = self
             .recipe
             .modules

@@ -59,7 +59,11 @@ fn compile_expr(sys: &System, expr: &str) -> crate::eval::Expr {
     });
     let mut asked = crate::compile(&def).unwrap_or_else(|e| panic!("`{expr}`: {e:?}"));
     // a question must not change the model (an `age` nobody read before would add a slot)
-    assert_eq!(asked.slot_ranges(), sys.slot_ranges(), "`{expr}` changes the state layout");
+    assert_eq!(
+        asked.slot_ranges(),
+        sys.slot_ranges(),
+        "`{expr}` changes the state layout"
+    );
     match asked.properties.pop().map(|p| p.kind) {
         Some(PropertyKind::Invariant(e)) => e,
         _ => unreachable!("the question is the last property"),
@@ -206,14 +210,23 @@ fn codel_chain_runs_within_a_cycle_and_pauses_to_the_period() {
     let ex = explore(&sys);
     assert!(ex.deadlocks.is_empty());
     // the activity reaches each of its states, and `ether` again
-    for e in ["m.S@a", "m.S@b", "pending(m.S)", "m.S@ether && !pending(m.S)"] {
+    for e in [
+        "m.S@a",
+        "m.S@b",
+        "pending(m.S)",
+        "m.S@ether && !pending(m.S)",
+    ] {
         assert!(ex.any(&sys, e), "{e} is never reached");
     }
     assert!(ex.any(&sys, "active(m.S)") && ex.all(&sys, "active(m.S) == !m.S@ether"));
     // `a` follows `start` in the same cycle: time never passes at `a`
     let at_a = compile_expr(&sys, "m.S@a");
     let mut steps = Steps::new();
-    for s in ex.states.iter().filter(|s| sys.eval(&at_a, s).unwrap() != 0) {
+    for s in ex
+        .states
+        .iter()
+        .filter(|s| sys.eval(&at_a, s).unwrap() != 0)
+    {
         sys.enabled_steps(s, &mut steps).unwrap();
         let names: Vec<String> = steps.iter().map(|st| sys.label_name(st.label)).collect();
         assert_eq!(names, ["m_S_a"], "at `a` only its codel may run");
@@ -258,9 +271,15 @@ fn interrupt_with_a_stop_codel_runs_the_stop_path_ungated() {
     assert!(halts
         .iter()
         .any(|(a, b)| holds_in(&sys, "m.A@main", a) && holds_in(&sys, "m.A@stop", b)));
-    assert!(ex.any(&sys, "m.A@park"), "the stop codel's yields are followed");
+    assert!(
+        ex.any(&sys, "m.A@park"),
+        "the stop codel's yields are followed"
+    );
     assert!(before_each(&ex, &sys, "m_A_main", "age(m.p) == 0"));
-    assert!(!before_each(&ex, &sys, "m_A_stop", "age(m.p) == 0"), "the stop codel runs while `Fresh` fails");
+    assert!(
+        !before_each(&ex, &sys, "m_A_stop", "age(m.p) == 0"),
+        "the stop codel runs while `Fresh` fails"
+    );
     // an interrupted activity whose stop path reaches `ether` has completed: `after` is met
     let ends = transitions_named(&sys, &ex, "m_A_park");
     assert!(!ends.is_empty() && ends.iter().all(|(_, b)| holds_in(&sys, "m_A.done", b)));
@@ -268,7 +287,10 @@ fn interrupt_with_a_stop_codel_runs_the_stop_path_ungated() {
     // held for a port nobody writes: a deadlock, and the shortest one is one request away
     assert!(!ex.deadlocks.is_empty());
     assert_eq!(ex.trace(ex.deadlocks[0]), ["m_A_request"]);
-    assert!(ex.deadlocks.iter().any(|&d| holds_in(&sys, "m.A@main", &ex.states[d])));
+    assert!(ex
+        .deadlocks
+        .iter()
+        .any(|&d| holds_in(&sys, "m.A@main", &ex.states[d])));
 }
 
 #[test]
@@ -281,7 +303,8 @@ fn interrupt_without_a_stop_codel_ends_the_activity_at_once() {
     let halts = transitions_named(&sys, &ex, "m_Halt_request");
     assert!(halts
         .iter()
-        .any(|(a, b)| holds_in(&sys, "m.A@main", a) && holds_in(&sys, "m.A@ether && !pending(m.A)", b)));
+        .any(|(a, b)| holds_in(&sys, "m.A@main", a)
+            && holds_in(&sys, "m.A@ether && !pending(m.A)", b)));
     // interrupted is not completed: `B` (after A) is accepted only once A reached `ether`
     // by itself
     for (from, _) in transitions_named(&sys, &ex, "m_B_request") {
@@ -335,7 +358,9 @@ fn after_refuses_requests_until_the_service_completed() {
     assert!(ex.any(&sys, "active(m.Go)"));
     let requests = transitions_named(&sys, &ex, "m_Go_request");
     assert!(!requests.is_empty());
-    assert!(requests.iter().all(|(a, _)| holds_in(&sys, "m.done_Init", a)));
+    assert!(requests
+        .iter()
+        .all(|(a, _)| holds_in(&sys, "m.done_Init", a)));
     // and the engine's map names the reason
     let map = sys.genom.as_ref().expect("a GenoM map");
     let go = map.service("m", "Go").expect("service");
@@ -366,7 +391,11 @@ const THREE: &str = r#"(name: "m", tasks: [(name: "t", period: 1)], ports: [(nam
 
 /// Explores THREE with `constraint`, then without it; returns both.
 fn with_and_without(constraint: &str, rest: &str) -> ((System, Explored), (System, Explored)) {
-    let with = load(&model("with", THREE, &format!("constraints: [{constraint}], {rest}")));
+    let with = load(&model(
+        "with",
+        THREE,
+        &format!("constraints: [{constraint}], {rest}"),
+    ));
     let without = load(&model("without", THREE, rest));
     let (a, b) = (explore(&with), explore(&without));
     ((with, a), (without, b))
@@ -375,9 +404,14 @@ fn with_and_without(constraint: &str, rest: &str) -> ((System, Explored), (Syste
 #[test]
 fn exclusive_never_lets_two_be_active() {
     let prop = r#"properties: [Invariant(name: "excl", expr: "!(active(m.A) && active(m.B))")]"#;
-    let ((_, with), (_, without)) = with_and_without(r#"Exclusive(services: ["m.A", "m.B"])"#, prop);
+    let ((_, with), (_, without)) =
+        with_and_without(r#"Exclusive(services: ["m.A", "m.B"])"#, prop);
     assert!(with.violations.is_empty());
-    assert_eq!(without.violations.len(), 1, "the invariant needs the constraint");
+    assert_eq!(
+        without.violations.len(),
+        1,
+        "the invariant needs the constraint"
+    );
 }
 
 #[test]
@@ -395,7 +429,8 @@ fn at_most_bounds_the_active_ones() {
 
 #[test]
 fn requires_gates_every_codel_but_the_stop_path() {
-    let ((sys, with), (sys2, without)) = with_and_without(r#"Requires(service: "m.A", active: ["m.B"])"#, "");
+    let ((sys, with), (sys2, without)) =
+        with_and_without(r#"Requires(service: "m.A", active: ["m.B"])"#, "");
     assert!(before_each(&with, &sys, "m_A_start", "active(m.B)"));
     assert!(before_each(&with, &sys, "m_A_main", "active(m.B)"));
     assert!(!before_each(&without, &sys2, "m_A_main", "active(m.B)"));
@@ -419,7 +454,8 @@ fn guard_gates_on_any_expression() {
     let rest = r#"atoms: {"Door": Atom(locations: ["shut", "open"], initial: "shut",
         transitions: [(from: "shut", to: "open"), (from: "open", to: "shut")])},
         components: [(name: "door", atom: "Door")]"#;
-    let ((sys, with), (sys2, without)) = with_and_without(r#"Guard(service: "m.A", when: "door@open")"#, rest);
+    let ((sys, with), (sys2, without)) =
+        with_and_without(r#"Guard(service: "m.A", when: "door@open")"#, rest);
     assert!(before_each(&with, &sys, "m_A_start", "door@open"));
     assert!(before_each(&with, &sys, "m_A_main", "door@open"));
     assert!(!before_each(&without, &sys2, "m_A_main", "door@open"));
