@@ -6,6 +6,7 @@
 
 mod check;
 mod report;
+mod verify;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -13,7 +14,11 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "bip", version, about = "A formally checked behaviour engine for robot functional layers")]
+#[command(
+    name = "bip",
+    version,
+    about = "A formally checked behaviour engine for robot functional layers"
+)]
 struct Cli {
     /// More log output (-v: info, -vv: debug, -vvv: trace); RUST_LOG overrides.
     #[arg(short, long, action = clap::ArgAction::Count, global = true)]
@@ -30,6 +35,10 @@ enum Command {
         #[arg(required = true)]
         files: Vec<PathBuf>,
     },
+    /// Verify a model's properties (deadlock freedom, invariants, reachability, range
+    /// errors) by exploring its states. Exit code 0: all hold, 1: some property fails,
+    /// 2: model or usage error, 3: inconclusive.
+    Verify(verify::Args),
 }
 
 /// Exit codes shared by every command.
@@ -45,6 +54,7 @@ fn main() -> ExitCode {
     init_logging(cli.verbose);
     let code = match cli.command {
         Command::Check { files } => check::run(&files),
+        Command::Verify(args) => verify::run(&args),
     };
     ExitCode::from(code)
 }

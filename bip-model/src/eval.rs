@@ -100,9 +100,8 @@ impl Expr {
                         count: ix.count,
                     });
                 }
-                let slot = ix.first_slot as usize
-                    + i as usize * ix.stride as usize
-                    + ix.offset as usize;
+                let slot =
+                    ix.first_slot as usize + i as usize * ix.stride as usize + ix.offset as usize;
                 match ix.at {
                     Some(loc) => (env.slots[slot] == i64::from(loc)) as i64,
                     None => env.slots[slot],

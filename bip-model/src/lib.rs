@@ -29,6 +29,7 @@ pub use state::{State, StateLayout};
 pub use step::{Label, OwnedStep, Pick, Step, Steps};
 pub use system::{
     Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule, Property,
-    PropertyKind, RangeError, RangeErrorKind, Role, Summary, System, Target, Transition, Var, VarType,
+    PropertyKind, RangeError, RangeErrorKind, Role, Summary, System, Target, Transition, Var,
+    VarType,
 };
 pub use trace::{Trace, TraceStep, TraceValue, Verdict};

@@ -45,7 +45,8 @@ fn parse_shared(name: &str, text: &Arc<String>) -> Result<SystemDef, LoadError> 
         let start = offset_of(text, e.span.start.line, e.span.start.col);
         let end = offset_of(text, e.span.end.line, e.span.end.col).max(start);
         let mut err = ModelError::new(e.code.to_string(), Span::new(start, end));
-        if let ron::Error::NoSuchStructField { .. } | ron::Error::MissingStructField { .. } = e.code {
+        if let ron::Error::NoSuchStructField { .. } | ron::Error::MissingStructField { .. } = e.code
+        {
             err = err.with_help("see docs/model.md for the fields of each part of a model");
         }
         LoadError::model(name, text, vec![err])
@@ -76,7 +77,10 @@ fn is_blank(text: &str) -> bool {
     let mut rest = text.trim_start();
     loop {
         if let Some(r) = rest.strip_prefix("//") {
-            rest = r.split_once('\n').map_or("", |(_, after)| after).trim_start();
+            rest = r
+                .split_once('\n')
+                .map_or("", |(_, after)| after)
+                .trim_start();
         } else if let Some(r) = rest.strip_prefix("/*") {
             match r.find("*/") {
                 Some(end) => rest = r[end + 2..].trim_start(),

@@ -426,7 +426,13 @@ fn tokenize(text: &str) -> HashMap<TokenKey, Vec<Token>> {
                 let (end, value) = scan_raw_string(text, i);
                 let hashes = end - i - value.len() - 3; // `r`, two quotes, hashes on both sides
                 let content_start = i + 2 + hashes / 2;
-                push(TokenKey::Str(value.clone()), content_start, content_start + value.len(), true, b);
+                push(
+                    TokenKey::Str(value.clone()),
+                    content_start,
+                    content_start + value.len(),
+                    true,
+                    b,
+                );
                 i = end;
             }
             b'b' if b.get(i + 1) == Some(&b'"') => {
@@ -449,7 +455,13 @@ fn tokenize(text: &str) -> HashMap<TokenKey, Vec<Token>> {
                 while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
                     i += 1;
                 }
-                push(TokenKey::Ident(text[start..i].to_string()), start, i, true, b);
+                push(
+                    TokenKey::Ident(text[start..i].to_string()),
+                    start,
+                    i,
+                    true,
+                    b,
+                );
             }
             _ => i += 1,
         }
@@ -616,7 +628,13 @@ fn scan_raw_string(text: &str, start: usize) -> (usize, String) {
     i += 1; // opening quote
     let content_start = i;
     while i < b.len() {
-        if b[i] == b'"' && b[i + 1..].iter().take(hashes).filter(|&&c| c == b'#').count() == hashes
+        if b[i] == b'"'
+            && b[i + 1..]
+                .iter()
+                .take(hashes)
+                .filter(|&&c| c == b'#')
+                .count()
+                == hashes
         {
             let value = text[content_start..i].to_string();
             return (i + 1 + hashes, value);
@@ -650,7 +668,11 @@ pub fn offset_of(text: &str, line: usize, col: usize) -> usize {
     let mut offset = 0;
     for (n, l) in text.split_inclusive('\n').enumerate() {
         if n + 1 == line {
-            let within: usize = l.chars().take(col.saturating_sub(1)).map(char::len_utf8).sum();
+            let within: usize = l
+                .chars()
+                .take(col.saturating_sub(1))
+                .map(char::len_utf8)
+                .sum();
             return offset + within;
         }
         offset += l.len();
@@ -704,8 +726,7 @@ mod tests {
     #[test]
     fn claims_follow_file_order() {
         let text = r#"["a", "b", "a"]"#;
-        let v: Vec<Spanned<String>> =
-            with_positions(text, || ron::from_str(text)).expect("parses");
+        let v: Vec<Spanned<String>> = with_positions(text, || ron::from_str(text)).expect("parses");
         assert_eq!(v[0].span, Span::new(2, 3));
         assert_eq!(v[2].span, Span::new(12, 13));
     }

@@ -172,7 +172,9 @@ impl System {
             None => Ok(true),
             Some(g) => g
                 .holds(&mut Env::new(state.slots(), comp.slot + 1))
-                .map_err(|e| self.range_error(e, &format!("guard of {}", self.describe_transition(c, t)))),
+                .map_err(|e| {
+                    self.range_error(e, &format!("guard of {}", self.describe_transition(c, t)))
+                }),
         }
     }
 
@@ -264,7 +266,9 @@ impl System {
         let mut any = false;
         let mut last = None;
         for e in &out.entries {
-            let Label::Interaction(i) = e.label else { continue };
+            let Label::Interaction(i) = e.label else {
+                continue;
+            };
             // steps of one interaction are adjacent: decide once per interaction
             if last == Some(i) {
                 continue;
@@ -287,7 +291,12 @@ impl System {
 
     /// True if interaction `i` is suppressed in `state`, given the set of interactions
     /// enabled before priorities.
-    pub fn is_suppressed(&self, state: &State, i: u32, enabled: &[u64]) -> Result<bool, RangeError> {
+    pub fn is_suppressed(
+        &self,
+        state: &State,
+        i: u32,
+        enabled: &[u64],
+    ) -> Result<bool, RangeError> {
         for &r in &self.rules_by_low[i as usize] {
             let rule = &self.priorities[r as usize];
             if !any_bit(enabled, rule.high.clone()) {
@@ -329,20 +338,29 @@ impl System {
             self.run_action(&t.action, comp.slot + 1, to).map_err(|e| {
                 self.name_error(
                     e,
-                    &format!("action of {}", self.describe_transition(p.component, p.transition)),
+                    &format!(
+                        "action of {}",
+                        self.describe_transition(p.component, p.transition)
+                    ),
                 )
             })?;
         }
         for p in step.picks {
             let comp = &self.components[p.component as usize];
             let atom = &self.atoms[comp.atom as usize];
-            to.slots_mut()[comp.slot as usize] = i64::from(atom.transitions[p.transition as usize].to);
+            to.slots_mut()[comp.slot as usize] =
+                i64::from(atom.transitions[p.transition as usize].to);
         }
         Ok(())
     }
 
     /// Runs assignments left to right on `state`, each seeing the ones before it.
-    fn run_action(&self, action: &[Assign], base: u32, state: &mut State) -> Result<(), ActionError> {
+    fn run_action(
+        &self,
+        action: &[Assign],
+        base: u32,
+        state: &mut State,
+    ) -> Result<(), ActionError> {
         for a in action {
             let v = a
                 .value

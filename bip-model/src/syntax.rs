@@ -133,7 +133,9 @@ impl ConnectorKindDef {
 /// always receive a request; neither is progress of the system itself. `DeadlockFree` is
 /// therefore checked against progress steps: a state is a deadlock when no progress step is
 /// enabled in it, nor in any state reached from it by `Time` steps alone (docs/model.md).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize, serde::Serialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize, serde::Serialize,
+)]
 pub enum Role {
     /// The system's own work (the default; every internal transition is progress).
     #[default]
@@ -224,14 +226,16 @@ impl<'de> Deserialize<'de> for PropertyDef {
                         }
                     }
                     PropertyTag::Invariant => {
-                        let n: NamedExprDef = variant.struct_variant(&["name", "expr"], fields())?;
+                        let n: NamedExprDef =
+                            variant.struct_variant(&["name", "expr"], fields())?;
                         Ok(PropertyDef::Invariant {
                             name: n.name,
                             expr: n.expr,
                         })
                     }
                     PropertyTag::Reachable => {
-                        let n: NamedExprDef = variant.struct_variant(&["name", "expr"], fields())?;
+                        let n: NamedExprDef =
+                            variant.struct_variant(&["name", "expr"], fields())?;
                         Ok(PropertyDef::Reachable {
                             name: n.name,
                             expr: n.expr,

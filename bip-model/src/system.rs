@@ -7,8 +7,8 @@
 use std::ops::Range;
 
 use crate::eval::{Env, EvalError, Expr};
-pub use crate::syntax::Role;
 use crate::state::{State, StateLayout};
+pub use crate::syntax::Role;
 
 /// A compiled model.
 #[derive(Clone, Debug)]
@@ -369,7 +369,9 @@ impl System {
         let comp = &self.components[component as usize];
         let atom = &self.atoms[comp.atom as usize];
         let t = &atom.transitions[transition as usize];
-        let port = t.port.map_or("internal", |p| atom.ports[p as usize].as_str());
+        let port = t
+            .port
+            .map_or("internal", |p| atom.ports[p as usize].as_str());
         format!(
             "{}: {} -{}-> {}",
             comp.name, atom.locations[t.from as usize], port, atom.locations[t.to as usize]
@@ -437,7 +439,9 @@ impl System {
             components: self.components.len(),
             connectors: self.connectors.len(),
             interactions: self.interactions.len(),
-            internal_transitions: per_comp(&|a| a.transitions.iter().filter(|t| t.port.is_none()).count()),
+            internal_transitions: per_comp(&|a| {
+                a.transitions.iter().filter(|t| t.port.is_none()).count()
+            }),
             locations: per_comp(&|a| a.locations.len()),
             variables: per_comp(&|a| a.vars.len()),
             priorities_declared: self.declared_priorities,

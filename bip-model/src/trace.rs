@@ -112,7 +112,10 @@ impl System {
         let mut out = OrderedMap::default();
         for (slot, (a, b)) in before.slots().iter().zip(after.slots()).enumerate() {
             if a != b {
-                out.push(self.slot_name(slot as u32), self.trace_value(after, slot as u32));
+                out.push(
+                    self.slot_name(slot as u32),
+                    self.trace_value(after, slot as u32),
+                );
             }
         }
         out
@@ -218,7 +221,12 @@ impl Trace {
 }
 
 /// True if `after` differs from `before` exactly where the record says, with its values.
-fn matches_record(system: &System, before: &State, after: &State, recorded: &[(u32, &TraceValue)]) -> bool {
+fn matches_record(
+    system: &System,
+    before: &State,
+    after: &State,
+    recorded: &[(u32, &TraceValue)],
+) -> bool {
     for &(slot, v) in recorded {
         if system.trace_value(after, slot) != *v {
             return false;
@@ -256,7 +264,13 @@ impl fmt::Display for TraceDisplay<'_> {
                 current.insert(sys.slot_name(slot), sys.trace_value(&init, slot));
             }
         }
-        let width = t.steps.iter().map(|s| s.step.len()).max().unwrap_or(0).min(32);
+        let width = t
+            .steps
+            .iter()
+            .map(|s| s.step.len())
+            .max()
+            .unwrap_or(0)
+            .min(32);
         let num_width = n.to_string().len();
         for (k, s) in t.steps.iter().enumerate() {
             write!(f, "  {:>num_width$}  {:<width$}", k + 1, s.step)?;

@@ -1,14 +1,17 @@
-pub fn add(left: u64, right: u64) -> u64 {
-    left + right
-}
+//! `bip-verifier`: verification of bip models.
+//!
+//! - [`explore::verify`]: explicit-state verification, breadth-first and parallel, with
+//!   shortest counterexamples (`explore.rs`, over the visited set of `visited.rs`);
+//! - [`report`]: the verdicts and statistics any method produces;
+//! - [`promela`]: the same system as a Promela model, to cross-check with SPIN.
+//!
+//! Every method uses `bip-model`'s step relation and deadlock definition; none has a
+//! notion of its own of "enabled" or "deadlock".
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+pub mod explore;
+pub mod memory;
+pub mod report;
+pub mod visited;
 
-    #[test]
-    fn it_works() {
-        let result = add(2, 2);
-        assert_eq!(result, 4);
-    }
-}
+pub use explore::{verify, Options, Progress, VerifyError, RANGE_ERRORS};
+pub use report::{Method, Outcome, PropertyKind, PropertyResult, Report, Stats, Stop, Verdict};

@@ -45,7 +45,10 @@ pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
     });
     if let Some(t) = &def.tick_ms {
         if tick_ms.is_none() {
-            return Err(vec![ModelError::new("`tick_ms` must be a positive integer", t.span)]);
+            return Err(vec![ModelError::new(
+                "`tick_ms` must be a positive integer",
+                t.span,
+            )]);
         }
     }
     let (rules, rules_by_low) = priorities;
@@ -110,9 +113,8 @@ fn check_name(errors: &mut Errors, name: &Text, what: &str) -> bool {
         && n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
     if !ok {
         errors.push(
-            ModelError::new(format!("`{n}` is not a valid {what} name"), name.span).with_help(
-                "names use letters, digits and `_`, and do not start with a digit",
-            ),
+            ModelError::new(format!("`{n}` is not a valid {what} name"), name.span)
+                .with_help("names use letters, digits and `_`, and do not start with a digit"),
         );
         return false;
     }
@@ -162,7 +164,12 @@ impl Compiler {
     }
 
     /// Evaluates a constant written as a number, a boolean or an expression string.
-    fn const_value(&self, v: &ConstExpr, want: Ty, fixed: &[(&str, i64)]) -> Result<i64, ModelError> {
+    fn const_value(
+        &self,
+        v: &ConstExpr,
+        want: Ty,
+        fixed: &[(&str, i64)],
+    ) -> Result<i64, ModelError> {
         let (value, ty) = self.const_any(v, fixed)?;
         if ty != want {
             return Err(ModelError::new(
@@ -189,14 +196,21 @@ impl Compiler {
     }
 
     fn constants(&mut self, def: &SystemDef) {
-        unique(&mut self.errors, def.constants.iter().map(|(k, _)| k), "constant");
+        unique(
+            &mut self.errors,
+            def.constants.iter().map(|(k, _)| k),
+            "constant",
+        );
         for (name, value) in def.constants.iter() {
-            if !check_name(&mut self.errors, name, "constant") || self.consts.contains_key(name.as_str()) {
+            if !check_name(&mut self.errors, name, "constant")
+                || self.consts.contains_key(name.as_str())
+            {
                 continue;
             }
             match self.const_any(value, &[]) {
                 Ok((v, ty)) => {
-                    self.consts.insert(name.value.clone(), ConstInfo { value: v, ty });
+                    self.consts
+                        .insert(name.value.clone(), ConstInfo { value: v, ty });
                     self.const_list.push((name.value.clone(), v));
                 }
                 Err(e) => self.errors.push(e),
@@ -207,7 +221,9 @@ impl Compiler {
     fn atoms(&mut self, def: &SystemDef) {
         unique(&mut self.errors, def.atoms.iter().map(|(k, _)| k), "atom");
         for (name, a) in def.atoms.iter() {
-            if !check_name(&mut self.errors, name, "atom") || self.atom_by_name.contains_key(name.as_str()) {
+            if !check_name(&mut self.errors, name, "atom")
+                || self.atom_by_name.contains_key(name.as_str())
+            {
                 continue;
             }
             let atom = self.atom(name, a);
@@ -220,7 +236,10 @@ impl Compiler {
     fn atom(&mut self, name: &Text, a: &AtomDef) -> Atom {
         let errors = &mut self.errors;
         if a.locations.is_empty() {
-            errors.push(ModelError::new(format!("atom `{name}` has no locations"), name.span));
+            errors.push(ModelError::new(
+                format!("atom `{name}` has no locations"),
+                name.span,
+            ));
         }
         for l in &a.locations {
             check_name(errors, l, "location");
@@ -274,7 +293,9 @@ impl Compiler {
             };
             let init = match &v.init {
                 None => ty.range().0,
-                Some(init) => self.checked_init(init, &ty, &v.name, &[]).unwrap_or(ty.range().0),
+                Some(init) => self
+                    .checked_init(init, &ty, &v.name, &[])
+                    .unwrap_or(ty.range().0),
             };
             vars.push(Var {
                 name: v.name.value.clone(),
@@ -303,7 +324,10 @@ impl Compiler {
                     None => {
                         self.errors.push(
                             ModelError::new(format!("atom `{name}` has no port `{p}`"), p.span)
-                                .with_help(one_of("its ports are", a.ports.iter().map(|p| p.as_str()))),
+                                .with_help(one_of(
+                                    "its ports are",
+                                    a.ports.iter().map(|p| p.as_str()),
+                                )),
                         );
                         None
                     }
@@ -361,7 +385,9 @@ impl Compiler {
                 if let VarType::Int { lo, hi } = ty {
                     if v < *lo || v > *hi {
                         let mut e = ModelError::new(
-                            format!("initial value {v} of `{var}` is outside its range {lo}..={hi}"),
+                            format!(
+                                "initial value {v} of `{var}` is outside its range {lo}..={hi}"
+                            ),
                             init.span,
                         );
                         if let Some((_, k)) = fixed.iter().find(|(n, _)| *n == "self_index") {
@@ -425,7 +451,10 @@ impl Compiler {
                         format!("atom `{}` has no variable `{n}`", atom.name),
                         act.sub_span(a.target.span.start..a.target.span.end),
                     )
-                    .with_help(one_of("its variables are", atom.vars.iter().map(|v| v.name.as_str()))),
+                    .with_help(one_of(
+                        "its variables are",
+                        atom.vars.iter().map(|v| v.name.as_str()),
+                    )),
                 );
                 continue;
             };
@@ -447,7 +476,11 @@ impl Compiler {
     }
 
     fn components(&mut self, def: &SystemDef) {
-        unique(&mut self.errors, def.components.iter().map(|c| &c.name), "component");
+        unique(
+            &mut self.errors,
+            def.components.iter().map(|c| &c.name),
+            "component",
+        );
         for cd in &def.components {
             if !check_name(&mut self.errors, &cd.name, "component")
                 || self.family_by_name.contains_key(cd.name.as_str())
@@ -493,13 +526,23 @@ impl Compiler {
         };
         let a = &self.atoms[atom as usize];
         let mut overrides: Vec<(u32, &ConstExpr)> = Vec::new();
-        unique(&mut self.errors, cd.vars_init.iter().map(|(k, _)| k), "initial value for");
+        unique(
+            &mut self.errors,
+            cd.vars_init.iter().map(|(k, _)| k),
+            "initial value for",
+        );
         for (var, value) in cd.vars_init.iter() {
             match a.var_index(var) {
                 Some(v) => overrides.push((v, value)),
                 None => self.errors.push(
-                    ModelError::new(format!("atom `{}` has no variable `{var}`", a.name), var.span)
-                        .with_help(one_of("its variables are", a.vars.iter().map(|v| v.name.as_str()))),
+                    ModelError::new(
+                        format!("atom `{}` has no variable `{var}`", a.name),
+                        var.span,
+                    )
+                    .with_help(one_of(
+                        "its variables are",
+                        a.vars.iter().map(|v| v.name.as_str()),
+                    )),
                 ),
             }
         }
@@ -531,7 +574,8 @@ impl Compiler {
                 if failed_override[o] {
                     continue; // report a bad `vars_init` once, not once per instance
                 }
-                match self.checked_init(value, &vars[v as usize].ty, &vars[v as usize].name, &fixed) {
+                match self.checked_init(value, &vars[v as usize].ty, &vars[v as usize].name, &fixed)
+                {
                     Some(x) => self.initial[(slot + 1 + v) as usize] = x,
                     None => failed_override[o] = true,
                 }
@@ -547,7 +591,11 @@ impl Compiler {
     }
 
     fn connectors(&mut self, def: &SystemDef) {
-        unique(&mut self.errors, def.connectors.iter().map(|c| &c.name), "connector");
+        unique(
+            &mut self.errors,
+            def.connectors.iter().map(|c| &c.name),
+            "connector",
+        );
         for cd in &def.connectors {
             if !check_name(&mut self.errors, &cd.name, "connector")
                 || self.connector_by_name.contains_key(cd.name.as_str())
@@ -573,11 +621,18 @@ impl Compiler {
                 let r = parse_range(f).map_err(|e| parse_error(f, e))?;
                 let names = self.names();
                 let mut res = Resolver::new(&names, Place::Constant, &[]);
-                let lo = res.constant(&r.lo, Ty::Int).map_err(|e| forall_bound(f, e))?;
-                let hi = res.constant(&r.hi, Ty::Int).map_err(|e| forall_bound(f, e))?;
+                let lo = res
+                    .constant(&r.lo, Ty::Int)
+                    .map_err(|e| forall_bound(f, e))?;
+                let hi = res
+                    .constant(&r.hi, Ty::Int)
+                    .map_err(|e| forall_bound(f, e))?;
                 if hi.saturating_sub(lo) > MAX_COUNT {
                     return Err(ModelError::new(
-                        format!("`forall` over {} values; at most {MAX_COUNT} are allowed", hi - lo),
+                        format!(
+                            "`forall` over {} values; at most {MAX_COUNT} are allowed",
+                            hi - lo
+                        ),
                         f.span,
                     ));
                 }
@@ -595,7 +650,11 @@ impl Compiler {
             ConnectorKindDef::Rendezvous => None,
             ConnectorKindDef::Broadcast { trigger } => Some((trigger, parse(trigger)?)),
         };
-        let guard = cd.guard.as_ref().map(|g| parse(g).map(|e| (g, e))).transpose()?;
+        let guard = cd
+            .guard
+            .as_ref()
+            .map(|g| parse(g).map(|e| (g, e)))
+            .transpose()?;
         let action = match &cd.action {
             None => None,
             Some(a) => Some((a, parse_action(a).map_err(|e| parse_error(a, e))?)),
@@ -669,7 +728,10 @@ impl Compiler {
                     format!("atom `{}` has no port `{}`", atom.name, member.name),
                     text.sub_span(member.span.start..member.span.end),
                 )
-                .with_help(one_of("its ports are", atom.ports.iter().map(String::as_str)))),
+                .with_help(one_of(
+                    "its ports are",
+                    atom.ports.iter().map(String::as_str),
+                ))),
             }
         };
         let mut refs = Vec::with_capacity(ports.len() + 1);
@@ -836,10 +898,11 @@ impl Compiler {
             } else {
                 format!("unknown connector `{name}`")
             };
-            self.errors.push(ModelError::new(msg, t.span).with_help(one_of(
-                "the connectors are",
-                self.connectors.iter().map(|c| c.name.as_str()),
-            )));
+            self.errors
+                .push(ModelError::new(msg, t.span).with_help(one_of(
+                    "the connectors are",
+                    self.connectors.iter().map(|c| c.name.as_str()),
+                )));
             return None;
         };
         let conn = &self.connectors[c as usize];
@@ -848,8 +911,11 @@ impl Compiler {
         };
         if conn.indices.is_empty() && conn.interactions.len() == 1 {
             self.errors.push(
-                ModelError::new(format!("connector `{name}` has no `forall`; it has no instances"), t.span)
-                    .with_help(format!("write `{name}`")),
+                ModelError::new(
+                    format!("connector `{name}` has no `forall`; it has no instances"),
+                    t.span,
+                )
+                .with_help(format!("write `{name}`")),
             );
             return None;
         }
@@ -881,9 +947,10 @@ impl Compiler {
         let mut seen: HashMap<String, Span> = HashMap::new();
         for p in &def.properties {
             let (name_span, text) = match p {
-                PropertyDef::DeadlockFree { terminal } => {
-                    (terminal.as_ref().map_or(Span::NONE, |t| t.span), terminal.as_ref())
-                }
+                PropertyDef::DeadlockFree { terminal } => (
+                    terminal.as_ref().map_or(Span::NONE, |t| t.span),
+                    terminal.as_ref(),
+                ),
                 PropertyDef::Invariant { name, expr } | PropertyDef::Reachable { name, expr } => {
                     (name.span, Some(expr))
                 }
@@ -905,7 +972,9 @@ impl Compiler {
                 },
             };
             let kind = match (p, compiled) {
-                (PropertyDef::DeadlockFree { .. }, terminal) => PropertyKind::DeadlockFree { terminal },
+                (PropertyDef::DeadlockFree { .. }, terminal) => {
+                    PropertyKind::DeadlockFree { terminal }
+                }
                 (PropertyDef::Invariant { .. }, Some(e)) => PropertyKind::Invariant(e),
                 (PropertyDef::Reachable { .. }, Some(e)) => PropertyKind::Reachable(e),
                 _ => continue,

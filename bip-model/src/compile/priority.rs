@@ -55,7 +55,13 @@ pub(super) fn close(
         if overlap(&r.low, &r.high) {
             return Err(cycle_error(declared, &r.chain));
         }
-        let key = (r.low.start, r.low.end, r.high.start, r.high.end, r.when.clone());
+        let key = (
+            r.low.start,
+            r.low.end,
+            r.high.start,
+            r.high.end,
+            r.when.clone(),
+        );
         if seen.insert(key) {
             if rules.len() >= MAX_RULES {
                 return Err(ModelError::new(
@@ -68,7 +74,11 @@ pub(super) fn close(
         Ok(())
     };
     for (k, d) in declared.iter().enumerate() {
-        let when = if d.when.is_some() { vec![k as u32] } else { Vec::new() };
+        let when = if d.when.is_some() {
+            vec![k as u32]
+        } else {
+            Vec::new()
+        };
         add(
             &mut rules,
             Rule {
@@ -133,7 +143,10 @@ pub(super) fn close(
 }
 
 fn cycle_error(declared: &[Declared], chain: &[u32]) -> ModelError {
-    let texts: Vec<&str> = chain.iter().map(|&k| declared[k as usize].text.as_str()).collect();
+    let texts: Vec<&str> = chain
+        .iter()
+        .map(|&k| declared[k as usize].text.as_str())
+        .collect();
     let first = &declared[chain[0] as usize];
     let mut e = ModelError::new(
         format!("the priorities form a cycle: {}", texts.join(", ")),

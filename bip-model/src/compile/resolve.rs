@@ -39,7 +39,11 @@ fn err<T>(span: Span, message: impl Into<String>) -> Result<T, ResolveError> {
     })
 }
 
-fn err_help<T>(span: Span, message: impl Into<String>, help: impl Into<String>) -> Result<T, ResolveError> {
+fn err_help<T>(
+    span: Span,
+    message: impl Into<String>,
+    help: impl Into<String>,
+) -> Result<T, ResolveError> {
     Err(ResolveError {
         message: message.into(),
         span,
@@ -142,7 +146,10 @@ impl<'a> Resolver<'a> {
                         err_help(
                             field.span,
                             format!("atom `{}` has no variable `{}`", atom.name, field.name),
-                            one_of("its variables are", atom.vars.iter().map(|v| v.name.as_str())),
+                            one_of(
+                                "its variables are",
+                                atom.vars.iter().map(|v| v.name.as_str()),
+                            ),
                         )
                     };
                 };
@@ -159,7 +166,10 @@ impl<'a> Resolver<'a> {
                     return err_help(
                         loc.span,
                         format!("atom `{}` has no location `{}`", atom.name, loc.name),
-                        one_of("its locations are", atom.locations.iter().map(String::as_str)),
+                        one_of(
+                            "its locations are",
+                            atom.locations.iter().map(String::as_str),
+                        ),
                     );
                 };
                 (self.slot_read(comp, 0, Some(l)), Ty::Bool)
@@ -206,11 +216,7 @@ impl<'a> Resolver<'a> {
                         if ta != tb {
                             return err(
                                 e.span,
-                                format!(
-                                    "cannot compare {} with {}",
-                                    ta.article(),
-                                    tb.article()
-                                ),
+                                format!("cannot compare {} with {}", ta.article(), tb.article()),
                             );
                         }
                         Ty::Bool
@@ -246,8 +252,12 @@ impl<'a> Resolver<'a> {
                 (C::Cond(Box::new(cc), Box::new(ca), Box::new(cb)), ta)
             }
             ExprKind::Quant(kind, range, body) => {
-                let lo = self.constant(&range.lo, Ty::Int).map_err(|e| quant_bound(e))?;
-                let hi = self.constant(&range.hi, Ty::Int).map_err(|e| quant_bound(e))?;
+                let lo = self
+                    .constant(&range.lo, Ty::Int)
+                    .map_err(|e| quant_bound(e))?;
+                let hi = self
+                    .constant(&range.hi, Ty::Int)
+                    .map_err(|e| quant_bound(e))?;
                 let depth = self.quant.len();
                 if depth >= MAX_QUANT_DEPTH {
                     return err(
@@ -332,7 +342,10 @@ impl<'a> Resolver<'a> {
         let help = match self.place {
             Place::Constant => "only constants can be used here".to_string(),
             Place::Atom(atom) => {
-                let mut h = one_of("the atom's variables are", atom.vars.iter().map(|v| v.name.as_str()));
+                let mut h = one_of(
+                    "the atom's variables are",
+                    atom.vars.iter().map(|v| v.name.as_str()),
+                );
                 if self.names.atoms.iter().any(|a| a.var_index(n).is_some()) {
                     h = format!("{h}; an atom reads only its own variables");
                 }
@@ -395,10 +408,7 @@ impl<'a> Resolver<'a> {
                 match index {
                     eval::Expr::Const(k) => {
                         if k < 0 || k >= i64::from(count) {
-                            return err(
-                                idx.span,
-                                format!("index {k} is outside {n}[0..{count}]"),
-                            );
+                            return err(idx.span, format!("index {k} is outside {n}[0..{count}]"));
                         }
                         Ok(CompRef::Static(fam.first + k as u32))
                     }
@@ -479,7 +489,10 @@ fn to_constant(c: eval::Expr, span: Span) -> Result<i64, ResolveError> {
             Err(_) => return err(span, "this constant expression overflows 64-bit integers"),
         }
     }
-    err(span, "expected a constant expression (it may use constants only)")
+    err(
+        span,
+        "expected a constant expression (it may use constants only)",
+    )
 }
 
 fn body_span(e: &expr::Expr) -> Span {

@@ -295,7 +295,10 @@ mod tests {
             round_trip("exists i in 0..N - 1: fork[(i + 1) % N].x > 2"),
             "exists i in 0..N - 1: fork[(i + 1) % N].x > 2"
         );
-        assert_eq!(round_trip("active(m.S) && m.S@start"), "active(m.S) && m.S@start");
+        assert_eq!(
+            round_trip("active(m.S) && m.S@start"),
+            "active(m.S) && m.S@start"
+        );
     }
 
     #[test]
