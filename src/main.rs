@@ -5,6 +5,7 @@
 //! 2 the model or the command is wrong, 3 the result is inconclusive.
 
 mod check;
+mod export;
 mod report;
 mod verify;
 
@@ -39,6 +40,8 @@ enum Command {
     /// errors) by exploring its states. Exit code 0: all hold, 1: some property fails,
     /// 2: model or usage error, 3: inconclusive.
     Verify(verify::Args),
+    /// Write the model in another tool's language (Promela, for SPIN).
+    Export(export::Args),
 }
 
 /// Exit codes shared by every command.
@@ -55,6 +58,7 @@ fn main() -> ExitCode {
     let code = match cli.command {
         Command::Check { files } => check::run(&files),
         Command::Verify(args) => verify::run(&args),
+        Command::Export(args) => export::run(&args),
     };
     ExitCode::from(code)
 }

@@ -19,7 +19,7 @@
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use bip_model::eval::Expr;
+use bip_model::eval::{Env, Expr};
 use bip_model::{
     Liveness, LivenessChecker, OwnedStep, PropertyKind as ModelKind, State, Steps, System, Trace,
 };
@@ -267,6 +267,9 @@ struct Explorer<'a> {
     depth: u32,
     max_memory: Option<u64>,
     started: Instant,
+    /// Time spent in each phase, for `-v` logs and profiles.
+    expand_time: Duration,
+    insert_time: Duration,
 }
 
 impl<'a> Explorer<'a> {
@@ -302,6 +305,8 @@ impl<'a> Explorer<'a> {
             depth: 0,
             max_memory: options.max_memory.or_else(memory::default_limit),
             started: Instant::now(),
+            expand_time: Duration::ZERO,
+            insert_time: Duration::ZERO,
         }
     }
 
@@ -333,8 +338,13 @@ impl<'a> Explorer<'a> {
                     break 'levels;
                 }
                 let before = self.visited.allocated_bytes();
+                let t0 = Instant::now();
                 self.expand(group);
-                if let Err(ShardFull) = self.insert() {
+                let t1 = Instant::now();
+                let inserted = self.insert();
+                self.expand_time += t1 - t0;
+                self.insert_time += t1.elapsed();
+                if let Err(ShardFull) = inserted {
                     stopped = Some(Stop::TooManyStates);
                     break 'levels;
                 }
@@ -506,6 +516,8 @@ impl<'a> Explorer<'a> {
             transitions = self.transitions,
             depth = self.depth,
             seconds,
+            expand_seconds = self.expand_time.as_secs_f64(),
+            insert_seconds = self.insert_time.as_secs_f64(),
             "explored"
         );
         Ok(Report {
@@ -586,7 +598,8 @@ impl Ctx<'_, '_> {
         let range_target = self.targets.len() - 1;
         for local in chunk.start..chunk.end {
             let id = self.visited.id(chunk.shard, local);
-            layout.decode(self.visited.state(id), &mut s.state);
+            let current = self.visited.state(id);
+            layout.decode(current, &mut s.state);
             let found = |p: usize, what: Found, out: &mut ChunkOut| {
                 if out.findings[p].is_none() {
                     out.findings[p] = Some(Finding { state: id, what });
@@ -606,10 +619,14 @@ impl Ctx<'_, '_> {
                     }
                     Check::RangeErrors => continue,
                 };
-                match sys.holds(e, &s.state, &format!("property {}", t.name)) {
+                // the context string is built only on an error: this runs for every state
+                match e.holds(&mut Env::new(s.state.slots(), 0)) {
                     Ok(v) if v == wanted => found(p, what, out),
                     Ok(_) => {}
-                    Err(err) => found(p, Found::RangeError(err.to_string()), out),
+                    Err(err) => {
+                        let err = sys.range_error(err, &format!("property {}", t.name));
+                        found(p, Found::RangeError(err.to_string()), out);
+                    }
                 }
             }
             if let Err(err) = sys.enabled_steps(&s.state, &mut s.steps) {
@@ -647,7 +664,7 @@ impl Ctx<'_, '_> {
                     continue;
                 }
                 out.transitions += 1;
-                layout.encode(next, packed);
+                layout.encode_changed(state, current, next, packed);
                 let h = hash(packed);
                 if self.visited.find(h, packed).is_none() {
                     out.raw.extend_from_slice(&h.to_le_bytes());

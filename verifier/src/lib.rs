@@ -10,6 +10,7 @@
 
 pub mod explore;
 pub mod memory;
+pub mod promela;
 pub mod report;
 pub mod visited;
 
