@@ -87,6 +87,7 @@ pub fn run(args: &Args) -> u8 {
         max_memory: args.max_memory,
         timeout: args.timeout,
         stop_at_first: args.stop_at_first,
+        liveness_bound: 0,
     };
     let show_progress =
         !args.quiet && args.format == Format::Text && std::io::stderr().is_terminal();

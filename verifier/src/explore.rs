@@ -50,6 +50,10 @@ pub struct Options {
     pub timeout: Option<Duration>,
     /// Stop as soon as one property fails.
     pub stop_at_first: bool,
+    /// Bound on the states the deadlock check explores by time steps alone from one state
+    /// (0: `bip-model`'s default). Past it, the state's liveness is unknown and
+    /// `DeadlockFree` cannot hold.
+    pub liveness_bound: usize,
 }
 
 /// Something that went wrong besides the model's verdicts.
@@ -281,6 +285,9 @@ impl<'a> Explorer<'a> {
             .map(|_| {
                 let mut checker = LivenessChecker::default();
                 checker.max_memo = memo;
+                if options.liveness_bound > 0 {
+                    checker.max_time_states = options.liveness_bound;
+                }
                 Mutex::new(Scratch {
                     state: system.initial_state(),
                     next: system.initial_state(),

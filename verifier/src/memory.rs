@@ -63,11 +63,11 @@ fn cgroup_allowance() -> Option<u64> {
 /// Parses a size as the command line takes it: `1000000`, `512K`, `300M`, `4G`, `1T`
 /// (binary units; an optional `B` or `iB` suffix is accepted).
 pub fn parse_size(text: &str) -> Result<u64, String> {
-    let t = text.trim();
-    let t = t
-        .strip_suffix("iB")
-        .or_else(|| t.strip_suffix('B'))
-        .unwrap_or(t);
+    let lower = text.trim().to_ascii_lowercase();
+    let t = lower
+        .strip_suffix("ib")
+        .or_else(|| lower.strip_suffix('b'))
+        .unwrap_or(&lower);
     let (digits, unit) = match t.char_indices().find(|(_, c)| c.is_ascii_alphabetic()) {
         Some((i, _)) => (&t[..i], &t[i..]),
         None => (t, ""),
