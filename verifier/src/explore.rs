@@ -274,6 +274,8 @@ struct Explorer<'a> {
     /// Time spent in each phase, for `-v` logs and profiles.
     expand_time: Duration,
     insert_time: Duration,
+    /// The run ended early because every verdict was final.
+    stopped_decided: bool,
 }
 
 impl<'a> Explorer<'a> {
@@ -314,6 +316,7 @@ impl<'a> Explorer<'a> {
             started: Instant::now(),
             expand_time: Duration::ZERO,
             insert_time: Duration::ZERO,
+            stopped_decided: false,
         }
     }
 
@@ -366,6 +369,7 @@ impl<'a> Explorer<'a> {
                     break 'levels;
                 }
                 if self.all_decided() {
+                    self.stopped_decided = true;
                     break 'levels;
                 }
                 if last_progress.elapsed() >= Duration::from_millis(250) {
@@ -489,10 +493,17 @@ impl<'a> Explorer<'a> {
     fn report(self, stopped: Option<Stop>) -> Result<Report, VerifyError> {
         let seconds = self.started.elapsed().as_secs_f64();
         let states = self.visited.len();
+        // the deepest level with a stored state (the run may have stopped before expanding it)
+        let depth = (0..self.visited.levels())
+            .rev()
+            .find(|&l| self.visited.level_len(l) > 0)
+            .unwrap_or(0) as u32;
+        let complete = stopped.is_none() && !self.stopped_decided;
         let stats = Stats {
             states,
+            complete,
             transitions: self.transitions,
-            depth: self.depth,
+            depth,
             seconds,
             states_per_second: if seconds > 0.0 {
                 states as f64 / seconds
@@ -521,7 +532,7 @@ impl<'a> Explorer<'a> {
         tracing::info!(
             states,
             transitions = self.transitions,
-            depth = self.depth,
+            depth,
             seconds,
             expand_seconds = self.expand_time.as_secs_f64(),
             insert_seconds = self.insert_time.as_secs_f64(),

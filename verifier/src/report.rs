@@ -121,6 +121,10 @@ impl std::fmt::Display for Stop {
 pub struct Stats {
     /// Distinct states stored.
     pub states: u64,
+    /// True if every reachable state was stored and expanded: `states` is the number of
+    /// reachable states. False if a limit stopped the run, or it stopped early because no
+    /// further state could change a verdict.
+    pub complete: bool,
     /// Steps fired (edges of the state graph explored, including those to known states).
     pub transitions: u64,
     /// Largest distance, in steps, of a stored state from the initial state.

@@ -156,30 +156,38 @@ impl Shard {
         bytes: &[u8],
         parent: StateId,
     ) -> Result<Option<u32>, ShardFull> {
-        if (self.parents.len() + 1) * 4 > self.table.len() * 3 {
-            self.grow();
-        }
-        let mask = self.table.len() - 1;
         let tag = tag_of(hash);
-        let mut i = hash as usize & mask;
-        loop {
-            let e = self.table[i];
-            if e == 0 {
-                break;
-            }
-            if e >> LOCAL_BITS == tag && self.state((e & LOCAL_MASK) - 1) == bytes {
-                return Ok(None);
-            }
-            i = (i + 1) & mask;
+        let mut i = self.probe(hash, bytes, tag);
+        if self.table[i] != 0 {
+            return Ok(None);
         }
         let local = self.len();
         if local >= SHARD_CAPACITY {
             return Err(ShardFull);
         }
+        // grow only for a state that is really new, so that the table's size depends on
+        // the states stored and not on how many duplicates were offered
+        if (self.parents.len() + 1) * 4 > self.table.len() * 3 {
+            self.grow();
+            i = self.probe(hash, bytes, tag);
+        }
         self.table[i] = (tag << LOCAL_BITS) | (local + 1);
         self.arena.extend_from_slice(bytes);
         self.parents.push(parent);
         Ok(Some(local))
+    }
+
+    /// The table entry holding these bytes, or the empty entry where they would go.
+    fn probe(&self, hash: u64, bytes: &[u8], tag: u32) -> usize {
+        let mask = self.table.len() - 1;
+        let mut i = hash as usize & mask;
+        loop {
+            let e = self.table[i];
+            if e == 0 || (e >> LOCAL_BITS == tag && self.state((e & LOCAL_MASK) - 1) == bytes) {
+                return i;
+            }
+            i = (i + 1) & mask;
+        }
     }
 
     /// Doubles the table and re-enters every state (hashes are recomputed from the arena,
@@ -305,6 +313,11 @@ impl Visited {
             let len = s.len();
             s.level_starts.push(len);
         }
+    }
+
+    /// Number of levels started.
+    pub fn levels(&self) -> usize {
+        self.shards.first().map_or(0, |s| s.level_starts.len())
     }
 
     /// Number of states in `level`.
