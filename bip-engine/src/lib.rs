@@ -1,14 +1,2 @@
-pub fn add(left: u64, right: u64) -> u64 {
-    left + right
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn it_works() {
-        let result = add(2, 2);
-        assert_eq!(result, 4);
-    }
-}
+//! `bip-engine`: the runtime engine that runs codels and gates every codel transition on
+//! the verified model. (Built in a later step; see ../shared/DESIGN.md.)

@@ -141,15 +141,17 @@ impl Trace {
         }
     }
 
-    /// The trace as pretty RON.
+    /// The trace as pretty RON, in MODEL.md's layout: `Trace(` then steps written
+    /// `(step: "...", state: {...})`.
     pub fn to_ron(&self) -> String {
+        // ron names either every struct or none; MODEL.md names only the outer one
         let config = ron::ser::PrettyConfig::new()
-            .struct_names(true)
-            .depth_limit(3)
-            .extensions(ron::extensions::Extensions::IMPLICIT_SOME);
-        ron_options()
-            .to_string_pretty(self, config)
-            .unwrap_or_else(|e| format!("// could not write the trace: {e}"))
+            .struct_names(false)
+            .depth_limit(2);
+        match ron_options().to_string_pretty(self, config) {
+            Ok(body) => format!("Trace{body}\n"),
+            Err(e) => format!("// could not write the trace: {e}\n"),
+        }
     }
 
     /// Reads a trace written in RON.

@@ -143,6 +143,13 @@ pub(super) fn close(
 }
 
 fn cycle_error(declared: &[Declared], chain: &[u32]) -> ModelError {
+    // start the cycle at the priority declared first, so it reads in file order
+    let start = (0..chain.len()).min_by_key(|&k| chain[k]).unwrap_or(0);
+    let chain: Vec<u32> = chain[start..]
+        .iter()
+        .chain(&chain[..start])
+        .copied()
+        .collect();
     let texts: Vec<&str> = chain
         .iter()
         .map(|&k| declared[k as usize].text.as_str())

@@ -252,12 +252,8 @@ impl<'a> Resolver<'a> {
                 (C::Cond(Box::new(cc), Box::new(ca), Box::new(cb)), ta)
             }
             ExprKind::Quant(kind, range, body) => {
-                let lo = self
-                    .constant(&range.lo, Ty::Int)
-                    .map_err(|e| quant_bound(e))?;
-                let hi = self
-                    .constant(&range.hi, Ty::Int)
-                    .map_err(|e| quant_bound(e))?;
+                let lo = self.constant(&range.lo, Ty::Int).map_err(quant_bound)?;
+                let hi = self.constant(&range.hi, Ty::Int).map_err(quant_bound)?;
                 let depth = self.quant.len();
                 if depth >= MAX_QUANT_DEPTH {
                     return err(

@@ -18,6 +18,7 @@ pub fn parse_expr(text: &str) -> PResult<Expr> {
     let mut p = Parser::new(text)?;
     let e = p.expr()?;
     p.expect_end()?;
+    check_depth(&e)?;
     Ok(e)
 }
 
@@ -35,6 +36,7 @@ pub fn parse_action(text: &str) -> PResult<Vec<Assign>> {
             return Err(p.error_here("expected `=` after the assigned variable"));
         }
         let value = p.expr()?;
+        check_depth(&value)?;
         out.push(Assign { target, value });
         if !p.at(&Tok::End) && !p.eat(&Tok::Semi) {
             return Err(p.error_here("expected `;` between assignments"));
@@ -48,6 +50,8 @@ pub fn parse_range(text: &str) -> PResult<Range> {
     let mut p = Parser::new(text)?;
     let r = p.range()?;
     p.expect_end()?;
+    check_depth(&r.lo)?;
+    check_depth(&r.hi)?;
     Ok(r)
 }
 
@@ -191,8 +195,47 @@ fn lex(text: &str) -> PResult<Vec<(Tok, Span)>> {
 }
 
 /// Expressions nest by recursion; this bound turns a pathological input into an error
-/// instead of a stack overflow.
+/// instead of a stack overflow, here and in every later pass over the tree.
 const MAX_DEPTH: usize = 200;
+
+/// Left-associative chains (`1 + 1 + … + 1`) are parsed by a loop, not by recursion, but
+/// they still build deep trees; every tree is checked once, without recursion.
+fn check_depth(e: &Expr) -> PResult<()> {
+    let mut stack = vec![(e, 1usize)];
+    while let Some((e, d)) = stack.pop() {
+        if d > MAX_DEPTH {
+            return Err(ParseError {
+                message: format!(
+                    "expression nested more than {MAX_DEPTH} levels deep (split long chains \
+                     of operators, or use a quantifier)"
+                ),
+                span: e.span,
+            });
+        }
+        match &e.kind {
+            ExprKind::Int(_) | ExprKind::Bool(_) | ExprKind::Name(_) => {}
+            ExprKind::Index(a, b) | ExprKind::Binary(_, a, b) => {
+                stack.push((a, d + 1));
+                stack.push((b, d + 1));
+            }
+            ExprKind::Member(a, _) | ExprKind::At(a, _) | ExprKind::Unary(_, a) => {
+                stack.push((a, d + 1))
+            }
+            ExprKind::Call(_, args) => stack.extend(args.iter().map(|a| (a, d + 1))),
+            ExprKind::Cond(a, b, c) => {
+                stack.push((a, d + 1));
+                stack.push((b, d + 1));
+                stack.push((c, d + 1));
+            }
+            ExprKind::Quant(_, r, body) => {
+                stack.push((&r.lo, d + 1));
+                stack.push((&r.hi, d + 1));
+                stack.push((body, d + 1));
+            }
+        }
+    }
+    Ok(())
+}
 
 struct Parser {
     toks: Vec<(Tok, Span)>,
@@ -307,8 +350,7 @@ impl Parser {
     /// Precedence climbing over the binary operators with precedence >= `min`.
     fn binary(&mut self, min: u8) -> PResult<Expr> {
         let mut lhs = self.unary()?;
-        loop {
-            let Tok::Op(op) = *self.peek() else { break };
+        while let Tok::Op(op) = *self.peek() {
             let p = op.precedence();
             if p < min {
                 break;
@@ -553,6 +595,10 @@ mod tests {
         assert!(err(&text).message.contains("nested"));
         let text = "!".repeat(10_000) + "x";
         assert!(err(&text).message.contains("nested"));
+        let text = vec!["1"; 10_000].join(" + ");
+        assert!(err(&text).message.contains("nested"));
+        let text = vec!["1"; 150].join(" + ");
+        assert!(parse_expr(&text).is_ok());
     }
 
     #[test]

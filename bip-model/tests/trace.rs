@@ -1,0 +1,120 @@
+//! The shared trace format: built from a path, written and read as RON, replayed with the
+//! step relation, shown readably.
+
+use bip_model::{load_str, OwnedStep, State, System, Trace, TraceValue, Verdict};
+
+fn system(text: &str) -> System {
+    load_str("t.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()))
+}
+
+/// The path taking, at each state, the first enabled step whose name is given.
+fn path(sys: &System, names: &[&str]) -> Vec<(OwnedStep, State)> {
+    let mut s = sys.initial_state();
+    let mut out = Vec::new();
+    for name in names {
+        let (step, next) = sys
+            .successors(&s)
+            .expect("no range error")
+            .into_iter()
+            .find(|(st, _)| sys.label_name(st.label) == *name)
+            .unwrap_or_else(|| panic!("{name} not enabled"));
+        out.push((step, next.clone()));
+        s = next;
+    }
+    out
+}
+
+#[test]
+fn philosophers_deadlock_trace_round_trips_and_replays() {
+    let sys = system(include_str!("../../robots/philosophers.ron"));
+    let names = ["left[0]", "left[1]", "left[2]", "left[3]", "left[4]"];
+    let p = path(&sys, &names);
+    let trace = Trace::from_path(&sys, Verdict::Deadlock, &p);
+    assert_eq!(trace.steps.len(), 5);
+    assert_eq!(trace.steps[0].step, "left[0]");
+    let changed: Vec<(&str, &TraceValue)> = trace.steps[0]
+        .state
+        .iter()
+        .map(|(k, v)| (k.as_str(), v))
+        .collect();
+    assert_eq!(
+        changed,
+        vec![
+            ("phil[0]", &TraceValue::Location("hungry".into())),
+            ("fork[0]", &TraceValue::Location("taken".into()))
+        ]
+    );
+    let text = trace.to_ron();
+    assert!(text.starts_with("Trace("), "{text}");
+    assert!(text.contains("verdict: Deadlock"), "{text}");
+    let back = Trace::from_ron(&text).expect("reads back");
+    assert_eq!(back, trace);
+    let replayed = back.replay(&sys).expect("replays");
+    assert_eq!(replayed.len(), 5);
+    assert_eq!(replayed.last().map(|(_, s)| s), p.last().map(|(_, s)| s));
+}
+
+#[test]
+fn replay_rejects_a_step_that_is_not_enabled_or_leads_elsewhere() {
+    let sys = system(include_str!("../../robots/philosophers.ron"));
+    let mut trace = Trace::from_path(&sys, Verdict::None, &path(&sys, &["left[0]", "left[1]"]));
+    trace.steps[1].step = "right[0]".into(); // fork[1] is free but recorded changes differ
+    let err = trace.replay(&sys).expect_err("wrong state");
+    assert_eq!(err.step, 2);
+    assert!(
+        err.message.contains("does not lead to the recorded state"),
+        "{err}"
+    );
+    trace.steps[1].step = "release[3]".into();
+    let err = trace.replay(&sys).expect_err("not enabled");
+    assert!(err.message.contains("`release[3]` is not enabled"), "{err}");
+    let mut trace = Trace::from_path(&sys, Verdict::None, &path(&sys, &["left[0]"]));
+    trace.steps[0]
+        .state
+        .push("phil[9]".into(), TraceValue::Location("eating".into()));
+    let err = trace.replay(&sys).expect_err("unknown name");
+    assert!(
+        err.message
+            .contains("`phil[9]` is not a component or variable"),
+        "{err}"
+    );
+}
+
+#[test]
+fn data_changes_are_recorded_with_their_types() {
+    let sys = system(include_str!("../../robots/pipeline.ron"));
+    let p = path(&sys, &["tick", "put"]);
+    let trace = Trace::from_path(&sys, Verdict::Witness("x".into()), &p);
+    let put = &trace.steps[1];
+    let names: Vec<&str> = put.state.iter().map(|(k, _)| k.as_str()).collect();
+    assert_eq!(names, vec!["prod", "prod.seq", "buf.items"]);
+    assert_eq!(
+        put.state.iter().nth(1).map(|(_, v)| v),
+        Some(&TraceValue::Int(1))
+    );
+    let text = trace.to_ron();
+    assert_eq!(Trace::from_ron(&text).expect("reads"), trace);
+    trace.replay(&sys).expect("replays");
+}
+
+#[test]
+fn display_shows_old_and_new_values() {
+    let sys = system(include_str!("../../robots/pipeline.ron"));
+    let trace = Trace::from_path(
+        &sys,
+        Verdict::Violation("p".into()),
+        &path(&sys, &["tick", "put"]),
+    );
+    let shown = trace.display(Some(&sys)).to_string();
+    assert!(shown.starts_with("violation of p after 2 steps"), "{shown}");
+    assert!(shown.contains("prod: making → ready"), "{shown}");
+    assert!(shown.contains("buf.items: 0 → 1"), "{shown}");
+    let bare = trace.display(None).to_string();
+    assert!(bare.contains("buf.items = 1"), "{bare}");
+}
+
+#[test]
+fn malformed_trace_text_is_an_error() {
+    assert!(Trace::from_ron("Trace(system: \"x\")").is_err());
+    assert!(Trace::from_ron("not ron at all").is_err());
+}
