@@ -25,9 +25,11 @@ struct Spec {
 struct AtomSpec {
     locations: usize,
     hi: i64,
-    /// (from, port or none, to, guard threshold or none, increment)
-    transitions: Vec<(usize, Option<usize>, usize, Option<i64>, i64)>,
+    transitions: Vec<TransitionSpec>,
 }
+
+/// (from, port or none, to, guard threshold or none, increment)
+type TransitionSpec = (usize, Option<usize>, usize, Option<i64>, i64);
 
 fn atom_spec() -> impl Strategy<Value = AtomSpec> {
     (2usize..4, 1i64..4).prop_flat_map(|(locations, hi)| {
