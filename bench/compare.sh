@@ -55,7 +55,7 @@ for m in "${models[@]}"; do
     (cd "$WORK" && spin -o2 -a m.pml > /dev/null)
     for variant in "-DSAFETY -DNOREDUCE" "-DSAFETY"; do
         (cd "$WORK" && gcc -O2 $variant -DMEMLIM=16000 -o pan pan.c)
-        read -r secs kib < <(measure "$WORK/pan" -c0 -m1000000)
+        read -r secs kib < <(measure "$WORK/pan" -c0 -m10000000)
         stored=$(awk '/states, stored/ {print $1; exit}' "$WORK/out")
         ptime=$(awk '/elapsed time/ {print $4; exit}' "$WORK/out")
         # SPIN's own figure for the states: stored * (state vector + overhead)
