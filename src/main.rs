@@ -5,7 +5,9 @@
 //! 2 the model or the command is wrong, 3 the result is inconclusive.
 
 mod check;
+mod export;
 mod report;
+mod verify;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -34,6 +36,12 @@ enum Command {
         #[arg(required = true)]
         files: Vec<PathBuf>,
     },
+    /// Verify a model's properties (deadlock freedom, invariants, reachability, range
+    /// errors) by exploring its states. Exit code 0: all hold, 1: some property fails,
+    /// 2: model or usage error, 3: inconclusive.
+    Verify(verify::Args),
+    /// Write the model in another tool's language (Promela, for SPIN).
+    Export(export::Args),
 }
 
 /// Exit codes shared by every command.
@@ -49,6 +57,8 @@ fn main() -> ExitCode {
     init_logging(cli.verbose);
     let code = match cli.command {
         Command::Check { files } => check::run(&files),
+        Command::Verify(args) => verify::run(&args),
+        Command::Export(args) => export::run(&args),
     };
     ExitCode::from(code)
 }

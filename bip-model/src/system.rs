@@ -33,6 +33,8 @@ pub struct System {
     pub(crate) rules_by_low: Vec<Vec<u32>>,
     /// For each slot, the range of values it may hold.
     pub(crate) slot_ranges: Vec<(i64, i64)>,
+    /// Flat tables for the step relation's inner loop.
+    pub(crate) enable_index: crate::step::EnableIndex,
 }
 
 /// An atom type: locations, ports, variables and transitions.

@@ -53,6 +53,7 @@ pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
     }
     let (rules, rules_by_low) = priorities;
     let layout = StateLayout::new(&c.slot_ranges);
+    let enable_index = crate::step::EnableIndex::new(&c.atoms, &c.components, &c.interactions);
     Ok(System {
         name: def.name.value.clone(),
         tick_ms,
@@ -69,6 +70,7 @@ pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
         initial: State::from_slots(c.initial),
         rules_by_low,
         slot_ranges: c.slot_ranges,
+        enable_index,
     })
 }
 
