@@ -6,7 +6,9 @@
 
 mod check;
 mod expand;
+mod export;
 mod report;
+mod verify;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -41,6 +43,12 @@ enum Command {
         /// Model file (RON).
         file: PathBuf,
     },
+    /// Verify a model's properties (deadlock freedom, invariants, reachability, range
+    /// errors) by exploring its states. Exit code 0: all hold, 1: some property fails,
+    /// 2: model or usage error, 3: inconclusive.
+    Verify(verify::Args),
+    /// Write the model in another tool's language (Promela, for SPIN).
+    Export(export::Args),
 }
 
 /// Exit codes shared by every command.
@@ -57,6 +65,8 @@ fn main() -> ExitCode {
     let code = match cli.command {
         Command::Check { files } => check::run(&files),
         Command::Expand { file } => expand::run(&file),
+        Command::Verify(args) => verify::run(&args),
+        Command::Export(args) => export::run(&args),
     };
     ExitCode::from(code)
 }

@@ -22,16 +22,36 @@ fn summary(out: &Output) -> String {
 #[test]
 fn expand_prints_core_that_checks_with_the_same_sizes() {
     let dir = tempfile::tempdir().expect("temp dir");
-    for model in ["robots/rover.ron", "robots/satellite.ron", "robots/tests/mini.ron"] {
+    for model in [
+        "robots/rover.ron",
+        "robots/satellite.ron",
+        "robots/tests/mini.ron",
+    ] {
         let out = bip(&["expand", model]);
-        assert_eq!(out.status.code(), Some(0), "{model}: {}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{model}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let core = String::from_utf8(out.stdout).expect("utf-8");
-        assert!(!core.contains("modules:") && !core.contains("constraints:"), "{model}");
-        assert!(core.contains("role: Time") && core.contains("role: Environment"), "{model}");
+        assert!(
+            !core.contains("modules:") && !core.contains("constraints:"),
+            "{model}"
+        );
+        assert!(
+            core.contains("role: Time") && core.contains("role: Environment"),
+            "{model}"
+        );
         let path = dir.path().join("expanded.ron");
         std::fs::write(&path, &core).expect("write");
         let again = bip(&["check", path.to_str().expect("utf-8")]);
-        assert_eq!(again.status.code(), Some(0), "{model}: {}", String::from_utf8_lossy(&again.stderr));
+        assert_eq!(
+            again.status.code(),
+            Some(0),
+            "{model}: {}",
+            String::from_utf8_lossy(&again.stderr)
+        );
         let direct = bip(&["check", model]);
         assert_eq!(summary(&again), summary(&direct), "{model}");
         // expanding the expanded model changes nothing
@@ -64,8 +84,9 @@ fn expand_names_the_generated_parts() {
 /// Writes a broken copy of rover.ron and checks `bip expand`'s diagnostic.
 fn expand_bad(name: &str, replace: (&str, &str), expect: &[&str]) {
     let dir = tempfile::tempdir().expect("temp dir");
-    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/rover.ron"))
-        .expect("rover.ron");
+    let good =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/rover.ron"))
+            .expect("rover.ron");
     assert!(good.contains(replace.0), "{name}: pattern not in rover.ron");
     let path = dir.path().join(format!("{name}.ron"));
     std::fs::write(&path, good.replacen(replace.0, replace.1, 1)).expect("write");
@@ -73,7 +94,10 @@ fn expand_bad(name: &str, replace: (&str, &str), expect: &[&str]) {
         let out = bip(&[command, path.to_str().expect("utf-8")]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{name}: {stderr}");
-        assert!(out.stdout.is_empty() || command == "check", "{name}: printed a model");
+        assert!(
+            out.stdout.is_empty() || command == "check",
+            "{name}: printed a model"
+        );
         for e in expect {
             assert!(stderr.contains(e), "{name}: `{e}` not in\n{stderr}");
         }
@@ -85,18 +109,34 @@ fn expand_bad(name: &str, replace: (&str, &str), expect: &[&str]) {
 fn bad_genom_input_gets_positions_and_exit_2() {
     expand_bad(
         "yield",
-        (r#"yields: ["pause::move", "ether"]"#, r#"yields: ["pause::mvoe", "ether"]"#),
-        &["yields to `mvoe`, which is not a codel state of `GoTo`", "yield.ron:71:49]", "undeclared state"],
+        (
+            r#"yields: ["pause::move", "ether"]"#,
+            r#"yields: ["pause::mvoe", "ether"]"#,
+        ),
+        &[
+            "yields to `mvoe`, which is not a codel state of `GoTo`",
+            "yield.ron:71:49]",
+            "undeclared state",
+        ],
     );
     expand_bad(
         "ether",
-        (r#"(state: "scan",  yields: ["pause::scan", "ether"]"#, r#"(state: "scan",  yields: ["pause::scan"]"#),
-        &["no path from `start` to `ether` in activity `Scan`", "ether.ron:"],
+        (
+            r#"(state: "scan",  yields: ["pause::scan", "ether"]"#,
+            r#"(state: "scan",  yields: ["pause::scan"]"#,
+        ),
+        &[
+            "no path from `start` to `ether` in activity `Scan`",
+            "ether.ron:",
+        ],
     );
     expand_bad(
         "service",
         (r#"active: ["sick.Scan"]"#, r#"active: ["sick.Scna"]"#),
-        &["module `sick` has no service `Scna`", "its services are: Scan, Stop"],
+        &[
+            "module `sick` has no service `Scna`",
+            "its services are: Scan, Stop",
+        ],
     );
     expand_bad(
         "period",
@@ -105,7 +145,10 @@ fn bad_genom_input_gets_positions_and_exit_2() {
     );
     expand_bad(
         "age",
-        (r#"guard: "!active(sick.Scan) || age(pom.pose) > 2""#, r#"guard: "!active(sick.Scan) || age(pom.pose) > pack.level""#),
+        (
+            r#"guard: "!active(sick.Scan) || age(pom.pose) > 2""#,
+            r#"guard: "!active(sick.Scan) || age(pom.pose) > pack.level""#,
+        ),
         &["may only be compared with a constant"],
     );
 }

@@ -83,26 +83,90 @@ impl StateLayout {
 
     /// Writes `state` into `out` (`out.len() == self.bytes()`). Every slot must be within
     /// its range, which the step relation guarantees.
+    ///
+    /// Fields are laid out one after the other from bit 0 (little-endian bit order), so
+    /// packing streams them through a 128-bit accumulator and writes whole words: the
+    /// verifier packs every successor it generates.
     pub fn encode(&self, state: &State, out: &mut [u8]) {
         debug_assert_eq!(out.len(), self.bytes());
-        out.fill(0);
+        let mut acc: u128 = 0;
+        let mut acc_bits = 0u32;
+        let mut pos = 0usize;
         for (f, &v) in self.fields.iter().zip(state.slots()) {
             if f.bits == 0 {
                 continue;
             }
-            let raw = v.wrapping_sub(f.lo) as u64;
-            write_bits(out, f.offset, f.bits, raw);
+            let raw = v.wrapping_sub(f.lo) as u64 & mask(f.bits);
+            acc |= u128::from(raw) << acc_bits;
+            acc_bits += f.bits;
+            if acc_bits >= 64 {
+                out[pos..pos + 8].copy_from_slice(&(acc as u64).to_le_bytes());
+                pos += 8;
+                acc >>= 64;
+                acc_bits -= 64;
+            }
+        }
+        let rest = acc_bits.div_ceil(8) as usize;
+        out[pos..pos + rest].copy_from_slice(&(acc as u64).to_le_bytes()[..rest]);
+    }
+
+    /// Packs `after` into `out` given `before` and its packing: copies `before_packed` and
+    /// rewrites only the fields whose slot differs. A step changes a few slots of many, so
+    /// this is much cheaper than [`StateLayout::encode`] for successors; the result is the
+    /// same.
+    pub fn encode_changed(
+        &self,
+        before: &State,
+        before_packed: &[u8],
+        after: &State,
+        out: &mut [u8],
+    ) {
+        out.copy_from_slice(before_packed);
+        let (a, b) = (before.slots(), after.slots());
+        let n = self.fields.len().min(a.len()).min(b.len());
+        // compare 8 slots at a time (the compiler vectorises this); look closer only where
+        // something changed
+        let mut base = 0;
+        while base < n {
+            let end = (base + 8).min(n);
+            let differs = a[base..end]
+                .iter()
+                .zip(&b[base..end])
+                .fold(0u64, |acc, (x, y)| acc | (x ^ y) as u64);
+            if differs != 0 {
+                for k in base..end {
+                    let f = &self.fields[k];
+                    if a[k] != b[k] && f.bits > 0 {
+                        let raw = b[k].wrapping_sub(f.lo) as u64 & mask(f.bits);
+                        overwrite_bits(out, f.offset, f.bits, raw);
+                    }
+                }
+            }
+            base = end;
         }
     }
 
     /// Reads a packed state into `out`, which must have this layout's number of slots.
     pub fn decode(&self, packed: &[u8], out: &mut State) {
+        let mut acc: u128 = 0;
+        let mut acc_bits = 0u32;
+        let mut pos = 0usize;
         for (f, v) in self.fields.iter().zip(out.slots_mut()) {
-            *v = if f.bits == 0 {
-                f.lo
-            } else {
-                f.lo.wrapping_add(read_bits(packed, f.offset, f.bits) as i64)
-            };
+            if f.bits == 0 {
+                *v = f.lo;
+                continue;
+            }
+            if acc_bits < f.bits {
+                let take = (packed.len() - pos).min(8);
+                let mut word = [0u8; 8];
+                word[..take].copy_from_slice(&packed[pos..pos + take]);
+                acc |= u128::from(u64::from_le_bytes(word)) << acc_bits;
+                acc_bits += take as u32 * 8;
+                pos += take;
+            }
+            *v = f.lo.wrapping_add((acc as u64 & mask(f.bits)) as i64);
+            acc >>= f.bits;
+            acc_bits -= f.bits;
         }
     }
 
@@ -121,37 +185,25 @@ impl StateLayout {
     }
 }
 
-fn write_bits(out: &mut [u8], offset: u32, bits: u32, mut raw: u64) {
+/// Writes `raw` into bits `offset..offset + bits` of `out`, least significant bit first.
+fn overwrite_bits(out: &mut [u8], offset: u32, bits: u32, mut raw: u64) {
     let mut pos = offset as usize;
     let mut left = bits;
     while left > 0 {
         let byte = pos / 8;
         let shift = (pos % 8) as u32;
         let take = (8 - shift).min(left);
-        let mask = ((1u16 << take) - 1) as u8;
-        out[byte] |= ((raw as u8) & mask) << shift;
+        let m = (((1u16 << take) - 1) as u8) << shift;
+        out[byte] = (out[byte] & !m) | (((raw as u8) << shift) & m);
         raw = raw.checked_shr(take).unwrap_or(0);
         pos += take as usize;
         left -= take;
     }
 }
 
-fn read_bits(packed: &[u8], offset: u32, bits: u32) -> u64 {
-    let mut pos = offset as usize;
-    let mut left = bits;
-    let mut got = 0u32;
-    let mut raw = 0u64;
-    while left > 0 {
-        let byte = pos / 8;
-        let shift = (pos % 8) as u32;
-        let take = (8 - shift).min(left);
-        let mask = ((1u16 << take) - 1) as u8;
-        raw |= u64::from((packed[byte] >> shift) & mask) << got;
-        got += take;
-        pos += take as usize;
-        left -= take;
-    }
-    raw
+/// The low `bits` bits set (`bits` from 1 to 64).
+fn mask(bits: u32) -> u64 {
+    u64::MAX >> (64 - bits)
 }
 
 #[cfg(test)]
@@ -164,6 +216,22 @@ mod tests {
         let l = StateLayout::new(&[(0, 0), (0, 1), (0, 2), (-5, 10), (i64::MIN, i64::MAX)]);
         assert_eq!(l.bits(), 1 + 2 + 4 + 64); // one value needs no bit; -5..=10 is 16 values
         assert_eq!(l.bytes(), 9);
+    }
+
+    /// The packed format, one bit at a time: field `k` at bit offset `offset`, least
+    /// significant bit first.
+    fn pack_bit_by_bit(layout: &StateLayout, state: &State) -> Vec<u8> {
+        let mut out = vec![0u8; layout.bytes()];
+        for (f, &v) in layout.fields.iter().zip(state.slots()) {
+            let raw = v.wrapping_sub(f.lo) as u64;
+            for b in 0..f.bits {
+                if raw >> b & 1 == 1 {
+                    let at = (f.offset + b) as usize;
+                    out[at / 8] |= 1 << (at % 8);
+                }
+            }
+        }
+        out
     }
 
     proptest! {
@@ -185,6 +253,15 @@ mod tests {
             let state = State::from_slots(values);
             let packed = layout.pack(&state);
             prop_assert_eq!(packed.len(), layout.bytes());
+            prop_assert_eq!(&packed, &pack_bit_by_bit(&layout, &state));
+            // patching from another state gives the same bytes
+            let zero_slots: Vec<i64> = ranges.iter().map(|&(lo, _)| lo).collect();
+            let zero = State::from_slots(zero_slots);
+            let mut patched = vec![0xa5; layout.bytes()];
+            layout.encode_changed(&zero, &layout.pack(&zero), &state, &mut patched);
+            prop_assert_eq!(&patched, &packed);
+            layout.encode_changed(&state, &packed, &zero, &mut patched);
+            prop_assert_eq!(&patched, &layout.pack(&zero));
             prop_assert_eq!(layout.unpack(&packed), state);
         }
     }

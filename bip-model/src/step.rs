@@ -120,6 +120,85 @@ impl Steps {
     }
 }
 
+/// Flat tables for finding enabled transitions quickly: the transitions of a component from
+/// its current location on a port are `cells[port.base + location * port.stride]`, without
+/// going through the component and its atom. Built once when the system is compiled.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct EnableIndex {
+    /// Every atom's `by_loc_port`, concatenated, as `(start, end)`.
+    cells: Vec<(u32, u32)>,
+    /// The ports of each interaction: `ports[inter_ports[i]]`.
+    inter_ports: Vec<(u32, u32)>,
+    ports: Vec<PortCell>,
+    /// One per component: where its internal transitions are.
+    internal: Vec<PortCell>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct PortCell {
+    component: u32,
+    /// The component's location slot.
+    slot: u32,
+    base: u32,
+    stride: u32,
+    /// A broadcast receiver, which does not block the interaction.
+    optional: bool,
+}
+
+impl EnableIndex {
+    pub(crate) fn new(
+        atoms: &[crate::system::Atom],
+        components: &[crate::system::Component],
+        interactions: &[crate::system::Interaction],
+    ) -> EnableIndex {
+        let mut cells = Vec::new();
+        let mut atom_base = Vec::with_capacity(atoms.len());
+        for a in atoms {
+            atom_base.push(cells.len() as u32);
+            cells.extend(a.by_loc_port.iter().map(|r| (r.start, r.end)));
+        }
+        let cell = |component: u32, col: usize, optional: bool| {
+            let comp = &components[component as usize];
+            let atom = &atoms[comp.atom as usize];
+            PortCell {
+                component,
+                slot: comp.slot,
+                base: atom_base[comp.atom as usize] + col as u32,
+                stride: atom.ports.len() as u32 + 1,
+                optional,
+            }
+        };
+        let mut ports = Vec::new();
+        let mut inter_ports = Vec::with_capacity(interactions.len());
+        for inter in interactions {
+            let start = ports.len() as u32;
+            for (k, pr) in inter.ports.iter().enumerate() {
+                let optional = inter.trigger.is_some_and(|tr| tr as usize != k);
+                ports.push(cell(pr.component, pr.port as usize, optional));
+            }
+            inter_ports.push((start, ports.len() as u32));
+        }
+        let internal = (0..components.len() as u32)
+            .map(|c| {
+                let ports = atoms[components[c as usize].atom as usize].ports.len();
+                cell(c, ports, false)
+            })
+            .collect();
+        EnableIndex {
+            cells,
+            inter_ports,
+            ports,
+            internal,
+        }
+    }
+
+    #[inline]
+    fn transitions(&self, port: &PortCell, slots: &[i64]) -> (u32, u32) {
+        let loc = slots[port.slot as usize] as u32;
+        self.cells[(port.base + loc * port.stride) as usize]
+    }
+}
+
 impl System {
     /// Every step enabled in `state` (after priorities), into `out`.
     ///
@@ -145,17 +224,16 @@ impl System {
 
     fn push_internal_steps(&self, state: &State, out: &mut Steps) -> Result<(), RangeError> {
         let slots = state.slots();
-        for (c, comp) in self.components.iter().enumerate() {
-            let atom = &self.atoms[comp.atom as usize];
-            let loc = slots[comp.slot as usize] as u32;
-            for t in atom.transitions_from(loc, None) {
-                if self.transition_guard(state, c as u32, t)? {
+        for cell in &self.enable_index.internal {
+            let (start, end) = self.enable_index.transitions(cell, slots);
+            for t in start..end {
+                if self.transition_guard(state, cell.component, t)? {
                     out.push(
                         Label::Internal {
-                            component: c as u32,
+                            component: cell.component,
                         },
                         [Pick {
-                            component: c as u32,
+                            component: cell.component,
                             transition: t,
                         }],
                     );
@@ -165,6 +243,7 @@ impl System {
         Ok(())
     }
 
+    #[inline]
     fn transition_guard(&self, state: &State, c: u32, t: u32) -> Result<bool, RangeError> {
         let comp = &self.components[c as usize];
         let atom = &self.atoms[comp.atom as usize];
@@ -188,25 +267,34 @@ impl System {
     ) -> Result<(), RangeError> {
         let inter = &self.interactions[i as usize];
         let slots = state.slots();
+        let idx = &self.enable_index;
+        let (first, last) = idx.inter_ports[i as usize];
+        let ports = &idx.ports[first as usize..last as usize];
+        // most interactions are disabled in most states: reject them on the locations alone
+        for cell in ports {
+            if !cell.optional {
+                let (start, end) = idx.transitions(cell, slots);
+                if start == end {
+                    return Ok(());
+                }
+            }
+        }
         out.choices.clear();
         out.bounds.clear();
-        for (k, pr) in inter.ports.iter().enumerate() {
-            let comp = &self.components[pr.component as usize];
-            let atom = &self.atoms[comp.atom as usize];
-            let loc = slots[comp.slot as usize] as u32;
+        for cell in ports {
+            let (from, to) = idx.transitions(cell, slots);
             let start = out.choices.len() as u32;
-            for t in atom.transitions_from(loc, Some(pr.port)) {
-                if self.transition_guard(state, pr.component, t)? {
+            for t in from..to {
+                if self.transition_guard(state, cell.component, t)? {
                     out.choices.push(Pick {
-                        component: pr.component,
+                        component: cell.component,
                         transition: t,
                     });
                 }
             }
             let len = out.choices.len() as u32 - start;
             if len == 0 {
-                let optional = inter.trigger.is_some_and(|tr| tr as usize != k);
-                if !optional {
+                if !cell.optional {
                     return Ok(()); // a required port is not enabled
                 }
                 continue; // a broadcast receiver that does not join

@@ -36,6 +36,8 @@ pub struct System {
     /// The GenoM layer the system was expanded from, if any: what the engine binds codels
     /// and sends requests with (docs/genom.md, "The engine's map").
     pub genom: Option<crate::genom::GenomMap>,
+    /// Flat tables for the step relation's inner loop.
+    pub(crate) enable_index: crate::step::EnableIndex,
 }
 
 /// An atom type: locations, ports, variables and transitions.

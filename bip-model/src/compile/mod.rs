@@ -71,6 +71,7 @@ pub(crate) fn compile_core(
     }
     let (rules, rules_by_low) = priorities;
     let layout = StateLayout::new(&c.slot_ranges);
+    let enable_index = crate::step::EnableIndex::new(&c.atoms, &c.components, &c.interactions);
     let system = System {
         name: def.name.value.clone(),
         tick_ms,
@@ -88,6 +89,7 @@ pub(crate) fn compile_core(
         rules_by_low,
         slot_ranges: c.slot_ranges,
         genom: None,
+        enable_index,
     };
     Ok((system, extra))
 }

@@ -1,0 +1,419 @@
+//! `bip verify FILE`: check every property of a model, print the verdicts, save the traces.
+
+use std::fmt::Write as _;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Duration;
+
+use bip_model::System;
+use bip_verifier::report::human_bytes;
+use bip_verifier::{Outcome, Progress, PropertyKind, Report, Verdict};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use crate::{exit, report};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    Text,
+    Json,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The model file (RON).
+    pub file: PathBuf,
+    /// Worker threads (default: one per core).
+    #[arg(short, long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Stop, inconclusive, once N states are stored.
+    #[arg(long, value_name = "N")]
+    pub max_states: Option<u64>,
+    /// Stop, inconclusive, before using more memory than SIZE (like 512M or 4G; default:
+    /// 3/4 of the memory available at start).
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    pub max_memory: Option<u64>,
+    /// Stop, inconclusive, after SECS seconds.
+    #[arg(long, value_name = "SECS", value_parser = parse_seconds)]
+    pub timeout: Option<Duration>,
+    /// Stop at the first property that fails.
+    #[arg(long)]
+    pub stop_at_first: bool,
+    /// Output format on stdout.
+    #[arg(long, value_enum, default_value = "text")]
+    pub format: Format,
+    /// Also write a JUnit XML report (one test case per property) to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub junit: Option<PathBuf>,
+    /// Save each counterexample and witness as a RON trace file in DIR.
+    #[arg(long, value_name = "DIR")]
+    pub trace_dir: Option<PathBuf>,
+    /// No progress line and no statistics on stderr.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+fn parse_size(s: &str) -> Result<u64, String> {
+    bip_verifier::memory::parse_size(s)
+}
+
+fn parse_seconds(s: &str) -> Result<Duration, String> {
+    let v: f64 = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number of seconds"))?;
+    Duration::try_from_secs_f64(v).map_err(|_| format!("`{s}` is not a number of seconds"))
+}
+
+pub fn run(args: &Args) -> u8 {
+    let system = match bip_model::load_file(&args.file) {
+        Ok(s) => s,
+        Err(e) => {
+            report::load_error(&e);
+            return exit::ERROR;
+        }
+    };
+    if let Some(dir) = &args.trace_dir {
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            eprintln!(
+                "error: cannot create the trace directory {}: {e}",
+                dir.display()
+            );
+            return exit::ERROR;
+        }
+    }
+    let options = bip_verifier::Options {
+        jobs: args.jobs.unwrap_or(0),
+        max_states: args.max_states,
+        max_memory: args.max_memory,
+        timeout: args.timeout,
+        stop_at_first: args.stop_at_first,
+        liveness_bound: 0,
+    };
+    let show_progress =
+        !args.quiet && args.format == Format::Text && std::io::stderr().is_terminal();
+    let bar: Mutex<Option<ProgressBar>> = Mutex::new(None);
+    let on_progress = |p: &Progress| {
+        if show_progress && p.elapsed >= Duration::from_secs(1) {
+            let mut bar = bar.lock().unwrap_or_else(|e| e.into_inner());
+            let bar = bar.get_or_insert_with(new_bar);
+            bar.set_message(format!(
+                "{} states, {} transitions, depth {} ({}/{} of the level), {}",
+                p.states,
+                p.transitions,
+                p.depth,
+                p.level_done,
+                p.level_states,
+                human_bytes(p.store_bytes)
+            ));
+        }
+    };
+    let result = bip_verifier::verify(&system, &options, &on_progress);
+    if let Some(bar) = bar.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        bar.finish_and_clear();
+    }
+    let report = match result {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return exit::ERROR;
+        }
+    };
+    match write_outputs(args, &system, &report) {
+        Ok(()) => match report.outcome() {
+            Outcome::AllHold => exit::OK,
+            Outcome::SomeFail => exit::FAILED,
+            Outcome::Inconclusive => exit::INCONCLUSIVE,
+        },
+        Err(message) => {
+            eprintln!("error: {message}");
+            exit::ERROR
+        }
+    }
+}
+
+fn new_bar() -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr_with_hz(1));
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed}] {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    bar
+}
+
+fn write_outputs(args: &Args, system: &System, report: &Report) -> Result<(), String> {
+    let mut saved = Vec::new();
+    if let Some(dir) = &args.trace_dir {
+        saved = save_traces(dir, report)?;
+    }
+    let text = match args.format {
+        Format::Text => text_report(args, system, report, &saved),
+        Format::Json => json_report(args, report)?,
+    };
+    let mut stdout = std::io::stdout().lock();
+    stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+        .map_err(|e| format!("cannot write the report: {e}"))?;
+    if let Some(path) = &args.junit {
+        std::fs::write(path, junit_report(args, report))
+            .map_err(|e| format!("cannot write the JUnit report {}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Writes `<property>.trace.ron` for each property with a trace; returns the paths.
+fn save_traces(dir: &Path, report: &Report) -> Result<Vec<(String, PathBuf)>, String> {
+    let mut out = Vec::new();
+    for p in &report.properties {
+        let Some(trace) = p.verdict.trace() else {
+            continue;
+        };
+        let path = dir.join(format!("{}.trace.ron", file_name(&p.name)));
+        std::fs::write(&path, trace.to_ron() + "\n")
+            .map_err(|e| format!("cannot write the trace {}: {e}", path.display()))?;
+        out.push((p.name.clone(), path));
+    }
+    Ok(out)
+}
+
+/// A property name as a file name: anything but letters, digits, `-` and `_` becomes `_`.
+fn file_name(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+fn kind_name(kind: PropertyKind) -> &'static str {
+    match kind {
+        PropertyKind::DeadlockFree => "deadlock freedom",
+        PropertyKind::Invariant => "invariant",
+        PropertyKind::Reachable => "reachability",
+        PropertyKind::RangeErrors => "range errors",
+    }
+}
+
+fn text_report(
+    args: &Args,
+    system: &System,
+    report: &Report,
+    saved: &[(String, PathBuf)],
+) -> String {
+    let mut s = String::new();
+    let st = &report.stats;
+    let _ = writeln!(
+        s,
+        "{}: system `{}`, {} exploration, {} worker{}",
+        args.file.display(),
+        report.model,
+        report.method,
+        st.jobs,
+        if st.jobs == 1 { "" } else { "s" }
+    );
+    let width = report
+        .properties
+        .iter()
+        .map(|p| p.name.len())
+        .max()
+        .unwrap_or(0);
+    for p in &report.properties {
+        let (word, detail) = match &p.verdict {
+            Verdict::Holds { witness: Some(t) } => {
+                ("holds", format!("witness after {} steps", t.steps.len()))
+            }
+            Verdict::Holds { witness: None } => ("holds", String::new()),
+            Verdict::Fails { reason, .. } => ("FAILS", reason.clone()),
+            Verdict::Inconclusive { reason } => ("inconclusive", reason.clone()),
+        };
+        let _ = writeln!(s, "  {:<width$}  {:<12}  {detail}", p.name, word);
+    }
+    for p in &report.properties {
+        let Some(trace) = p.verdict.trace() else {
+            continue;
+        };
+        let what = if p.verdict.holds() {
+            "witness"
+        } else {
+            "counterexample"
+        };
+        let _ = write!(
+            s,
+            "\n{} ({}), {what}: {}",
+            p.name,
+            kind_name(p.kind),
+            trace.display(Some(system))
+        );
+        if let Some((_, path)) = saved.iter().find(|(n, _)| *n == p.name) {
+            let _ = writeln!(s, "  saved as {}", path.display());
+        }
+    }
+    if report
+        .properties
+        .iter()
+        .any(|p| p.kind == PropertyKind::RangeErrors && p.verdict.fails())
+    {
+        let _ = writeln!(
+            s,
+            "\nnote: steps that make range errors have no successor; the other verdicts are about the states reachable without them"
+        );
+    }
+    if !args.quiet {
+        let _ = writeln!(
+            s,
+            "\n{} states, {} transitions, depth {}, {:.2} s ({:.0} states/s), {:.1} bytes/state ({} B packed), store {}, peak memory {}",
+            st.states,
+            st.transitions,
+            st.depth,
+            st.seconds,
+            st.states_per_second,
+            st.bytes_per_state,
+            st.state_bytes,
+            human_bytes(st.store_bytes),
+            st.peak_memory_bytes.map_or("unknown".into(), human_bytes)
+        );
+    }
+    if let Some(stop) = &report.stopped {
+        let _ = writeln!(s, "stopped: {stop}");
+    }
+    let fails = report
+        .properties
+        .iter()
+        .filter(|p| p.verdict.fails())
+        .count();
+    let undecided = report
+        .properties
+        .iter()
+        .filter(|p| matches!(p.verdict, Verdict::Inconclusive { .. }))
+        .count();
+    let _ = match report.outcome() {
+        Outcome::AllHold => writeln!(s, "result: all {} properties hold", report.properties.len()),
+        Outcome::SomeFail => writeln!(
+            s,
+            "result: {fails} of {} properties fail",
+            report.properties.len()
+        ),
+        Outcome::Inconclusive => {
+            writeln!(s, "result: inconclusive ({undecided} properties undecided)")
+        }
+    };
+    s
+}
+
+fn json_report(args: &Args, report: &Report) -> Result<String, String> {
+    #[derive(serde::Serialize)]
+    struct Doc<'a> {
+        file: String,
+        outcome: Outcome,
+        #[serde(flatten)]
+        report: &'a Report,
+    }
+    let doc = Doc {
+        file: args.file.display().to_string(),
+        outcome: report.outcome(),
+        report,
+    };
+    serde_json::to_string_pretty(&doc)
+        .map(|s| s + "\n")
+        .map_err(|e| format!("cannot write the JSON report: {e}"))
+}
+
+fn junit_report(args: &Args, report: &Report) -> String {
+    let props = &report.properties;
+    let failures = props.iter().filter(|p| p.verdict.fails()).count();
+    let errors = props
+        .iter()
+        .filter(|p| matches!(p.verdict, Verdict::Inconclusive { .. }))
+        .count();
+    let suite = format!("bip verify {}", args.file.display());
+    let mut s = String::new();
+    let _ = writeln!(s, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
+    let _ = writeln!(
+        s,
+        r#"<testsuites name="{}" tests="{}" failures="{failures}" errors="{errors}" time="{:.3}">"#,
+        xml(&suite),
+        props.len(),
+        report.stats.seconds
+    );
+    let _ = writeln!(
+        s,
+        r#"  <testsuite name="{}" tests="{}" failures="{failures}" errors="{errors}" skipped="0" time="{:.3}">"#,
+        xml(&report.model),
+        props.len(),
+        report.stats.seconds
+    );
+    for p in props {
+        let _ = write!(
+            s,
+            r#"    <testcase classname="{}" name="{}" time="{:.3}""#,
+            xml(&report.model),
+            xml(&p.name),
+            report.stats.seconds
+        );
+        match &p.verdict {
+            Verdict::Holds { .. } => {
+                let _ = writeln!(s, "/>");
+            }
+            Verdict::Fails { reason, trace } => {
+                let body = trace
+                    .as_ref()
+                    .map(|t| t.display(None).to_string())
+                    .unwrap_or_default();
+                let _ = writeln!(
+                    s,
+                    ">\n      <failure message=\"{}\" type=\"{}\">{}</failure>\n    </testcase>",
+                    xml(reason),
+                    kind_name(p.kind),
+                    xml(&body)
+                );
+            }
+            Verdict::Inconclusive { reason } => {
+                // an undecided property is not a pass: report it as an error, not as skipped
+                let _ = writeln!(
+                    s,
+                    ">\n      <error message=\"{}\" type=\"inconclusive\"/>\n    </testcase>",
+                    xml(reason)
+                );
+            }
+        }
+    }
+    let _ = writeln!(s, "  </testsuite>\n</testsuites>");
+    s
+}
+
+/// Escapes text for XML attributes and content.
+fn xml(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c if (c as u32) < 0x20 && c != '\n' && c != '\t' && c != '\r' => {}
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn xml_escapes_markup_and_drops_control_characters() {
+        assert_eq!(xml("a<b & \"c\"\u{1}"), "a&lt;b &amp; &quot;c&quot;");
+    }
+
+    #[test]
+    fn property_names_become_file_names() {
+        assert_eq!(file_name("no/way out"), "no_way_out");
+        assert_eq!(file_name("DeadlockFree"), "DeadlockFree");
+    }
+}

@@ -1,0 +1,282 @@
+//! End-to-end tests of `bip verify` and `bip export --promela`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bip(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_bip"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn robot(name: &str) -> String {
+    format!("{}/robots/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn write_model(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+#[test]
+fn exit_codes_follow_the_verdicts() {
+    let o = bip(&["verify", &robot("philosophers.ron")]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        text.contains("DeadlockFree") && text.contains("deadlock after 5 steps"),
+        "{text}"
+    );
+    assert!(
+        text.contains("left[") && text.contains("thinking → hungry"),
+        "{text}"
+    );
+    assert!(text.contains("82 states"), "{text}");
+    let o = bip(&["verify", &robot("philosophers-asymmetric.ron"), "-j", "1"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    assert!(stdout(&o).contains("result: all 5 properties hold"));
+}
+
+#[test]
+fn json_report_is_one_document() {
+    let o = bip(&["verify", &robot("philosophers.ron"), "--format", "json"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).is_empty(),
+        "JSON mode writes nothing on stderr: {}",
+        stderr(&o)
+    );
+    let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(doc["model"], "philosophers");
+    assert_eq!(doc["method"], "explicit");
+    assert_eq!(doc["outcome"], "some_fail");
+    assert_eq!(doc["stats"]["states"], 82);
+    assert_eq!(doc["stats"]["complete"], true);
+    let props = doc["properties"].as_array().unwrap();
+    assert_eq!(props.len(), 4);
+    let dl = props.iter().find(|p| p["name"] == "DeadlockFree").unwrap();
+    assert_eq!(dl["verdict"], "fails");
+    assert_eq!(dl["trace"]["verdict"], "Deadlock");
+    assert_eq!(dl["trace"]["steps"].as_array().unwrap().len(), 5);
+    let w = props.iter().find(|p| p["name"] == "someone_eats").unwrap();
+    assert_eq!(w["verdict"], "holds");
+    assert_eq!(w["witness"]["steps"].as_array().unwrap().len(), 2);
+}
+
+#[test]
+fn junit_report_has_one_case_per_property() {
+    let dir = tempfile::tempdir().unwrap();
+    let junit = dir.path().join("report.xml");
+    let o = bip(&[
+        "verify",
+        &robot("philosophers.ron"),
+        "-q",
+        "--junit",
+        junit.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let xml = std::fs::read_to_string(&junit).unwrap();
+    let doc = roxmltree::Document::parse(&xml).unwrap();
+    let cases: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("testcase"))
+        .collect();
+    assert_eq!(cases.len(), 4);
+    let failed: Vec<_> = cases
+        .iter()
+        .filter(|c| c.children().any(|n| n.has_tag_name("failure")))
+        .map(|c| c.attribute("name").unwrap())
+        .collect();
+    assert_eq!(failed, vec!["DeadlockFree"]);
+    let suite = doc
+        .descendants()
+        .find(|n| n.has_tag_name("testsuite"))
+        .unwrap();
+    assert_eq!(suite.attribute("failures"), Some("1"));
+}
+
+#[test]
+fn traces_are_saved_and_replay() {
+    let dir = tempfile::tempdir().unwrap();
+    let traces = dir.path().join("traces/nested");
+    let o = bip(&[
+        "verify",
+        &robot("philosophers.ron"),
+        "--trace-dir",
+        traces.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let system = bip_model::load_file(robot("philosophers.ron")).unwrap();
+    let text = std::fs::read_to_string(traces.join("DeadlockFree.trace.ron")).unwrap();
+    let trace = bip_model::Trace::from_ron(&text).unwrap();
+    assert_eq!(trace.verdict, bip_model::Verdict::Deadlock);
+    assert_eq!(trace.replay(&system).unwrap().len(), 5);
+    assert!(traces.join("someone_eats.trace.ron").exists());
+    assert!(!traces.join("neighbours_never_both_eat.trace.ron").exists());
+}
+
+#[test]
+fn output_errors_are_messages_with_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "").unwrap();
+    // a trace directory below a regular file cannot be created
+    let bad_dir: PathBuf = file.join("traces");
+    let o = bip(&[
+        "verify",
+        &robot("philosophers.ron"),
+        "--trace-dir",
+        bad_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("cannot create the trace directory"),
+        "{}",
+        stderr(&o)
+    );
+    // a full disk
+    if Path::new("/dev/full").exists() {
+        let o = bip(&["verify", &robot("philosophers.ron"), "--junit", "/dev/full"]);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(
+            stderr(&o).contains("cannot write the JUnit report"),
+            "{}",
+            stderr(&o)
+        );
+        assert!(!stderr(&o).contains("panicked"));
+    }
+    let o = bip(&[
+        "export",
+        &robot("philosophers.ron"),
+        "--promela",
+        bad_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn bad_properties_are_load_errors_with_positions() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(robot("philosophers.ron"))
+        .unwrap()
+        .replace(
+            "exists i in 0..N: phil[i]@eating",
+            "exists i in 0..N: phil[i]@eatin",
+        );
+    let path = write_model(dir.path(), "bad.ron", &text);
+    let o = bip(&["verify", &path]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(err.contains("eatin") && err.contains("bad.ron:"), "{err}");
+    let o = bip(&["verify", "/nonexistent/model.ron"]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = bip(&["verify", &robot("philosophers.ron"), "--max-memory", "12Q"]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn a_hundred_million_states_under_a_state_limit_end_inconclusive() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_model(
+        dir.path(),
+        "huge.ron",
+        r#"System(
+            name: "huge",
+            atoms: { "C": Atom(locations: ["s"], initial: "s", vars: [(name: "v", ty: Int(0, 9))],
+                               transitions: [(from: "s", to: "s", action: "v = (v + 1) % 10")]) },
+            components: [(name: "c", atom: "C", count: 8)],
+        )"#,
+    );
+    let start = std::time::Instant::now();
+    let o = bip(&[
+        "verify",
+        &path,
+        "--max-states",
+        "100000",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(start.elapsed().as_secs() < 60);
+    let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(doc["outcome"], "inconclusive");
+    assert_eq!(doc["stopped"]["reason"], "max_states");
+    assert_eq!(doc["properties"][0]["verdict"], "inconclusive");
+    let o = bip(&["verify", &path, "--timeout", "0.2", "-q"]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(stdout(&o).contains("time limit"), "{}", stdout(&o));
+}
+
+/// SPIN on the exported Promela finds the same number of states and the same deadlock
+/// verdict. `spin -o2` keeps SPIN from merging states that differ only in variables it
+/// finds dead (bip keeps every variable).
+#[test]
+fn spin_agrees_on_the_examples() {
+    let have = |tool: &str| {
+        Command::new("sh")
+            .args(["-c", &format!("command -v {tool}")])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if !have("spin") || !have("gcc") {
+        println!("note: spin or gcc is not on PATH; the SPIN cross-check was NOT run (apt-get install spin)");
+        return;
+    }
+    for (model, deadlocks) in [
+        ("philosophers.ron", true),
+        ("philosophers-asymmetric.ron", false),
+        ("philosophers-atomic.ron", false),
+        ("pipeline.ron", false),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let pml = dir.path().join("model.pml");
+        let o = bip(&["export", &robot(model), "--promela", pml.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let run = |cmd: &str| {
+            let o = Command::new("sh")
+                .arg("-c")
+                .arg(cmd)
+                .current_dir(dir.path())
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{cmd}: {}{}", stdout(&o), stderr(&o));
+            stdout(&o)
+        };
+        run("spin -o2 -a model.pml && gcc -O1 -DSAFETY -DNOREDUCE -o pan pan.c");
+        let pan = run("./pan -c0");
+        let stored: u64 = pan
+            .lines()
+            .find(|l| l.trim_end().ends_with("states, stored"))
+            .and_then(|l| l.split_whitespace().next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{pan}"));
+        let errors = pan
+            .lines()
+            .any(|l| l.starts_with("pan:") && l.contains("invalid end state"));
+        let o = bip(&["verify", &robot(model), "--format", "json"]);
+        let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        assert_eq!(
+            doc["stats"]["states"], stored,
+            "{model}: bip and SPIN count different states"
+        );
+        assert_eq!(errors, deadlocks, "{model}: SPIN's deadlock verdict\n{pan}");
+        let dl = doc["properties"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == "DeadlockFree")
+            .unwrap()
+            .clone();
+        assert_eq!(dl["verdict"] == "fails", deadlocks, "{model}");
+    }
+}

@@ -1,0 +1,735 @@
+//! Explicit-state verification: breadth-first exploration of the reachable states with the
+//! step relation of `bip-model`, level by level, in parallel.
+//!
+//! Each level is cut into chunks of states in a fixed order (see [`Visited::chunks`]), and
+//! chunks are handled in batches, each in two phases:
+//!
+//! 1. *expand* (chunks in parallel, the visited set read-only): check the properties on each
+//!    state of the chunk, compute its steps, fire them, and keep the successors that are not
+//!    stored yet as candidates, bucketed by shard;
+//! 2. *insert* (shards in parallel): each shard takes its candidates, chunk by chunk in order,
+//!    and stores the new ones with their parent.
+//!
+//! Every state of level `d` is checked before any of level `d + 1`, so the first state found
+//! violating a property is at the smallest depth, and following parent links gives a
+//! shortest counterexample. States are numbered and findings chosen in chunk order, which
+//! does not depend on the number of workers: a run with one worker and a run with eight
+//! store the same states under the same numbers and report the same traces.
+
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use bip_model::eval::{Env, Expr};
+use bip_model::{
+    Liveness, LivenessChecker, OwnedStep, PropertyKind as ModelKind, State, Steps, System, Trace,
+};
+use rayon::prelude::*;
+
+use crate::memory;
+use crate::report::{Method, PropertyKind, PropertyResult, Report, Stats, Stop, Verdict};
+use crate::visited::{hash, shard_of, Chunk, ShardFull, StateId, Visited, SHARDS};
+
+/// States per chunk: large enough to amortise scheduling, small enough to balance.
+const CHUNK_STATES: u32 = 1024;
+/// Chunks per worker in one batch; limits are checked between batches.
+const CHUNKS_PER_WORKER: usize = 8;
+/// Memory the liveness checker of one worker may use for its memory of states.
+const LIVENESS_MEMO_BYTES: usize = 32 << 20;
+
+/// How to run.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// Worker threads; 0 for one per core.
+    pub jobs: usize,
+    /// Stop (inconclusive) once this many states are stored and more remain to explore.
+    pub max_states: Option<u64>,
+    /// Stop (inconclusive) before the run would use more memory; `None` takes
+    /// [`memory::default_limit`].
+    pub max_memory: Option<u64>,
+    /// Stop (inconclusive) after this long.
+    pub timeout: Option<Duration>,
+    /// Stop as soon as one property fails.
+    pub stop_at_first: bool,
+    /// Bound on the states the deadlock check explores by time steps alone from one state
+    /// (0: `bip-model`'s default). Past it, the state's liveness is unknown and
+    /// `DeadlockFree` cannot hold.
+    pub liveness_bound: usize,
+}
+
+/// Something that went wrong besides the model's verdicts.
+#[derive(Debug, thiserror::Error)]
+pub enum VerifyError {
+    #[error("cannot start the worker threads: {0}")]
+    Threads(String),
+    /// A trace could not be rebuilt from the stored states: a bug in bip.
+    #[error("internal error: {0}")]
+    Internal(String),
+}
+
+/// Progress of a run, for a progress line.
+#[derive(Clone, Debug)]
+pub struct Progress {
+    pub states: u64,
+    pub transitions: u64,
+    pub depth: u32,
+    /// States of the level being explored, and how many of them are done.
+    pub level_states: u64,
+    pub level_done: u64,
+    pub elapsed: Duration,
+    pub store_bytes: u64,
+}
+
+/// What one property checks, with its compiled expression.
+enum Check<'a> {
+    Deadlock { terminal: Option<&'a Expr> },
+    Invariant(&'a Expr),
+    Reachable(&'a Expr),
+    RangeErrors,
+}
+
+struct Target<'a> {
+    name: String,
+    kind: PropertyKind,
+    expr: String,
+    check: Check<'a>,
+}
+
+/// The name of the result that reports range errors.
+pub const RANGE_ERRORS: &str = "RangeErrors";
+
+/// The properties a run checks: the model's (deadlock freedom if it has none), and range
+/// errors, which are always checked.
+fn targets(system: &System) -> Vec<Target<'_>> {
+    let mut out: Vec<Target<'_>> = system
+        .properties
+        .iter()
+        .map(|p| {
+            let (kind, check) = match &p.kind {
+                ModelKind::DeadlockFree { terminal } => (
+                    PropertyKind::DeadlockFree,
+                    Check::Deadlock {
+                        terminal: terminal.as_ref(),
+                    },
+                ),
+                ModelKind::Invariant(e) => (PropertyKind::Invariant, Check::Invariant(e)),
+                ModelKind::Reachable(e) => (PropertyKind::Reachable, Check::Reachable(e)),
+            };
+            Target {
+                name: p.name.clone(),
+                kind,
+                expr: p.text.clone(),
+                check,
+            }
+        })
+        .collect();
+    if out.is_empty() {
+        out.push(Target {
+            name: "DeadlockFree".into(),
+            kind: PropertyKind::DeadlockFree,
+            expr: String::new(),
+            check: Check::Deadlock { terminal: None },
+        });
+    }
+    out.push(Target {
+        name: RANGE_ERRORS.into(),
+        kind: PropertyKind::RangeErrors,
+        expr: String::new(),
+        check: Check::RangeErrors,
+    });
+    out
+}
+
+/// What was found about a property in a state.
+#[derive(Clone, Debug)]
+struct Finding {
+    state: StateId,
+    what: Found,
+}
+
+#[derive(Clone, Debug)]
+enum Found {
+    Deadlock,
+    Violation,
+    Witness,
+    RangeError(String),
+}
+
+/// Per-worker scratch, reused across chunks.
+struct Scratch {
+    state: State,
+    next: State,
+    steps: Steps,
+    checker: LivenessChecker,
+    packed: Vec<u8>,
+}
+
+/// The output of expanding one chunk.
+#[derive(Default)]
+struct ChunkOut {
+    /// Candidate records `[hash: 8][parent: 4][packed state]`, in the order found...
+    raw: Vec<u8>,
+    /// ... and grouped by shard: shard `s` holds records `offsets[s]..offsets[s + 1]`.
+    sorted: Vec<u8>,
+    offsets: Vec<u32>,
+    transitions: u64,
+    findings: Vec<Option<Finding>>,
+    liveness_unknown: u64,
+}
+
+impl ChunkOut {
+    fn reset(&mut self, targets: usize) {
+        self.raw.clear();
+        self.sorted.clear();
+        self.offsets.clear();
+        self.transitions = 0;
+        self.findings.clear();
+        self.findings.resize(targets, None);
+        self.liveness_unknown = 0;
+    }
+
+    fn allocated(&self) -> usize {
+        self.raw.capacity() + self.sorted.capacity() + self.offsets.capacity() * 4
+    }
+
+    /// Groups the raw records by shard (a counting sort, stable: order within a shard is
+    /// the order found).
+    fn sort_by_shard(&mut self, rec: usize) {
+        let n = self.raw.len() / rec;
+        self.offsets.clear();
+        self.offsets.resize(SHARDS + 1, 0);
+        for r in self.raw.chunks_exact(rec) {
+            self.offsets[shard_of(read_hash(r)) + 1] += 1;
+        }
+        for s in 0..SHARDS {
+            self.offsets[s + 1] += self.offsets[s];
+        }
+        let mut next: Vec<u32> = self.offsets[..SHARDS].to_vec();
+        self.sorted.clear();
+        self.sorted.resize(n * rec, 0);
+        for r in self.raw.chunks_exact(rec) {
+            let s = shard_of(read_hash(r));
+            let at = next[s] as usize * rec;
+            self.sorted[at..at + rec].copy_from_slice(r);
+            next[s] += 1;
+        }
+    }
+
+    fn bucket(&self, shard: usize, rec: usize) -> &[u8] {
+        if self.offsets.is_empty() {
+            return &[];
+        }
+        &self.sorted[self.offsets[shard] as usize * rec..self.offsets[shard + 1] as usize * rec]
+    }
+}
+
+fn read_hash(rec: &[u8]) -> u64 {
+    let mut b = [0u8; 8];
+    b.copy_from_slice(&rec[..8]);
+    u64::from_le_bytes(b)
+}
+
+fn read_parent(rec: &[u8]) -> u32 {
+    let mut b = [0u8; 4];
+    b.copy_from_slice(&rec[8..12]);
+    u32::from_le_bytes(b)
+}
+
+const REC_HEADER: usize = 12;
+
+/// Verifies every property of `system` by explicit-state exploration.
+///
+/// `progress` is called from time to time (about four times a second) during long runs.
+pub fn verify(
+    system: &System,
+    options: &Options,
+    progress: &(dyn Fn(&Progress) + Sync),
+) -> Result<Report, VerifyError> {
+    let jobs = if options.jobs == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        options.jobs
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .thread_name(|i| format!("bip-verify-{i}"))
+        .build()
+        .map_err(|e| VerifyError::Threads(e.to_string()))?;
+    pool.install(|| Explorer::new(system, options, jobs).run(progress))
+}
+
+struct Explorer<'a> {
+    system: &'a System,
+    options: &'a Options,
+    jobs: usize,
+    targets: Vec<Target<'a>>,
+    visited: Visited,
+    scratch: Vec<Mutex<Scratch>>,
+    outs: Vec<ChunkOut>,
+    findings: Vec<Option<Finding>>,
+    liveness_unknown: u64,
+    transitions: u64,
+    depth: u32,
+    max_memory: Option<u64>,
+    started: Instant,
+    /// Time spent in each phase, for `-v` logs and profiles.
+    expand_time: Duration,
+    insert_time: Duration,
+    /// The run ended early because every verdict was final.
+    stopped_decided: bool,
+}
+
+impl<'a> Explorer<'a> {
+    fn new(system: &'a System, options: &'a Options, jobs: usize) -> Explorer<'a> {
+        let targets = targets(system);
+        let slots = system.slot_count();
+        let memo = (LIVENESS_MEMO_BYTES / (slots * 8 + 64)).clamp(1_000, 1_000_000);
+        let scratch = (0..jobs)
+            .map(|_| {
+                let mut checker = LivenessChecker::default();
+                checker.max_memo = memo;
+                if options.liveness_bound > 0 {
+                    checker.max_time_states = options.liveness_bound;
+                }
+                Mutex::new(Scratch {
+                    state: system.initial_state(),
+                    next: system.initial_state(),
+                    steps: Steps::new(),
+                    checker,
+                    packed: vec![0; system.layout.bytes()],
+                })
+            })
+            .collect();
+        let n = targets.len();
+        Explorer {
+            system,
+            options,
+            jobs,
+            targets,
+            visited: Visited::new(system.layout.bytes()),
+            scratch,
+            outs: Vec::new(),
+            findings: vec![None; n],
+            liveness_unknown: 0,
+            transitions: 0,
+            depth: 0,
+            max_memory: options.max_memory.or_else(memory::default_limit),
+            started: Instant::now(),
+            expand_time: Duration::ZERO,
+            insert_time: Duration::ZERO,
+            stopped_decided: false,
+        }
+    }
+
+    fn run(mut self, progress: &(dyn Fn(&Progress) + Sync)) -> Result<Report, VerifyError> {
+        let initial = self.system.layout.pack(&self.system.initial_state());
+        self.visited.start_level();
+        if self.visited.insert(&initial, StateId::NONE).is_err() {
+            return Err(VerifyError::Internal(
+                "cannot store the initial state".into(),
+            ));
+        }
+        let batch = self.jobs * CHUNKS_PER_WORKER;
+        let mut last_progress = Instant::now();
+        let mut last_growth = 0u64;
+        let mut stopped = None;
+        let mut level = 0usize;
+        'levels: loop {
+            let chunks = self.visited.chunks(level, CHUNK_STATES);
+            if chunks.is_empty() {
+                break;
+            }
+            self.depth = level as u32;
+            let level_states = self.visited.level_len(level);
+            let mut level_done = 0u64;
+            self.visited.start_level();
+            for group in chunks.chunks(batch) {
+                if let Some(stop) = self.limit_reached(last_growth) {
+                    stopped = Some(stop);
+                    break 'levels;
+                }
+                let before = self.visited.allocated_bytes();
+                let t0 = Instant::now();
+                self.expand(group);
+                let t1 = Instant::now();
+                let inserted = self.insert();
+                self.expand_time += t1 - t0;
+                self.insert_time += t1.elapsed();
+                if let Err(ShardFull) = inserted {
+                    stopped = Some(Stop::TooManyStates);
+                    break 'levels;
+                }
+                last_growth = self.visited.allocated_bytes().saturating_sub(before);
+                self.merge_findings(group.len());
+                level_done += group
+                    .iter()
+                    .map(|c| u64::from(c.end - c.start))
+                    .sum::<u64>();
+                if self.options.stop_at_first && self.any_failure() {
+                    stopped = Some(Stop::FirstFailure);
+                    break 'levels;
+                }
+                if self.all_decided() {
+                    self.stopped_decided = true;
+                    break 'levels;
+                }
+                if last_progress.elapsed() >= Duration::from_millis(250) {
+                    last_progress = Instant::now();
+                    progress(&Progress {
+                        states: self.visited.len(),
+                        transitions: self.transitions,
+                        depth: self.depth,
+                        level_states,
+                        level_done,
+                        elapsed: self.started.elapsed(),
+                        store_bytes: self.store_bytes(),
+                    });
+                }
+            }
+            level += 1;
+        }
+        self.report(stopped)
+    }
+
+    /// A limit that stops the run before the next batch, if any.
+    fn limit_reached(&self, last_growth: u64) -> Option<Stop> {
+        if let Some(limit) = self.options.max_states {
+            if self.visited.len() >= limit {
+                return Some(Stop::MaxStates { limit });
+            }
+        }
+        if let Some(t) = self.options.timeout {
+            if self.started.elapsed() >= t {
+                return Some(Stop::Timeout {
+                    seconds: t.as_secs_f64(),
+                });
+            }
+        }
+        if let Some(limit) = self.max_memory {
+            // the next batch may grow the set by about as much as the last one; leave room
+            // for twice that, and for what the process holds besides (read from /proc)
+            let projected = self.store_bytes() + 2 * last_growth;
+            let resident = memory::resident_bytes().unwrap_or(0) + 2 * last_growth;
+            if projected.max(resident) > limit {
+                return Some(Stop::MaxMemory { limit });
+            }
+        }
+        None
+    }
+
+    fn store_bytes(&self) -> u64 {
+        self.visited.allocated_bytes() + self.outs.iter().map(|o| o.allocated() as u64).sum::<u64>()
+    }
+
+    /// Phase 1: expands the chunks of a batch in parallel.
+    fn expand(&mut self, group: &[Chunk]) {
+        let n = self.targets.len();
+        if self.outs.len() < group.len() {
+            self.outs.resize_with(group.len(), ChunkOut::default);
+        }
+        let open: Vec<bool> = self.findings.iter().map(Option::is_none).collect();
+        let ctx = Ctx {
+            system: self.system,
+            targets: &self.targets,
+            visited: &self.visited,
+            open: &open,
+        };
+        let scratch = &self.scratch;
+        self.outs[..group.len()]
+            .par_iter_mut()
+            .zip(group.par_iter())
+            .for_each(|(out, chunk)| {
+                out.reset(n);
+                let worker = rayon::current_thread_index().unwrap_or(0) % scratch.len();
+                let mut s = scratch[worker].lock().unwrap_or_else(|p| p.into_inner());
+                ctx.expand_chunk(*chunk, &mut s, out);
+            });
+        self.outs.truncate(group.len());
+    }
+
+    /// Phase 2: stores the new states, shards in parallel, chunks in order within a shard.
+    fn insert(&mut self) -> Result<(), ShardFull> {
+        let rec = REC_HEADER + self.visited.width();
+        let outs = &self.outs;
+        let visited = &mut self.visited;
+        visited
+            .shards_mut()
+            .par_iter_mut()
+            .enumerate()
+            .try_for_each(|(s, shard)| {
+                for out in outs {
+                    for r in out.bucket(s, rec).chunks_exact(rec) {
+                        let parent = StateId::from_bits(read_parent(r));
+                        shard.insert(read_hash(r), &r[REC_HEADER..], parent)?;
+                    }
+                }
+                Ok(())
+            })
+    }
+
+    /// Takes, for each open property, the first finding in chunk order.
+    fn merge_findings(&mut self, chunks: usize) {
+        for out in &self.outs[..chunks] {
+            self.transitions += out.transitions;
+            self.liveness_unknown += out.liveness_unknown;
+            for (mine, theirs) in self.findings.iter_mut().zip(&out.findings) {
+                if mine.is_none() {
+                    mine.clone_from(theirs);
+                }
+            }
+        }
+    }
+
+    fn any_failure(&self) -> bool {
+        self.findings
+            .iter()
+            .any(|f| matches!(f, Some(Finding { what, .. }) if !matches!(what, Found::Witness)))
+    }
+
+    /// True if no further state can change a verdict.
+    fn all_decided(&self) -> bool {
+        self.findings.iter().all(Option::is_some)
+    }
+
+    fn report(self, stopped: Option<Stop>) -> Result<Report, VerifyError> {
+        let seconds = self.started.elapsed().as_secs_f64();
+        let states = self.visited.len();
+        // the deepest level with a stored state (the run may have stopped before expanding it)
+        let depth = (0..self.visited.levels())
+            .rev()
+            .find(|&l| self.visited.level_len(l) > 0)
+            .unwrap_or(0) as u32;
+        let complete = stopped.is_none() && !self.stopped_decided;
+        let stats = Stats {
+            states,
+            complete,
+            transitions: self.transitions,
+            depth,
+            seconds,
+            states_per_second: if seconds > 0.0 {
+                states as f64 / seconds
+            } else {
+                0.0
+            },
+            bytes_per_state: self.visited.used_bytes() as f64 / states.max(1) as f64,
+            state_bytes: self.visited.width(),
+            store_bytes: self.store_bytes(),
+            peak_memory_bytes: memory::peak_resident_bytes(),
+            jobs: self.jobs,
+        };
+        let mut properties = Vec::with_capacity(self.targets.len());
+        for (t, f) in self.targets.iter().zip(&self.findings) {
+            let verdict = match f {
+                Some(f) => self.verdict_of(t, f)?,
+                None => self.open_verdict(t, stopped.as_ref(), states),
+            };
+            properties.push(PropertyResult {
+                name: t.name.clone(),
+                kind: t.kind,
+                expr: t.expr.clone(),
+                verdict,
+            });
+        }
+        tracing::info!(
+            states,
+            transitions = self.transitions,
+            depth,
+            seconds,
+            expand_seconds = self.expand_time.as_secs_f64(),
+            insert_seconds = self.insert_time.as_secs_f64(),
+            "explored"
+        );
+        Ok(Report {
+            model: self.system.name.clone(),
+            method: Method::Explicit,
+            properties,
+            stats,
+            stopped,
+        })
+    }
+
+    fn verdict_of(&self, t: &Target<'_>, f: &Finding) -> Result<Verdict, VerifyError> {
+        use bip_model::Verdict as TraceVerdict;
+        let (trace_verdict, reason) = match &f.what {
+            Found::Deadlock => (TraceVerdict::Deadlock, "deadlock".to_string()),
+            Found::Violation => (
+                TraceVerdict::Violation(t.name.clone()),
+                "violated".to_string(),
+            ),
+            Found::Witness => (TraceVerdict::Witness(t.name.clone()), String::new()),
+            Found::RangeError(m) => (
+                TraceVerdict::RangeError(m.clone()),
+                format!("range error: {m}"),
+            ),
+        };
+        let trace = trace_to(self.system, &self.visited, f.state, trace_verdict)?;
+        let n = trace.steps.len();
+        let after = format!("after {n} step{}", if n == 1 { "" } else { "s" });
+        Ok(match f.what {
+            Found::Witness => Verdict::Holds {
+                witness: Some(trace),
+            },
+            _ => Verdict::Fails {
+                reason: format!("{reason} {after}"),
+                trace: Some(trace),
+            },
+        })
+    }
+
+    /// The verdict of a property nothing was found about.
+    fn open_verdict(&self, t: &Target<'_>, stopped: Option<&Stop>, states: u64) -> Verdict {
+        if let Some(stop) = stopped {
+            return Verdict::Inconclusive {
+                reason: format!("{stop} after {states} states"),
+            };
+        }
+        match t.check {
+            Check::Reachable(_) => Verdict::Fails {
+                reason: format!("no reachable state satisfies it ({states} states explored)"),
+                trace: None,
+            },
+            Check::Deadlock { .. } if self.liveness_unknown > 0 => Verdict::Inconclusive {
+                reason: format!(
+                    "in {} states without a progress step, the states reached by time steps alone exceed the liveness check's bound",
+                    self.liveness_unknown
+                ),
+            },
+            _ => Verdict::Holds { witness: None },
+        }
+    }
+}
+
+/// What phase 1 reads.
+struct Ctx<'a, 'b> {
+    system: &'a System,
+    targets: &'b [Target<'a>],
+    visited: &'b Visited,
+    /// The properties still undecided when the batch started.
+    open: &'b [bool],
+}
+
+impl Ctx<'_, '_> {
+    fn expand_chunk(&self, chunk: Chunk, s: &mut Scratch, out: &mut ChunkOut) {
+        let sys = self.system;
+        let layout = &sys.layout;
+        let width = self.visited.width();
+        let rec = REC_HEADER + width;
+        let range_target = self.targets.len() - 1;
+        for local in chunk.start..chunk.end {
+            let id = self.visited.id(chunk.shard, local);
+            let current = self.visited.state(id);
+            layout.decode(current, &mut s.state);
+            let found = |p: usize, what: Found, out: &mut ChunkOut| {
+                if out.findings[p].is_none() {
+                    out.findings[p] = Some(Finding { state: id, what });
+                }
+            };
+            let mut deadlock_target = None;
+            for (p, t) in self.targets.iter().enumerate() {
+                if !self.open[p] || out.findings[p].is_some() {
+                    continue;
+                }
+                let (e, wanted, what) = match &t.check {
+                    Check::Invariant(e) => (*e, false, Found::Violation),
+                    Check::Reachable(e) => (*e, true, Found::Witness),
+                    Check::Deadlock { .. } => {
+                        deadlock_target = Some(p);
+                        continue;
+                    }
+                    Check::RangeErrors => continue,
+                };
+                // the context string is built only on an error: this runs for every state
+                match e.holds(&mut Env::new(s.state.slots(), 0)) {
+                    Ok(v) if v == wanted => found(p, what, out),
+                    Ok(_) => {}
+                    Err(err) => {
+                        let err = sys.range_error(err, &format!("property {}", t.name));
+                        found(p, Found::RangeError(err.to_string()), out);
+                    }
+                }
+            }
+            if let Err(err) = sys.enabled_steps(&s.state, &mut s.steps) {
+                found(range_target, Found::RangeError(err.to_string()), out);
+                continue;
+            }
+            if let Some(p) = deadlock_target {
+                match sys.liveness(&s.state, &s.steps, &mut s.checker) {
+                    Ok(Liveness::Deadlock) => {
+                        let Check::Deadlock { terminal } = &self.targets[p].check else {
+                            unreachable!("deadlock_target is a deadlock check")
+                        };
+                        match terminal
+                            .map(|e| sys.holds(e, &s.state, "terminal condition of DeadlockFree"))
+                        {
+                            None | Some(Ok(false)) => found(p, Found::Deadlock, out),
+                            Some(Ok(true)) => {}
+                            Some(Err(err)) => found(p, Found::RangeError(err.to_string()), out),
+                        }
+                    }
+                    Ok(Liveness::Unknown) | Err(_) => out.liveness_unknown += 1,
+                    Ok(Liveness::Progress | Liveness::AfterTime { .. }) => {}
+                }
+            }
+            let Scratch {
+                state,
+                next,
+                steps,
+                packed,
+                ..
+            } = s;
+            for step in steps.iter() {
+                if let Err(err) = sys.fire(state, step, next) {
+                    found(range_target, Found::RangeError(err.to_string()), out);
+                    continue;
+                }
+                out.transitions += 1;
+                layout.encode_changed(state, current, next, packed);
+                let h = hash(packed);
+                if self.visited.find(h, packed).is_none() {
+                    out.raw.extend_from_slice(&h.to_le_bytes());
+                    out.raw.extend_from_slice(&id.to_bits().to_le_bytes());
+                    out.raw.extend_from_slice(packed);
+                }
+            }
+        }
+        out.sort_by_shard(rec);
+    }
+}
+
+/// The trace from the initial state to stored state `id`. The steps are found again by
+/// firing the enabled steps of each state on the path until one leads to the next state.
+fn trace_to(
+    system: &System,
+    visited: &Visited,
+    id: StateId,
+    verdict: bip_model::Verdict,
+) -> Result<Trace, VerifyError> {
+    let layout = &system.layout;
+    let path = visited.path_to(id);
+    let mut steps = Steps::new();
+    let mut next = system.initial_state();
+    let mut packed = vec![0u8; layout.bytes()];
+    let mut out: Vec<(OwnedStep, State)> = Vec::with_capacity(path.len());
+    let mut state = layout.unpack(visited.state(path[0]));
+    for &to in &path[1..] {
+        let target = visited.state(to);
+        system.enabled_steps(&state, &mut steps).map_err(|e| {
+            VerifyError::Internal(format!("a state on a trace has a range error: {e}"))
+        })?;
+        let mut taken = None;
+        for step in steps.iter() {
+            if system.fire(&state, step, &mut next).is_ok() {
+                layout.encode(&next, &mut packed);
+                if packed == target {
+                    taken = Some(step.to_owned());
+                    break;
+                }
+            }
+        }
+        let step = taken.ok_or_else(|| {
+            VerifyError::Internal("no step leads to the next state of a trace".into())
+        })?;
+        state = next.clone();
+        out.push((step, next.clone()));
+    }
+    Ok(Trace::from_path(system, verdict, &out))
+}

@@ -1,0 +1,121 @@
+//! What the process may use and what it uses, read from Linux's `/proc` and cgroup files.
+//! Elsewhere these answer `None` and the explorer relies on its own accounting.
+
+use std::fs;
+
+/// The memory a run may use when the user sets no limit: 3/4 of what is available now (the
+/// smaller of the system's available memory and the cgroup's remaining allowance), so that
+/// the run ends as inconclusive before the operating system would have to kill it.
+pub fn default_limit() -> Option<u64> {
+    let available = meminfo_kib("MemAvailable:").map(|k| k * 1024);
+    let cgroup = cgroup_allowance();
+    let base = match (available, cgroup) {
+        (Some(a), Some(c)) => a.min(c),
+        (a, c) => a.or(c)?,
+    };
+    Some(base / 4 * 3)
+}
+
+/// Resident memory of this process now.
+pub fn resident_bytes() -> Option<u64> {
+    let statm = fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    Some(pages * page_size())
+}
+
+/// Peak resident memory of this process.
+pub fn peak_resident_bytes() -> Option<u64> {
+    let status = fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+fn page_size() -> u64 {
+    // statm counts pages; 4 KiB on the platforms bip targets. /proc/self/smaps would say
+    // for sure, but reading it is slow.
+    4096
+}
+
+fn meminfo_kib(key: &str) -> Option<u64> {
+    let info = fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with(key))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// `memory.max - memory.current` of this process's cgroup (v2), if it has a limit.
+fn cgroup_allowance() -> Option<u64> {
+    let cgroup = fs::read_to_string("/proc/self/cgroup").ok()?;
+    let path = cgroup.lines().find_map(|l| l.strip_prefix("0::"))?;
+    let dir = format!("/sys/fs/cgroup{}", path.trim_end());
+    let max: u64 = fs::read_to_string(format!("{dir}/memory.max"))
+        .ok()?
+        .trim()
+        .parse()
+        .ok()?;
+    let current: u64 = fs::read_to_string(format!("{dir}/memory.current"))
+        .ok()
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap_or(0);
+    Some(max.saturating_sub(current))
+}
+
+/// Parses a size as the command line takes it: `1000000`, `512K`, `300M`, `4G`, `1T`
+/// (binary units; an optional `B` or `iB` suffix is accepted).
+pub fn parse_size(text: &str) -> Result<u64, String> {
+    let lower = text.trim().to_ascii_lowercase();
+    let t = lower
+        .strip_suffix("ib")
+        .or_else(|| lower.strip_suffix('b'))
+        .unwrap_or(&lower);
+    let (digits, unit) = match t.char_indices().find(|(_, c)| c.is_ascii_alphabetic()) {
+        Some((i, _)) => (&t[..i], &t[i..]),
+        None => (t, ""),
+    };
+    let shift = match unit.to_ascii_uppercase().as_str() {
+        "" => 0,
+        "K" => 10,
+        "M" => 20,
+        "G" => 30,
+        "T" => 40,
+        _ => return Err(format!("`{text}`: unknown unit (use K, M, G or T)")),
+    };
+    let value: f64 = digits
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a size (like 512M or 4G)"))?;
+    if !value.is_finite() || value < 0.0 {
+        return Err(format!("`{text}` is not a size (like 512M or 4G)"));
+    }
+    let bytes = value * (1u64 << shift) as f64;
+    if bytes >= u64::MAX as f64 {
+        return Err(format!("`{text}` is too large"));
+    }
+    Ok(bytes as u64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse_with_binary_units() {
+        assert_eq!(parse_size("1000"), Ok(1000));
+        assert_eq!(parse_size("512K"), Ok(512 << 10));
+        assert_eq!(parse_size("1.5G"), Ok(3 << 29));
+        assert_eq!(parse_size("2GiB"), Ok(2 << 30));
+        assert_eq!(parse_size("300mb"), Ok(300 << 20));
+        assert!(parse_size("12X").is_err());
+        assert!(parse_size("-1M").is_err());
+        assert!(parse_size("").is_err());
+    }
+
+    #[test]
+    fn this_process_has_a_size_on_linux() {
+        if cfg!(target_os = "linux") {
+            assert!(resident_bytes().is_some_and(|b| b > 0));
+            assert!(peak_resident_bytes().is_some_and(|b| b > 0));
+            assert!(default_limit().is_some_and(|b| b > 0));
+        }
+    }
+}

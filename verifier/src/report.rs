@@ -1,0 +1,248 @@
+//! The result of a verification, whatever method produced it: one verdict per property,
+//! the statistics of the run and why it stopped early, if it did.
+
+use bip_model::Trace;
+use serde::Serialize;
+
+/// How the verdicts were obtained.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Breadth-first exploration of the reachable states.
+    Explicit,
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Method::Explicit => "explicit-state",
+        })
+    }
+}
+
+/// What kind of property a result is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PropertyKind {
+    DeadlockFree,
+    Invariant,
+    Reachable,
+    /// Range errors are always checked (MODEL.md section 3); reported as a property of their own.
+    RangeErrors,
+}
+
+/// The verdict on one property.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "verdict", rename_all = "snake_case")]
+pub enum Verdict {
+    /// The property holds. For `Reachable`, `witness` leads to a state satisfying it.
+    Holds {
+        #[serde(skip_serializing_if = "Option::is_none")]
+        witness: Option<Trace>,
+    },
+    /// The property fails: `reason` says how; `trace` is a counterexample when there is one
+    /// (an unreachable `Reachable` has none).
+    Fails {
+        reason: String,
+        trace: Option<Trace>,
+    },
+    /// Not decided (a limit was reached, the run stopped at the first failure, ...).
+    Inconclusive { reason: String },
+}
+
+impl Verdict {
+    pub fn holds(&self) -> bool {
+        matches!(self, Verdict::Holds { .. })
+    }
+
+    pub fn fails(&self) -> bool {
+        matches!(self, Verdict::Fails { .. })
+    }
+
+    /// The counterexample or witness, if any.
+    pub fn trace(&self) -> Option<&Trace> {
+        match self {
+            Verdict::Holds { witness } => witness.as_ref(),
+            Verdict::Fails { trace, .. } => trace.as_ref(),
+            Verdict::Inconclusive { .. } => None,
+        }
+    }
+}
+
+/// One property and its verdict.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PropertyResult {
+    pub name: String,
+    pub kind: PropertyKind,
+    /// The expression as written (`terminal` for `DeadlockFree`), empty if none.
+    pub expr: String,
+    #[serde(flatten)]
+    pub verdict: Verdict,
+}
+
+/// Why a run ended before it had looked at every reachable state.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum Stop {
+    MaxStates {
+        limit: u64,
+    },
+    MaxMemory {
+        limit: u64,
+    },
+    Timeout {
+        seconds: f64,
+    },
+    /// `--stop-at-first`: a property failed.
+    FirstFailure,
+    /// More states than the visited set can number.
+    TooManyStates,
+}
+
+impl std::fmt::Display for Stop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stop::MaxStates { limit } => write!(f, "the state limit ({limit} states) was reached"),
+            Stop::MaxMemory { limit } => {
+                write!(f, "the memory limit ({}) was reached", human_bytes(*limit))
+            }
+            Stop::Timeout { seconds } => write!(f, "the time limit ({seconds} s) was reached"),
+            Stop::FirstFailure => write!(f, "the run stopped at the first failure"),
+            Stop::TooManyStates => write!(
+                f,
+                "the model has more states than the visited set can number"
+            ),
+        }
+    }
+}
+
+/// Figures of one run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Stats {
+    /// Distinct states stored.
+    pub states: u64,
+    /// True if every reachable state was stored and expanded: `states` is the number of
+    /// reachable states. False if a limit stopped the run, or it stopped early because no
+    /// further state could change a verdict.
+    pub complete: bool,
+    /// Steps fired (edges of the state graph explored, including those to known states).
+    pub transitions: u64,
+    /// Largest distance, in steps, of a stored state from the initial state.
+    pub depth: u32,
+    pub seconds: f64,
+    pub states_per_second: f64,
+    /// Bytes of the visited set in use per stored state (packed state, parent link, table).
+    pub bytes_per_state: f64,
+    /// Bytes of a packed state.
+    pub state_bytes: usize,
+    /// Bytes allocated by the visited set and the work buffers at the end.
+    pub store_bytes: u64,
+    /// Peak resident memory of the process, where the system reports it.
+    pub peak_memory_bytes: Option<u64>,
+    /// Worker threads.
+    pub jobs: usize,
+}
+
+/// The verdicts and figures of a verification.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    pub model: String,
+    pub method: Method,
+    pub properties: Vec<PropertyResult>,
+    pub stats: Stats,
+    /// Why the run ended early, if it did.
+    pub stopped: Option<Stop>,
+}
+
+/// The overall outcome, which decides the exit code.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// Every property holds.
+    AllHold,
+    /// Some property fails (whatever the others say: a failure is final).
+    SomeFail,
+    /// Nothing fails, but something is undecided.
+    Inconclusive,
+}
+
+impl Report {
+    pub fn outcome(&self) -> Outcome {
+        if self.properties.iter().any(|p| p.verdict.fails()) {
+            Outcome::SomeFail
+        } else if self.properties.iter().all(|p| p.verdict.holds()) {
+            Outcome::AllHold
+        } else {
+            Outcome::Inconclusive
+        }
+    }
+
+    pub fn property(&self, name: &str) -> Option<&PropertyResult> {
+        self.properties.iter().find(|p| p.name == name)
+    }
+}
+
+/// `1.5 GiB`, `12.0 MiB`, `512 B`.
+pub fn human_bytes(n: u64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = n as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{n} B")
+    } else {
+        format!("{v:.1} {}", UNITS[u])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn result(verdict: Verdict) -> PropertyResult {
+        PropertyResult {
+            name: "p".into(),
+            kind: PropertyKind::Invariant,
+            expr: String::new(),
+            verdict,
+        }
+    }
+
+    fn report(verdicts: Vec<Verdict>) -> Report {
+        Report {
+            model: "m".into(),
+            method: Method::Explicit,
+            properties: verdicts.into_iter().map(result).collect(),
+            stats: Stats::default(),
+            stopped: None,
+        }
+    }
+
+    #[test]
+    fn a_failure_outranks_an_inconclusive_verdict() {
+        let holds = Verdict::Holds { witness: None };
+        let fails = Verdict::Fails {
+            reason: "x".into(),
+            trace: None,
+        };
+        let unknown = Verdict::Inconclusive { reason: "y".into() };
+        assert_eq!(report(vec![holds.clone()]).outcome(), Outcome::AllHold);
+        assert_eq!(
+            report(vec![holds.clone(), unknown.clone()]).outcome(),
+            Outcome::Inconclusive
+        );
+        assert_eq!(
+            report(vec![unknown, fails, holds]).outcome(),
+            Outcome::SomeFail
+        );
+    }
+
+    #[test]
+    fn bytes_read_well() {
+        assert_eq!(human_bytes(512), "512 B");
+        assert_eq!(human_bytes(3 << 20), "3.0 MiB");
+    }
+}
