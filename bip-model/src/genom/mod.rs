@@ -114,6 +114,18 @@ pub(crate) fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
             crate::source::Span::NONE,
         )]
     })?;
+    // reports show the properties as written, not as rewritten for the core
+    for (p, written) in system.properties.iter_mut().zip(&def.properties) {
+        p.text = match written {
+            PropertyDef::DeadlockFree { terminal } => terminal
+                .as_ref()
+                .map(|t| t.value.clone())
+                .unwrap_or_default(),
+            PropertyDef::Invariant { expr, .. } | PropertyDef::Reachable { expr, .. } => {
+                expr.value.clone()
+            }
+        };
+    }
     system.genom = Some(map);
     Ok(system)
 }
