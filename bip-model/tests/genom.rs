@@ -443,3 +443,40 @@ fn the_engine_map_names_every_codel_and_yield() {
         .expect("evaluates")
         .is_empty());
 }
+
+#[test]
+fn errors_in_user_texts_point_into_them_through_rewriting_and_merging() {
+    let model = |extra: &str, constraint: &str, invariant: &str| {
+        GOOD.replace(
+            "        Requires(service: \"ndd.GoTo\", active: [\"sick.Scan\"]),",
+            &format!("        Requires(service: \"ndd.GoTo\", active: [\"sick.Scan\"]),\n        {constraint}"),
+        )
+        .replace(
+            "    properties: [",
+            &format!("    atoms: {{\"Door\": Atom(locations: [\"shut\", \"open\"], initial: \"shut\", ports: [\"see\"],\n        vars: [(name: \"seen\", ty: Bool)], transitions: [(from: \"shut\", port: \"see\", to: \"shut\")])}},\n    components: [(name: \"door\", atom: \"Door\")],\n    connectors: [{extra}],\n    properties: ["),
+        )
+        .replace(
+            "ndd.GoTo@move => active(sick.Scan) || !active(sick.Scan)",
+            invariant,
+        )
+    };
+    let ok = model("", "", "true");
+    assert!(load_str("ok.ron", &ok).is_ok(), "{}", load_str("ok.ron", &ok).err().map(|e| e.summary()).unwrap_or_default());
+    let cases = [
+        // a `Guard` condition, rewritten, inside a codel connector's guard
+        ("", r#"Guard(service: "ndd.GoTo", when: "active(sick.Scan) && door@opne"),"#, "true", "no location `opne`", "opne"),
+        // unchanged, inside a function's request guard
+        ("", r#"Guard(service: "sick.Stop", when: "dor@open"),"#, "true", "unknown component `dor`", "dor"),
+        // an extension's guard and action, merged with generated ones
+        (r#"(name: "ndd_GoTo_move", ports: ["door.see"], guard: "door.sen")"#, "", "true", "no variable `sen`", "sen"),
+        (r#"(name: "ndd_GoTo_move", ports: ["door.see"], action: "door.seen = active(sick.Scan) && ndd.Init")"#, "", "true", "is a service, not a value", "Init"),
+        (r#"(name: "ndd_GoTo_move", ports: ["door.see"], action: "door.seen = active(sick.Scan) + 1")"#, "", "true", "needs an integer", "active(sick.Scan)"),
+        // a property, rewritten, and DeadlockFree's terminal, merged with the idle excuse
+        ("", "", "pending(ndd.GoTo) + 1 > 0", "needs an integer", "pending(ndd.GoTo)"),
+    ];
+    for (extra, constraint, invariant, words, covered) in cases {
+        assert_error(&model(extra, constraint, invariant), words, covered);
+    }
+    let terminal = ok.replace("DeadlockFree,", r#"DeadlockFree(terminal: "active(sick.Scan) && door@ajar"),"#);
+    assert_error(&terminal, "no location `ajar`", "ajar");
+}

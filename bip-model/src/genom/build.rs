@@ -8,6 +8,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use super::check::{ConstraintKind, Layer, PortRef, Service, ServiceRef, Yield, ETHER};
 use super::map::{Reason, Recipe, RecipeCodel, RecipeCondition, RecipeModule, RecipeService};
 use super::names::*;
+use super::origin::{Origins, Src};
 use crate::diag::{Errors, ModelError};
 use crate::expr::{parse_expr, ExprKind};
 use crate::source::{ConstExpr, ConstValue, OrderedMap, Span, Spanned};
@@ -16,21 +17,32 @@ use crate::syntax::{
     SystemDef, Text, TransitionDef, TypeDef, VarDef,
 };
 
-/// The result of expanding a model: its core form and the recipe of the engine's map.
+/// The result of expanding a model: its core form, the recipe of the engine's map, and
+/// where the expanded texts come from (compile it with [`Expansion::compile`], which puts
+/// errors back at their places in the model's file).
 pub struct Expansion {
     pub def: SystemDef,
     pub recipe: Recipe,
+    pub(crate) origins: Origins,
 }
 
-/// The rewritten user texts the expansion needs, by place.
+/// The user texts the expansion needs (rewritten where they name GenoM things), by place.
+#[derive(Default)]
 pub(super) struct UserTexts {
     /// `Guard` constraints' conditions, by constraint index.
-    pub guards: HashMap<usize, Text>,
+    pub guards: HashMap<usize, Src>,
     /// User connectors' guards and actions, by connector index.
-    pub connector_guards: HashMap<usize, Text>,
-    pub connector_actions: HashMap<usize, Text>,
-    pub priority_whens: HashMap<usize, Text>,
-    pub properties: HashMap<usize, Text>,
+    pub connector_guards: HashMap<usize, Src>,
+    pub connector_actions: HashMap<usize, Src>,
+    pub priority_whens: HashMap<usize, Src>,
+    pub properties: HashMap<usize, Src>,
+}
+
+/// A condition of a request or a codel, while the expansion builds it.
+#[derive(Clone)]
+struct Cond {
+    reason: Reason,
+    src: Src,
 }
 
 fn text(s: impl Into<String>) -> Text {
@@ -38,22 +50,20 @@ fn text(s: impl Into<String>) -> Text {
 }
 
 /// Normalises a generated expression (fewest parentheses) for the printed model.
-fn tidy(s: &str) -> String {
+pub(super) fn tidy(s: &str) -> String {
     parse_expr(s).map_or_else(|_| s.to_string(), |e| e.to_string())
 }
 
-/// `a && b && …` of the non-empty parts, each parenthesised.
-fn conj(parts: &[String]) -> Option<String> {
-    match parts {
-        [] => None,
-        [one] => Some(tidy(one)),
-        many => Some(tidy(
-            &many
-                .iter()
-                .map(|p| format!("({p})"))
-                .collect::<Vec<_>>()
-                .join(" && "),
-        )),
+/// A generated rendezvous connector (guards and actions are set when it is finished).
+fn connector(name: &str, ports: Vec<Text>, role: Role) -> ConnectorDef {
+    ConnectorDef {
+        name: text(name),
+        forall: None,
+        ports,
+        kind: ConnectorKindDef::Rendezvous,
+        role,
+        guard: None,
+        action: None,
     }
 }
 
@@ -109,8 +119,11 @@ struct Builder<'a, 'd> {
     components: Vec<ComponentDef>,
     /// The activities' components (their `abort` port is open to user connectors).
     activity_components: HashSet<String>,
-    connectors: Vec<ConnectorDef>,
+    /// Generated connectors, their guards and actions kept apart until user connectors
+    /// have extended them.
+    connectors: Vec<(ConnectorDef, Option<Src>, Option<Src>)>,
     recipe: Recipe,
+    origins: Origins,
 }
 
 pub(super) fn build(
@@ -118,6 +131,7 @@ pub(super) fn build(
     def: &SystemDef,
     ages: BTreeMap<PortRef, i64>,
     user: UserTexts,
+    origins: Origins,
 ) -> Result<Expansion, Vec<ModelError>> {
     let mut tracked = HashSet::new();
     for (mi, m) in layer.modules.iter().enumerate() {
@@ -143,6 +157,7 @@ pub(super) fn build(
         activity_components: HashSet::new(),
         connectors: Vec::new(),
         recipe: Recipe::default(),
+        origins,
     };
     for mi in 0..layer.modules.len() {
         b.recipe_module(mi);
@@ -611,49 +626,37 @@ impl<'a, 'd> Builder<'a, 'd> {
             .first()
             .map_or(Span::NONE, |m| m.def.name.span);
         self.claim(TICK, span, "the clock's tick".into());
-        self.connectors.push(ConnectorDef {
-            name: text(TICK),
-            forall: None,
-            ports,
-            kind: ConnectorKindDef::Broadcast {
-                trigger: text(format!("{CLOCK}.tick")),
+        let action = (!action.is_empty()).then(|| Src::gen(action.join("; ")));
+        self.connectors.push((
+            ConnectorDef {
+                kind: ConnectorKindDef::Broadcast {
+                    trigger: text(format!("{CLOCK}.tick")),
+                },
+                ..connector(TICK, ports, Role::Time)
             },
-            role: Role::Time,
-            guard: None,
-            action: if action.is_empty() {
-                None
-            } else {
-                Some(text(action.join("; ")))
-            },
-        });
+            None,
+            action,
+        ));
     }
 
-    /// The conditions a constraint puts on starting activity `r` (Exclusive, AtMost, and
-    /// waiting for interrupted services) and on running its codels (Requires, Fresh,
-    /// Guard), as (reason, expression) pairs.
-    fn conditions(
-        &self,
-        r: ServiceRef,
-        user: &UserTexts,
-    ) -> (Vec<RecipeCondition>, Vec<RecipeCondition>) {
+    /// The conditions on starting activity `r` (waiting for what it interrupts, Exclusive,
+    /// AtMost) and on running its codels (Requires, Fresh, Guard).
+    fn conditions(&self, r: ServiceRef, user: &UserTexts) -> (Vec<Cond>, Vec<Cond>) {
         let mut start = Vec::new();
         let mut run = Vec::new();
         let s = self.service(r);
         let m = self.module_name(r);
         if s.is_activity() {
-            for &x in &s.interrupts {
-                if x == r.service {
-                    continue;
-                }
+            for &x in s.interrupts.iter().filter(|&&x| x != r.service) {
                 let target = ServiceRef {
                     module: r.module,
                     service: x,
                 };
-                start.push(RecipeCondition {
+                start.push(Cond {
                     reason: Reason::Interrupting {
                         service: format!("{m}.{}", self.service(target).name),
                     },
-                    text: format!("{}@{ETHER}", self.comp(target)),
+                    src: Src::gen(format!("{}@{ETHER}", self.comp(target))),
                 });
             }
         }
@@ -662,62 +665,74 @@ impl<'a, 'd> Builder<'a, 'd> {
                 index: ci,
                 kind: c.def.kind().to_string(),
             };
-            let cond = match &c.kind {
+            let others = |list: &[ServiceRef], f: &dyn Fn(String) -> String| -> Vec<String> {
+                list.iter()
+                    .filter(|&&y| y != r)
+                    .map(|&y| f(self.comp(y)))
+                    .collect()
+            };
+            match &c.kind {
                 ConstraintKind::Exclusive(list) if list.contains(&r) => {
-                    let others: Vec<String> = list
-                        .iter()
-                        .filter(|&&y| y != r)
-                        .map(|&y| format!("{}@{ETHER}", self.comp(y)))
-                        .collect();
-                    start.push(RecipeCondition {
+                    let at_ether = others(list, &|c| format!("{c}@{ETHER}"));
+                    start.push(Cond {
                         reason,
-                        text: others.join(" && "),
+                        src: Src::gen(at_ether.join(" && ")),
                     });
-                    continue;
                 }
                 ConstraintKind::AtMost { max, services } if services.contains(&r) => {
-                    let count: Vec<String> = services
-                        .iter()
-                        .filter(|&&y| y != r)
-                        .map(|&y| format!("({}@{ETHER} ? 0 : 1)", self.comp(y)))
-                        .collect();
-                    start.push(RecipeCondition {
+                    let count = others(services, &|c| format!("({c}@{ETHER} ? 0 : 1)"));
+                    start.push(Cond {
                         reason,
-                        text: tidy(&format!("{} < {max}", count.join(" + "))),
+                        src: Src::gen(tidy(&format!("{} < {max}", count.join(" + ")))),
                     });
-                    continue;
                 }
-                ConstraintKind::Requires { service, active } if *service == r => active
-                    .iter()
-                    .map(|&y| format!("!{}@{ETHER}", self.comp(y)))
-                    .collect::<Vec<_>>()
-                    .join(" && "),
+                ConstraintKind::Requires { service, active } if *service == r => {
+                    let active: Vec<String> = active
+                        .iter()
+                        .map(|&y| format!("!{}@{ETHER}", self.comp(y)))
+                        .collect();
+                    run.push(Cond {
+                        reason,
+                        src: Src::gen(active.join(" && ")),
+                    });
+                }
                 ConstraintKind::Fresh {
                     service,
                     port,
                     max_age,
                 } if *service == r => {
                     let pm = &self.layer.modules[port.module];
-                    format!(
-                        "{}.{} <= {max_age}",
+                    let age = format!(
+                        "{}.{}",
                         module_component(pm.name),
                         age_var(pm.ports[port.port])
-                    )
+                    );
+                    run.push(Cond {
+                        reason,
+                        src: Src::gen(format!("{age} <= {max_age}")),
+                    });
                 }
                 ConstraintKind::Guard { service, .. } if *service == r => {
-                    match user.guards.get(&ci) {
-                        Some(t) => t.value.clone(),
-                        None => continue,
+                    if let Some(src) = user.guards.get(&ci) {
+                        run.push(Cond {
+                            reason,
+                            src: src.clone(),
+                        });
                     }
                 }
-                _ => continue,
-            };
-            run.push(RecipeCondition {
-                reason,
-                text: tidy(&cond),
-            });
+                _ => {}
+            }
         }
         (start, run)
+    }
+
+    /// A condition for the engine's map: its text, and the text to compile.
+    fn recipe_condition(&mut self, c: &Cond) -> RecipeCondition {
+        RecipeCondition {
+            reason: c.reason.clone(),
+            text: c.src.plain(),
+            compiled: self.origins.text(c.src.clone()),
+        }
     }
 
     fn service_connectors(&mut self, r: ServiceRef, user: &UserTexts) {
@@ -730,22 +745,20 @@ impl<'a, 'd> Builder<'a, 'd> {
         if s.is_activity() {
             ports.push(text(format!("{}.request", self.comp(r))));
             if !s.interrupts_itself(r.service) {
-                refusals.push(RecipeCondition {
+                refusals.push(Cond {
                     reason: Reason::AlreadyRequested,
-                    text: format!("{0}@{ETHER} && !{0}.{REQ}", self.comp(r)),
+                    src: Src::gen(format!("{0}@{ETHER} && !{0}.{REQ}", self.comp(r))),
                 });
             }
         } else {
             ports.push(text(format!("{}.{}", module_component(m), s.name)));
         }
-        for &x in &s.interrupts {
-            if x != r.service {
-                let target = ServiceRef {
-                    module: r.module,
-                    service: x,
-                };
-                ports.push(text(format!("{}.interrupt", self.comp(target))));
-            }
+        for &x in s.interrupts.iter().filter(|&&x| x != r.service) {
+            let target = ServiceRef {
+                module: r.module,
+                service: x,
+            };
+            ports.push(text(format!("{}.interrupt", self.comp(target))));
         }
         for &a in &s.after {
             let target = ServiceRef {
@@ -758,36 +771,34 @@ impl<'a, 'd> Builder<'a, 'd> {
             } else {
                 format!("{}.{}", module_component(m), done_var(t.name))
             };
-            refusals.push(RecipeCondition {
+            refusals.push(Cond {
                 reason: Reason::After {
                     service: format!("{m}.{}", t.name),
                 },
-                text: flag,
+                src: Src::gen(flag),
             });
         }
         if !s.is_activity() {
             refusals.extend(run_conds.iter().cloned());
         }
-        let guard_parts: Vec<String> = refusals
-            .iter()
-            .filter(|c| c.reason != Reason::AlreadyRequested)
-            .map(|c| c.text.clone())
-            .collect();
+        // the request port's own guards say "already requested"; the others guard the
+        // connector
+        let guard = Src::and(
+            refusals
+                .iter()
+                .filter(|c| c.reason != Reason::AlreadyRequested)
+                .map(|c| c.src.clone())
+                .collect(),
+        );
         let name = request_connector(m, s.name);
         self.claim(
             &name,
             s.def.name.span,
             format!("requests of `{m}.{}`", s.name),
         );
-        self.connectors.push(ConnectorDef {
-            name: text(&name),
-            forall: None,
-            ports,
-            kind: ConnectorKindDef::Rendezvous,
-            role: Role::Environment,
-            guard: conj(&guard_parts).map(text),
-            action: None,
-        });
+        self.connectors
+            .push((connector(&name, ports, Role::Environment), guard, None));
+        let refusals = refusals.iter().map(|c| self.recipe_condition(c)).collect();
         let mut service = RecipeService {
             name: s.name.to_string(),
             kind: s.kind,
@@ -810,46 +821,46 @@ impl<'a, 'd> Builder<'a, 'd> {
             let mut holds = Vec::new();
             if c.state == "start" {
                 for sc in &start_conds {
-                    let text = if start_is_location {
-                        tidy(&format!("!{comp}@{ETHER} || ({})", sc.text))
+                    // a start condition applies to starting, not to re-entering `start`
+                    let src = if start_is_location {
+                        sc.src.clone().or_after(&format!("!{comp}@{ETHER}"))
                     } else {
-                        sc.text.clone()
+                        sc.src.clone()
                     };
-                    holds.push(RecipeCondition {
+                    holds.push(Cond {
                         reason: sc.reason.clone(),
-                        text,
+                        src,
                     });
                 }
             }
             for rc in &run_conds {
-                let text = if s.stop.is_some() {
-                    tidy(&format!("{comp}.{STOPPING} || ({})", rc.text))
+                // the stop path is not gated
+                let src = if s.stop.is_some() {
+                    rc.src.clone().or_after(&format!("{comp}.{STOPPING}"))
                 } else {
-                    rc.text.clone()
+                    rc.src.clone()
                 };
-                holds.push(RecipeCondition {
+                holds.push(Cond {
                     reason: rc.reason.clone(),
-                    text,
+                    src,
                 });
             }
-            let guard = conj(&holds.iter().map(|h| h.text.clone()).collect::<Vec<_>>());
+            let guard = Src::and(holds.iter().map(|h| h.src.clone()).collect());
             let mut ports = vec![text(format!("{comp}.{}", c.state))];
             let mut action = Vec::new();
             let mi = r.module;
-            let mut writes_aged = false;
             for &w in &c.writes {
                 if self.caps.contains_key(&PortRef {
                     module: mi,
                     port: w,
                 }) {
-                    writes_aged = true;
                     action.push(format!(
                         "{m}.{} = 0",
                         age_var(self.layer.modules[mi].ports[w])
                     ));
                 }
             }
-            if writes_aged {
+            if !action.is_empty() {
                 ports.push(text(format!("{}.write", module_component(m))));
             }
             let run = codel_connector(m, s.name, c.state);
@@ -859,19 +870,12 @@ impl<'a, 'd> Builder<'a, 'd> {
                 span,
                 format!("codel `{}` of `{m}.{}`", c.state, s.name),
             );
-            self.connectors.push(ConnectorDef {
-                name: text(&run),
-                forall: None,
-                ports,
-                kind: ConnectorKindDef::Rendezvous,
-                role: Role::Progress,
-                guard: guard.clone().map(text),
-                action: if action.is_empty() {
-                    None
-                } else {
-                    Some(text(action.join("; ")))
-                },
-            });
+            let action = (!action.is_empty()).then(|| Src::gen(action.join("; ")));
+            self.connectors.push((
+                connector(&run, ports, Role::Progress),
+                guard.clone(),
+                action,
+            ));
             let fail = if c.throws.is_empty() {
                 None
             } else {
@@ -881,17 +885,12 @@ impl<'a, 'd> Builder<'a, 'd> {
                     span,
                     format!("exceptions of codel `{}` of `{m}.{}`", c.state, s.name),
                 );
-                self.connectors.push(ConnectorDef {
-                    name: text(&f),
-                    forall: None,
-                    ports: vec![text(format!("{comp}.{}", fail_port(c.state)))],
-                    kind: ConnectorKindDef::Rendezvous,
-                    role: Role::Progress,
-                    guard: guard.map(text),
-                    action: None,
-                });
+                let ports = vec![text(format!("{comp}.{}", fail_port(c.state)))];
+                self.connectors
+                    .push((connector(&f, ports, Role::Progress), guard, None));
                 Some(f)
             };
+            let holds = holds.iter().map(|h| self.recipe_condition(h)).collect();
             service.codels.push(RecipeCodel {
                 state: c.state.to_string(),
                 run,
@@ -981,13 +980,19 @@ impl<'a, 'd> Builder<'a, 'd> {
             by_name.entry(c.name.as_str()).or_insert(k);
         }
         let mut extended = HashSet::new();
-        let mut connectors = std::mem::take(&mut self.connectors);
-        for g in &mut connectors {
+        let mut generated = std::mem::take(&mut self.connectors);
+        for (g, guard, action) in &mut generated {
             let Some(&k) = by_name.get(g.name.as_str()) else {
                 continue;
             };
             extended.insert(k);
-            self.extend(g, &def.connectors[k], k, &user);
+            self.extend(g, guard, action, &def.connectors[k], k, &user);
+        }
+        let mut connectors = Vec::with_capacity(generated.len() + def.connectors.len());
+        for (mut g, guard, action) in generated {
+            g.guard = guard.map(|s| self.origins.text(s));
+            g.action = action.map(|s| self.origins.text(s));
+            connectors.push(g);
         }
         for (k, c) in def.connectors.iter().enumerate() {
             if extended.contains(&k) {
@@ -996,10 +1001,10 @@ impl<'a, 'd> Builder<'a, 'd> {
             self.check_user_ports(c, &generated_components);
             let mut c = c.clone();
             if let Some(g) = user.connector_guards.get(&k) {
-                c.guard = Some(g.clone());
+                c.guard = Some(self.origins.text(g.clone()));
             }
             if let Some(a) = user.connector_actions.get(&k) {
-                c.action = Some(a.clone());
+                c.action = Some(self.origins.text(a.clone()));
             }
             connectors.push(c);
         }
@@ -1027,12 +1032,21 @@ impl<'a, 'd> Builder<'a, 'd> {
                 properties,
             },
             recipe: std::mem::take(&mut self.recipe),
+            origins: std::mem::take(&mut self.origins),
         }
     }
 
     /// Merges user connector `u` (index `k`) into generated connector `g`: its ports join,
     /// its guard is conjoined, its action runs after the generated one.
-    fn extend(&mut self, g: &mut ConnectorDef, u: &ConnectorDef, k: usize, user: &UserTexts) {
+    fn extend(
+        &mut self,
+        g: &mut ConnectorDef,
+        guard: &mut Option<Src>,
+        action: &mut Option<Src>,
+        u: &ConnectorDef,
+        k: usize,
+        user: &UserTexts,
+    ) {
         let is_tick = g.name.as_str() == TICK;
         if let Some(f) = &u.forall {
             self.errors.push(
@@ -1098,29 +1112,19 @@ impl<'a, 'd> Builder<'a, 'd> {
             }
         }
         if let Some(ug) = user.connector_guards.get(&k) {
-            g.guard = Some(match &g.guard {
-                None => ug.clone(),
-                Some(gg) => Spanned {
-                    value: tidy(&format!("({}) && ({})", gg.value, ug.value)),
-                    span: ug.span,
-                    verbatim: false,
-                },
+            *guard = Src::and(guard.take().into_iter().chain([ug.clone()]).collect());
+            let cond = self.recipe_condition(&Cond {
+                reason: Reason::Connector,
+                src: ug.clone(),
             });
             if let Some(s) = self.recipe_request_mut(g.name.as_str()) {
-                s.refusals.push(RecipeCondition {
-                    reason: Reason::Connector,
-                    text: ug.value.clone(),
-                });
+                s.refusals.push(cond);
             }
         }
         if let Some(ua) = user.connector_actions.get(&k) {
-            g.action = Some(match &g.action {
+            *action = Some(match action.take() {
                 None => ua.clone(),
-                Some(ga) => Spanned {
-                    value: format!("{}; {}", ga.value, ua.value),
-                    span: ua.span,
-                    verbatim: false,
-                },
+                Some(ga) => ga.then(ua.clone()),
             });
         }
     }
@@ -1238,7 +1242,7 @@ impl<'a, 'd> Builder<'a, 'd> {
         for (k, p) in self.def.priorities.iter().enumerate() {
             let mut p = p.clone();
             if let Some(w) = user.priority_whens.get(&k) {
-                p.when = Some(w.clone());
+                p.when = Some(self.origins.text(w.clone()));
             }
             out.push(p);
         }
@@ -1271,51 +1275,45 @@ impl<'a, 'd> Builder<'a, 'd> {
             .map(|c| format!("{c}@{ETHER} && !{c}.{REQ}"))
             .collect();
         // with no activity at all, nothing is ever outstanding
-        let idle = match (open, conj(&idle)) {
+        let idle = match (open, Src::and(idle.into_iter().map(Src::gen).collect())) {
             (false, _) => None,
             (true, None) => Some("true".to_string()),
-            (true, some) => some,
+            (true, Some(src)) => Some(src.plain()),
         };
         self.recipe.idle = idle.clone();
-        self.def
-            .properties
-            .iter()
-            .enumerate()
-            .map(|(k, p)| match p {
+        let mut out = Vec::with_capacity(self.def.properties.len());
+        for (k, p) in self.def.properties.iter().enumerate() {
+            out.push(match p {
                 PropertyDef::DeadlockFree { terminal } => {
-                    let user_terminal = user
-                        .properties
-                        .get(&k)
-                        .cloned()
-                        .or_else(|| terminal.clone());
-                    let terminal = match (user_terminal, &idle) {
-                        (t, None) => t,
-                        (None, Some(i)) => Some(text(i.clone())),
-                        (Some(t), Some(i)) => Some(Spanned {
-                            value: tidy(&format!("({}) || ({i})", t.value)),
-                            span: t.span,
-                            verbatim: false,
-                        }),
+                    let user_terminal = user.properties.get(&k).cloned();
+                    let parts: Vec<Src> = user_terminal
+                        .into_iter()
+                        .chain(idle.clone().map(Src::gen))
+                        .collect();
+                    let terminal = match Src::join(parts, "||") {
+                        Some(src) => Some(self.origins.text(src)),
+                        None => terminal.clone(),
                     };
                     PropertyDef::DeadlockFree { terminal }
                 }
                 PropertyDef::Invariant { name, expr } => PropertyDef::Invariant {
                     name: name.clone(),
-                    expr: user
-                        .properties
-                        .get(&k)
-                        .cloned()
-                        .unwrap_or_else(|| expr.clone()),
+                    expr: self.user_text(user.properties.get(&k), expr),
                 },
                 PropertyDef::Reachable { name, expr } => PropertyDef::Reachable {
                     name: name.clone(),
-                    expr: user
-                        .properties
-                        .get(&k)
-                        .cloned()
-                        .unwrap_or_else(|| expr.clone()),
+                    expr: self.user_text(user.properties.get(&k), expr),
                 },
-            })
-            .collect()
+            });
+        }
+        out
+    }
+
+    /// The text to compile for a user's text: as written, or rewritten.
+    fn user_text(&mut self, src: Option<&Src>, written: &Text) -> Text {
+        match src {
+            Some(src) => self.origins.text(src.clone()),
+            None => written.clone(),
+        }
     }
 }

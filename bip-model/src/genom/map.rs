@@ -256,10 +256,13 @@ pub struct RecipeCodel {
     pub holds: Vec<RecipeCondition>,
 }
 
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug)]
 pub struct RecipeCondition {
     pub reason: Reason,
+    /// The condition as an expression of the expanded model.
     pub text: String,
+    /// The same, to compile (its span leads back to the user's text it holds, if any).
+    pub compiled: Text,
 }
 
 /// Something in the recipe that the compiled system lacks: a bug of the expansion.
@@ -272,9 +275,9 @@ impl Recipe {
         let mut out = Vec::new();
         for m in &self.modules {
             for s in &m.services {
-                out.extend(s.refusals.iter().map(|c| Text::from(c.text.as_str())));
+                out.extend(s.refusals.iter().map(|c| c.compiled.clone()));
                 for c in &s.codels {
-                    out.extend(c.holds.iter().map(|h| Text::from(h.text.as_str())));
+                    out.extend(c.holds.iter().map(|h| h.compiled.clone()));
                 }
             }
         }

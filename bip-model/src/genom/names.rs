@@ -9,10 +9,10 @@
 use std::collections::{BTreeMap, HashMap};
 
 use super::check::{Layer, PortRef, ETHER};
+use super::origin::Rewrite;
 use crate::compile::{one_of, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::expr::{self, parse_action, parse_expr, BinOp, Expr, ExprKind, Ident, UnOp};
-use crate::source::Spanned;
 use crate::syntax::Text;
 
 /// The component and atom of the global clock.
@@ -134,28 +134,34 @@ impl<'a, 'd> Rewriter<'a, 'd> {
         *e = (*e).max(k);
     }
 
-    /// Rewrites an expression; `None` (with errors pushed) if it cannot be. A syntax error
-    /// is left for the compiler to report.
-    pub fn expr(&mut self, errors: &mut Errors, t: &Text) -> Option<Text> {
+    /// Rewrites an expression: `Ok(None)` if it has no GenoM names (it stays as written),
+    /// `Ok(Some(..))` with the printed text and the tree it was printed from (which keeps
+    /// the original's positions), `Err` with the error pushed. A syntax error is left for
+    /// the compiler to report.
+    pub fn expr(&mut self, errors: &mut Errors, t: &Text) -> Result<Option<(String, Rewrite)>, ()> {
         let Ok(e) = parse_expr(t) else {
-            return Some(t.clone());
+            return Ok(None);
         };
         let mut changed = false;
         let mut bound = Vec::new();
         match self.walk(&e, &mut bound, &mut changed) {
-            Ok(new) if changed => Some(rewritten(t, new.to_string())),
-            Ok(_) => Some(t.clone()),
+            Ok(new) if changed => Ok(Some((new.to_string(), Rewrite::Expr(new)))),
+            Ok(_) => Ok(None),
             Err(f) => {
                 errors.push(failure(t, f));
-                None
+                Err(())
             }
         }
     }
 
-    /// Rewrites the values of an action's assignments.
-    pub fn action(&mut self, errors: &mut Errors, t: &Text) -> Option<Text> {
+    /// Rewrites the assignments of an action, like [`Rewriter::expr`].
+    pub fn action(
+        &mut self,
+        errors: &mut Errors,
+        t: &Text,
+    ) -> Result<Option<(String, Rewrite)>, ()> {
         let Ok(assigns) = parse_action(t) else {
-            return Some(t.clone());
+            return Ok(None);
         };
         let mut changed = false;
         let mut out = Vec::with_capacity(assigns.len());
@@ -167,14 +173,14 @@ impl<'a, 'd> Rewriter<'a, 'd> {
                 (Ok(target), Ok(value)) => out.push(expr::Assign { target, value }),
                 (Err(f), _) | (_, Err(f)) => {
                     errors.push(failure(t, f));
-                    return None;
+                    return Err(());
                 }
             }
         }
         if changed {
-            Some(rewritten(t, expr::action_to_string(&out)))
+            Ok(Some((expr::action_to_string(&out), Rewrite::Action(out))))
         } else {
-            Some(t.clone())
+            Ok(None)
         }
     }
 
@@ -418,15 +424,6 @@ fn failure(t: &Text, f: Failure) -> ModelError {
     let mut e = ModelError::new(f.message, t.sub_span(f.span.start..f.span.end));
     e.help = f.help;
     e
-}
-
-/// The rewritten text of `t`: it keeps `t`'s span (errors point at the whole string).
-fn rewritten(t: &Text, value: String) -> Text {
-    Spanned {
-        value,
-        span: t.span,
-        verbatim: false,
-    }
 }
 
 fn name(n: &str) -> Expr {
