@@ -461,22 +461,68 @@ fn errors_in_user_texts_point_into_them_through_rewriting_and_merging() {
         )
     };
     let ok = model("", "", "true");
-    assert!(load_str("ok.ron", &ok).is_ok(), "{}", load_str("ok.ron", &ok).err().map(|e| e.summary()).unwrap_or_default());
+    assert!(
+        load_str("ok.ron", &ok).is_ok(),
+        "{}",
+        load_str("ok.ron", &ok)
+            .err()
+            .map(|e| e.summary())
+            .unwrap_or_default()
+    );
     let cases = [
         // a `Guard` condition, rewritten, inside a codel connector's guard
-        ("", r#"Guard(service: "ndd.GoTo", when: "active(sick.Scan) && door@opne"),"#, "true", "no location `opne`", "opne"),
+        (
+            "",
+            r#"Guard(service: "ndd.GoTo", when: "active(sick.Scan) && door@opne"),"#,
+            "true",
+            "no location `opne`",
+            "opne",
+        ),
         // unchanged, inside a function's request guard
-        ("", r#"Guard(service: "sick.Stop", when: "dor@open"),"#, "true", "unknown component `dor`", "dor"),
+        (
+            "",
+            r#"Guard(service: "sick.Stop", when: "dor@open"),"#,
+            "true",
+            "unknown component `dor`",
+            "dor",
+        ),
         // an extension's guard and action, merged with generated ones
-        (r#"(name: "ndd_GoTo_move", ports: ["door.see"], guard: "door.sen")"#, "", "true", "no variable `sen`", "sen"),
-        (r#"(name: "ndd_GoTo_move", ports: ["door.see"], action: "door.seen = active(sick.Scan) && ndd.Init")"#, "", "true", "is a service, not a value", "Init"),
-        (r#"(name: "ndd_GoTo_move", ports: ["door.see"], action: "door.seen = active(sick.Scan) + 1")"#, "", "true", "needs an integer", "active(sick.Scan)"),
+        (
+            r#"(name: "ndd_GoTo_move", ports: ["door.see"], guard: "door.sen")"#,
+            "",
+            "true",
+            "no variable `sen`",
+            "sen",
+        ),
+        (
+            r#"(name: "ndd_GoTo_move", ports: ["door.see"], action: "door.seen = active(sick.Scan) && ndd.Init")"#,
+            "",
+            "true",
+            "is a service, not a value",
+            "Init",
+        ),
+        (
+            r#"(name: "ndd_GoTo_move", ports: ["door.see"], action: "door.seen = active(sick.Scan) + 1")"#,
+            "",
+            "true",
+            "needs an integer",
+            "active(sick.Scan)",
+        ),
         // a property, rewritten, and DeadlockFree's terminal, merged with the idle excuse
-        ("", "", "pending(ndd.GoTo) + 1 > 0", "needs an integer", "pending(ndd.GoTo)"),
+        (
+            "",
+            "",
+            "pending(ndd.GoTo) + 1 > 0",
+            "needs an integer",
+            "pending(ndd.GoTo)",
+        ),
     ];
     for (extra, constraint, invariant, words, covered) in cases {
         assert_error(&model(extra, constraint, invariant), words, covered);
     }
-    let terminal = ok.replace("DeadlockFree,", r#"DeadlockFree(terminal: "active(sick.Scan) && door@ajar"),"#);
+    let terminal = ok.replace(
+        "DeadlockFree,",
+        r#"DeadlockFree(terminal: "active(sick.Scan) && door@ajar"),"#,
+    );
     assert_error(&terminal, "no location `ajar`", "ajar");
 }

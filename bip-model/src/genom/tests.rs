@@ -460,3 +460,33 @@ fn guard_gates_on_any_expression() {
     assert!(before_each(&with, &sys, "m_A_main", "door@open"));
     assert!(!before_each(&without, &sys2, "m_A_main", "door@open"));
 }
+
+#[test]
+fn ids_are_readable_and_attributes_are_requests() {
+    let modules = |mode: i64| {
+        format!(
+            r#"(name: "m", ids: [(name: "mode", ty: Int(0, 2), init: {mode})],
+            tasks: [(name: "t", period: 1)], services: [
+            (name: "Set", kind: Attribute),
+            (name: "S", kind: Activity, task: "t", after: ["Set"], codels: [
+                (state: "start", yields: ["pause::main"]),
+                (state: "main",  yields: ["pause::main", "ether"]),
+            ]),
+        ])"#
+        )
+    };
+    let rest =
+        r#"constraints: [Guard(service: "m.S", when: "m.mode == 1")], properties: [DeadlockFree]"#;
+    let sys = load(&model("ids1", &modules(1), rest));
+    let ex = explore(&sys);
+    assert!(ex.any(&sys, "active(m.S)") && ex.all(&sys, "m.mode == 1"));
+    assert!(ex.deadlocks.is_empty());
+    assert!(transitions_named(&sys, &ex, "m_S_request")
+        .iter()
+        .all(|(a, _)| holds_in(&sys, "m.done_Set", a)));
+    // the guard never holds: a request is accepted and never served, a deadlock
+    let sys = load(&model("ids0", &modules(0), rest));
+    let ex = explore(&sys);
+    assert!(!ex.any(&sys, "active(m.S)"));
+    assert_eq!(ex.trace(ex.deadlocks[0]), ["m_Set_request", "m_S_request"]);
+}
