@@ -21,8 +21,9 @@ use crate::syntax::{
 /// where the expanded texts come from (compile it with [`Expansion::compile`], which puts
 /// errors back at their places in the model's file).
 pub struct Expansion {
+    /// The expanded model: BIP core only.
     pub def: SystemDef,
-    pub recipe: Recipe,
+    pub(crate) recipe: Recipe,
     pub(crate) origins: Origins,
 }
 

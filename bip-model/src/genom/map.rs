@@ -3,8 +3,8 @@
 //! that can refuse it; for each task, its period; the tick. This is the contract between
 //! the expansion and `bip-engine` (docs/genom.md, "The engine's map").
 //!
-//! The expansion writes a [`Recipe`] with names; once the expanded model is compiled,
-//! [`Recipe::resolve`] turns it into a [`GenomMap`] of indices into the [`System`].
+//! The expansion writes the map with names (a recipe); once the expanded model is
+//! compiled, the names become indices into the [`System`]: the [`GenomMap`].
 
 use crate::eval;
 use crate::state::State;
@@ -212,14 +212,14 @@ fn failed<'c>(
 // The recipe: the same, by names, as the expansion writes it.
 
 #[derive(Clone, Debug, Default)]
-pub struct Recipe {
+pub(crate) struct Recipe {
     pub tick: String,
     pub modules: Vec<RecipeModule>,
     pub idle: Option<String>,
 }
 
 #[derive(Clone, Debug)]
-pub struct RecipeModule {
+pub(crate) struct RecipeModule {
     pub name: String,
     pub tasks: Vec<(String, i64)>,
     /// Port names and their age caps, for ports whose age is tracked.
@@ -228,7 +228,7 @@ pub struct RecipeModule {
 }
 
 #[derive(Clone, Debug)]
-pub struct RecipeService {
+pub(crate) struct RecipeService {
     pub name: String,
     pub kind: ServiceKind,
     pub task: Option<usize>,
@@ -241,7 +241,7 @@ pub struct RecipeService {
 }
 
 #[derive(Clone, Debug)]
-pub struct RecipeCodel {
+pub(crate) struct RecipeCodel {
     pub state: String,
     pub run: String,
     pub fail: Option<String>,
@@ -257,7 +257,7 @@ pub struct RecipeCodel {
 }
 
 #[derive(Clone, Debug)]
-pub struct RecipeCondition {
+pub(crate) struct RecipeCondition {
     pub reason: Reason,
     /// The condition as an expression of the expanded model.
     pub text: String,
@@ -267,7 +267,7 @@ pub struct RecipeCondition {
 
 /// Something in the recipe that the compiled system lacks: a bug of the expansion.
 #[derive(Debug)]
-pub struct MissingName(pub String);
+pub(crate) struct MissingName(pub String);
 
 impl Recipe {
     /// The condition texts, in the order [`Recipe::resolve`] expects them compiled.
