@@ -230,7 +230,8 @@ fn text_report(
             Verdict::Fails { reason, .. } => ("FAILS", reason.clone()),
             Verdict::Inconclusive { reason } => ("inconclusive", reason.clone()),
         };
-        let _ = writeln!(s, "  {:<width$}  {:<12}  {detail}", p.name, word);
+        let line = format!("  {:<width$}  {:<12}  {detail}", p.name, word);
+        let _ = writeln!(s, "{}", line.trim_end());
     }
     for p in &report.properties {
         let Some(trace) = p.verdict.trace() else {

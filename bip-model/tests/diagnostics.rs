@@ -239,7 +239,7 @@ fn priority_cycle_is_printed() {
         r#"priorities: [(low: "a", high: "b"), (low: "b", high: "c[2]", when: "fork[0].uses > 1"),
                        (low: "c", high: "a")]"#,
     );
-    let err = load_str("cycle.ron", &text).err().expect("a cycle");
+    let err = load_str("cycle.ron", &text).expect_err("a cycle");
     let e = &err.errors()[0];
     assert!(e.message.contains("cycle"), "{}", e.message);
     for p in ["a < b", "b < c[2]", "c < a"] {
@@ -258,9 +258,7 @@ fn empty_and_missing_files() {
     assert!(msg.contains("empty"), "{msg}");
     let (msg, _, _) = first_error("  // just a comment\n /* and another */ \n");
     assert!(msg.contains("empty"), "{msg}");
-    let err = load_file("/nonexistent/dir/model.ron")
-        .err()
-        .expect("missing");
+    let err = load_file("/nonexistent/dir/model.ron").expect_err("missing");
     assert!(matches!(err, LoadError::Io { .. }));
     assert!(
         err.to_string().contains("/nonexistent/dir/model.ron"),
@@ -289,7 +287,7 @@ fn several_errors_are_all_reported() {
     let text = ok_model()
         .replace(r#"to: "free")"#, r#"to: "fre")"#)
         .replace("\"fork[(i+1)%N].take\"", "\"fork[(i+1)%N].tak\"");
-    let err = load_str("two.ron", &text).err().expect("fails");
+    let err = load_str("two.ron", &text).expect_err("fails");
     assert_eq!(err.errors().len(), 2, "{}", err.summary());
     let summary = err.summary();
     assert!(summary.contains("two.ron:12:"), "{summary}");
@@ -335,7 +333,7 @@ fn huge_file_loads() {
     assert_eq!(sys.interactions.len(), n);
     // and an error near the end of a huge file still has its position
     let bad = text.replace("\"f59999.take\"", "\"f59999.tak\"");
-    let err = load_str("huge.ron", &bad).err().expect("fails");
+    let err = load_str("huge.ron", &bad).expect_err("fails");
     let (line, _) = err.positions()[0];
     assert!(line > 2 * n - 10, "line {line}");
 }

@@ -228,9 +228,9 @@ fn generate(seed: u64) -> Gen {
                 .chance(50)
                 .then(|| gen_bool(&mut r, 2, &mut leaf, GUARD_OPS));
             let mut action = Vec::new();
-            for v in 0..vars.len() {
+            for (v, var) in vars.iter().enumerate() {
                 if r.chance(40) {
-                    let e = if vars[v].is_bool {
+                    let e = if var.is_bool {
                         gen_bool(&mut r, 2, &mut leaf, ACTION_OPS)
                     } else {
                         gen_int(&mut r, 2, &mut leaf, ACTION_OPS)
