@@ -516,10 +516,9 @@ impl<'a, 'd> Builder<'a, 'd> {
         // codels: one transition per yield, from each place the codel runs from
         for c in &s.codels {
             ports.push(text(c.state));
-            let fail = !c.throws.is_empty();
-            if fail {
-                ports.push(text(fail_port(c.state)));
-            }
+            // every codel has an error path: a declared exception, or what the engine does
+            // with a codel that panics, yields something undeclared or leaves a range
+            ports.push(text(fail_port(c.state)));
             let mut sources: Vec<(&str, String, Vec<String>)> = Vec::new();
             if c.state == "start" {
                 sources.push((ETHER, format!("{REQ} && !{PAUSED}"), set(&["req = false"])));
@@ -551,17 +550,15 @@ impl<'a, 'd> Builder<'a, 'd> {
                     };
                     t.push(tr(from, c.state, to, Some(guard.clone()), &action));
                 }
-                if fail {
-                    let mut action = pre.clone();
-                    action.extend(end.iter().cloned());
-                    t.push(tr(
-                        from,
-                        &fail_port(c.state),
-                        ETHER,
-                        Some(guard.clone()),
-                        &action,
-                    ));
-                }
+                let mut action = pre.clone();
+                action.extend(end.iter().cloned());
+                t.push(tr(
+                    from,
+                    &fail_port(c.state),
+                    ETHER,
+                    Some(guard.clone()),
+                    &action,
+                ));
             }
         }
         let atom = AtomDef {
@@ -877,20 +874,15 @@ impl<'a, 'd> Builder<'a, 'd> {
                 guard.clone(),
                 action,
             ));
-            let fail = if c.throws.is_empty() {
-                None
-            } else {
-                let f = fail_connector(m, s.name, c.state);
-                self.claim(
-                    &f,
-                    span,
-                    format!("exceptions of codel `{}` of `{m}.{}`", c.state, s.name),
-                );
-                let ports = vec![text(format!("{comp}.{}", fail_port(c.state)))];
-                self.connectors
-                    .push((connector(&f, ports, Role::Progress), guard, None));
-                Some(f)
-            };
+            let fail = fail_connector(m, s.name, c.state);
+            self.claim(
+                &fail,
+                span,
+                format!("error path of codel `{}` of `{m}.{}`", c.state, s.name),
+            );
+            let fail_ports = vec![text(format!("{comp}.{}", fail_port(c.state)))];
+            self.connectors
+                .push((connector(&fail, fail_ports, Role::Progress), guard, None));
             let holds = holds.iter().map(|h| self.recipe_condition(h)).collect();
             service.codels.push(RecipeCodel {
                 state: c.state.to_string(),
@@ -1211,9 +1203,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                     let mut level = Vec::new();
                     for c in &s.codels {
                         level.push(c.run.clone());
-                        if let Some(f) = &c.fail {
-                            level.push(f.clone());
-                        }
+                        level.push(c.fail.clone());
                     }
                     levels.push(level);
                 }

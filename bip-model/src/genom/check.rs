@@ -356,10 +356,7 @@ fn codels<'d>(errors: &mut Errors, ports: &[&str], s: &'d ServiceDef, out: &mut 
                     )),
             );
         } else if let Some(base) = n.strip_suffix("_fail") {
-            if s.codels
-                .iter()
-                .any(|o| o.state.as_str() == base && !o.throws.is_empty())
-            {
+            if s.codels.iter().any(|o| o.state.as_str() == base) {
                 errors.push(
                     ModelError::new(format!("a codel state cannot be named `{n}`"), c.state.span)
                         .with_help(format!("`{n}` names the error port of codel `{base}`")),

@@ -85,9 +85,10 @@ pub struct CodelMap {
     pub state: String,
     /// The interaction of the codel's normal outcomes: one step per yield.
     pub run: u32,
-    /// The interaction of the codel ending with one of its `throws`; `None` if it throws
-    /// nothing.
-    pub fail: Option<u32>,
+    /// The interaction of the codel's error path: it ends with one of its `throws`, or the
+    /// engine found it faulty (a panic, an undeclared yield, an ids value out of range).
+    /// The activity ends without success.
+    pub fail: u32,
     pub yields: Vec<YieldMap>,
     pub throws: Vec<String>,
     pub writes: Vec<String>,
@@ -244,7 +245,7 @@ pub(crate) struct RecipeService {
 pub(crate) struct RecipeCodel {
     pub state: String,
     pub run: String,
-    pub fail: Option<String>,
+    pub fail: String,
     /// The yields as written, in order: the transitions of the codel's port from each
     /// source location are generated in this order.
     pub yields: Vec<String>,
@@ -380,10 +381,7 @@ impl Recipe {
                     codels.push(CodelMap {
                         state: c.state.clone(),
                         run: interaction(&c.run)?,
-                        fail: match &c.fail {
-                            Some(f) => Some(interaction(f)?),
-                            None => None,
-                        },
+                        fail: interaction(&c.fail)?,
                         yields,
                         throws: c.throws.clone(),
                         writes: c.writes.clone(),
