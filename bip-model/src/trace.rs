@@ -2,13 +2,15 @@
 //! and engine recordings. Each step names the fired interaction (or `comp.internal`) and
 //! the locations and variables that changed.
 
-use std::collections::HashMap;
-use std::fmt;
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use core::fmt;
+use hashbrown::HashMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::load::ron_options;
-use crate::source::OrderedMap;
+use crate::ordered_map::OrderedMap;
 use crate::state::State;
 use crate::step::{OwnedStep, Steps};
 use crate::system::{RangeError, System, VarType};
@@ -79,7 +81,7 @@ impl fmt::Display for ReplayError {
     }
 }
 
-impl std::error::Error for ReplayError {}
+impl core::error::Error for ReplayError {}
 
 impl System {
     /// The value of a slot as a trace shows it.
@@ -143,20 +145,22 @@ impl Trace {
 
     /// The trace as pretty RON, in MODEL.md's layout: `Trace(` then steps written
     /// `(step: "...", state: {...})`.
+    #[cfg(feature = "std")]
     pub fn to_ron(&self) -> String {
         // ron names either every struct or none; MODEL.md names only the outer one
         let config = ron::ser::PrettyConfig::new()
             .struct_names(false)
             .depth_limit(2);
-        match ron_options().to_string_pretty(self, config) {
+        match crate::load::ron_options().to_string_pretty(self, config) {
             Ok(body) => format!("Trace{body}\n"),
             Err(e) => format!("// could not write the trace: {e}\n"),
         }
     }
 
     /// Reads a trace written in RON.
+    #[cfg(feature = "std")]
     pub fn from_ron(text: &str) -> Result<Trace, String> {
-        ron_options()
+        crate::load::ron_options()
             .from_str(text)
             .map_err(|e| format!("{}: {}", e.span.start, e.code))
     }

@@ -6,9 +6,10 @@
 use std::collections::{BTreeMap, HashMap, HashSet};
 
 use super::check::{ConstraintKind, Layer, PortRef, Service, ServiceRef, Yield, ETHER};
-use super::map::{Reason, Recipe, RecipeCodel, RecipeCondition, RecipeModule, RecipeService};
+use super::map::Reason;
 use super::names::*;
 use super::origin::{Origins, Src};
+use super::recipe::{Recipe, RecipeCodel, RecipeCondition, RecipeModule, RecipeService};
 use crate::diag::{Errors, ModelError};
 use crate::expr::{parse_expr, ExprKind};
 use crate::source::{ConstExpr, ConstValue, OrderedMap, Span, Spanned};
