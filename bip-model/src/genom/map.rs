@@ -9,6 +9,8 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
+use core::ops::Range;
+
 use crate::eval;
 use crate::state::State;
 use crate::system::{RangeError, System};
@@ -103,9 +105,30 @@ pub struct CodelMap {
     pub fail: u32,
     pub yields: Vec<YieldMap>,
     pub throws: Vec<String>,
+    /// The out ports it writes.
     pub writes: Vec<String>,
+    /// The ids fields it writes, in the module's order. A step of [`CodelMap::run`] picks
+    /// one transition of the module's component among [`CodelMap::ids_transitions`]: the
+    /// one for the values written ([`CodelMap::ids_transition`]).
+    pub ids: Vec<IdsWrite>,
+    /// The module atom's transitions that write the ids (empty if the codel writes none).
+    pub ids_transitions: Range<u32>,
     /// What must hold for the codel to run; the failed ones say why it is held.
     pub holds: Vec<Condition>,
+}
+
+/// An ids field a codel writes (docs/genom.md, "Codels that write ids").
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct IdsWrite {
+    pub name: String,
+    /// Index of the field among the module atom's variables.
+    pub var: u32,
+    /// Its slot in the state.
+    pub slot: u32,
+    pub lo: i64,
+    pub hi: i64,
+    /// How many transitions apart two consecutive values of this field are.
+    pub stride: u32,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -197,6 +220,20 @@ impl CodelMap {
     /// The conditions that hold the codel back in `state`.
     pub fn held_by(&self, system: &System, state: &State) -> Result<Vec<&Condition>, RangeError> {
         failed(&self.holds, system, state)
+    }
+
+    /// The module transition that writes `value(k)` into the `k`-th field of
+    /// [`CodelMap::ids`]; `None` if a value is outside its field's range.
+    pub fn ids_transition(&self, mut value: impl FnMut(usize) -> i64) -> Option<u32> {
+        let mut t = self.ids_transitions.start;
+        for (k, f) in self.ids.iter().enumerate() {
+            let v = value(k);
+            if v < f.lo || v > f.hi {
+                return None;
+            }
+            t += (v - f.lo) as u32 * f.stride;
+        }
+        Some(t)
     }
 
     /// The yield a transition of the activity's atom takes.

@@ -48,6 +48,9 @@ pub(crate) struct RecipeCodel {
     pub from_location: bool,
     pub throws: Vec<String>,
     pub writes: Vec<String>,
+    /// Written ids fields, in the module's order, and the module port that writes them.
+    pub ids: Vec<String>,
+    pub ids_port: Option<String>,
     pub holds: Vec<RecipeCondition>,
 }
 
@@ -172,6 +175,36 @@ impl Recipe {
                             }
                         })
                         .collect();
+                    let matom = system.atom_of(mc);
+                    let ids_transitions = match &c.ids_port {
+                        None => 0..0,
+                        Some(p) => {
+                            let port = matom.port_index(p).ok_or_else(|| missing(p))?;
+                            matom.transitions_from(0, Some(port))
+                        }
+                    };
+                    let mut ids: Vec<IdsWrite> = Vec::new();
+                    for x in &c.ids {
+                        let var = matom.var_index(x).ok_or_else(|| missing(x))?;
+                        let (lo, hi) = matom.vars[var as usize].ty.range();
+                        ids.push(IdsWrite {
+                            name: x.clone(),
+                            var,
+                            slot: system.components[mc as usize].var_slot(var),
+                            lo,
+                            hi,
+                            stride: 1,
+                        });
+                    }
+                    // the last field varies fastest
+                    let mut stride = 1u32;
+                    for f in ids.iter_mut().rev() {
+                        f.stride = stride;
+                        stride = stride.saturating_mul((f.hi - f.lo + 1) as u32);
+                    }
+                    if !ids.is_empty() && stride as usize != ids_transitions.len() {
+                        return Err(missing("the transitions that write ids"));
+                    }
                     codels.push(CodelMap {
                         state: c.state.clone(),
                         run: interaction(&c.run)?,
@@ -179,6 +212,8 @@ impl Recipe {
                         yields,
                         throws: c.throws.clone(),
                         writes: c.writes.clone(),
+                        ids,
+                        ids_transitions,
                         holds,
                     });
                 }
