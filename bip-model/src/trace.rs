@@ -168,10 +168,28 @@ impl Trace {
     /// Re-executes the trace with the step relation: each step must be enabled and lead to
     /// the recorded changes. Returns the steps and states it passes through.
     pub fn replay(&self, system: &System) -> Result<Vec<(OwnedStep, State)>, ReplayError> {
+        match self.replay_prefix(system) {
+            (path, None) => Ok(path),
+            (_, Some(e)) => Err(e),
+        }
+    }
+
+    /// Like [`Trace::replay`], but keeps the steps that replay before the first that does
+    /// not: the path so far, and the error, if any.
+    pub fn replay_prefix(&self, system: &System) -> (Vec<(OwnedStep, State)>, Option<ReplayError>) {
+        let mut out = Vec::with_capacity(self.steps.len());
+        let err = self.replay_into(system, &mut out).err();
+        (out, err)
+    }
+
+    fn replay_into(
+        &self,
+        system: &System,
+        out: &mut Vec<(OwnedStep, State)>,
+    ) -> Result<(), ReplayError> {
         let slots = system.slot_by_name();
         let mut state = system.initial_state();
         let mut steps = Steps::new();
-        let mut out = Vec::with_capacity(self.steps.len());
         for (k, ts) in self.steps.iter().enumerate() {
             let n = k + 1;
             let fail = |message: String| ReplayError { step: n, message };
@@ -214,7 +232,7 @@ impl Trace {
             state = next;
             out.push((step, state.clone()));
         }
-        Ok(out)
+        Ok(())
     }
 
     /// A readable rendering; with the system, changes show as `old → new`.

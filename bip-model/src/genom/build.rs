@@ -981,6 +981,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         (p.to_string(), cap)
                     })
                     .collect(),
+                ids: m.ids.iter().map(|(x, _)| x.to_string()).collect(),
                 services: Vec::new(),
             });
         }

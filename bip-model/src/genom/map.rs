@@ -47,7 +47,21 @@ pub struct ModuleMap {
     pub component: u32,
     pub tasks: Vec<TaskMap>,
     pub ports: Vec<PortMap>,
+    /// The ids fields, in order.
+    pub ids: Vec<IdsField>,
     pub services: Vec<ServiceMap>,
+}
+
+/// An ids field of a module.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct IdsField {
+    pub name: String,
+    /// Index of the field among the module atom's variables.
+    pub var: u32,
+    /// Its slot in the state.
+    pub slot: u32,
+    pub lo: i64,
+    pub hi: i64,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]

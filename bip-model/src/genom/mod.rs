@@ -33,8 +33,8 @@ mod tests;
 #[cfg(feature = "std")]
 pub use build::Expansion;
 pub use map::{
-    AgeMap, CodelMap, Condition, GenomMap, IdsWrite, ModuleMap, PortMap, Reason, ServiceKind,
-    ServiceMap, TaskMap, YieldMap,
+    AgeMap, CodelMap, Condition, GenomMap, IdsField, IdsWrite, ModuleMap, PortMap, Reason,
+    ServiceKind, ServiceMap, TaskMap, YieldMap,
 };
 
 #[cfg(feature = "std")]

@@ -19,6 +19,8 @@ pub(crate) struct RecipeModule {
     pub tasks: Vec<(String, i64)>,
     /// Port names and their age caps, for ports whose age is tracked.
     pub ports: Vec<(String, Option<i64>)>,
+    /// Ids field names, in order.
+    pub ids: Vec<String>,
     pub services: Vec<RecipeService>,
 }
 
@@ -118,6 +120,18 @@ impl Recipe {
                 ports.push(PortMap {
                     name: p.clone(),
                     age,
+                });
+            }
+            let mut ids = Vec::new();
+            for x in &m.ids {
+                let var = atom.var_index(x).ok_or_else(|| missing(x))?;
+                let (lo, hi) = atom.vars[var as usize].ty.range();
+                ids.push(IdsField {
+                    name: x.clone(),
+                    var,
+                    slot: system.components[mc as usize].var_slot(var),
+                    lo,
+                    hi,
                 });
             }
             let mut services = Vec::new();
@@ -241,6 +255,7 @@ impl Recipe {
                     })
                     .collect(),
                 ports,
+                ids,
                 services,
             });
         }
