@@ -58,9 +58,9 @@ pub(crate) struct CodelTable {
 pub(crate) struct ServiceTable {
     pub module: String,
     pub name: String,
-    /// The activity's task (index among the module's tasks).
+    /// The activity's task.
     #[cfg_attr(not(feature = "std"), allow(dead_code))]
-    pub task: Option<usize>,
+    pub task: Option<String>,
     pub request: u32,
     pub owned: bool,
     pub refusals: Vec<Condition>,
@@ -214,7 +214,7 @@ impl Tables {
                 t.services.push(ServiceTable {
                     module: m.name.clone(),
                     name: s.name.clone(),
-                    task: s.task,
+                    task: s.task.and_then(|k| m.tasks.get(k)).map(|t| t.name.clone()),
                     request: s.request,
                     owned: s.owned_by_model,
                     refusals: s.refusals.clone(),

@@ -42,6 +42,12 @@ pub enum DefaultCodels {
     Random(u64),
 }
 
+/// A callback for every event.
+pub type EventFn = Box<dyn FnMut(&Event) + Send>;
+
+/// Arguments of a request, for its activity's codels.
+pub type Args = Box<dyn Any + Send>;
+
 /// How a codel is run.
 pub(crate) enum Body {
     Bound(CodelFn),
@@ -108,7 +114,7 @@ pub struct EngineBuilder {
     tick_us: Option<u64>,
     record: Option<usize>,
     event_capacity: usize,
-    on_event: Option<Box<dyn FnMut(&Event) + Send>>,
+    on_event: Option<EventFn>,
     threads: bool,
 }
 
@@ -318,10 +324,10 @@ pub struct Engine {
     ids_buf: Vec<i64>,
     written: u64,
     ctx_fault: Option<CtxFault>,
-    inbox: VecDeque<(Ticket, u32, Option<Box<dyn Any + Send>>)>,
+    inbox: VecDeque<(Ticket, u32, Option<Args>)>,
     events: VecDeque<Event>,
     event_capacity: usize,
-    on_event: Option<Box<dyn FnMut(&Event) + Send>>,
+    on_event: Option<EventFn>,
     clock: Box<dyn Clock>,
     tick_us: u64,
     next_tick_us: u64,
@@ -874,6 +880,36 @@ impl Engine {
         Ok(out)
     }
 
+    /// Every activity with work outstanding (requested, or running): the codel it runs
+    /// next, whether it waits for its task's period, and the conditions of that codel
+    /// that fail now (what holds it once its period comes).
+    pub fn outstanding(&self) -> Result<Vec<(CodelId, bool, Reasons)>, EngineError> {
+        let mut out = Vec::new();
+        for svc in &self.t.services {
+            let Some(a) = &svc.activity else { continue };
+            let slots = self.state.slots();
+            let loc = slots[a.loc_slot as usize] as u32;
+            if loc == a.ether && slots[a.req_slot as usize] == 0 {
+                continue;
+            }
+            let Some(c) = a.codel_at.get(loc as usize).copied().flatten() else {
+                continue;
+            };
+            let mut mask = 0u64;
+            for (k, h) in self.t.codels[c as usize].map.holds.iter().enumerate() {
+                if !h
+                    .holds(&self.system, &self.state)
+                    .map_err(EngineError::Range)?
+                {
+                    mask |= 1 << k;
+                }
+            }
+            let paused = slots[a.paused_slot as usize] != 0;
+            out.push((CodelId(c), paused, Reasons(mask)));
+        }
+        Ok(out)
+    }
+
     fn held_codel(&self, s: usize) -> Result<Option<(u32, Reasons)>, EngineError> {
         let Some(a) = &self.t.services[s].activity else {
             return Ok(None);
@@ -1203,9 +1239,7 @@ impl Engine {
     /// takes yield `yield_k` and writes the staged ids; chosen by the policy if several.
     fn find_run_step(&mut self, ck: usize, yield_k: usize, forced: bool) -> Option<u32> {
         let c = &self.t.codels[ck];
-        let Some(activity) = self.t.services[c.service as usize].activity.as_ref() else {
-            return None;
-        };
+        let activity = self.t.services[c.service as usize].activity.as_ref()?;
         let comp = activity.component;
         let want_ids = if c.map.ids.is_empty() {
             None

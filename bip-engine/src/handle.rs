@@ -2,7 +2,7 @@
 //! request gets its replies on a channel of its own.
 
 use std::any::Any;
-use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender, TryRecvError};
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -60,10 +60,7 @@ impl PendingReply {
 
     /// The next reply if there is one already.
     pub fn try_next(&self) -> Option<(Ticket, Reply)> {
-        match self.rx.try_recv() {
-            Ok(r) => Some(r),
-            Err(TryRecvError::Empty | TryRecvError::Disconnected) => None,
-        }
+        self.rx.try_recv().ok()
     }
 }
 

@@ -74,7 +74,7 @@ pub use clock::RealClock;
 #[cfg(target_has_atomic = "64")]
 pub use clock::VirtualClock;
 pub use codel::{CodelFn, Ctx, Next};
-pub use engine::{DefaultCodels, Engine, EngineBuilder, Stats, Stepped, Until};
+pub use engine::{Args, DefaultCodels, Engine, EngineBuilder, EventFn, Stats, Stepped, Until};
 pub use error::{BuildError, EngineError, RequestError, StepAsError};
 pub use event::{
     CodelId, Event, Fault, FaultKind, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket,

@@ -4,20 +4,15 @@
 /// that the model leaves unordered, connectors of yours, internal transitions) and among
 /// several steps of one interaction. The GenoM expansion orders codels, so with a GenoM
 /// model there is rarely more than one (docs/engine.md, "Scheduling").
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Policy {
     /// Always the first, in the model's order (interaction index, then step).
     First,
     /// In turn: the k-th choice takes candidate `k mod n`.
+    #[default]
     RoundRobin,
     /// Uniformly at random from a seeded generator: deterministic for a seed.
     Seeded(u64),
-}
-
-impl Default for Policy {
-    fn default() -> Self {
-        Policy::RoundRobin
-    }
 }
 
 /// SplitMix64: small, fast, and enough to spread choices.

@@ -38,7 +38,8 @@ pub enum End {
     /// A plain recording: nothing to check.
     Recording,
     /// The last state is a deadlock (no progress now or after ticks); `held` lists the
-    /// codels that wait, and why.
+    /// activities with work outstanding, the codel each runs next, and the conditions
+    /// that hold it.
     Deadlock { held: Vec<String> },
     /// The invariant fails in the last state.
     Violation { property: String },
@@ -181,16 +182,21 @@ fn check_end(engine: &Engine, verdict: &Verdict) -> End {
             match live {
                 Ok(Liveness::Deadlock) => {
                     let held = engine
-                        .held()
+                        .outstanding()
                         .unwrap_or_default()
                         .into_iter()
-                        .map(|(c, r)| {
+                        .map(|(c, paused, r)| {
                             let (m, s, st) = engine.codel_name(c);
                             let why: Vec<String> = engine.hold_texts(c, r).collect();
-                            if why.is_empty() {
-                                format!("{m}.{s} codel `{st}`")
+                            let wait = if paused {
+                                " (waits for its period)"
                             } else {
-                                format!("{m}.{s} codel `{st}`, held by {}", why.join(", "))
+                                ""
+                            };
+                            if why.is_empty() {
+                                format!("{m}.{s} codel `{st}`{wait}")
+                            } else {
+                                format!("{m}.{s} codel `{st}`{wait}, held by {}", why.join(", "))
                             }
                         })
                         .collect();

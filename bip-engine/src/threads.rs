@@ -103,13 +103,8 @@ impl Drop for Workers {
 }
 
 fn task_of(t: &Tables, codel: usize) -> String {
-    // codels of one service share its task; services of one module with the same period
-    // may still be distinct tasks, so the service names the thread when no task is known
-    let c = &t.codels[codel];
-    format!(
-        "task{}",
-        t.services[c.service as usize].task.unwrap_or(usize::MAX)
-    )
+    let s = &t.services[t.codels[codel].service as usize];
+    s.task.clone().unwrap_or_else(|| s.name.clone())
 }
 
 fn serve(mut codels: Vec<(CodelInfo, CodelFn)>, jobs: Receiver<Job>, done: SyncSender<Job>) {
