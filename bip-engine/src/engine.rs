@@ -618,7 +618,9 @@ impl Engine {
         }
     }
 
-    fn wait_until(&mut self, t: u64) {
+    /// Waits until the clock reaches `t` (a virtual clock jumps there), taking in requests
+    /// from handles meanwhile.
+    pub fn wait_until(&mut self, t: u64) {
         #[cfg(feature = "std")]
         if self.remote.is_some() {
             self.wait_remote(t);
@@ -1032,6 +1034,8 @@ impl Engine {
         let error = match verdict {
             Verdict2::Error(o) => {
                 match &o {
+                    // a replayed error path is what the trace says, not a fault seen now
+                    Outcome::Fault(f) if f.kind == FaultKind::Replayed => {}
                     Outcome::Fault(f) => {
                         self.stats.faults += 1;
                         let i = &self.t.codels[ck].info;
