@@ -310,3 +310,71 @@ fn each_step_is_a_tracing_event() {
     }
     assert!(text.lines().any(|l| l.contains("step=\"tick\"")), "{text}");
 }
+
+#[test]
+fn a_function_named_by_a_constraint_is_refused_with_the_constraint() {
+    // `Requires` on a function gates its request: refused while the laser is off
+    let mut e = Engine::builder(load_str(
+        r#"System(
+        name: "gated",
+        tick_ms: 10,
+        modules: [(
+            name: "m",
+            tasks: [(name: "t", period: 1)],
+            services: [
+                (name: "Scan", kind: Activity, task: "t", codels: [
+                    (state: "start", yields: ["pause::scan"]),
+                    (state: "scan", yields: ["pause::scan", "ether"]),
+                ]),
+                (name: "Snapshot", kind: Function),
+            ],
+        )],
+        constraints: [Requires(service: "m.Snapshot", active: ["m.Scan"])],
+    )"#,
+    ))
+    .default_codels(DefaultCodels::FirstYield)
+    .record(1000)
+    .build()
+    .expect("builds");
+    let s = e.service_id("m", "Snapshot").expect("service");
+    let early = e.request("m", "Snapshot", ()).expect("queued");
+    e.run_until(Until::Quiescent).expect("runs");
+    let got = replies(&mut e);
+    let [(t, Reply::Refused(Refusal::Conditions(r)))] = got.as_slice() else {
+        panic!("{got:?}");
+    };
+    assert_eq!(*t, early);
+    let refusals = &e
+        .system()
+        .genom
+        .as_ref()
+        .expect("layer")
+        .service("m", "Snapshot")
+        .expect("service")
+        .refusals;
+    assert_eq!(
+        r.iter().map(|k| &refusals[k].reason).collect::<Vec<_>>(),
+        [&Reason::Constraint {
+            index: 0,
+            kind: "Requires".into()
+        }]
+    );
+    let texts: Vec<String> = e.refusal_texts(s, *r).collect();
+    assert_eq!(texts.len(), 1);
+    assert!(
+        texts[0].starts_with("constraint #0 (Requires)"),
+        "{texts:?}"
+    );
+    // once the scan runs, the same request is accepted and done
+    e.request("m", "Scan", ()).expect("queued");
+    e.run_until(Until::Ticks(2)).expect("runs");
+    let later = e.request("m", "Snapshot", ()).expect("queued");
+    e.run_until(Until::Ticks(1)).expect("runs");
+    let got = replies(&mut e);
+    assert!(got.contains(&(later, Reply::Accepted)), "{got:?}");
+    assert!(
+        got.contains(&(later, Reply::Done(Outcome::Ether))),
+        "{got:?}"
+    );
+    states_of(e.system(), &e.record());
+}
