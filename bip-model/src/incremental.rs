@@ -35,8 +35,10 @@ pub struct EnabledSet {
     /// Per interaction, the priority rules in which it is one of the higher interactions.
     by_high_start: Vec<u32>,
     by_high: Vec<u32>,
-    /// Per rule, true if it has a `when` (its effect needs evaluating in each state).
-    rule_has_when: Vec<bool>,
+    /// Per rule without a `when`, the interactions it suppresses (`low`), as `start..end`;
+    /// empty for a rule with a `when`. A copy of `System::priorities`' ranges packed in 8
+    /// bytes a rule: [`EnabledSet::flip`] walks them on every change of an interaction.
+    rule_low: Vec<(u32, u32)>,
     /// Interactions under some rule with a `when`: their suppression is decided by
     /// [`System::is_suppressed`] in each state.
     under_when: Vec<u64>,
@@ -119,6 +121,18 @@ impl EnabledSet {
             }
         }
         let any_when = rule_has_when.iter().any(|&w| w);
+        let rule_low = system
+            .priorities
+            .iter()
+            .zip(&rule_has_when)
+            .map(|(r, &when)| {
+                if when {
+                    (0, 0)
+                } else {
+                    (r.low.start, r.low.end)
+                }
+            })
+            .collect();
         let (deps_start, deps) = flatten(&per_comp);
 
         let mut per_high: Vec<Vec<u32>> = vec![Vec::new(); n_inter];
@@ -135,7 +149,7 @@ impl EnabledSet {
             deps,
             by_high_start,
             by_high,
-            rule_has_when,
+            rule_low,
             under_when,
             any_when,
             picks: vec![Vec::new(); n_inter],
@@ -251,26 +265,26 @@ impl EnabledSet {
         let now = steps > 0;
         if now != bit(&self.pre, i) {
             set_bit(&mut self.pre, i, now);
-            self.flip(system, i, now);
+            self.flip(i, now);
         }
         Ok(())
     }
 
     /// Interaction `i` gained (`on`) or lost its steps: count it in the rules where it is
     /// higher, and update what those rules suppress.
-    fn flip(&mut self, system: &System, i: u32, on: bool) {
+    fn flip(&mut self, i: u32, on: bool) {
         let (s, e) = (
             self.by_high_start[i as usize] as usize,
             self.by_high_start[i as usize + 1] as usize,
         );
-        for k in s..e {
-            let r = self.by_high[k] as usize;
+        for &r in &self.by_high[s..e] {
+            let r = r as usize;
             let before = self.high_count[r];
-            self.high_count[r] = if on { before + 1 } else { before - 1 };
-            let crossed = (before == 0) != (self.high_count[r] == 0);
-            if crossed && !self.rule_has_when[r] {
-                for low in system.priorities[r].low.clone() {
-                    let b = &mut self.blockers[low as usize];
+            let after = if on { before + 1 } else { before - 1 };
+            self.high_count[r] = after;
+            if (before == 0) != (after == 0) {
+                let (lo, hi) = self.rule_low[r];
+                for b in &mut self.blockers[lo as usize..hi as usize] {
                     *b = if on { *b + 1 } else { *b - 1 };
                 }
             }

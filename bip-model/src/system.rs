@@ -180,9 +180,10 @@ pub struct Interaction {
     pub trigger: Option<u32>,
     pub guard: Option<Expr>,
     pub action: Vec<Assign>,
-    /// Components whose slots the guard or action of this interaction read, besides its
-    /// participants (for incremental re-evaluation; [`crate::EnabledSet`] handles what
-    /// priorities read itself).
+    /// Components whose slots the guard of this interaction reads, besides its
+    /// participants: what its enabledness depends on, for incremental re-evaluation (the
+    /// action does not decide it; [`crate::EnabledSet`] handles what priorities read
+    /// itself).
     pub reads: Vec<u32>,
 }
 
