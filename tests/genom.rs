@@ -246,6 +246,21 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
         trace.steps.last().map(|s| s.step.as_str()),
         Some("ndd_GoTo_request")
     );
+    // through the engine: each step allowed, the deadlock reached, and why
+    let saved = dir.path().join("DeadlockFree.trace.ron");
+    let out = bip(&[
+        "replay",
+        "robots/rover-deadlock.ron",
+        saved.to_str().expect("utf-8"),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(text.contains("allowed: request accepted"), "{text}");
+    assert!(text.contains("deadlock reached after"), "{text}");
+    assert!(
+        text.contains("waiting: ndd.GoTo codel `start`") && text.contains("(Requires)"),
+        "{text}"
+    );
 }
 
 #[test]

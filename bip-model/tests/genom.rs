@@ -186,11 +186,11 @@ fn codel_automaton_errors() {
             "not an activity; it has no codel states",
             "start",
         ),
-        // a written port that does not exist
+        // a written port (or ids field) that does not exist
         (
             r#"writes: ["scan"]"#,
             r#"writes: ["scna"]"#,
-            "no out port `scna`",
+            "no out port or ids field `scna`",
             "scna",
         ),
     ];
