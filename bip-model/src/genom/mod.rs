@@ -13,6 +13,7 @@ mod check;
 pub mod map;
 mod names;
 mod origin;
+mod stuck;
 pub mod syntax;
 
 #[cfg(test)]
@@ -23,6 +24,7 @@ pub use map::{
     AgeMap, CodelMap, Condition, GenomMap, ModuleMap, PortMap, Reason, ServiceMap, TaskMap,
     YieldMap,
 };
+pub use stuck::Stuck;
 
 use crate::compile::{compile_core, Constants};
 use crate::diag::{Errors, ModelError};
