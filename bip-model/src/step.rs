@@ -258,6 +258,32 @@ impl System {
         Ok(())
     }
 
+    /// True if `component` takes part in interaction `i` and one of its transitions on its
+    /// port there is enabled in `state` (location and the atom's own guard; the
+    /// interaction's guard and the other participants aside). Used to explain deadlocks.
+    pub fn participant_ready(
+        &self,
+        state: &State,
+        i: u32,
+        component: u32,
+    ) -> Result<bool, RangeError> {
+        let Some(port) = self.interactions[i as usize]
+            .ports
+            .iter()
+            .find(|p| p.component == component)
+        else {
+            return Ok(false);
+        };
+        let atom = self.atom_of(component);
+        let loc = self.location(state, component);
+        for t in atom.transitions_from(loc, Some(port.port)) {
+            if self.transition_guard(state, component, t)? {
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
+
     #[inline]
     fn transition_guard(&self, state: &State, c: u32, t: u32) -> Result<bool, RangeError> {
         let comp = &self.components[c as usize];

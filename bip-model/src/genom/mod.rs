@@ -24,6 +24,7 @@ mod names;
 mod origin;
 #[cfg(feature = "std")]
 mod recipe;
+mod stuck;
 #[cfg(feature = "std")]
 pub mod syntax;
 
@@ -36,6 +37,7 @@ pub use map::{
     AgeMap, CodelMap, Condition, GenomMap, IdsField, IdsWrite, ModuleMap, PortMap, Reason,
     ServiceKind, ServiceMap, TaskMap, YieldMap,
 };
+pub use stuck::Stuck;
 
 #[cfg(feature = "std")]
 pub(crate) use expansion::compile;
