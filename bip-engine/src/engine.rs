@@ -927,8 +927,10 @@ impl Engine {
             return Ok(None);
         };
         let cm = &self.t.codels[c as usize].map;
-        if self.enabled.has_steps_before_priorities(cm.run)
-            || self.enabled.has_steps_before_priorities(cm.fail)
+        // codels are higher than the tick in every GenoM layer, so the set evaluates them
+        // always (`None`, never evaluated, cannot happen here)
+        if self.enabled.has_steps_before_priorities(cm.run) != Some(false)
+            || self.enabled.has_steps_before_priorities(cm.fail) != Some(false)
         {
             return Ok(None); // it can run; it may only wait for its turn
         }

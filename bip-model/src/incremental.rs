@@ -5,11 +5,17 @@
 //! read those components can change. [`EnabledSet`] caches, per interaction, its steps
 //! before priorities, and after a step re-evaluates only the interactions whose participants
 //! or read components (`Interaction::reads`) moved, with the same function the full
-//! relation uses ([`System::push_interaction_steps`]); priorities are applied with
-//! per-rule counts of enabled higher interactions, or with [`System::is_suppressed`] itself
-//! for interactions under a rule with a `when`. It is not a second notion of "enabled": it
+//! relation uses ([`System::push_interaction_steps`]); priorities are applied by looking
+//! up, for a lower interaction, whether one of its higher interactions has steps (a sparse
+//! bit mask per lower interaction), or with [`System::is_suppressed`] itself for
+//! interactions under a rule with a `when`. It is not a second notion of "enabled": it
 //! yields exactly the steps of [`System::enabled_steps`], in the same order (a property
 //! test checks it on random systems), only computed from a cache.
+//!
+//! An interaction that is higher in no rule and that priorities suppress now cannot
+//! change anything the set answers, so it is not evaluated until it is no longer
+//! suppressed (it is "stale" meanwhile). In a GenoM layer that is the tick and the
+//! requests while a codel is due: most of what a codel step would otherwise re-evaluate.
 
 #[allow(unused_imports)]
 use crate::prelude::*;
@@ -32,13 +38,14 @@ pub struct EnabledSet {
     /// action): `deps[deps_start[c]..deps_start[c + 1]]`.
     deps_start: Vec<u32>,
     deps: Vec<u32>,
-    /// Per interaction, the priority rules in which it is one of the higher interactions.
-    by_high_start: Vec<u32>,
-    by_high: Vec<u32>,
-    /// Per rule without a `when`, the interactions it suppresses (`low`), as `start..end`;
-    /// empty for a rule with a `when`. A copy of `System::priorities`' ranges packed in 8
-    /// bytes a rule: [`EnabledSet::flip`] walks them on every change of an interaction.
-    rule_low: Vec<(u32, u32)>,
+    /// Per interaction, its higher interactions under rules without a `when`, as a sparse
+    /// bit mask: `(word, bits)` pairs over `pre`,
+    /// `highs[highs_start[i]..highs_start[i + 1]]`.
+    highs_start: Vec<u32>,
+    highs: Vec<(u32, u64)>,
+    /// Interactions that no rule names as higher and no `when` decides: they are left
+    /// unevaluated while suppressed.
+    lazy: Vec<u64>,
     /// Interactions under some rule with a `when`: their suppression is decided by
     /// [`System::is_suppressed`] in each state.
     under_when: Vec<u64>,
@@ -50,10 +57,9 @@ pub struct EnabledSet {
     width: Vec<u32>,
     /// Interactions with steps before priorities (one bit each).
     pre: Vec<u64>,
-    /// Per rule, how many of its higher interactions have steps.
-    high_count: Vec<u32>,
-    /// Per interaction, how many rules without `when` suppress it now.
-    blockers: Vec<u32>,
+    /// Lazy interactions not evaluated since they were suppressed: their `picks` and
+    /// `pre` bit are out of date (and do not matter while they stay suppressed).
+    stale: Vec<u64>,
     /// Per interaction under a `when` rule: suppressed in this state.
     when_suppressed: Vec<u64>,
     /// Per component, its enabled internal transitions.
@@ -121,42 +127,48 @@ impl EnabledSet {
             }
         }
         let any_when = rule_has_when.iter().any(|&w| w);
-        let rule_low = system
-            .priorities
-            .iter()
-            .zip(&rule_has_when)
-            .map(|(r, &when)| {
-                if when {
-                    (0, 0)
-                } else {
-                    (r.low.start, r.low.end)
-                }
-            })
-            .collect();
         let (deps_start, deps) = flatten(&per_comp);
 
-        let mut per_high: Vec<Vec<u32>> = vec![Vec::new(); n_inter];
-        for (r, rule) in system.priorities.iter().enumerate() {
+        // lower interaction -> the words of `pre` holding its higher ones (no `when`)
+        let mut is_high = vec![0u64; words];
+        let mut per_low: Vec<Vec<(u32, u64)>> = vec![Vec::new(); n_inter];
+        for (rule, &when) in system.priorities.iter().zip(&rule_has_when) {
             for h in rule.high.clone() {
-                per_high[h as usize].push(r as u32);
+                set_bit(&mut is_high, h, true);
+            }
+            if when {
+                continue;
+            }
+            for l in rule.low.clone() {
+                let masks = &mut per_low[l as usize];
+                for h in rule.high.clone() {
+                    let (w, b) = (h / 64, 1u64 << (h % 64));
+                    match masks.iter_mut().find(|(mw, _)| *mw == w) {
+                        Some((_, m)) => *m |= b,
+                        None => masks.push((w, b)),
+                    }
+                }
             }
         }
-        let (by_high_start, by_high) = flatten(&per_high);
+        let (highs_start, highs) = flatten(&per_low);
+        let mut lazy = vec![0u64; words];
+        for i in 0..n_inter as u32 {
+            set_bit(&mut lazy, i, !bit(&is_high, i) && !bit(&under_when, i));
+        }
 
         let mut set = EnabledSet {
             comp_slots,
             deps_start,
             deps,
-            by_high_start,
-            by_high,
-            rule_low,
+            highs_start,
+            highs,
+            lazy,
             under_when,
             any_when,
             picks: vec![Vec::new(); n_inter],
             width: vec![0; n_inter],
             pre: vec![0; words],
-            high_count: vec![0; system.priorities.len()],
-            blockers: vec![0; n_inter],
+            stale: vec![0; words],
             when_suppressed: vec![0; words],
             internal: vec![Vec::new(); n_comp],
             scratch: Steps::new(),
@@ -173,8 +185,6 @@ impl EnabledSet {
     pub fn reset(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
         self.valid = false;
         self.pre.fill(0);
-        self.high_count.fill(0);
-        self.blockers.fill(0);
         self.when_suppressed.fill(0);
         for p in &mut self.picks {
             p.clear();
@@ -183,10 +193,14 @@ impl EnabledSet {
         for c in 0..system.components.len() as u32 {
             self.eval_internal(system, state, c)?;
         }
+        // the lazy ones are left for `settle`, once the others are known
+        self.stale.clone_from(&self.lazy);
         for i in 0..system.interactions.len() as u32 {
-            self.eval_interaction(system, state, i)?;
+            if !bit(&self.lazy, i) {
+                self.eval_interaction(system, state, i)?;
+            }
         }
-        self.decide_whens(system, state)?;
+        self.settle(system, state)?;
         self.valid = true;
         Ok(())
     }
@@ -228,11 +242,32 @@ impl EnabledSet {
         }
         for k in 0..self.dirty.len() {
             let i = self.dirty[k];
-            self.eval_interaction(system, after, i)?;
+            if bit(&self.lazy, i) {
+                set_bit(&mut self.stale, i, true);
+            } else {
+                self.eval_interaction(system, after, i)?;
+            }
         }
-        self.decide_whens(system, after)?;
+        self.settle(system, after)?;
         self.valid = true;
         Ok(())
+    }
+
+    /// With every interaction that some rule names as higher up to date: evaluates the
+    /// stale interactions that are no longer suppressed, and decides the `when` rules.
+    fn settle(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
+        for w in 0..self.stale.len() {
+            let mut bits = self.stale[w];
+            while bits != 0 {
+                let i = (w * 64) as u32 + bits.trailing_zeros();
+                bits &= bits - 1;
+                if !self.blocked(i) {
+                    set_bit(&mut self.stale, i, false);
+                    self.eval_interaction(system, state, i)?;
+                }
+            }
+        }
+        self.decide_whens(system, state)
     }
 
     /// True unless the last update or reset failed.
@@ -262,33 +297,20 @@ impl EnabledSet {
         picks.clear();
         picks.extend_from_slice(&self.scratch.picks);
         self.width[i as usize] = picks.len().checked_div(steps).unwrap_or(0) as u32;
-        let now = steps > 0;
-        if now != bit(&self.pre, i) {
-            set_bit(&mut self.pre, i, now);
-            self.flip(i, now);
-        }
+        set_bit(&mut self.pre, i, steps > 0);
         Ok(())
     }
 
-    /// Interaction `i` gained (`on`) or lost its steps: count it in the rules where it is
-    /// higher, and update what those rules suppress.
-    fn flip(&mut self, i: u32, on: bool) {
+    /// True if a higher interaction of a rule without `when` over `i` has steps.
+    #[inline]
+    fn blocked(&self, i: u32) -> bool {
         let (s, e) = (
-            self.by_high_start[i as usize] as usize,
-            self.by_high_start[i as usize + 1] as usize,
+            self.highs_start[i as usize] as usize,
+            self.highs_start[i as usize + 1] as usize,
         );
-        for &r in &self.by_high[s..e] {
-            let r = r as usize;
-            let before = self.high_count[r];
-            let after = if on { before + 1 } else { before - 1 };
-            self.high_count[r] = after;
-            if (before == 0) != (after == 0) {
-                let (lo, hi) = self.rule_low[r];
-                for b in &mut self.blockers[lo as usize..hi as usize] {
-                    *b = if on { *b + 1 } else { *b - 1 };
-                }
-            }
-        }
+        self.highs[s..e]
+            .iter()
+            .any(|&(w, m)| self.pre[w as usize] & m != 0)
     }
 
     /// Decides suppression of the enabled interactions under a rule with a `when`.
@@ -308,9 +330,10 @@ impl EnabledSet {
         Ok(())
     }
 
-    /// True if interaction `i` has steps before priorities are applied.
-    pub fn has_steps_before_priorities(&self, i: u32) -> bool {
-        bit(&self.pre, i)
+    /// True if interaction `i` has steps before priorities are applied; `None` if the
+    /// set did not evaluate it because it is suppressed and higher in no rule.
+    pub fn has_steps_before_priorities(&self, i: u32) -> Option<bool> {
+        (!bit(&self.stale, i)).then(|| bit(&self.pre, i))
     }
 
     /// True if interaction `i` has enabled steps (after priorities).
@@ -324,7 +347,7 @@ impl EnabledSet {
         if bit(&self.under_when, i) {
             bit(&self.when_suppressed, i)
         } else {
-            self.blockers[i as usize] > 0
+            self.blocked(i)
         }
     }
 
@@ -393,7 +416,7 @@ impl EnabledSet {
 }
 
 /// Lists of lists as one array and start offsets (one more than lists).
-fn flatten(lists: &[Vec<u32>]) -> (Vec<u32>, Vec<u32>) {
+fn flatten<T: Copy>(lists: &[Vec<T>]) -> (Vec<u32>, Vec<T>) {
     let mut start = Vec::with_capacity(lists.len() + 1);
     let mut flat = Vec::new();
     for l in lists {
