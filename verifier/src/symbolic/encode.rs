@@ -24,8 +24,8 @@ use bip_model::{Assign, Label, Role, State, System, Target, VarType};
 use z3::ast::{Bool, Int};
 
 use super::term::{
-    and, and2, eq_num, err_formula, err_or, err_when, ff, iff, implies, ite_int, lit, not, num, or,
-    translate, tt, Slots, Sym, Term,
+    and, and2, err_formula, err_or, err_when, ff, iff, implies, lit, lt_const, not, or, translate,
+    tt, width, Choice, Slots, Sym, Term,
 };
 
 /// What a state slot holds.
@@ -139,17 +139,26 @@ impl StepFilter {
 /// The choice variables of one step.
 pub struct StepVars {
     /// The step's label, numbered as in [`StepEnc::labels`].
-    pub sel: Int,
+    pub sel: Choice,
     /// Per component: the transition it takes, if it takes part.
-    pub tr: Vec<Int>,
+    pub tr: Vec<Choice>,
 }
 
 impl StepVars {
     pub fn fresh(sys: &System, prefix: &str) -> StepVars {
         StepVars {
-            sel: Int::new_const(format!("{prefix}!sel")),
-            tr: (0..sys.components.len())
-                .map(|c| Int::new_const(format!("{prefix}!tr{c}")))
+            sel: Choice::fresh(
+                &format!("{prefix}!sel"),
+                sys.interactions.len() + sys.components.len(),
+            ),
+            tr: sys
+                .components
+                .iter()
+                .enumerate()
+                .map(|(c, comp)| {
+                    let n = sys.atoms[comp.atom as usize].transitions.len();
+                    Choice::fresh(&format!("{prefix}!tr{c}"), n)
+                })
                 .collect(),
         }
     }
@@ -263,7 +272,17 @@ impl<'s> Encoding<'s> {
                 SlotKind::Bool => {
                     slots.push(Sym::of_bool(Bool::new_const(format!("{prefix}!{s}"))));
                 }
-                _ => {
+                SlotKind::Loc { count } => {
+                    let w = width(i128::from(hi));
+                    let bits: Vec<Bool> = (0..w)
+                        .map(|k| Bool::new_const(format!("{prefix}!{s}.{k}")))
+                        .collect();
+                    if !u64::from(*count).is_power_of_two() {
+                        domain.push(lt_const(&bits, u64::from(*count)));
+                    }
+                    slots.push(Sym::of_bits(bits, 0, hi.into()));
+                }
+                SlotKind::Int { .. } => {
                     let x = Int::new_const(format!("{prefix}!{s}"));
                     domain.push(x.ge(lo));
                     domain.push(x.le(hi));
@@ -297,6 +316,16 @@ impl<'s> Encoding<'s> {
             let v = match &s.term {
                 Term::I(x) => model.eval(x, true)?.as_i64()?,
                 Term::B(b) => i64::from(model.eval(b, true)?.as_bool()?),
+                Term::Count(..) => model.eval(&s.int_term(), true)?.as_i64()?,
+                Term::Bits(bits) => {
+                    let mut v = 0;
+                    for (k, b) in bits.iter().enumerate() {
+                        if model.eval(b, true)?.as_bool()? {
+                            v |= 1 << k;
+                        }
+                    }
+                    v
+                }
             };
             out.push(v);
         }
@@ -316,7 +345,7 @@ impl<'s> Encoding<'s> {
     /// `loc(c) == l` in a frame.
     pub fn at(&self, f: &Frame, c: u32, l: u32) -> Bool {
         let slot = self.sys.components[c as usize].slot as usize;
-        eq_num(&f.slots[slot].int_term(), i64::from(l))
+        f.slots[slot].eq_const(i64::from(l))
     }
 
     /// Evaluates a global expression (property, terminal condition) on a frame.
@@ -332,13 +361,13 @@ impl<'s> Encoding<'s> {
         let mut port_err = Vec::with_capacity(sys.components.len());
         for comp in &sys.components {
             let atom = &sys.atoms[comp.atom as usize];
-            let loc = f.slots[comp.slot as usize].int_term();
+            let loc = &f.slots[comp.slot as usize];
             let base = comp.slot + 1;
             let mut en = Vec::with_capacity(atom.transitions.len());
             let mut here = Vec::with_capacity(atom.transitions.len());
             let mut errs = Vec::with_capacity(atom.transitions.len());
             for t in &atom.transitions {
-                let h = eq_num(&loc, i64::from(t.from));
+                let h = loc.eq_const(i64::from(t.from));
                 let (val, err) = match (&t.guard, lit(&h)) {
                     (_, Some(false)) | (None, _) => (tt(), None),
                     (Some(g), _) => {
@@ -532,16 +561,16 @@ impl<'s> Encoding<'s> {
                 next: f.slots.clone(),
             };
         }
-        let sel_is = |k: i64| eq_num(&v.sel, k);
+        let sel_is = |k: i64| v.sel.is(k);
         let choose = |c: u32, port: Option<u32>| -> Bool {
             or(self.transitions_on(c, port).iter().map(|&t| {
                 and2(
-                    &eq_num(&v.tr[c as usize], i64::from(t)),
+                    &v.tr[c as usize].is(i64::from(t)),
                     &en.trans_en[c as usize][t as usize],
                 )
             }))
         };
-        let mut valid = vec![v.sel.ge(0), v.sel.lt(labels.len() as i64)];
+        let mut valid = vec![v.sel.below(labels.len() as u64)];
         for (i, inter) in sys.interactions.iter().enumerate() {
             let Some(k) = label_of_inter[i] else { continue };
             let mut cond = vec![en.allowed[i].clone()];
@@ -627,21 +656,20 @@ impl<'s> Encoding<'s> {
             if relevant.is_empty() {
                 continue;
             }
-            // location: the chosen transition's target
-            let mut loc = num(i64::from(
-                atom.transitions[relevant[relevant.len() - 1] as usize].to,
-            ));
-            for &t in relevant[..relevant.len() - 1].iter().rev() {
-                let to = num(i64::from(atom.transitions[t as usize].to));
-                loc = ite_int(&eq_num(tr, i64::from(t)), &to, &loc);
-            }
+            // location: the chosen transition's target, bit by bit
             let slot = comp.slot as usize;
-            let (lo, hi) = self.kinds[slot].range();
-            next[slot] = Sym::of_int(
-                ite_int(&moves, &loc, &f.slots[slot].int_term()),
-                lo.into(),
-                hi.into(),
-            );
+            let (_, hi) = self.kinds[slot].range();
+            let w = width(i128::from(hi));
+            let dest: Vec<Bool> = (0..w)
+                .map(|k| {
+                    or(relevant
+                        .iter()
+                        .filter(|&&t| atom.transitions[t as usize].to >> k & 1 == 1)
+                        .map(|&t| tr.is(i64::from(t))))
+                })
+                .collect();
+            let dest = Sym::of_bits(dest, 0, hi.into());
+            next[slot] = choose_sym(&moves, &dest, &f.slots[slot]);
             // variables: the chosen transition's action, on the values the connector left
             let mut per_var: Vec<Vec<(i64, Sym)>> = vec![Vec::new(); atom.vars.len()];
             let mut errs = Vec::new();
@@ -651,7 +679,7 @@ impl<'s> Encoding<'s> {
                     continue;
                 }
                 let (written, err) = self.run_action(action, &pre, comp.slot + 1);
-                let picked = eq_num(tr, i64::from(t));
+                let picked = tr.is(i64::from(t));
                 if let Some(e) = err_when(&picked, err) {
                     errs.push(e);
                 }
@@ -670,7 +698,7 @@ impl<'s> Encoding<'s> {
                 let before = next[slot].clone();
                 let mut val = before.clone();
                 for (t, x) in options.iter().rev() {
-                    val = choose_sym(&eq_num(tr, *t), x, &val);
+                    val = choose_sym(&tr.is(*t), x, &val);
                 }
                 next[slot] = choose_sym(&moves, &val, &before);
             }
@@ -762,21 +790,7 @@ impl<'s> Encoding<'s> {
 
 /// `c ? a : b` on values of either kind (for the successor's slots).
 fn choose_sym(c: &Bool, a: &Sym, b: &Sym) -> Sym {
-    match lit(c) {
-        Some(true) => return a.clone(),
-        Some(false) => return b.clone(),
-        None => {}
-    }
-    let (lo, hi) = (a.lo.min(b.lo), a.hi.max(b.hi));
-    match (&a.term, &b.term) {
-        (Term::B(x), Term::B(y)) => {
-            let mut s = Sym::of_bool(super::term::ite_bool(c, x, y));
-            s.lo = s.lo.max(lo);
-            s.hi = s.hi.min(hi);
-            s
-        }
-        _ => Sym::of_int(ite_int(c, &a.int_term(), &b.int_term()), lo, hi),
-    }
+    super::term::choose(c, a, b)
 }
 
 /// Two values are equal.
@@ -786,6 +800,10 @@ pub fn sym_eq(a: &Sym, b: &Sym) -> Bool {
     }
     match (&a.term, &b.term) {
         (Term::B(x), Term::B(y)) => iff(x, y),
+        (Term::Bits(_), _) | (_, Term::Bits(_)) if a.lo >= 0 && b.lo >= 0 => {
+            let w = width(a.hi.max(b.hi));
+            and(a.bits(w).iter().zip(&b.bits(w)).map(|(x, y)| iff(x, y)))
+        }
         _ => {
             if a.hi < b.lo || b.hi < a.lo {
                 ff()

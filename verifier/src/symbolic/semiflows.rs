@@ -24,7 +24,7 @@ use z3::ast::{Bool, Int};
 
 use super::encode::{Encoding, Frame};
 use super::net::Net;
-use super::term::{eq_num, ite_int, num};
+use super::term::{and, ite_int, not, num, or};
 
 /// `Σ coefficient · [at place] = constant`.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
@@ -258,10 +258,15 @@ fn normalise(net: &Net, y: &Sparse) -> Option<Semiflow> {
     })
 }
 
+/// Semiflows over at most this many location combinations are written as clauses (each
+/// combination that breaks the equation is forbidden), which keeps location-only models
+/// propositional; larger ones are linear equations over 0/1 terms.
+const MAX_TABLE: usize = 256;
+
 impl Semiflow {
     /// The invariant on a frame.
     pub fn constraint(&self, enc: &Encoding<'_>, net: &Net, f: &Frame) -> Bool {
-        // one term per component: its coefficient at its current location
+        // per component: its locations with a coefficient
         let mut per_comp: Vec<(u32, Vec<(u32, i64)>)> = Vec::new();
         for &(p, v) in &self.terms {
             let c = net.comp_of[p as usize];
@@ -271,13 +276,53 @@ impl Semiflow {
                 _ => per_comp.push((c, vec![(l, v)])),
             }
         }
+        // each component contributes one of its coefficients, or 0 elsewhere
+        let combos = per_comp
+            .iter()
+            .try_fold(1usize, |n, (_, list)| n.checked_mul(list.len() + 1));
+        if combos.is_some_and(|n| n <= MAX_TABLE) {
+            let mut clauses = Vec::new();
+            let mut pick = vec![0usize; per_comp.len()];
+            loop {
+                let sum: i64 = per_comp
+                    .iter()
+                    .zip(&pick)
+                    .map(|((_, list), &k)| list.get(k).map_or(0, |e| e.1))
+                    .sum();
+                if sum != self.constant {
+                    // forbid this combination
+                    clauses.push(or(per_comp.iter().zip(&pick).map(
+                        |((c, list), &k)| match list.get(k) {
+                            Some(&(l, _)) => not(&enc.at(f, *c, l)),
+                            None => or(list.iter().map(|&(l, _)| enc.at(f, *c, l))),
+                        },
+                    )));
+                }
+                let mut i = 0;
+                loop {
+                    if i == pick.len() {
+                        return and(clauses);
+                    }
+                    pick[i] += 1;
+                    if pick[i] <= per_comp[i].1.len() {
+                        break;
+                    }
+                    pick[i] = 0;
+                    i += 1;
+                }
+            }
+        }
+        self.linear(enc, &per_comp, f)
+    }
+
+    /// `Σ coefficient · [at location] == constant`, as arithmetic.
+    fn linear(&self, enc: &Encoding<'_>, per_comp: &[(u32, Vec<(u32, i64)>)], f: &Frame) -> Bool {
         let sum: Vec<Int> = per_comp
             .iter()
             .map(|(c, list)| {
-                let loc = f.slots[enc.sys.components[*c as usize].slot as usize].int_term();
                 let mut t = num(0);
                 for &(l, v) in list.iter().rev() {
-                    t = ite_int(&eq_num(&loc, i64::from(l)), &num(v), &t);
+                    t = ite_int(&enc.at(f, *c, l), &num(v), &t);
                 }
                 t
             })

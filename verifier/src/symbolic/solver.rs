@@ -93,6 +93,12 @@ pub fn check(solver: &Solver, assumptions: &[Bool], budget: &Budget, calls: &mut
         None => solver.check_assumptions(assumptions),
     };
     calls.time += started.elapsed();
+    tracing::debug!(
+        seconds = started.elapsed().as_secs_f64(),
+        answer = ?answer,
+        assertions = solver.get_assertions().len(),
+        "solver call"
+    );
     match answer {
         SatResult::Sat => Answer::Sat,
         SatResult::Unsat => Answer::Unsat,

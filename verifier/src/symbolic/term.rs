@@ -20,12 +20,20 @@ const I64_MAX: i128 = i64::MAX as i128;
 /// Interval arithmetic saturates here, far beyond any i64 value, so it never overflows.
 const HUGE: i128 = 1 << 100;
 
-/// A z3 term: integers (locations, `Int` variables) or booleans (`Bool` variables,
-/// conditions). Compiled expressions treat booleans as 0 and 1; conversions are explicit.
+/// A z3 term: integers (`Int` variables, arithmetic), booleans (`Bool` variables,
+/// conditions), or small non-negative integers in binary (locations: one `Bool` per bit,
+/// least significant first, so that "at location l" is a conjunction of literals and
+/// models without data stay propositional). Compiled expressions treat booleans as 0 and
+/// 1; conversions are explicit.
 #[derive(Clone, Debug)]
 pub enum Term {
     I(Int),
     B(Bool),
+    Bits(Vec<Bool>),
+    /// How many of these conditions hold, plus a constant (a `count` quantifier): compared
+    /// with a constant, it becomes a pseudo-boolean constraint, which z3 reasons about
+    /// far better than a sum of if-then-elses.
+    Count(std::rc::Rc<Vec<Bool>>, i64),
 }
 
 /// A symbolic value: its term, the interval `lo..=hi` it lies in when it does not fail,
@@ -243,6 +251,21 @@ impl Sym {
         }
     }
 
+    /// A small non-negative integer in binary, `width` bits.
+    pub fn of_bits(bits: Vec<Bool>, lo: i128, hi: i128) -> Sym {
+        if lo == hi {
+            if let Ok(v) = i64::try_from(lo) {
+                return Sym::int(v);
+            }
+        }
+        Sym {
+            term: Term::Bits(bits),
+            lo,
+            hi,
+            err: None,
+        }
+    }
+
     /// The value as an integer term (booleans are 0 and 1).
     pub fn int_term(&self) -> Int {
         if let Some(v) = self.constant() {
@@ -251,6 +274,29 @@ impl Sym {
         match &self.term {
             Term::I(x) => x.clone(),
             Term::B(b) => ite_int(b, &num(1), &num(0)),
+            Term::Bits(bits) => {
+                let parts: Vec<Int> = bits
+                    .iter()
+                    .enumerate()
+                    .map(|(k, b)| ite_int(b, &num(1 << k), &num(0)))
+                    .collect();
+                match parts.len() {
+                    0 => num(0),
+                    1 => parts[0].clone(),
+                    _ => Int::add(&parts),
+                }
+            }
+            Term::Count(of, plus) => {
+                let mut parts: Vec<Int> = of.iter().map(|b| ite_int(b, &num(1), &num(0))).collect();
+                if *plus != 0 {
+                    parts.push(num(*plus));
+                }
+                match parts.len() {
+                    0 => num(0),
+                    1 => parts[0].clone(),
+                    _ => Int::add(&parts),
+                }
+            }
         }
     }
 
@@ -262,11 +308,76 @@ impl Sym {
         match &self.term {
             Term::B(b) => b.clone(),
             Term::I(x) => not(&eq_num(x, 0)),
+            Term::Bits(bits) => or(bits.iter().cloned()),
+            Term::Count(of, plus) => count_cmp(of, *plus, BinOp::Ne, 0),
+        }
+    }
+
+    /// `self == v`, as literals where possible.
+    pub fn eq_const(&self, v: i64) -> Bool {
+        if i128::from(v) < self.lo || i128::from(v) > self.hi {
+            return ff();
+        }
+        if let Some(k) = self.constant() {
+            return Bool::from_bool(k == v);
+        }
+        match &self.term {
+            Term::I(x) => eq_num(x, v),
+            Term::B(b) => match v {
+                0 => not(b),
+                _ => b.clone(),
+            },
+            Term::Bits(bits) => {
+                and(bits.iter().enumerate().map(
+                    |(k, b)| {
+                        if v >> k & 1 == 1 {
+                            b.clone()
+                        } else {
+                            not(b)
+                        }
+                    },
+                ))
+            }
+            Term::Count(of, plus) => count_cmp(of, *plus, BinOp::Eq, v),
+        }
+    }
+
+    /// The value's `width` bits (a constant or a binary term).
+    pub fn bits(&self, width: usize) -> Vec<Bool> {
+        if let Some(v) = self.constant() {
+            return (0..width)
+                .map(|k| Bool::from_bool(v >> k & 1 == 1))
+                .collect();
+        }
+        match &self.term {
+            Term::Bits(b) => b.clone(),
+            Term::B(b) => {
+                let mut out = vec![b.clone()];
+                out.resize(width.max(1), ff());
+                out
+            }
+            // not expected: locations are binary or constant
+            Term::Count(..) => {
+                let x = self.int_term();
+                (0..width)
+                    .map(|k| eq_num(&x.div(num(1 << k)).modulo(num(2)), 1))
+                    .collect()
+            }
+            Term::I(x) => (0..width)
+                .map(|k| {
+                    let bit = x.div(num(1 << k)).modulo(num(2));
+                    eq_num(&bit, 1)
+                })
+                .collect(),
         }
     }
 
     fn is_bool(&self) -> bool {
         matches!(self.term, Term::B(_))
+    }
+
+    fn is_bits(&self) -> bool {
+        matches!(self.term, Term::Bits(_))
     }
 
     fn with_err(mut self, err: Option<Bool>) -> Sym {
@@ -450,7 +561,6 @@ impl Translator<'_> {
             QuantKind::Count => {
                 let mut terms = Vec::new();
                 let mut err = None;
-                let mut hi = 0i128;
                 let mut lo = 0i128;
                 for b in &bodies {
                     err = err_or(err, b.err.clone());
@@ -458,37 +568,94 @@ impl Translator<'_> {
                     match lit(&v) {
                         Some(true) => lo += 1,
                         Some(false) => {}
-                        None => terms.push(ite_int(&v, &num(1), &num(0))),
+                        None => terms.push(v),
                     }
-                    hi += i128::from(lit(&v) != Some(false));
                 }
-                let t = if terms.is_empty() {
-                    num(lo as i64)
-                } else {
-                    let mut all = terms;
-                    if lo > 0 {
-                        all.push(num(lo as i64));
-                    }
-                    Int::add(&all)
-                };
-                Sym::of_int(t, lo, hi).with_err(err)
+                let hi = lo + terms.len() as i128;
+                if terms.is_empty() {
+                    return Sym::int(lo as i64).with_err(err);
+                }
+                Sym {
+                    term: Term::Count(std::rc::Rc::new(terms), lo as i64),
+                    lo,
+                    hi,
+                    err: None,
+                }
+                .with_err(err)
             }
         }
     }
 }
 
+/// `count(of) + plus op k` as a pseudo-boolean constraint.
+fn count_cmp(of: &[Bool], plus: i64, op: BinOp, k: i64) -> Bool {
+    let n = of.len() as i64;
+    let k = k - plus;
+    // decide on the bounds 0..=n first; pseudo-boolean bounds are i32
+    let (lo_ok, hi_ok) = match op {
+        BinOp::Eq => (k >= 0 && k <= n, true),
+        BinOp::Ne => (true, true),
+        BinOp::Le => (k >= 0, k < n),
+        BinOp::Lt => (k > 0, k <= n),
+        BinOp::Ge => (k <= n, k > 0),
+        BinOp::Gt => (k < n, k >= 0),
+        _ => (true, true),
+    };
+    let fits = i32::try_from(k).is_ok() && i32::try_from(n).is_ok();
+    let weighted: Vec<(&Bool, i32)> = of.iter().map(|b| (b, 1)).collect();
+    match op {
+        BinOp::Eq if !lo_ok => ff(),
+        BinOp::Ne if !(k >= 0 && k <= n) => tt(),
+        BinOp::Le | BinOp::Lt if !lo_ok => ff(),
+        BinOp::Le | BinOp::Lt if !hi_ok => tt(),
+        BinOp::Ge | BinOp::Gt if !lo_ok => ff(),
+        BinOp::Ge | BinOp::Gt if !hi_ok => tt(),
+        _ if !fits => {
+            // out of pseudo-boolean range: plain arithmetic
+            let parts: Vec<Int> = of.iter().map(|b| ite_int(b, &num(1), &num(0))).collect();
+            let sum = Int::add(&parts);
+            match op {
+                BinOp::Eq => sum.eq(k),
+                BinOp::Ne => not(&sum.eq(k)),
+                BinOp::Le => sum.le(k),
+                BinOp::Lt => sum.lt(k),
+                BinOp::Ge => sum.ge(k),
+                _ => sum.gt(k),
+            }
+        }
+        BinOp::Eq => Bool::pb_eq(&weighted, k as i32),
+        BinOp::Ne => not(&Bool::pb_eq(&weighted, k as i32)),
+        BinOp::Le => Bool::pb_le(&weighted, k as i32),
+        BinOp::Lt => Bool::pb_le(&weighted, k as i32 - 1),
+        BinOp::Ge => Bool::pb_ge(&weighted, k as i32),
+        _ => Bool::pb_ge(&weighted, k as i32 + 1),
+    }
+}
+
 /// `v == loc` for a location slot's value.
 fn at(v: &Sym, loc: u32) -> Sym {
-    let loc = i128::from(loc);
-    if loc < v.lo || loc > v.hi {
-        return Sym::boolean(false).with_err(v.err.clone());
-    }
-    Sym::of_bool(eq_num(&v.int_term(), loc as i64)).with_err(v.err.clone())
+    Sym::of_bool(v.eq_const(i64::from(loc))).with_err(v.err.clone())
+}
+
+/// Bits needed for the values `0..=hi`.
+pub fn width(hi: i128) -> usize {
+    (128 - hi.max(0).leading_zeros()) as usize
 }
 
 /// `c ? a : b` on values of either kind.
-fn choose(c: &Bool, a: &Sym, b: &Sym) -> Sym {
+pub fn choose(c: &Bool, a: &Sym, b: &Sym) -> Sym {
+    match lit(c) {
+        Some(true) => return a.clone(),
+        Some(false) => return b.clone(),
+        None => {}
+    }
     let (lo, hi) = (a.lo.min(b.lo), a.hi.max(b.hi));
+    if (a.is_bits() || b.is_bits()) && lo >= 0 {
+        let w = width(hi);
+        let (x, y) = (a.bits(w), b.bits(w));
+        let bits = x.iter().zip(&y).map(|(p, q)| ite_bool(c, p, q)).collect();
+        return Sym::of_bits(bits, lo, hi);
+    }
     if a.is_bool() && b.is_bool() {
         let mut s = Sym::of_bool(ite_bool(c, &a.bool_term(), &b.bool_term()));
         s.lo = s.lo.max(lo);
@@ -535,10 +702,40 @@ fn arith(op: BinOp, a: &Sym, b: &Sym) -> Sym {
                 iff(&a.bool_term(), &b.bool_term())
             } else if a.hi < b.lo || b.hi < a.lo {
                 ff()
+            } else if let Some(k) = b.constant() {
+                a.eq_const(k)
+            } else if let Some(k) = a.constant() {
+                b.eq_const(k)
+            } else if a.is_bits() && b.is_bits() {
+                let w = width(a.hi.max(b.hi));
+                and(a.bits(w).iter().zip(&b.bits(w)).map(|(x, y)| iff(x, y)))
             } else {
                 a.int_term().eq(b.int_term())
             };
             Sym::of_bool(if op == BinOp::Eq { eq } else { not(&eq) })
+        }
+        BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge
+            if matches!(a.term, Term::Count(..)) && b.constant().is_some() =>
+        {
+            let (Term::Count(of, plus), Some(k)) = (&a.term, b.constant()) else {
+                unreachable!("checked by the guard")
+            };
+            Sym::of_bool(count_cmp(of, *plus, op, k))
+        }
+        BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge
+            if matches!(b.term, Term::Count(..)) && a.constant().is_some() =>
+        {
+            let (Term::Count(of, plus), Some(k)) = (&b.term, a.constant()) else {
+                unreachable!("checked by the guard")
+            };
+            // k op count  <=>  count op' k
+            let flipped = match op {
+                BinOp::Lt => BinOp::Gt,
+                BinOp::Le => BinOp::Ge,
+                BinOp::Gt => BinOp::Lt,
+                _ => BinOp::Le,
+            };
+            Sym::of_bool(count_cmp(of, *plus, flipped, k))
         }
         BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge => {
             // decide on the intervals when they do not overlap
@@ -637,4 +834,70 @@ fn division(op: BinOp, a: &Sym, b: &Sym) -> Sym {
     let mut s = Sym::of_int(t, lo.max(I64_MIN), hi.min(I64_MAX));
     s.err = err;
     s
+}
+
+/// A choice among `0..n` in binary: one fresh `Bool` per bit.
+#[derive(Clone, Debug)]
+pub struct Choice {
+    pub bits: Vec<Bool>,
+}
+
+impl Choice {
+    /// A choice among at most `n` values, named `name.k` per bit.
+    pub fn fresh(name: &str, n: usize) -> Choice {
+        let w = width(n.saturating_sub(1) as i128);
+        Choice {
+            bits: (0..w)
+                .map(|k| Bool::new_const(format!("{name}.{k}")))
+                .collect(),
+        }
+    }
+
+    /// The choice is `k`.
+    pub fn is(&self, k: i64) -> Bool {
+        if k < 0 || (self.bits.len() < 63 && k >> self.bits.len() != 0) {
+            return ff();
+        }
+        and(self.bits.iter().enumerate().map(
+            |(i, b)| {
+                if k >> i & 1 == 1 {
+                    b.clone()
+                } else {
+                    not(b)
+                }
+            },
+        ))
+    }
+
+    /// The choice is below `n`.
+    pub fn below(&self, n: u64) -> Bool {
+        lt_const(&self.bits, n)
+    }
+
+    pub fn read(&self, model: &z3::Model) -> Option<u64> {
+        let mut v = 0u64;
+        for (k, b) in self.bits.iter().enumerate() {
+            if model.eval(b, true)?.as_bool()? {
+                v |= 1 << k;
+            }
+        }
+        Some(v)
+    }
+}
+
+/// The binary number `bits` (least significant first) is below `n`.
+pub fn lt_const(bits: &[Bool], n: u64) -> Bool {
+    if bits.len() < 64 && n >> bits.len() != 0 {
+        return tt();
+    }
+    // comparing from the least significant bit up: below(k) says bits 0..=k are below n's
+    let mut below = ff();
+    for (k, b) in bits.iter().enumerate() {
+        below = if n >> k & 1 == 1 {
+            or2(&not(b), &below)
+        } else {
+            and2(&not(b), &below)
+        };
+    }
+    below
 }
