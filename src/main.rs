@@ -5,6 +5,7 @@
 //! 2 the model or the command is wrong, 3 the result is inconclusive.
 
 mod check;
+mod expand;
 mod export;
 mod report;
 mod verify;
@@ -36,6 +37,12 @@ enum Command {
         #[arg(required = true)]
         files: Vec<PathBuf>,
     },
+    /// Print a model with its GenoM layer expanded into BIP core (RON that `bip check`
+    /// reads back).
+    Expand {
+        /// Model file (RON).
+        file: PathBuf,
+    },
     /// Verify a model's properties (deadlock freedom, invariants, reachability, range
     /// errors) by exploring its states or by symbolic proofs. Exit code 0: all hold,
     /// 1: some property fails, 2: model or usage error, 3: inconclusive.
@@ -57,6 +64,7 @@ fn main() -> ExitCode {
     init_logging(cli.verbose);
     let code = match cli.command {
         Command::Check { files } => check::run(&files),
+        Command::Expand { file } => expand::run(&file),
         Command::Verify(args) => verify::run(&args),
         Command::Export(args) => export::run(&args),
     };

@@ -13,6 +13,7 @@ mod deadlock;
 pub mod diag;
 pub mod eval;
 pub mod expr;
+pub mod genom;
 mod load;
 pub mod source;
 mod state;
@@ -24,7 +25,11 @@ pub mod trace;
 pub use compile::{compile, Ty};
 pub use deadlock::{Liveness, LivenessChecker};
 pub use diag::{LoadError, ModelError};
-pub use load::{compile_def, load_file, load_str, parse_str, read_model_file, ron_options};
+pub use genom::{expand, GenomMap};
+pub use load::{
+    compile_def, expand_file, expand_str, load_file, load_str, parse_str, read_model_file,
+    ron_options,
+};
 pub use state::{State, StateLayout};
 pub use step::{Label, OwnedStep, Pick, Step, Steps};
 pub use system::{

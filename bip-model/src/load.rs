@@ -60,6 +60,28 @@ pub fn load_str(name: &str, text: &str) -> Result<System, LoadError> {
     compile_def(name, &shared, &def)
 }
 
+/// Parses a model and expands its GenoM layer into BIP core (a model without one comes
+/// back as written). The expanded model is compiled too, so that it is known to load.
+pub fn expand_str(name: &str, text: &str) -> Result<SystemDef, LoadError> {
+    let shared = Arc::new(text.to_string());
+    let def = parse_shared(name, &shared)?;
+    if !def.has_genom_layer() {
+        compile_def(name, &shared, &def)?;
+        return Ok(def);
+    }
+    let expansion =
+        crate::genom::expand(&def).map_err(|errors| LoadError::model(name, &shared, errors))?;
+    compile_def(name, &shared, &def)?;
+    Ok(expansion.def)
+}
+
+/// Reads a model file and expands its GenoM layer (see [`expand_str`]).
+pub fn expand_file(path: impl AsRef<Path>) -> Result<SystemDef, LoadError> {
+    let path = path.as_ref();
+    let text = read_model_file(path)?;
+    expand_str(&path.display().to_string(), &text)
+}
+
 /// Compiles parsed file-format types; `text` is the file they came from (for positions).
 pub fn compile_def(name: &str, text: &Arc<String>, def: &SystemDef) -> Result<System, LoadError> {
     compile(def).map_err(|errors| LoadError::model(name, text, errors))

@@ -141,7 +141,11 @@ impl<'de> Deserialize<'de> for Spanned<String> {
 }
 
 fn locate_string(value: String) -> Spanned<String> {
-    let found = claim(&TokenKey::Str(value.clone()));
+    let key = TokenKey::Str(value);
+    let found = claim(&key);
+    let TokenKey::Str(value) = key else {
+        return Spanned::generated(String::new());
+    };
     match found {
         Some(tok) => Spanned {
             value,
@@ -348,9 +352,35 @@ struct Token {
     paren_follows: bool,
 }
 
+/// The identifiers a value claims (booleans, and the one enum variant that may be written
+/// with or without parentheses); other identifiers are field and variant names, which serde
+/// reads itself.
+const CLAIMED_WORDS: &[&str] = &["true", "false", "DeadlockFree"];
+
+/// FNV-1a: token keys are short and the locator hashes one per value of the file, where
+/// SipHash's resistance to collisions chosen by an attacker buys nothing.
+#[derive(Default, Clone, Copy)]
+struct Fnv(u64);
+
+impl std::hash::Hasher for Fnv {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        let mut h = if self.0 == 0 { 0xcbf2_9ce4_8422_2325 } else { self.0 };
+        for &b in bytes {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+        self.0 = h;
+    }
+}
+
+type TokenMap = HashMap<TokenKey, Vec<Token>, std::hash::BuildHasherDefault<Fnv>>;
+
 struct Locator {
     /// For each token value, its occurrences in file order.
-    tokens: HashMap<TokenKey, Vec<Token>>,
+    tokens: TokenMap,
     /// The end of the last claimed token: values are claimed in file order.
     cursor: usize,
 }
@@ -398,9 +428,9 @@ pub(crate) fn with_positions<R>(text: &str, f: impl FnOnce() -> R) -> R {
 /// One pass over the file: strings (with escapes decoded), raw strings, integers and
 /// identifiers; comments and everything else skipped. Malformed input is tolerated here;
 /// `ron` reports it.
-fn tokenize(text: &str) -> HashMap<TokenKey, Vec<Token>> {
+fn tokenize(text: &str) -> TokenMap {
     let b = text.as_bytes();
-    let mut out: HashMap<TokenKey, Vec<Token>> = HashMap::new();
+    let mut out = TokenMap::default();
     let mut i = 0;
     let mut push = |key: TokenKey, start: usize, end: usize, verbatim: bool, b: &[u8]| {
         // only meaningful for identifiers
@@ -455,13 +485,10 @@ fn tokenize(text: &str) -> HashMap<TokenKey, Vec<Token>> {
                 while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
                     i += 1;
                 }
-                push(
-                    TokenKey::Ident(text[start..i].to_string()),
-                    start,
-                    i,
-                    true,
-                    b,
-                );
+                let word = &text[start..i];
+                if CLAIMED_WORDS.contains(&word) {
+                    push(TokenKey::Ident(word.to_string()), start, i, true, b);
+                }
             }
             _ => i += 1,
         }

@@ -9,6 +9,9 @@ use std::fmt;
 use serde::de::{self, Deserialize, Deserializer, EnumAccess, MapAccess, VariantAccess, Visitor};
 use serde::ser::{Serialize, SerializeStructVariant, Serializer};
 
+pub use crate::genom::syntax::{
+    CodelDef, ConstraintDef, ModuleDef, PortDef, ServiceDef, ServiceKind, TaskDef,
+};
 use crate::source::{ident_has_parens, ConstExpr, OrderedMap, Spanned};
 
 pub type Text = Spanned<String>;
@@ -31,8 +34,93 @@ pub struct SystemDef {
     pub connectors: Vec<ConnectorDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub priorities: Vec<PriorityDef>,
+    /// The GenoM layer (MODEL.md section 4), expanded into the core before compilation.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub modules: Vec<ModuleDef>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub constraints: Vec<ConstraintDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub properties: Vec<PropertyDef>,
+}
+
+impl SystemDef {
+    /// The model as RON text that [`crate::load_str`] reads back (how `bip expand` prints
+    /// an expanded model).
+    pub fn to_ron(&self) -> Result<String, ron::Error> {
+        let config = ron::ser::PrettyConfig::new()
+            .struct_names(true)
+            .depth_limit(4)
+            .extensions(ron::extensions::Extensions::IMPLICIT_SOME);
+        let text = crate::load::ron_options().to_string_pretty(self, config)?;
+        Ok(tidy_ron(&text))
+    }
+
+    /// True if the model has a GenoM layer to expand.
+    pub fn has_genom_layer(&self) -> bool {
+        !self.modules.is_empty() || !self.constraints.is_empty()
+    }
+}
+
+/// Writes printed RON the way MODEL.md does: the inner structs without their type names
+/// (`(from: …)`, not `TransitionDef(from: …)`), and lists of plain values on one line.
+fn tidy_ron(text: &str) -> String {
+    const INNER: [&str; 5] = [
+        "VarDef(",
+        "TransitionDef(",
+        "ComponentDef(",
+        "ConnectorDef(",
+        "PriorityDef(",
+    ];
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < lines.len() {
+        let line = lines[i];
+        if line.trim_end().ends_with('[') {
+            // a list whose items are all plain strings or numbers goes on one line
+            let mut items = Vec::new();
+            let mut j = i + 1;
+            while j < lines.len() {
+                let item = lines[j].trim();
+                let scalar = item.ends_with(',')
+                    && (item.starts_with('"') && item.ends_with("\",")
+                        || item[..item.len() - 1].parse::<i64>().is_ok());
+                if !scalar {
+                    break;
+                }
+                items.push(&item[..item.len() - 1]);
+                j += 1;
+            }
+            let close = lines.get(j).map(|l| l.trim());
+            if !items.is_empty() && matches!(close, Some("]") | Some("],")) {
+                let suffix = if close == Some("],") { "," } else { "" };
+                out.push_str(&strip_inner(line, &INNER));
+                out.push_str(&items.join(", "));
+                out.push(']');
+                out.push_str(suffix);
+                out.push('\n');
+                i = j + 1;
+                continue;
+            }
+        }
+        out.push_str(&strip_inner(line, &INNER));
+        out.push('\n');
+        i += 1;
+    }
+    out
+}
+
+/// Removes a struct name that starts the line's content (outside strings: a printed line
+/// starts with indentation, then a field name, a struct name or a string).
+fn strip_inner(line: &str, names: &[&str]) -> String {
+    let content = line.trim_start();
+    let indent = &line[..line.len() - content.len()];
+    for n in names {
+        if let Some(rest) = content.strip_prefix(n) {
+            return format!("{indent}({rest}");
+        }
+    }
+    line.to_string()
 }
 
 /// An atom type: an automaton with ports and bounded data.
@@ -100,6 +188,9 @@ pub struct ConnectorDef {
     /// `"i in a..b"`: one connector instance `name[i]` per value.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub forall: Option<Text>,
+    /// Required except in a connector that extends a generated one (docs/genom.md), which
+    /// may add only a guard.
+    #[serde(default)]
     pub ports: Vec<Text>,
     #[serde(default, skip_serializing_if = "ConnectorKindDef::is_rendezvous")]
     pub kind: ConnectorKindDef,

@@ -33,6 +33,9 @@ pub struct System {
     pub(crate) rules_by_low: Vec<Vec<u32>>,
     /// For each slot, the range of values it may hold.
     pub(crate) slot_ranges: Vec<(i64, i64)>,
+    /// The GenoM layer the system was expanded from, if any: what the engine binds codels
+    /// and sends requests with (docs/genom.md, "The engine's map").
+    pub genom: Option<crate::genom::GenomMap>,
     /// Flat tables for the step relation's inner loop.
     pub(crate) enable_index: crate::step::EnableIndex,
 }

@@ -20,15 +20,32 @@ use crate::system::{
     PropertyKind, System, Target, Transition, Var, VarType,
 };
 
+pub(crate) use resolve::one_of;
 pub use resolve::Ty;
-use resolve::{one_of, ConstInfo, Names, Place, ResolveError, Resolver};
+use resolve::{ConstInfo, Names, Place, ResolveError, Resolver};
 
 /// The largest family a model may declare; far beyond what any exploration handles, small
 /// enough that a typo (`count: "10000000000"`) is an error rather than an out-of-memory.
 const MAX_COUNT: i64 = 10_000_000;
 
 /// Compiles a parsed model. On failure, returns every error found.
+///
+/// A model with a GenoM layer (`modules`, `constraints`) is first expanded into BIP core
+/// (`genom::expand`); the compiled system then carries the map the engine binds codels
+/// and requests with ([`System::genom`]).
 pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
+    if def.has_genom_layer() {
+        return crate::genom::compile(def);
+    }
+    compile_core(def, &[]).map(|(system, _)| system)
+}
+
+/// Compiles a core model (the GenoM layer, if any, is ignored), plus `extra` global
+/// boolean expressions over it (the GenoM layer's conditions, for the engine's map).
+pub(crate) fn compile_core(
+    def: &SystemDef,
+    extra: &[Text],
+) -> Result<(System, Vec<eval::Expr>), Vec<ModelError>> {
     let mut c = Compiler::default();
     c.constants(def);
     c.atoms(def);
@@ -36,6 +53,7 @@ pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
     c.connectors(def);
     let priorities = c.priorities(def);
     let properties = c.properties(def);
+    let extra: Vec<eval::Expr> = extra.iter().filter_map(|t| c.global_bool(t)).collect();
     if !c.errors.is_empty() {
         return Err(c.errors.list);
     }
@@ -54,7 +72,7 @@ pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
     let (rules, rules_by_low) = priorities;
     let layout = StateLayout::new(&c.slot_ranges);
     let enable_index = crate::step::EnableIndex::new(&c.atoms, &c.components, &c.interactions);
-    Ok(System {
+    let system = System {
         name: def.name.value.clone(),
         tick_ms,
         constants: c.const_list,
@@ -70,8 +88,40 @@ pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
         initial: State::from_slots(c.initial),
         rules_by_low,
         slot_ranges: c.slot_ranges,
+        genom: None,
         enable_index,
-    })
+    };
+    Ok((system, extra))
+}
+
+/// A model's constants, evaluated by the compiler's rules, for the GenoM expansion (task
+/// periods, ages and limits written as constant expressions).
+pub(crate) struct Constants {
+    c: Compiler,
+}
+
+impl Constants {
+    /// Evaluates the constants of `def`; errors in them are returned (and would be
+    /// reported again by the compilation of the expanded model).
+    pub(crate) fn new(def: &SystemDef) -> (Constants, Vec<ModelError>) {
+        let mut c = Compiler::default();
+        c.constants(def);
+        let errors = std::mem::take(&mut c.errors.list);
+        (Constants { c }, errors)
+    }
+
+    /// An integer written as a number or a constant expression.
+    pub(crate) fn int(&self, v: &ConstExpr) -> Result<i64, ModelError> {
+        self.c.const_value(v, Ty::Int, &[])
+    }
+
+    /// The value of a parsed expression if it is an integer constant expression.
+    pub(crate) fn int_expr(&self, e: &expr::Expr) -> Option<i64> {
+        let names = self.c.names();
+        Resolver::new(&names, Place::Constant, &[])
+            .constant(e, Ty::Int)
+            .ok()
+    }
 }
 
 #[derive(Default)]
@@ -106,7 +156,7 @@ fn parse_error(text: &Text, e: expr::ParseError) -> ModelError {
 }
 
 /// Checks that a user-given name can be written in expressions.
-fn check_name(errors: &mut Errors, name: &Text, what: &str) -> bool {
+pub(crate) fn check_name(errors: &mut Errors, name: &Text, what: &str) -> bool {
     let n = name.as_str();
     let ok = n
         .chars()
@@ -134,7 +184,7 @@ fn check_name(errors: &mut Errors, name: &Text, what: &str) -> bool {
 }
 
 /// Reports duplicates among `names`; returns a map from name to first position.
-fn unique<'t>(
+pub(crate) fn unique<'t>(
     errors: &mut Errors,
     names: impl Iterator<Item = &'t Text>,
     what: &str,

@@ -1,0 +1,126 @@
+//! The GenoM layer of the file format (MODEL.md section 4): modules and constraints, as
+//! written. `genom::check` validates them; `genom::build` expands them into BIP core.
+
+use crate::source::ConstExpr;
+use crate::syntax::{Text, VarDef};
+
+/// A GenoM3-style module: ids, execution tasks, out ports and services.
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModuleDef {
+    pub name: Text,
+    /// Free text for people; ignored by the tool.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub doc: Option<Text>,
+    /// The module's internal data structure: bounded variables like an atom's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ids: Vec<VarDef>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tasks: Vec<TaskDef>,
+    /// Out ports (posters).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ports: Vec<PortDef>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub services: Vec<ServiceDef>,
+}
+
+/// An execution task: activities of the task are released every `period` ticks.
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskDef {
+    pub name: Text,
+    /// In ticks; at least 1.
+    pub period: ConstExpr,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub doc: Option<Text>,
+}
+
+/// An out port (poster). Its age is tracked when some expression or constraint reads it.
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PortDef {
+    pub name: Text,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub doc: Option<Text>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+pub enum ServiceKind {
+    /// Runs at once, in the control task, when requested.
+    Function,
+    /// Like a function; in GenoM it sets or reads ids fields.
+    Attribute,
+    /// Runs an automaton of codels in an execution task.
+    Activity,
+}
+
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServiceDef {
+    pub name: Text,
+    pub kind: ServiceKind,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub doc: Option<Text>,
+    /// The execution task of an activity.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<Text>,
+    /// Services of the same module that a request for this one interrupts.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub interrupts: Vec<Text>,
+    /// Services of the same module that must have completed successfully once before a
+    /// request for this one is accepted.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub after: Vec<Text>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub codels: Vec<CodelDef>,
+}
+
+/// One codel state of an activity: the codel it runs and where it may go next.
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CodelDef {
+    pub state: Text,
+    /// `"s"` (run `s` in the same cycle), `"pause::s"` (run `s` at the task's next period)
+    /// or `"ether"` (the activity ends successfully).
+    pub yields: Vec<Text>,
+    /// Exceptions the codel may end with; the activity then ends with that error.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub throws: Vec<Text>,
+    /// Out ports of the module the codel writes on every normal completion.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub writes: Vec<Text>,
+}
+
+/// A system-level constraint between services of (possibly different) modules. Services
+/// are written `"module.Service"`, ports `"module.port"`.
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+pub enum ConstraintDef {
+    /// Never two of these activities active at once: a start is held back while another
+    /// is active.
+    Exclusive { services: Vec<Text> },
+    /// The service runs only while every listed activity is active.
+    Requires { service: Text, active: Vec<Text> },
+    /// The service runs only while the port's age is at most `max_age` ticks.
+    Fresh {
+        service: Text,
+        port: Text,
+        max_age: ConstExpr,
+    },
+    /// The service runs only while the expression holds.
+    Guard { service: Text, when: Text },
+    /// At most `max` of these activities active at once.
+    AtMost { max: ConstExpr, services: Vec<Text> },
+}
+
+impl ConstraintDef {
+    /// The constraint's kind as written.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            ConstraintDef::Exclusive { .. } => "Exclusive",
+            ConstraintDef::Requires { .. } => "Requires",
+            ConstraintDef::Fresh { .. } => "Fresh",
+            ConstraintDef::Guard { .. } => "Guard",
+            ConstraintDef::AtMost { .. } => "AtMost",
+        }
+    }
+}
