@@ -49,7 +49,14 @@ fn exit_codes_follow_the_verdicts() {
 
 #[test]
 fn json_report_is_one_document() {
-    let o = bip(&["verify", &robot("philosophers.ron"), "--format", "json"]);
+    let o = bip(&[
+        "verify",
+        &robot("philosophers.ron"),
+        "--method",
+        "explicit",
+        "--format",
+        "json",
+    ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(
         stderr(&o).is_empty(),
@@ -201,6 +208,8 @@ fn a_hundred_million_states_under_a_state_limit_end_inconclusive() {
     let o = bip(&[
         "verify",
         &path,
+        "--method",
+        "explicit",
         "--max-states",
         "100000",
         "--format",
@@ -212,7 +221,15 @@ fn a_hundred_million_states_under_a_state_limit_end_inconclusive() {
     assert_eq!(doc["outcome"], "inconclusive");
     assert_eq!(doc["stopped"]["reason"], "max_states");
     assert_eq!(doc["properties"][0]["verdict"], "inconclusive");
-    let o = bip(&["verify", &path, "--timeout", "0.2", "-q"]);
+    let o = bip(&[
+        "verify",
+        &path,
+        "--method",
+        "explicit",
+        "--timeout",
+        "0.2",
+        "-q",
+    ]);
     assert_eq!(o.status.code(), Some(3));
     assert!(stdout(&o).contains("time limit"), "{}", stdout(&o));
 }

@@ -128,7 +128,7 @@ fn check_state(sys: &System, enc: &Encoding<'_>, s: &State) -> Result<(), String
             ex.fire_error
         ));
     }
-    solver.assert(&enc.transition(&f, &en, &v, &StepFilter::all(sys), &g));
+    solver.assert(enc.transition(&f, &en, &v, &StepFilter::all(sys), &g));
     let mut found = BTreeSet::new();
     loop {
         match solver.check() {
@@ -138,7 +138,7 @@ fn check_state(sys: &System, enc: &Encoding<'_>, s: &State) -> Result<(), String
         }
         let m = solver.get_model().ok_or("no model")?;
         let next = enc.read_state(&m, &g).ok_or("no state")?;
-        solver.assert(&not(&enc.frame_is(&g, &next)));
+        solver.assert(not(&enc.frame_is(&g, &next)));
         found.insert(next);
         if found.len() > ex.successors.len() + 5 {
             break;

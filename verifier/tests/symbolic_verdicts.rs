@@ -6,7 +6,7 @@
 mod common;
 
 use bip_model::{load_str, System, Verdict as TraceVerdict};
-use bip_verifier::{symbolic, verify, Options, PropertyKind, Report, SymbolicOptions, Verdict};
+use bip_verifier::{symbolic, verify, Options, PropertyKind, Report, SymbolicOptions};
 use proptest::prelude::*;
 
 fn symbolic_options() -> SymbolicOptions {

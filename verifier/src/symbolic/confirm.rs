@@ -15,8 +15,8 @@ use std::hash::{Hash, Hasher};
 
 use bip_model::eval::Expr;
 use bip_model::{
-    Liveness, LivenessChecker, OwnedStep, Property, PropertyKind as ModelKind, State, Steps,
-    System, Trace, TraceStep, Verdict as TraceVerdict,
+    Liveness, LivenessChecker, OwnedStep, Property, State, Steps, System, Trace, TraceStep,
+    Verdict as TraceVerdict,
 };
 
 use crate::explore::{verify, Options};
@@ -179,17 +179,4 @@ fn fingerprint(s: &State) -> u64 {
     let mut h = std::collections::hash_map::DefaultHasher::new();
     s.hash(&mut h);
     h.finish()
-}
-
-/// The `DeadlockFree` property of the system named `name` (or a default one).
-pub fn deadlock_property(sys: &System, name: &str) -> Property {
-    sys.properties
-        .iter()
-        .find(|p| p.name == name && matches!(p.kind, ModelKind::DeadlockFree { .. }))
-        .cloned()
-        .unwrap_or_else(|| Property {
-            name: name.to_string(),
-            kind: ModelKind::DeadlockFree { terminal: None },
-            text: String::new(),
-        })
 }

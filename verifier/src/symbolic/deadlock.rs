@@ -74,10 +74,10 @@ pub fn deadlock_free(p: &mut Prover<'_>, prop: &Property, range_errors_proved: b
         let solver = p.solver();
         let mut frames: Vec<Placed> = vec![p.reachable_frame(&solver)];
         let en0 = p.enc.enabling(&frames[0].frame);
-        solver.assert(&p.enc.no_progress(&en0));
+        solver.assert(p.enc.no_progress(&en0));
         if let Some(t) = terminal {
             let v = p.eval(t, &frames[0].frame);
-            solver.assert(&or([not(&v.bool_term()), err_formula(&v.err)]));
+            solver.assert(or([not(&v.bool_term()), err_formula(&v.err)]));
         }
         if has_time {
             let time = StepFilter::role(&p.enc, Role::Time);
@@ -92,14 +92,14 @@ pub fn deadlock_free(p: &mut Prover<'_>, prop: &Property, range_errors_proved: b
                 let step = p
                     .enc
                     .transition(&frames[i].frame, &en, &v, &time, &next.frame);
-                solver.assert(&implies(
+                solver.assert(implies(
                     &go,
                     &and([reached.clone(), step, p.enc.no_progress(&en_next)]),
                 ));
                 let stops = and([reached.clone(), not(&go)]);
-                solver.assert(&implies(&stops, &not(&p.enc.some_allowed(&en, Role::Time))));
+                solver.assert(implies(&stops, &not(&p.enc.some_allowed(&en, Role::Time))));
                 if let Some(pg) = prev_go {
-                    solver.assert(&implies(&go, &pg));
+                    solver.assert(implies(&go, &pg));
                 }
                 reached = go.clone();
                 prev_go = Some(go);
@@ -108,7 +108,7 @@ pub fn deadlock_free(p: &mut Prover<'_>, prop: &Property, range_errors_proved: b
             }
         }
         for b in &blocked {
-            solver.assert(&not(&p.enc.frame_is(&frames[0].frame, b)));
+            solver.assert(not(&p.enc.frame_is(&frames[0].frame, b)));
         }
         let mut steps = Steps::new();
         let mut checker = LivenessChecker::default();
@@ -224,7 +224,7 @@ fn block(
     if blocked.len() >= MAX_BLOCKED {
         return false;
     }
-    solver.assert(&not(&p.enc.frame_is(&f0.frame, &s)));
+    solver.assert(not(&p.enc.frame_is(&f0.frame, &s)));
     blocked.push(s);
     true
 }
@@ -238,7 +238,7 @@ fn no_predecessor(p: &mut Prover<'_>, state: &State) -> Option<bool> {
     let v = StepVars::fresh(sys, &p.fresh_name("b"));
     let target = p.enc.concrete_frame(state);
     solver.assert(
-        &p.enc
+        p.enc
             .transition(&pre.frame, &en, &v, &StepFilter::all(sys), &target),
     );
     match p.check(&solver, &[]) {

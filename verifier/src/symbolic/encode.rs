@@ -433,10 +433,10 @@ impl<'s> Encoding<'s> {
             // before it has an enabled transition
             let mut prefix = tt();
             let mut err: Option<Bool> = None;
-            for k in 0..inter.ports.len() {
+            for (k, &req) in required.iter().enumerate() {
                 let (c, p) = port(k);
                 err = err_or(err, err_when(&prefix, port_err[c][p].clone()));
-                if required[k] {
+                if req {
                     prefix = and2(&prefix, &port_en[c][p]);
                 }
             }

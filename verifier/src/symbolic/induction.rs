@@ -186,7 +186,7 @@ pub fn prove(p: &mut Prover<'_>, goal: Goal<'_>) -> Finding {
             step.assert(&good);
             let next = p.reachable_frame(&step);
             let v = StepVars::fresh(sys, &p.fresh_name("s"));
-            step.assert(&p.enc.transition(
+            step.assert(p.enc.transition(
                 &frames[k - 1].frame,
                 &frames_en[k - 1],
                 &v,
@@ -196,7 +196,7 @@ pub fn prove(p: &mut Prover<'_>, goal: Goal<'_>) -> Finding {
             let en_next = p.enc.enabling(&next.frame);
             if distinct {
                 for f in &frames {
-                    step.assert(&not(&p.enc.frames_equal(&f.frame, &next.frame)));
+                    step.assert(not(&p.enc.frames_equal(&f.frame, &next.frame)));
                 }
             }
             frames.push(next);
@@ -244,7 +244,7 @@ pub fn prove(p: &mut Prover<'_>, goal: Goal<'_>) -> Finding {
                     distinct = true;
                     for i in 0..frames.len() {
                         for j in i + 1..frames.len() {
-                            step.assert(&not(&p
+                            step.assert(not(&p
                                 .enc
                                 .frames_equal(&frames[i].frame, &frames[j].frame)));
                         }
@@ -261,7 +261,7 @@ pub fn prove(p: &mut Prover<'_>, goal: Goal<'_>) -> Finding {
             bmc.assert(&c);
         }
         let v = StepVars::fresh(sys, &p.fresh_name("p"));
-        bmc.assert(&p.enc.transition(&path[d], &path_en[d], &v, &all, &next));
+        bmc.assert(p.enc.transition(&path[d], &path_en[d], &v, &all, &next));
         path_en.push(p.enc.enabling(&next));
         path.push(next);
         if p.budget.expired() {

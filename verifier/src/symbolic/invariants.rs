@@ -41,6 +41,18 @@ pub struct ComponentInvariant {
     pub values: Option<Vec<Vec<Vec<i64>>>>,
     /// Per transition: it fires from some reachable local state.
     pub live: Vec<bool>,
+    /// The local states and, per transition, the moves between them, when the values
+    /// were enumerated.
+    pub graph: Option<LocalGraph>,
+}
+
+/// A component's reachable local states (`[location, values...]`) and, per transition,
+/// the pairs of local states (by index) it connects; the last entry of `edges` holds the
+/// changes a broadcast's action makes to a receiver that does not join.
+#[derive(Clone, Debug)]
+pub struct LocalGraph {
+    pub states: Vec<Vec<i64>>,
+    pub edges: Vec<Vec<(u32, u32)>>,
 }
 
 /// The invariants of every component.
@@ -57,6 +69,9 @@ struct Key {
     init: Vec<i64>,
     ports: Vec<bool>,
     havoc: Vec<Vec<u32>>,
+    /// Variables a broadcast's action may write while the component, a receiver, does not
+    /// join (it does not move, but its values change).
+    passive: Vec<u32>,
 }
 
 pub fn compute(enc: &Encoding<'_>) -> ComponentInvariants {
@@ -71,16 +86,21 @@ pub fn compute(enc: &Encoding<'_>) -> ComponentInvariants {
         let start = comp.slot as usize;
         let mut ports = vec![false; atom.ports.len()];
         let mut havoc = vec![Vec::new(); atom.ports.len()];
+        let mut passive = Vec::new();
         for &(i, k) in &enc.inters_of[c] {
             let inter = &sys.interactions[i as usize];
             let p = inter.ports[k as usize].port as usize;
             ports[p] = true;
+            let receiver = !enc.required(i, k);
             for a in &inter.action {
                 if let Target::Slot(s) = a.target {
                     if s > comp.slot && (s as usize) <= start + nv {
                         let v = s - comp.slot - 1;
                         if !havoc[p].contains(&v) {
                             havoc[p].push(v);
+                        }
+                        if receiver && !passive.contains(&v) {
+                            passive.push(v);
                         }
                     }
                 }
@@ -89,11 +109,13 @@ pub fn compute(enc: &Encoding<'_>) -> ComponentInvariants {
         for h in &mut havoc {
             h.sort_unstable();
         }
+        passive.sort_unstable();
         let key = Key {
             atom: comp.atom,
             init: init.slots()[start..=start + nv].to_vec(),
             ports,
             havoc,
+            passive,
         };
         let inv = cache
             .entry(key)
@@ -141,13 +163,48 @@ fn explore(sys: &System, key: &Key) -> ComponentInvariant {
         .map(|t| t.action.iter().all(|a| reads_only_locals(&a.value)))
         .collect();
     let mut live = vec![false; atom.transitions.len()];
-    let mut seen: HashSet<Vec<i64>> = HashSet::new();
+    let mut seen: HashMap<Vec<i64>, u32> = HashMap::new();
+    let mut states: Vec<Vec<i64>> = Vec::new();
+    let mut edges: Vec<HashSet<(u32, u32)>> = vec![HashSet::new(); atom.transitions.len() + 1];
+    let passive_combos: usize = key
+        .passive
+        .iter()
+        .map(|&v| (ranges[v as usize].1 - ranges[v as usize].0 + 1) as usize)
+        .try_fold(1usize, |acc, n| acc.checked_mul(n))
+        .unwrap_or(usize::MAX);
+    let mut exact = passive_combos <= MAX_HAVOC;
     let mut queue = VecDeque::new();
-    seen.insert(key.init.clone());
+    seen.insert(key.init.clone(), 0);
+    states.push(key.init.clone());
     queue.push_back(key.init.clone());
-    let mut exact = true;
     'search: while let Some(s) = queue.pop_front() {
+        if !exact {
+            break;
+        }
         let loc = s[0] as u32;
+        let from = seen[&s];
+        // a broadcast this component does not join may still write its variables
+        if !key.passive.is_empty() {
+            for next in havocked(&s, &key.passive, &ranges) {
+                let to = match seen.get(&next) {
+                    Some(&i) => i,
+                    None => {
+                        if seen.len() >= MAX_LOCAL_STATES {
+                            exact = false;
+                            break 'search;
+                        }
+                        let i = states.len() as u32;
+                        seen.insert(next.clone(), i);
+                        states.push(next.clone());
+                        queue.push_back(next);
+                        i
+                    }
+                };
+                if to != from {
+                    edges[atom.transitions.len()].insert((from, to));
+                }
+            }
+        }
         for (k, t) in atom.transitions.iter().enumerate() {
             if t.from != loc || !usable[k] {
                 continue;
@@ -185,13 +242,21 @@ fn explore(sys: &System, key: &Key) -> ComponentInvariant {
                 };
                 next[0] = i64::from(t.to);
                 live[k] = true;
-                if seen.insert(next.clone()) {
-                    if seen.len() > MAX_LOCAL_STATES {
-                        exact = false;
-                        break 'search;
+                let to = match seen.get(&next) {
+                    Some(&i) => i,
+                    None => {
+                        if seen.len() >= MAX_LOCAL_STATES {
+                            exact = false;
+                            break 'search;
+                        }
+                        let i = states.len() as u32;
+                        seen.insert(next.clone(), i);
+                        states.push(next.clone());
+                        queue.push_back(next);
+                        i
                     }
-                    queue.push_back(next);
-                }
+                };
+                edges[k].insert((from, to));
             }
         }
     }
@@ -200,17 +265,26 @@ fn explore(sys: &System, key: &Key) -> ComponentInvariant {
     }
     let mut locations = vec![false; atom.locations.len()];
     let mut values = vec![Vec::new(); atom.locations.len()];
-    for s in seen {
+    for s in &states {
         locations[s[0] as usize] = true;
         values[s[0] as usize].push(s[1..=nv].to_vec());
     }
     for v in &mut values {
         v.sort_unstable();
     }
+    let edges = edges
+        .into_iter()
+        .map(|e| {
+            let mut e: Vec<(u32, u32)> = e.into_iter().collect();
+            e.sort_unstable();
+            e
+        })
+        .collect();
     ComponentInvariant {
         locations,
         values: Some(values),
         live,
+        graph: Some(LocalGraph { states, edges }),
     }
 }
 
@@ -272,6 +346,7 @@ fn locations_only(atom: &bip_model::Atom, key: &Key, usable: &[bool]) -> Compone
         locations,
         values: None,
         live,
+        graph: None,
     }
 }
 

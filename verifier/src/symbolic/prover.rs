@@ -31,7 +31,6 @@ pub struct Prover<'s> {
     pub budget: Budget,
     pub calls: Calls,
     pub options: SymbolicOptions,
-    pub started: Instant,
     /// Frames created so far (their names must differ).
     frames: u64,
 }
@@ -73,7 +72,6 @@ impl<'s> Prover<'s> {
             budget,
             calls: Calls::default(),
             options,
-            started,
             frames: 0,
         }
     }
@@ -105,19 +103,10 @@ impl<'s> Prover<'s> {
             solver.assert(&c);
         }
         for s in &self.semiflows {
-            solver.assert(&s.constraint(&self.enc, &self.net, &placed.frame));
+            solver.assert(s.constraint(&self.enc, &self.net, &placed.frame));
         }
         self.give_traps(solver, &mut placed);
         placed
-    }
-
-    /// A fresh frame constrained to its domain only.
-    pub fn plain_frame(&mut self, solver: &Solver) -> Frame {
-        let (frame, domain) = self.fresh(solver);
-        for d in domain {
-            solver.assert(&d);
-        }
-        frame
     }
 
     fn fresh(&mut self, _solver: &Solver) -> (Frame, Vec<Bool>) {
@@ -134,27 +123,23 @@ impl<'s> Prover<'s> {
     /// Asserts the traps learned since the frame was placed.
     pub fn give_traps(&self, solver: &Solver, placed: &mut Placed) {
         for t in &self.traps[placed.traps_given..] {
-            solver.assert(&self.trap_constraint(t, &placed.frame));
+            solver.assert(self.trap_constraint(t, &placed.frame));
         }
         placed.traps_given = self.traps.len();
     }
 
     pub fn trap_constraint(&self, trap: &[u32], f: &Frame) -> Bool {
-        or(trap.iter().map(|&p| {
-            self.enc
-                .at(f, self.net.comp_of[p as usize], self.net.loc_of[p as usize])
-        }))
+        or(trap.iter().map(|&p| self.net.at(&self.enc, f, p)))
     }
 
     /// Learns the initially marked traps that are empty in `state`; returns how many are
     /// new. Zero means no trap excludes the state.
     pub fn learn_traps(&mut self, state: &State) -> usize {
-        let sys = self.sys();
-        let locs: Vec<u32> = (0..sys.components.len() as u32)
-            .map(|c| sys.location(state, c))
-            .collect();
+        let Some(marked) = self.net.marking(&self.enc, state) else {
+            return 0;
+        };
         let mut new = 0;
-        for t in traps::empty_traps(&self.net, &locs, TRAPS_PER_CANDIDATE) {
+        for t in traps::empty_traps(&self.net, &marked, TRAPS_PER_CANDIDATE) {
             if self.trap_set.insert(t.clone()) {
                 self.traps.push(t);
                 new += 1;

@@ -266,14 +266,13 @@ const MAX_TABLE: usize = 256;
 impl Semiflow {
     /// The invariant on a frame.
     pub fn constraint(&self, enc: &Encoding<'_>, net: &Net, f: &Frame) -> Bool {
-        // per component: its locations with a coefficient
+        // per component: its places with a coefficient
         let mut per_comp: Vec<(u32, Vec<(u32, i64)>)> = Vec::new();
         for &(p, v) in &self.terms {
             let c = net.comp_of[p as usize];
-            let l = net.loc_of[p as usize];
             match per_comp.last_mut() {
-                Some((k, list)) if *k == c => list.push((l, v)),
-                _ => per_comp.push((c, vec![(l, v)])),
+                Some((k, list)) if *k == c => list.push((p, v)),
+                _ => per_comp.push((c, vec![(p, v)])),
             }
         }
         // each component contributes one of its coefficients, or 0 elsewhere
@@ -292,9 +291,9 @@ impl Semiflow {
                 if sum != self.constant {
                     // forbid this combination
                     clauses.push(or(per_comp.iter().zip(&pick).map(
-                        |((c, list), &k)| match list.get(k) {
-                            Some(&(l, _)) => not(&enc.at(f, *c, l)),
-                            None => or(list.iter().map(|&(l, _)| enc.at(f, *c, l))),
+                        |((_, list), &k)| match list.get(k) {
+                            Some(&(p, _)) => not(&net.at(enc, f, p)),
+                            None => or(list.iter().map(|&(p, _)| net.at(enc, f, p))),
                         },
                     )));
                 }
@@ -312,17 +311,23 @@ impl Semiflow {
                 }
             }
         }
-        self.linear(enc, &per_comp, f)
+        self.linear(enc, net, &per_comp, f)
     }
 
     /// `Σ coefficient · [at location] == constant`, as arithmetic.
-    fn linear(&self, enc: &Encoding<'_>, per_comp: &[(u32, Vec<(u32, i64)>)], f: &Frame) -> Bool {
+    fn linear(
+        &self,
+        enc: &Encoding<'_>,
+        net: &Net,
+        per_comp: &[(u32, Vec<(u32, i64)>)],
+        f: &Frame,
+    ) -> Bool {
         let sum: Vec<Int> = per_comp
             .iter()
-            .map(|(c, list)| {
+            .map(|(_, list)| {
                 let mut t = num(0);
-                for &(l, v) in list.iter().rev() {
-                    t = ite_int(&enc.at(f, *c, l), &num(v), &t);
+                for &(p, v) in list.iter().rev() {
+                    t = ite_int(&net.at(enc, f, p), &num(v), &t);
                 }
                 t
             })

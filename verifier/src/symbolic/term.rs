@@ -496,10 +496,7 @@ impl Translator<'_> {
                     _ => av.clone(),
                 };
                 if lit(&needs_b) == Some(false) {
-                    let v = match op {
-                        BinOp::And => false,
-                        _ => true,
-                    };
+                    let v = !matches!(op, BinOp::And);
                     return Sym::boolean(v).with_err(a.err);
                 }
                 let b = self.expr(b, bound);

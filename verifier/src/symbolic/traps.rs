@@ -50,8 +50,8 @@ pub fn max_trap(net: &Net, allowed: &[bool]) -> Vec<bool> {
             }
         }
     };
-    for m in 0..members.len() {
-        if ycount[m] == 0 {
+    for (m, &y) in ycount.iter().enumerate() {
+        if y == 0 {
             settle(m, &mut in_s, &mut removed);
         }
     }
@@ -148,13 +148,13 @@ pub fn is_trap(net: &Net, set: &[bool]) -> bool {
     })
 }
 
-/// The initially marked traps that are empty in a candidate state (given by the location
-/// of each component), as small traps; empty if there is none, which means the candidate
-/// is not excluded by any trap.
-pub fn empty_traps(net: &Net, locations: &[u32], limit: usize) -> Vec<Vec<u32>> {
+/// The initially marked traps that are empty in a candidate state (given by the place
+/// each component occupies), as small traps; empty if there is none, which means the
+/// candidate is not excluded by any trap.
+pub fn empty_traps(net: &Net, marked: &[u32], limit: usize) -> Vec<Vec<u32>> {
     let mut allowed = vec![true; net.places()];
-    for (c, &l) in locations.iter().enumerate() {
-        allowed[(net.place_of[c] + l) as usize] = false;
+    for &p in marked {
+        allowed[p as usize] = false;
     }
     let q = max_trap(net, &allowed);
     let mut out: Vec<Vec<u32>> = Vec::new();
