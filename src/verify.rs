@@ -71,7 +71,7 @@ pub struct Args {
     #[arg(long, value_name = "SECS", value_parser = parse_seconds, default_value = "120")]
     pub solver_timeout: Duration,
     /// Symbolic method: deepest bounded model check and largest k of k-induction.
-    #[arg(long, value_name = "N", default_value_t = 12)]
+    #[arg(long, value_name = "N", default_value_t = 20)]
     pub max_depth: u32,
     /// Symbolic method: states the explicit search confirming a candidate deadlock may
     /// explore (0: no confirmation).

@@ -72,7 +72,7 @@ impl Default for SymbolicOptions {
             solver_timeout: Some(Duration::from_secs(120)),
             timeout: None,
             rlimit: None,
-            max_depth: 12,
+            max_depth: 20,
             confirm_states: 200_000,
             confirm_memory: 512 << 20,
             jobs: 0,
