@@ -7,7 +7,9 @@
 mod check;
 mod expand;
 mod export;
+mod replay;
 mod report;
+mod simulate;
 mod verify;
 
 use std::path::PathBuf;
@@ -49,6 +51,14 @@ enum Command {
     Verify(verify::Args),
     /// Write the model in another tool's language (Promela, for SPIN).
     Export(export::Args),
+    /// Run the model in the engine with default codels (random declared outcomes) and
+    /// random requests, checking every invariant at every step. Exit code 0: they held,
+    /// 1: one failed (the trace is printed), 2: model or usage error.
+    Simulate(simulate::Args),
+    /// Re-execute a trace (a counterexample, a witness, a recording) through the engine,
+    /// step by step, and show where the property fails. Exit code 0: a recording replayed,
+    /// 1: the trace's failure (or witness) is reached, 2: the trace does not fit the model.
+    Replay(replay::Args),
 }
 
 /// Exit codes shared by every command.
@@ -67,6 +77,8 @@ fn main() -> ExitCode {
         Command::Expand { file } => expand::run(&file),
         Command::Verify(args) => verify::run(&args),
         Command::Export(args) => export::run(&args),
+        Command::Simulate(args) => simulate::run(&args),
+        Command::Replay(args) => replay::run(&args),
     };
     ExitCode::from(code)
 }

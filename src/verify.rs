@@ -309,6 +309,9 @@ fn text_report(
             kind_name(p.kind),
             trace.display(Some(system))
         );
+        if p.kind == PropertyKind::DeadlockFree && p.verdict.fails() {
+            write_why_stuck(&mut s, system, trace);
+        }
         if let Some((_, path)) = saved.iter().find(|(n, _)| *n == p.name) {
             let _ = writeln!(s, "  saved as {}", path.display());
         }
@@ -380,6 +383,34 @@ fn text_report(
         }
     };
     s
+}
+
+/// Under a GenoM deadlock: the codels that are ready but held back, and by what.
+fn write_why_stuck(s: &mut String, system: &System, trace: &bip_model::Trace) {
+    let Some(genom) = &system.genom else {
+        return;
+    };
+    let last = match trace.replay(system) {
+        Ok(path) => path
+            .last()
+            .map_or_else(|| system.initial_state(), |(_, st)| st.clone()),
+        Err(_) => return,
+    };
+    match genom.stuck(system, &last) {
+        Ok(stuck) if !stuck.is_empty() => {
+            let _ = writeln!(s, "  why:");
+            for st in stuck {
+                let _ = writeln!(s, "    {st} but held by");
+                for c in &st.held_by {
+                    let _ = writeln!(s, "      {}: {}", c.reason, c.text);
+                }
+            }
+        }
+        Ok(_) => {}
+        Err(e) => {
+            let _ = writeln!(s, "  why: cannot tell ({e})");
+        }
+    }
 }
 
 fn json_report(args: &Args, report: &Report) -> Result<String, String> {

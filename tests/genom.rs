@@ -214,6 +214,13 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
         stdout.contains("result: 1 of 9 properties fail"),
         "{stdout}"
     );
+    // the report says which constraint holds the navigation back
+    assert!(
+        stdout.contains(
+            "ndd.GoTo codel start is ready after 1 tick but held by\n      constraint #1 (Requires): "
+        ),
+        "{stdout}"
+    );
     let system = bip_model::load_file("robots/rover-deadlock.ron").expect("loads");
     let text = std::fs::read_to_string(dir.path().join("DeadlockFree.trace.ron")).expect("a trace");
     let trace = bip_model::Trace::from_ron(&text).expect("reads");
@@ -245,6 +252,21 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
     assert_eq!(
         trace.steps.last().map(|s| s.step.as_str()),
         Some("ndd_GoTo_request")
+    );
+    // through the engine: each step allowed, the deadlock reached, and why
+    let saved = dir.path().join("DeadlockFree.trace.ron");
+    let out = bip(&[
+        "replay",
+        "robots/rover-deadlock.ron",
+        saved.to_str().expect("utf-8"),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(text.contains("allowed: request accepted"), "{text}");
+    assert!(text.contains("deadlock reached after"), "{text}");
+    assert!(
+        text.contains("waiting: ndd.GoTo codel `start`") && text.contains("(Requires)"),
+        "{text}"
     );
 }
 

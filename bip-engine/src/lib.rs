@@ -1,2 +1,84 @@
-//! `bip-engine`: the runtime engine that runs codels and gates every codel transition on
-//! the verified model. (Built in a later step; see ../shared/DESIGN.md.)
+//! `bip-engine`: the runtime engine that runs the codels of a GenoM-style functional layer
+//! and gates every step on the model `bip verify` checked.
+//!
+//! ```no_run
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! use bip_engine::{Engine, Next, RealClock, Until};
+//! let system = bip_model::load_file("robots/rover.ron")?;
+//! let mut engine = Engine::builder(system)
+//!     .codel(("rflex", "TrackSpeed", "track"), |ctx| {
+//!         // drive the wheels...
+//!         Next::Yield("pause::track")
+//!     })
+//!     .default_codels(bip_engine::DefaultCodels::FirstYield)
+//!     .clock(RealClock::new())
+//!     .build()?;
+//! engine.request("rflex", "Init", ())?;
+//! engine.request("rflex", "TrackSpeed", ())?;
+//! engine.run_until(Until::Ticks(50))?;
+//! for event in engine.events() {
+//!     println!("{event:?}");
+//! }
+//! # Ok(()) }
+//! ```
+//!
+//! - The engine computes the enabled steps with bip-model's step relation, kept up to date
+//!   by [`bip_model::EnabledSet`]; it commits only steps of that set, so its run is a path
+//!   of the model ([`Engine::record`] writes it as a trace).
+//! - A codel ([`Ctx`] → [`Next`]) returns a yield or an exception; a panic, an undeclared
+//!   yield, an ids value out of range take the codel's error path (the model's `_fail`
+//!   step) and are reported ([`Event::Fault`]).
+//! - Requests are served when the functional layer is quiescent; the reply says whether
+//!   the model accepted them and, later, how the activity ended.
+//!
+//! docs/engine.md describes the scheduling, requests, faults, time, threads and recording.
+//!
+//! # Features
+//! `std` (default): task threads, [`RealClock`], catching codel panics, [`Handle`] for
+//! requests from other threads. Without it the engine is `no_std` + `alloc`.
+
+#![cfg_attr(not(feature = "std"), no_std)]
+
+extern crate alloc;
+
+mod prelude {
+    #[allow(unused_imports)]
+    pub(crate) use alloc::{
+        borrow::ToOwned,
+        boxed::Box,
+        format,
+        string::{String, ToString},
+        vec,
+        vec::Vec,
+    };
+}
+
+mod bind;
+mod clock;
+mod codel;
+mod engine;
+mod error;
+mod event;
+#[cfg(feature = "std")]
+mod handle;
+mod policy;
+mod ports;
+mod record;
+pub mod replay;
+#[cfg(feature = "std")]
+mod threads;
+
+pub use clock::Clock;
+#[cfg(feature = "std")]
+pub use clock::RealClock;
+#[cfg(target_has_atomic = "64")]
+pub use clock::VirtualClock;
+pub use codel::{CodelFn, Ctx, Next};
+pub use engine::{Args, DefaultCodels, Engine, EngineBuilder, EventFn, Stats, Stepped, Until};
+pub use error::{BuildError, EngineError, RequestError, StepAsError};
+pub use event::{
+    CodelId, Event, Fault, FaultKind, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket,
+};
+#[cfg(feature = "std")]
+pub use handle::{Handle, PendingReply};
+pub use policy::Policy;

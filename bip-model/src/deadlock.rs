@@ -6,7 +6,10 @@
 //! steps alone lead to. (A clock can always tick and a client can always send; without
 //! this, no model with a clock could ever deadlock.)
 
-use std::collections::HashSet;
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use hashbrown::HashSet;
 
 use crate::state::State;
 use crate::step::Steps;

@@ -5,7 +5,10 @@
 //! reads slots. Errors (division by zero, overflow, an index out of its family) are values,
 //! never panics.
 
-use crate::expr::{BinOp, QuantKind};
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use crate::ops::{BinOp, QuantKind};
 
 /// A compiled expression.
 #[derive(Clone, Debug, PartialEq)]
@@ -174,11 +177,11 @@ impl Expr {
                 c => Expr::Cond(Box::new(c), Box::new(a.fold()), Box::new(b.fold())),
             },
             Expr::Indexed(mut ix) => {
-                ix.index = std::mem::replace(&mut ix.index, Expr::Const(0)).fold();
+                ix.index = core::mem::replace(&mut ix.index, Expr::Const(0)).fold();
                 Expr::Indexed(ix)
             }
             Expr::Quant(mut q) => {
-                q.body = std::mem::replace(&mut q.body, Expr::Const(0)).fold();
+                q.body = core::mem::replace(&mut q.body, Expr::Const(0)).fold();
                 Expr::Quant(q)
             }
             e => e,

@@ -1,6 +1,9 @@
 //! Global states: the working form (one `i64` per slot) and the packed form (each slot in
 //! as few bits as its range needs), which is what the verifier stores.
 
+#[allow(unused_imports)]
+use crate::prelude::*;
+
 /// A global state: per component, its location number then its variables' values.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct State {

@@ -5,6 +5,9 @@
 //! Steps are collected into a reusable [`Steps`] buffer so that computing them allocates
 //! nothing once the buffer has grown to the model's needs.
 
+#[allow(unused_imports)]
+use crate::prelude::*;
+
 use crate::eval::{Env, EvalError};
 use crate::state::State;
 use crate::system::{Assign, RangeError, RangeErrorKind, System, Target};
@@ -68,7 +71,7 @@ impl OwnedStep {
 #[derive(Clone, Debug, Default)]
 pub struct Steps {
     entries: Vec<StepEntry>,
-    picks: Vec<Pick>,
+    pub(crate) picks: Vec<Pick>,
     /// Scratch: enabled transitions per port of the interaction being expanded.
     choices: Vec<Pick>,
     bounds: Vec<(u32, u32)>,
@@ -104,12 +107,12 @@ impl Steps {
         (0..self.entries.len()).map(move |i| self.get(i))
     }
 
-    fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.entries.clear();
         self.picks.clear();
     }
 
-    fn push(&mut self, label: Label, picks: impl IntoIterator<Item = Pick>) {
+    pub(crate) fn push(&mut self, label: Label, picks: impl IntoIterator<Item = Pick>) {
         let start = self.picks.len() as u32;
         self.picks.extend(picks);
         self.entries.push(StepEntry {
@@ -146,6 +149,7 @@ struct PortCell {
 }
 
 impl EnableIndex {
+    #[cfg_attr(not(feature = "std"), allow(dead_code))]
     pub(crate) fn new(
         atoms: &[crate::system::Atom],
         components: &[crate::system::Component],
@@ -223,24 +227,61 @@ impl System {
     }
 
     fn push_internal_steps(&self, state: &State, out: &mut Steps) -> Result<(), RangeError> {
-        let slots = state.slots();
-        for cell in &self.enable_index.internal {
-            let (start, end) = self.enable_index.transitions(cell, slots);
-            for t in start..end {
-                if self.transition_guard(state, cell.component, t)? {
-                    out.push(
-                        Label::Internal {
-                            component: cell.component,
-                        },
-                        [Pick {
-                            component: cell.component,
-                            transition: t,
-                        }],
-                    );
-                }
+        for c in 0..self.components.len() as u32 {
+            self.push_internal_steps_of(state, c, out)?;
+        }
+        Ok(())
+    }
+
+    /// Pushes the enabled internal transitions of component `c` in `state`.
+    pub(crate) fn push_internal_steps_of(
+        &self,
+        state: &State,
+        c: u32,
+        out: &mut Steps,
+    ) -> Result<(), RangeError> {
+        let cell = &self.enable_index.internal[c as usize];
+        let (start, end) = self.enable_index.transitions(cell, state.slots());
+        for t in start..end {
+            if self.transition_guard(state, cell.component, t)? {
+                out.push(
+                    Label::Internal {
+                        component: cell.component,
+                    },
+                    [Pick {
+                        component: cell.component,
+                        transition: t,
+                    }],
+                );
             }
         }
         Ok(())
+    }
+
+    /// True if `component` takes part in interaction `i` and one of its transitions on its
+    /// port there is enabled in `state` (location and the atom's own guard; the
+    /// interaction's guard and the other participants aside). Used to explain deadlocks.
+    pub fn participant_ready(
+        &self,
+        state: &State,
+        i: u32,
+        component: u32,
+    ) -> Result<bool, RangeError> {
+        let Some(port) = self.interactions[i as usize]
+            .ports
+            .iter()
+            .find(|p| p.component == component)
+        else {
+            return Ok(false);
+        };
+        let atom = self.atom_of(component);
+        let loc = self.location(state, component);
+        for t in atom.transitions_from(loc, Some(port.port)) {
+            if self.transition_guard(state, component, t)? {
+                return Ok(true);
+            }
+        }
+        Ok(false)
     }
 
     #[inline]
@@ -515,7 +556,7 @@ enum ActionError {
     OutOfRange { slot: u32, value: i64 },
 }
 
-fn any_bit(bits: &[u64], range: std::ops::Range<u32>) -> bool {
+fn any_bit(bits: &[u64], range: core::ops::Range<u32>) -> bool {
     let (mut i, end) = (range.start, range.end);
     while i < end {
         let word = bits[i as usize / 64];

@@ -13,6 +13,7 @@ pub use crate::genom::syntax::{
     CodelDef, ConstraintDef, ModuleDef, PortDef, ServiceDef, ServiceKind, TaskDef,
 };
 use crate::source::{ident_has_parens, ConstExpr, OrderedMap, Spanned};
+pub use crate::system::Role;
 
 pub type Text = Spanned<String>;
 
@@ -224,25 +225,6 @@ impl ConnectorKindDef {
 /// always receive a request; neither is progress of the system itself. `DeadlockFree` is
 /// therefore checked against progress steps: a state is a deadlock when no progress step is
 /// enabled in it, nor in any state reached from it by `Time` steps alone (docs/model.md).
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize, serde::Serialize,
-)]
-pub enum Role {
-    /// The system's own work (the default; every internal transition is progress).
-    #[default]
-    Progress,
-    /// The passage of time (a clock tick).
-    Time,
-    /// A stimulus the environment may give at any time (a request); not progress.
-    Environment,
-}
-
-impl Role {
-    fn is_progress(&self) -> bool {
-        *self == Role::Progress
-    }
-}
-
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PriorityDef {

@@ -4,11 +4,32 @@
 //! slot for its location and one per variable. The step relation over these states lives in
 //! `step.rs`; it is the only one in the project.
 
-use std::ops::Range;
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use core::ops::Range;
 
 use crate::eval::{Env, EvalError, Expr};
 use crate::state::{State, StateLayout};
-pub use crate::syntax::Role;
+
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize, serde::Serialize,
+)]
+pub enum Role {
+    /// The system's own work (the default; every internal transition is progress).
+    #[default]
+    Progress,
+    /// The passage of time (a clock tick).
+    Time,
+    /// A stimulus the environment may give at any time (a request); not progress.
+    Environment,
+}
+
+impl Role {
+    pub fn is_progress(&self) -> bool {
+        *self == Role::Progress
+    }
+}
 
 /// A compiled model.
 #[derive(Clone, Debug)]
@@ -159,8 +180,10 @@ pub struct Interaction {
     pub trigger: Option<u32>,
     pub guard: Option<Expr>,
     pub action: Vec<Assign>,
-    /// Components whose slots the guard, action or priorities of this interaction read,
-    /// besides its participants (for incremental re-evaluation).
+    /// Components whose slots the guard of this interaction reads, besides its
+    /// participants: what its enabledness depends on, for incremental re-evaluation (the
+    /// action does not decide it; [`crate::EnabledSet`] handles what priorities read
+    /// itself).
     pub reads: Vec<u32>,
 }
 
@@ -223,8 +246,8 @@ pub enum RangeErrorKind {
     },
 }
 
-impl std::fmt::Display for RangeError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl core::fmt::Display for RangeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match &self.kind {
             RangeErrorKind::OutOfRange { var, value, lo, hi } => write!(
                 f,
@@ -246,7 +269,7 @@ impl std::fmt::Display for RangeError {
     }
 }
 
-impl std::error::Error for RangeError {}
+impl core::error::Error for RangeError {}
 
 impl System {
     /// The initial state.

@@ -2,13 +2,15 @@
 //! and engine recordings. Each step names the fired interaction (or `comp.internal`) and
 //! the locations and variables that changed.
 
-use std::collections::HashMap;
-use std::fmt;
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use core::fmt;
+use hashbrown::HashMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::load::ron_options;
-use crate::source::OrderedMap;
+use crate::ordered_map::OrderedMap;
 use crate::state::State;
 use crate::step::{OwnedStep, Steps};
 use crate::system::{RangeError, System, VarType};
@@ -79,7 +81,7 @@ impl fmt::Display for ReplayError {
     }
 }
 
-impl std::error::Error for ReplayError {}
+impl core::error::Error for ReplayError {}
 
 impl System {
     /// The value of a slot as a trace shows it.
@@ -143,20 +145,22 @@ impl Trace {
 
     /// The trace as pretty RON, in MODEL.md's layout: `Trace(` then steps written
     /// `(step: "...", state: {...})`.
+    #[cfg(feature = "std")]
     pub fn to_ron(&self) -> String {
         // ron names either every struct or none; MODEL.md names only the outer one
         let config = ron::ser::PrettyConfig::new()
             .struct_names(false)
             .depth_limit(2);
-        match ron_options().to_string_pretty(self, config) {
+        match crate::load::ron_options().to_string_pretty(self, config) {
             Ok(body) => format!("Trace{body}\n"),
             Err(e) => format!("// could not write the trace: {e}\n"),
         }
     }
 
     /// Reads a trace written in RON.
+    #[cfg(feature = "std")]
     pub fn from_ron(text: &str) -> Result<Trace, String> {
-        ron_options()
+        crate::load::ron_options()
             .from_str(text)
             .map_err(|e| format!("{}: {}", e.span.start, e.code))
     }
@@ -164,10 +168,28 @@ impl Trace {
     /// Re-executes the trace with the step relation: each step must be enabled and lead to
     /// the recorded changes. Returns the steps and states it passes through.
     pub fn replay(&self, system: &System) -> Result<Vec<(OwnedStep, State)>, ReplayError> {
+        match self.replay_prefix(system) {
+            (path, None) => Ok(path),
+            (_, Some(e)) => Err(e),
+        }
+    }
+
+    /// Like [`Trace::replay`], but keeps the steps that replay before the first that does
+    /// not: the path so far, and the error, if any.
+    pub fn replay_prefix(&self, system: &System) -> (Vec<(OwnedStep, State)>, Option<ReplayError>) {
+        let mut out = Vec::with_capacity(self.steps.len());
+        let err = self.replay_into(system, &mut out).err();
+        (out, err)
+    }
+
+    fn replay_into(
+        &self,
+        system: &System,
+        out: &mut Vec<(OwnedStep, State)>,
+    ) -> Result<(), ReplayError> {
         let slots = system.slot_by_name();
         let mut state = system.initial_state();
         let mut steps = Steps::new();
-        let mut out = Vec::with_capacity(self.steps.len());
         for (k, ts) in self.steps.iter().enumerate() {
             let n = k + 1;
             let fail = |message: String| ReplayError { step: n, message };
@@ -210,7 +232,7 @@ impl Trace {
             state = next;
             out.push((step, state.clone()));
         }
-        Ok(out)
+        Ok(())
     }
 
     /// A readable rendering; with the system, changes show as `old → new`.

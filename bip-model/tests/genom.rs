@@ -186,11 +186,11 @@ fn codel_automaton_errors() {
             "not an activity; it has no codel states",
             "start",
         ),
-        // a written port that does not exist
+        // a written port (or ids field) that does not exist
         (
             r#"writes: ["scan"]"#,
             r#"writes: ["scna"]"#,
-            "no out port `scna`",
+            "no out port or ids field `scna`",
             "scna",
         ),
     ];
@@ -525,4 +525,62 @@ fn errors_in_user_texts_point_into_them_through_rewriting_and_merging() {
         r#"DeadlockFree(terminal: "active(sick.Scan) && door@ajar"),"#,
     );
     assert_error(&terminal, "no location `ajar`", "ajar");
+}
+
+/// The state reached from the initial one by the enabled steps named `names`, in order.
+fn after_steps(sys: &System, names: &[&str]) -> State {
+    let mut state = sys.initial_state();
+    for name in names {
+        let (_, next) = sys
+            .successors(&state)
+            .expect("no range error")
+            .into_iter()
+            .find(|(step, _)| sys.label_name(step.label) == *name)
+            .unwrap_or_else(|| panic!("`{name}` is not enabled"));
+        state = next;
+    }
+    state
+}
+
+#[test]
+fn a_stuck_codel_names_the_constraints_that_hold_it() {
+    let text = include_str!("../../robots/rover-deadlock.ron");
+    let sys = load_str("rover-deadlock.ron", text).expect("the model loads");
+    let genom = sys.genom.as_ref().expect("a GenoM model");
+    // at rest nothing waits, so nothing is stuck
+    assert!(genom
+        .stuck(&sys, &sys.initial_state())
+        .expect("no range error")
+        .is_empty());
+    // GoTo requested while the laser is off: its start codel waits for Requires and Fresh
+    let state = after_steps(&sys, &["ndd_GoTo_request"]);
+    let stuck = genom.stuck(&sys, &state).expect("no range error");
+    assert_eq!(stuck.len(), 1, "{stuck:?}");
+    let s = &stuck[0];
+    assert_eq!((s.module, s.service, s.codel), ("ndd", "GoTo", "start"));
+    assert_eq!(s.after_ticks, 1, "the request waits for the next period");
+    let kinds: Vec<String> = s.held_by.iter().map(|c| c.reason.to_string()).collect();
+    assert_eq!(
+        kinds,
+        ["constraint #1 (Requires)", "constraint #2 (Fresh)"],
+        "{s}"
+    );
+    // once the laser scans, only the stale pose holds it
+    let scanning = after_steps(
+        &sys,
+        &[
+            "sick_Scan_request",
+            "tick",
+            "sick_Scan_start",
+            "ndd_GoTo_request",
+        ],
+    );
+    let held: Vec<String> = genom
+        .stuck(&sys, &scanning)
+        .expect("no range error")
+        .iter()
+        .filter(|s| s.service == "GoTo")
+        .flat_map(|s| s.held_by.iter().map(|c| c.reason.to_string()))
+        .collect();
+    assert_eq!(held, ["constraint #2 (Fresh)"]);
 }

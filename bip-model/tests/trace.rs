@@ -68,6 +68,11 @@ fn replay_rejects_a_step_that_is_not_enabled_or_leads_elsewhere() {
     trace.steps[1].step = "release[3]".into();
     let err = trace.replay(&sys).expect_err("not enabled");
     assert!(err.message.contains("`release[3]` is not enabled"), "{err}");
+    // the prefix that replays is kept
+    let (prefix, err) = trace.replay_prefix(&sys);
+    assert_eq!(prefix.len(), 1);
+    assert_eq!(sys.label_name(prefix[0].0.label), "left[0]");
+    assert_eq!(err.map(|e| e.step), Some(2));
     let mut trace = Trace::from_path(&sys, Verdict::None, &path(&sys, &["left[0]"]));
     trace.steps[0]
         .state

@@ -868,7 +868,8 @@ impl Compiler {
                 });
             }
         }
-        // components read besides the participants, for incremental re-evaluation
+        // components the guard reads besides the participants, for incremental
+        // re-evaluation (the action does not decide whether the interaction is enabled)
         let mut reads: Vec<u32> = Vec::new();
         let mut note = |slot: u32| {
             let c = self.component_of_slot(slot);
@@ -878,9 +879,6 @@ impl Compiler {
         };
         if let Some(g) = &guard {
             g.for_each_slot(0, &mut note);
-        }
-        for a in &assigns {
-            a.value.for_each_slot(0, &mut note);
         }
         reads.sort_unstable();
         Ok(Interaction {

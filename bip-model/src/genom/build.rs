@@ -5,10 +5,11 @@
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 
-use super::check::{ConstraintKind, Layer, PortRef, Service, ServiceRef, Yield, ETHER};
-use super::map::{Reason, Recipe, RecipeCodel, RecipeCondition, RecipeModule, RecipeService};
+use super::check::{ConstraintKind, Layer, Module, PortRef, Service, ServiceRef, Yield, ETHER};
+use super::map::Reason;
 use super::names::*;
 use super::origin::{Origins, Src};
+use super::recipe::{Recipe, RecipeCodel, RecipeCondition, RecipeModule, RecipeService};
 use crate::diag::{Errors, ModelError};
 use crate::expr::{parse_expr, ExprKind};
 use crate::source::{ConstExpr, ConstValue, OrderedMap, Span, Spanned};
@@ -338,14 +339,56 @@ impl<'a, 'd> Builder<'a, 'd> {
         if !aged.is_empty() {
             ports.push(text("tick"));
             transitions.push(tr("on", "tick", "on", None, &[]));
+            // a codel that writes ids joins through its own port (below) instead
             let writes = m.services.iter().any(|s| {
-                s.codels
-                    .iter()
-                    .any(|c| c.writes.iter().any(|w| aged.iter().any(|&(p, _)| p == *w)))
+                s.codels.iter().any(|c| {
+                    c.ids.is_empty() && c.writes.iter().any(|w| aged.iter().any(|&(p, _)| p == *w))
+                })
             });
             if writes {
                 ports.push(text("write"));
                 transitions.push(tr("on", "write", "on", None, &[]));
+            }
+        }
+        // a codel that writes ids: one transition per combination of the values it may
+        // write, the last field varying fastest (docs/genom.md, "Codels that write ids")
+        for s in m.services.iter().filter(|s| s.is_activity()) {
+            for c in s.codels.iter().filter(|c| !c.ids.is_empty()) {
+                let port = ids_port(s.name, c.state);
+                let fields: Vec<(&str, i64, i64)> = c
+                    .ids
+                    .iter()
+                    .filter_map(|&k| m.ids[k].1.map(|(lo, hi)| (m.ids[k].0, lo, hi)))
+                    .collect();
+                if fields.len() != c.ids.len() {
+                    continue; // a bound is not constant: the core reports it
+                }
+                ports.push(text(&port));
+                let mut values: Vec<i64> = fields.iter().map(|f| f.1).collect();
+                loop {
+                    let action: Vec<String> = fields
+                        .iter()
+                        .zip(&values)
+                        .map(|(f, v)| format!("{} = {}", f.0, ids_literal(m, f.0, *v)))
+                        .collect();
+                    transitions.push(tr("on", &port, "on", None, &action));
+                    // advance the odometer, last field fastest
+                    let mut k = fields.len();
+                    loop {
+                        if k == 0 {
+                            break;
+                        }
+                        k -= 1;
+                        if values[k] < fields[k].2 {
+                            values[k] += 1;
+                            break;
+                        }
+                        values[k] = fields[k].1;
+                    }
+                    if values.iter().zip(&fields).all(|(v, f)| *v == f.1) {
+                        break;
+                    }
+                }
             }
         }
         for (name, span) in reserved {
@@ -858,7 +901,13 @@ impl<'a, 'd> Builder<'a, 'd> {
                     ));
                 }
             }
-            if !action.is_empty() {
+            if !c.ids.is_empty() {
+                ports.push(text(format!(
+                    "{}.{}",
+                    module_component(m),
+                    ids_port(s.name, c.state)
+                )));
+            } else if !action.is_empty() {
                 ports.push(text(format!("{}.write", module_component(m))));
             }
             let run = codel_connector(m, s.name, c.state);
@@ -897,6 +946,12 @@ impl<'a, 'd> Builder<'a, 'd> {
                     .iter()
                     .map(|&w| self.layer.modules[mi].ports[w].to_string())
                     .collect(),
+                ids: c
+                    .ids
+                    .iter()
+                    .map(|&k| self.layer.modules[mi].ids[k].0.to_string())
+                    .collect(),
+                ids_port: (!c.ids.is_empty()).then(|| ids_port(s.name, c.state)),
                 holds,
             });
         }
@@ -926,6 +981,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         (p.to_string(), cap)
                     })
                     .collect(),
+                ids: m.ids.iter().map(|(x, _)| x.to_string()).collect(),
                 services: Vec::new(),
             });
         }
@@ -1306,5 +1362,19 @@ impl<'a, 'd> Builder<'a, 'd> {
             Some(src) => self.origins.text(src.clone()),
             None => written.clone(),
         }
+    }
+}
+
+/// A value of ids field `x` as the model writes it (`true`/`false` for a `Bool`).
+fn ids_literal(m: &Module, x: &str, v: i64) -> String {
+    let is_bool = m
+        .def
+        .ids
+        .iter()
+        .any(|d| d.name.as_str() == x && matches!(d.ty, TypeDef::Bool));
+    match (is_bool, v) {
+        (true, 0) => "false".into(),
+        (true, _) => "true".into(),
+        (false, v) => v.to_string(),
     }
 }

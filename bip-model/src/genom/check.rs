@@ -7,7 +7,9 @@ use std::collections::{HashMap, HashSet};
 use crate::compile::{check_name, one_of, unique, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::source::Span;
-use crate::syntax::{CodelDef, ConstraintDef, ModuleDef, ServiceDef, ServiceKind, SystemDef, Text};
+use crate::syntax::{
+    CodelDef, ConstraintDef, ModuleDef, ServiceDef, ServiceKind, SystemDef, Text, TypeDef,
+};
 
 /// The name of the final state of every activity (GenoM's `ether`).
 pub const ETHER: &str = "ether";
@@ -17,6 +19,9 @@ pub const PAUSE: &str = "pause::";
 pub const ACTIVITY_PORTS: [&str; 4] = ["request", "interrupt", "abort", "tick"];
 /// Port names of a generated module atom that services may not take.
 pub const MODULE_PORTS: [&str; 2] = ["tick", "write"];
+/// A codel that writes ids takes one step per combination of values it may write (the
+/// verifier explores them all); more than this many is almost surely a modelling mistake.
+pub const MAX_IDS_VALUES: u64 = 1024;
 
 /// A service of a module: `(module, service)` indices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -46,6 +51,9 @@ pub struct Module<'d> {
     /// Task names and periods (in ticks, at least 1).
     pub tasks: Vec<(&'d str, i64)>,
     pub ports: Vec<&'d str>,
+    /// The ids fields and their ranges (`None` if a bound is not a constant: the core
+    /// reports it).
+    pub ids: Vec<(&'d str, Option<(i64, i64)>)>,
     pub services: Vec<Service<'d>>,
 }
 
@@ -99,6 +107,8 @@ pub struct Codel<'d> {
     pub yields: Vec<Yield>,
     /// Written ports (indices into the module's ports).
     pub writes: Vec<usize>,
+    /// Written ids fields (indices into the module's ids), in the module's order.
+    pub ids: Vec<usize>,
     pub throws: Vec<&'d str>,
 }
 
@@ -198,6 +208,17 @@ fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleDef) -> Modu
         check_name(errors, &p.name, "port");
     }
     let ports: Vec<&str> = m.ports.iter().map(|p| p.name.as_str()).collect();
+    let ids: Vec<(&str, Option<(i64, i64)>)> = m
+        .ids
+        .iter()
+        .map(|v| {
+            let range = match &v.ty {
+                TypeDef::Bool => Some((0, 1)),
+                TypeDef::Int(lo, hi) => consts.int(lo).ok().zip(consts.int(hi).ok()),
+            };
+            (v.name.as_str(), range)
+        })
+        .collect();
     let index: HashMap<&str, usize> = m
         .services
         .iter()
@@ -205,16 +226,33 @@ fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleDef) -> Modu
         .rev() // the first of duplicates wins
         .map(|(k, s)| (s.name.as_str(), k))
         .collect();
-    let services = m
+    let services: Vec<Service> = m
         .services
         .iter()
-        .map(|s| service(errors, m, &tasks, &ports, &index, s))
+        .map(|s| service(errors, m, &tasks, &ports, &ids, &index, s))
         .collect();
+    // the port of the module atom through which a codel writes ids must be free
+    for s in services.iter().filter(|s| s.is_activity()) {
+        for c in s.codels.iter().filter(|c| !c.ids.is_empty()) {
+            let port = super::names::ids_port(s.name, c.state);
+            if let Some(f) = services.iter().find(|f| !f.is_activity() && f.name == port) {
+                errors.push(
+                    ModelError::new(
+                        format!("a function or attribute cannot be named `{port}`"),
+                        f.def.name.span,
+                    )
+                    .with_note(c.def.state.span, "this codel writes ids through that port")
+                    .with_help("docs/genom.md, \"Codels that write ids\""),
+                );
+            }
+        }
+    }
     Module {
         def: m,
         name: m.name.as_str(),
         tasks,
         ports,
+        ids,
         services,
     }
 }
@@ -224,6 +262,7 @@ fn service<'d>(
     m: &'d ModuleDef,
     tasks: &[(&str, i64)],
     ports: &[&str],
+    ids: &[(&str, Option<(i64, i64)>)],
     index: &HashMap<&str, usize>,
     s: &'d ServiceDef,
 ) -> Service<'d> {
@@ -328,12 +367,18 @@ fn service<'d>(
             ),
         },
     }
-    codels(errors, ports, s, &mut out);
+    codels(errors, ports, ids, s, &mut out);
     out
 }
 
 /// Checks an activity's codel automaton and fills in its codels and locations.
-fn codels<'d>(errors: &mut Errors, ports: &[&str], s: &'d ServiceDef, out: &mut Service<'d>) {
+fn codels<'d>(
+    errors: &mut Errors,
+    ports: &[&str],
+    ids: &[(&str, Option<(i64, i64)>)],
+    s: &'d ServiceDef,
+    out: &mut Service<'d>,
+) {
     let before = errors.list.len();
     unique(errors, s.codels.iter().map(|c| &c.state), "codel state");
     let states: Vec<&str> = s.codels.iter().map(|c| c.state.as_str()).collect();
@@ -419,17 +464,61 @@ fn codels<'d>(errors: &mut Errors, ports: &[&str], s: &'d ServiceDef, out: &mut 
             }
         }
         let mut writes = Vec::new();
-        unique(errors, c.writes.iter(), "written port");
+        let mut written_ids = Vec::new();
+        let mut combinations: u64 = 1;
+        unique(errors, c.writes.iter(), "written port or ids field");
         for w in &c.writes {
-            match ports.iter().position(|&p| p == w.as_str()) {
-                Some(k) if !writes.contains(&k) => writes.push(k),
-                Some(_) => {}
-                None => errors.push(
-                    ModelError::new(format!("the module has no out port `{w}`"), w.span)
-                        .with_help(one_of("its ports are", ports.iter().copied())),
+            let port = ports.iter().position(|&p| p == w.as_str());
+            let field = ids.iter().position(|&(x, _)| x == w.as_str());
+            match (port, field) {
+                (Some(_), Some(_)) => errors.push(
+                    ModelError::new(
+                        format!("`{w}` is both an out port and an ids field of the module"),
+                        w.span,
+                    )
+                    .with_help("rename one of them: `writes` would not say which it writes"),
+                ),
+                (Some(k), None) => {
+                    if !writes.contains(&k) {
+                        writes.push(k);
+                    }
+                }
+                (None, Some(k)) => {
+                    if written_ids.contains(&k) {
+                        continue;
+                    }
+                    written_ids.push(k);
+                    if let Some((lo, hi)) = ids[k].1 {
+                        let values = (i128::from(hi) - i128::from(lo) + 1).max(1) as u64;
+                        combinations = combinations.saturating_mul(values);
+                        if combinations > MAX_IDS_VALUES {
+                            errors.push(
+                                ModelError::new(
+                                    format!(
+                                        "codel `{}` may write {combinations} combinations of ids values; at most {MAX_IDS_VALUES}",
+                                        c.state
+                                    ),
+                                    w.span,
+                                )
+                                .with_label("here the count passes the limit")
+                                .with_help("a codel's step takes every value its written ids may hold, so that the verifier covers them all: narrow the ranges, or write fewer fields"),
+                            );
+                        }
+                    }
+                }
+                (None, None) => errors.push(
+                    ModelError::new(
+                        format!("the module has no out port or ids field `{w}`"),
+                        w.span,
+                    )
+                    .with_help(one_of(
+                        "its ports and ids fields are",
+                        ports.iter().copied().chain(ids.iter().map(|&(x, _)| x)),
+                    )),
                 ),
             }
         }
+        written_ids.sort_unstable();
         unique(errors, c.throws.iter(), "exception");
         for t in &c.throws {
             check_name(errors, t, "exception");
@@ -439,6 +528,7 @@ fn codels<'d>(errors: &mut Errors, ports: &[&str], s: &'d ServiceDef, out: &mut 
             state: c.state.as_str(),
             yields,
             writes,
+            ids: written_ids,
             throws: c.throws.iter().map(|t| t.as_str()).collect(),
         });
     }

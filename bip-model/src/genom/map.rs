@@ -6,10 +6,24 @@
 //! The expansion writes the map with names (a recipe); once the expanded model is
 //! compiled, the names become indices into the [`System`]: the [`GenomMap`].
 
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use core::ops::Range;
+
 use crate::eval;
 use crate::state::State;
-use crate::syntax::{ServiceKind, Text};
 use crate::system::{RangeError, System};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+pub enum ServiceKind {
+    /// Runs at once, in the control task, when requested.
+    Function,
+    /// Like a function; in GenoM it sets or reads ids fields.
+    Attribute,
+    /// Runs an automaton of codels in an execution task.
+    Activity,
+}
 
 /// The GenoM layer of a compiled system, in the system's indices.
 #[derive(Clone, Debug)]
@@ -33,7 +47,21 @@ pub struct ModuleMap {
     pub component: u32,
     pub tasks: Vec<TaskMap>,
     pub ports: Vec<PortMap>,
+    /// The ids fields, in order.
+    pub ids: Vec<IdsField>,
     pub services: Vec<ServiceMap>,
+}
+
+/// An ids field of a module.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct IdsField {
+    pub name: String,
+    /// Index of the field among the module atom's variables.
+    pub var: u32,
+    /// Its slot in the state.
+    pub slot: u32,
+    pub lo: i64,
+    pub hi: i64,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -91,9 +119,30 @@ pub struct CodelMap {
     pub fail: u32,
     pub yields: Vec<YieldMap>,
     pub throws: Vec<String>,
+    /// The out ports it writes.
     pub writes: Vec<String>,
+    /// The ids fields it writes, in the module's order. A step of [`CodelMap::run`] picks
+    /// one transition of the module's component among [`CodelMap::ids_transitions`]: the
+    /// one for the values written ([`CodelMap::ids_transition`]).
+    pub ids: Vec<IdsWrite>,
+    /// The module atom's transitions that write the ids (empty if the codel writes none).
+    pub ids_transitions: Range<u32>,
     /// What must hold for the codel to run; the failed ones say why it is held.
     pub holds: Vec<Condition>,
+}
+
+/// An ids field a codel writes (docs/genom.md, "Codels that write ids").
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct IdsWrite {
+    pub name: String,
+    /// Index of the field among the module atom's variables.
+    pub var: u32,
+    /// Its slot in the state.
+    pub slot: u32,
+    pub lo: i64,
+    pub hi: i64,
+    /// How many transitions apart two consecutive values of this field are.
+    pub stride: u32,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -136,8 +185,8 @@ pub enum Reason {
     Connector,
 }
 
-impl std::fmt::Display for Reason {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl core::fmt::Display for Reason {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Reason::AlreadyRequested => f.write_str("already requested or active"),
             Reason::After { service } => write!(f, "after {service}"),
@@ -187,6 +236,20 @@ impl CodelMap {
         failed(&self.holds, system, state)
     }
 
+    /// The module transition that writes `value(k)` into the `k`-th field of
+    /// [`CodelMap::ids`]; `None` if a value is outside its field's range.
+    pub fn ids_transition(&self, mut value: impl FnMut(usize) -> i64) -> Option<u32> {
+        let mut t = self.ids_transitions.start;
+        for (k, f) in self.ids.iter().enumerate() {
+            let v = value(k);
+            if v < f.lo || v > f.hi {
+                return None;
+            }
+            t += (v - f.lo) as u32 * f.stride;
+        }
+        Some(t)
+    }
+
     /// The yield a transition of the activity's atom takes.
     pub fn yield_of(&self, transition: u32) -> Option<&YieldMap> {
         self.yields
@@ -207,223 +270,4 @@ fn failed<'c>(
         }
     }
     Ok(out)
-}
-
-// ---------------------------------------------------------------------------------------
-// The recipe: the same, by names, as the expansion writes it.
-
-#[derive(Clone, Debug, Default)]
-pub(crate) struct Recipe {
-    pub tick: String,
-    pub modules: Vec<RecipeModule>,
-    pub idle: Option<String>,
-}
-
-#[derive(Clone, Debug)]
-pub(crate) struct RecipeModule {
-    pub name: String,
-    pub tasks: Vec<(String, i64)>,
-    /// Port names and their age caps, for ports whose age is tracked.
-    pub ports: Vec<(String, Option<i64>)>,
-    pub services: Vec<RecipeService>,
-}
-
-#[derive(Clone, Debug)]
-pub(crate) struct RecipeService {
-    pub name: String,
-    pub kind: ServiceKind,
-    pub task: Option<usize>,
-    pub component: Option<String>,
-    pub request: String,
-    pub owned_by_model: bool,
-    pub refusals: Vec<RecipeCondition>,
-    pub interrupts: Vec<String>,
-    pub codels: Vec<RecipeCodel>,
-}
-
-#[derive(Clone, Debug)]
-pub(crate) struct RecipeCodel {
-    pub state: String,
-    pub run: String,
-    pub fail: String,
-    /// The yields as written, in order: the transitions of the codel's port from each
-    /// source location are generated in this order.
-    pub yields: Vec<String>,
-    /// The codel runs from `ether` (it is `start`) and/or from its own location.
-    pub from_ether: bool,
-    pub from_location: bool,
-    pub throws: Vec<String>,
-    pub writes: Vec<String>,
-    pub holds: Vec<RecipeCondition>,
-}
-
-#[derive(Clone, Debug)]
-pub(crate) struct RecipeCondition {
-    pub reason: Reason,
-    /// The condition as an expression of the expanded model.
-    pub text: String,
-    /// The same, to compile (its span leads back to the user's text it holds, if any).
-    pub compiled: Text,
-}
-
-/// Something in the recipe that the compiled system lacks: a bug of the expansion.
-#[derive(Debug)]
-pub(crate) struct MissingName(pub String);
-
-impl Recipe {
-    /// The condition texts, in the order [`Recipe::resolve`] expects them compiled.
-    pub fn condition_texts(&self) -> Vec<Text> {
-        let mut out = Vec::new();
-        for m in &self.modules {
-            for s in &m.services {
-                out.extend(s.refusals.iter().map(|c| c.compiled.clone()));
-                for c in &s.codels {
-                    out.extend(c.holds.iter().map(|h| h.compiled.clone()));
-                }
-            }
-        }
-        if let Some(i) = &self.idle {
-            out.push(Text::from(i.as_str()));
-        }
-        out
-    }
-
-    /// Resolves names into `system`'s indices; `exprs` are the compiled
-    /// [`Recipe::condition_texts`].
-    pub fn resolve(
-        &self,
-        system: &System,
-        exprs: Vec<eval::Expr>,
-    ) -> Result<GenomMap, MissingName> {
-        let missing = |what: &str| MissingName(what.to_string());
-        let mut exprs = exprs.into_iter();
-        let mut next = |text: &str| exprs.next().ok_or_else(|| missing(text));
-        let interaction = |name: &str| system.interaction_index(name).ok_or_else(|| missing(name));
-        let component = |name: &str| system.component_index(name).ok_or_else(|| missing(name));
-        let mut modules = Vec::new();
-        for m in &self.modules {
-            let mc = component(&m.name)?;
-            let atom = system.atom_of(mc);
-            let mut ports = Vec::new();
-            for (p, cap) in &m.ports {
-                let age = match cap {
-                    None => None,
-                    Some(cap) => {
-                        let var = atom
-                            .var_index(&super::names::age_var(p))
-                            .ok_or_else(|| missing(p))?;
-                        Some(AgeMap {
-                            slot: system.components[mc as usize].var_slot(var),
-                            cap: *cap,
-                        })
-                    }
-                };
-                ports.push(PortMap {
-                    name: p.clone(),
-                    age,
-                });
-            }
-            let mut services = Vec::new();
-            for s in &m.services {
-                let mut refusals = Vec::new();
-                for c in &s.refusals {
-                    refusals.push(Condition {
-                        reason: c.reason.clone(),
-                        text: c.text.clone(),
-                        expr: next(&c.text)?,
-                    });
-                }
-                let comp = match &s.component {
-                    Some(c) => Some(component(c)?),
-                    None => None,
-                };
-                let mut codels = Vec::new();
-                for c in &s.codels {
-                    let mut holds = Vec::new();
-                    for h in &c.holds {
-                        holds.push(Condition {
-                            reason: h.reason.clone(),
-                            text: h.text.clone(),
-                            expr: next(&h.text)?,
-                        });
-                    }
-                    let ac = comp.ok_or_else(|| missing(&c.state))?;
-                    let atom = system.atom_of(ac);
-                    let port = atom.port_index(&c.state).ok_or_else(|| missing(&c.state))?;
-                    let mut sources = Vec::new();
-                    if c.from_ether {
-                        sources.push(
-                            atom.location_index(super::check::ETHER)
-                                .ok_or_else(|| missing("ether"))?,
-                        );
-                    }
-                    if c.from_location {
-                        sources.push(
-                            atom.location_index(&c.state)
-                                .ok_or_else(|| missing(&c.state))?,
-                        );
-                    }
-                    let yields = c
-                        .yields
-                        .iter()
-                        .enumerate()
-                        .map(|(k, y)| {
-                            let transitions = sources
-                                .iter()
-                                .map(|&l| atom.transitions_from(l, Some(port)).start + k as u32)
-                                .collect();
-                            YieldMap {
-                                target: y.clone(),
-                                transitions,
-                            }
-                        })
-                        .collect();
-                    codels.push(CodelMap {
-                        state: c.state.clone(),
-                        run: interaction(&c.run)?,
-                        fail: interaction(&c.fail)?,
-                        yields,
-                        throws: c.throws.clone(),
-                        writes: c.writes.clone(),
-                        holds,
-                    });
-                }
-                services.push(ServiceMap {
-                    name: s.name.clone(),
-                    kind: s.kind,
-                    task: s.task,
-                    component: comp,
-                    request: interaction(&s.request)?,
-                    owned_by_model: s.owned_by_model,
-                    refusals,
-                    interrupts: s.interrupts.clone(),
-                    codels,
-                });
-            }
-            modules.push(ModuleMap {
-                name: m.name.clone(),
-                component: mc,
-                tasks: m
-                    .tasks
-                    .iter()
-                    .map(|(n, p)| TaskMap {
-                        name: n.clone(),
-                        period: u32::try_from(*p).unwrap_or(u32::MAX),
-                    })
-                    .collect(),
-                ports,
-                services,
-            });
-        }
-        let idle = match &self.idle {
-            Some(i) => Some(next(i)?),
-            None => None,
-        };
-        Ok(GenomMap {
-            tick: interaction(&self.tick)?,
-            tick_ms: system.tick_ms,
-            modules,
-            idle,
-        })
-    }
 }

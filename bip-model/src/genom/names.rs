@@ -56,6 +56,11 @@ pub fn codel_connector(m: &str, s: &str, state: &str) -> String {
     format!("{m}_{s}_{state}")
 }
 
+/// The port of module atom through which codel `state` of activity `s` writes ids.
+pub fn ids_port(s: &str, state: &str) -> String {
+    format!("write_{s}_{state}")
+}
+
 /// The connector of codel `state` ending with one of its exceptions.
 pub fn fail_connector(m: &str, s: &str, state: &str) -> String {
     format!("{m}_{s}_{state}_fail")

@@ -1,6 +1,7 @@
 //! The GenoM layer of the file format (MODEL.md section 4): modules and constraints, as
 //! written. `genom::check` validates them; `genom::build` expands them into BIP core.
 
+pub use crate::genom::map::ServiceKind;
 use crate::source::ConstExpr;
 use crate::syntax::{Text, VarDef};
 
@@ -42,16 +43,6 @@ pub struct PortDef {
     pub name: Text,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub doc: Option<Text>,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
-pub enum ServiceKind {
-    /// Runs at once, in the control task, when requested.
-    Function,
-    /// Like a function; in GenoM it sets or reads ids fields.
-    Attribute,
-    /// Runs an automaton of codels in an execution task.
-    Activity,
 }
 
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]

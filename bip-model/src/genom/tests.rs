@@ -494,3 +494,113 @@ fn ids_are_readable_and_attributes_are_requests() {
     assert!(!ex.any(&sys, "active(m.S)"));
     assert_eq!(ex.trace(ex.deadlocks[0]), ["m_Set_request", "m_S_request"]);
 }
+
+#[test]
+fn a_codel_that_writes_ids_takes_every_value_and_errors_write_nothing() {
+    let modules = r#"(name: "m", ids: [(name: "speed", ty: Int(0, 3), init: 1), (name: "on", ty: Bool)],
+        tasks: [(name: "t", period: 1)], ports: [(name: "p")], services: [
+        (name: "S", kind: Activity, task: "t", codels: [
+            (state: "start", yields: ["pause::main"]),
+            (state: "main",  yields: ["pause::main", "ether"], writes: ["speed", "p", "on"]),
+        ]),
+    ])"#;
+    let rest = r#"properties: [DeadlockFree, Reachable(name: "written", expr: "age(m.p) == 0")]"#;
+    let sys = load(&model("ids_w", modules, rest));
+    let ex = explore(&sys);
+    // every value of both fields is reached, and only the main codel's steps change them
+    for v in 0..=3 {
+        assert!(
+            ex.any(&sys, &format!("m.speed == {v} && m.on")),
+            "speed {v}"
+        );
+        assert!(
+            ex.any(&sys, &format!("m.speed == {v} && !m.on")),
+            "speed {v}"
+        );
+    }
+    for s in &ex.states {
+        for (st, next) in sys.successors(s).expect("no range error") {
+            let name = sys.label_name(st.label);
+            let changed = s
+                .slots()
+                .iter()
+                .zip(next.slots())
+                .enumerate()
+                .any(|(slot, (a, b))| {
+                    a != b && ["m.speed", "m.on"].contains(&sys.slot_name(slot as u32).as_str())
+                });
+            if changed {
+                assert_eq!(
+                    name, "m_S_main",
+                    "only the codel's normal outcomes write ids"
+                );
+            }
+        }
+    }
+    // the map: one run step per yield and combination of values, and the transition for
+    // given values is the one whose step writes them
+    let map = sys.genom.as_ref().expect("a GenoM layer");
+    let codel = map.codel("m", "S", "main").expect("bound");
+    assert_eq!(
+        codel
+            .ids
+            .iter()
+            .map(|f| (f.name.as_str(), f.lo, f.hi, f.stride))
+            .collect::<Vec<_>>(),
+        [("speed", 0, 3, 2), ("on", 0, 1, 1)]
+    );
+    assert_eq!(codel.ids_transitions.len(), 8);
+    assert_eq!(codel.ids_transition(|k| [4, 0][k]), None);
+    let module = map.module("m").expect("module").component;
+    let t = codel.ids_transition(|k| [2, 1][k]).expect("in range");
+    let running = ex
+        .states
+        .iter()
+        .find(|s| holds_in(&sys, "m.S@main && !m_S.paused", s))
+        .expect("the main codel runs");
+    let (_, next) = sys
+        .successors(running)
+        .expect("no range error")
+        .into_iter()
+        .find(|(st, _)| {
+            st.picks
+                .iter()
+                .any(|p| p.component == module && p.transition == t)
+        })
+        .expect("a step writes those values");
+    assert!(holds_in(
+        &sys,
+        "m.speed == 2 && m.on && age(m.p) == 0",
+        &next
+    ));
+    // the start codel and the error path write nothing: they have no module pick
+    assert!(map.codel("m", "S", "start").expect("bound").ids.is_empty());
+}
+
+#[test]
+fn writes_naming_ids_are_checked() {
+    let bad = |writes: &str, extra: &str| {
+        let text = model(
+            "bad",
+            &format!(
+                r#"(name: "m", ids: [(name: "x", ty: Int(0, 2000)), (name: "p", ty: Bool), (name: "y", ty: Int(0, 600))],
+                tasks: [(name: "t", period: 1)], ports: [(name: "p")], services: [
+                (name: "S", kind: Activity, task: "t", codels: [
+                    (state: "start", yields: ["ether"], writes: [{writes}]),
+                ]),
+                {extra}
+            ])"#
+            ),
+            "",
+        );
+        load_str("bad.ron", &text)
+            .map(|_| String::new())
+            .unwrap_or_else(|e| e.summary())
+    };
+    assert!(bad(r#""x""#, "").contains("1024"), "{}", bad(r#""x""#, ""));
+    assert!(bad(r#""y""#, "").is_empty());
+    assert!(bad(r#""y", "p""#, "").contains("both an out port and an ids field"));
+    assert!(bad(r#""z""#, "").contains("no out port or ids field `z`"));
+    assert!(bad(r#""y""#, r#"(name: "write_S_start", kind: Function)"#)
+        .contains("cannot be named `write_S_start`"));
+}

@@ -1,0 +1,166 @@
+//! The engine's speed on robots/rover.ron, by hand (docs/performance.md, "Engine"):
+//!
+//!     cargo bench -p bip-engine --bench engine
+//!
+//! 1. Gated steps per second on one core with empty codels: every codel returns its first
+//!    yield at once, so the time is the engine's own (gating, choice, commit, ticks).
+//! 2. The engine's overhead on a codel that computes for about 2 µs: the time of the run
+//!    against the time the same computations take alone, called as many times.
+//!
+//! The engine runs on a virtual clock, so ticks come as soon as nothing else is left to
+//! do: the run measures the engine, not the rover's 100 ms period.
+
+use std::hint::black_box;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::{Duration, Instant};
+
+use bip_engine::{Engine, EngineBuilder, Next, Until};
+use bip_model::System;
+
+const WARM_UP: u64 = 20_000;
+
+fn rover() -> System {
+    let p = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/rover.ron");
+    match bip_model::load_file(std::path::Path::new(p)) {
+        Ok(s) => s,
+        Err(e) => panic!("{}", e.summary()),
+    }
+}
+
+/// Binds every codel of the rover to `body` followed by the codel's first yield.
+fn bind_all(system: &System, body: fn()) -> EngineBuilder {
+    let mut b = Engine::builder(system.clone()).event_capacity(1024);
+    let Some(map) = &system.genom else {
+        panic!("the rover has a GenoM layer")
+    };
+    for m in &map.modules {
+        for s in &m.services {
+            for c in &s.codels {
+                let first: &'static str = Box::leak(c.yields[0].target.clone().into_boxed_str());
+                b = b.codel((&m.name, &s.name, &c.state), move |_| {
+                    body();
+                    Next::Yield(first)
+                });
+            }
+        }
+    }
+    b
+}
+
+/// The engine on the rover with six activities running (the battery's Guard holds the
+/// motion now and then), warmed up.
+fn running(system: &System, body: fn()) -> Engine {
+    let mut e = bind_all(system, body).build().expect("builds");
+    for (m, s) in [
+        ("rflex", "Init"),
+        ("rflex", "TrackSpeed"),
+        ("sick", "Scan"),
+        ("pom", "Track"),
+        ("aspect", "Build"),
+        ("heating", "Heat"),
+    ] {
+        e.request(m, s, ()).expect("queued");
+    }
+    e.run_until(Until::Steps(WARM_UP)).expect("runs");
+    let _ = e.events().count();
+    e
+}
+
+/// Runs `steps` steps (draining events as a controller would); the time and the codels
+/// run.
+fn timed(e: &mut Engine, steps: u64) -> (Duration, u64) {
+    let codels0 = e.stats().codels;
+    let t = Instant::now();
+    let mut left = steps;
+    while left > 0 {
+        let n = left.min(10_000);
+        e.run_until(Until::Steps(n)).expect("runs");
+        black_box(e.events().count());
+        left -= n;
+    }
+    (t.elapsed(), e.stats().codels - codels0)
+}
+
+fn empty() {}
+
+/// Iterations of `work`'s loop: calibrated so that a call takes about 2 µs.
+static ITERATIONS: AtomicU32 = AtomicU32::new(1000);
+
+/// About 2 µs of arithmetic, that the compiler cannot skip.
+fn work() {
+    let mut x = black_box(0x9e37_79b9_7f4a_7c15u64);
+    for _ in 0..ITERATIONS.load(Ordering::Relaxed) {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+    }
+    black_box(x);
+}
+
+/// The time of `n` calls of `work` alone.
+fn work_alone(n: u64) -> Duration {
+    let t = Instant::now();
+    for _ in 0..n {
+        work();
+    }
+    t.elapsed()
+}
+
+fn calibrate(target: Duration) {
+    let n = 20_000;
+    work_alone(n);
+    let per_call = work_alone(n).as_secs_f64() / n as f64;
+    let k = ITERATIONS.load(Ordering::Relaxed) as f64 * target.as_secs_f64() / per_call;
+    ITERATIONS.store(k.round().max(1.0) as u32, Ordering::Relaxed);
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+const RUNS: usize = 5;
+
+fn main() {
+    let system = rover();
+    println!("rover.ron, one thread, virtual clock; median of {RUNS} runs");
+
+    // 1. empty codels
+    let steps = 2_000_000;
+    let mut rates = Vec::new();
+    let mut codel_share = 0.0;
+    for _ in 0..RUNS {
+        let mut e = running(&system, empty);
+        let (t, codels) = timed(&mut e, steps);
+        rates.push(steps as f64 / t.as_secs_f64());
+        codel_share = codels as f64 / steps as f64;
+    }
+    let rate = median(rates);
+    println!(
+        "empty codels: {:.2} M gated steps/s ({:.0} ns per step; {:.0}% of the steps are codels, the rest ticks and requests)",
+        rate / 1e6,
+        1e9 / rate,
+        codel_share * 100.0
+    );
+
+    // 2. codels of about 2 µs
+    calibrate(Duration::from_micros(2));
+    let steps = 200_000;
+    let mut overheads = Vec::new();
+    let mut per_codel = Vec::new();
+    let mut work_us = 0.0;
+    for _ in 0..RUNS {
+        let mut e = running(&system, work);
+        let (t, codels) = timed(&mut e, steps);
+        let alone = work_alone(codels);
+        work_us = alone.as_secs_f64() * 1e6 / codels as f64;
+        let extra = t.as_secs_f64() - alone.as_secs_f64();
+        overheads.push(extra / alone.as_secs_f64());
+        per_codel.push(extra * 1e9 / codels as f64);
+    }
+    println!(
+        "codels of {work_us:.2} µs: engine overhead {:.1}% of the codels' time ({:.0} ns per codel run, ticks included)",
+        median(overheads) * 100.0,
+        median(per_codel)
+    );
+}

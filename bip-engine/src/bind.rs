@@ -1,0 +1,299 @@
+//! The engine's tables, read once from the compiled system and its GenoM map: what each
+//! interaction is to the engine (a codel, a request, a tick, another step), and per codel
+//! and service what the engine needs to run it, reply and explain.
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use alloc::sync::Arc;
+
+use bip_model::genom::{CodelMap, Condition};
+use bip_model::{Role, System};
+
+use crate::codel::{CodelInfo, Field};
+use crate::error::BuildError;
+use crate::event::{Reasons, Ticket};
+
+/// What an interaction is to the engine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum InterKind {
+    /// A codel's normal outcomes (`fail: false`) or error path (`fail: true`).
+    Codel { codel: u32, fail: bool },
+    /// A service's request, sent by the engine on behalf of a client.
+    Request { service: u32 },
+    /// A `Time` step: fired once per tick.
+    Time,
+    /// Progress the model takes by itself (connectors of yours, model-owned requests).
+    Progress,
+    /// A stimulus from outside that is not a GenoM request: fired only when asked
+    /// ([`crate::Engine::step_as`]).
+    Environment,
+}
+
+/// What a port of an activity's atom does in its life cycle (docs/genom.md, section 2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum PortKind {
+    Request,
+    Interrupt,
+    Abort,
+    Tick,
+    Run(u32),
+    Fail(u32),
+}
+
+pub(crate) struct CodelTable {
+    pub map: CodelMap,
+    pub service: u32,
+    /// The module's component (where the ids are).
+    pub module_component: u32,
+    /// Its exceptions, shared with the outcomes that name them.
+    pub throws: Vec<Arc<str>>,
+    pub info: CodelInfo,
+    /// For each of `map.ids`, its index among the module's fields.
+    pub ids_field: Vec<usize>,
+    /// Its task's period in ticks.
+    pub period_ticks: u64,
+}
+
+pub(crate) struct ServiceTable {
+    pub module: String,
+    pub name: String,
+    /// The activity's task.
+    #[cfg_attr(not(feature = "std"), allow(dead_code))]
+    pub task: Option<String>,
+    pub request: u32,
+    pub owned: bool,
+    pub refusals: Vec<Condition>,
+    pub activity: Option<ActivityTable>,
+}
+
+pub(crate) struct ActivityTable {
+    pub component: u32,
+    pub loc_slot: u32,
+    pub ether: u32,
+    pub req_slot: u32,
+    pub paused_slot: u32,
+    pub stopping_slot: Option<u32>,
+    /// Per port of the atom.
+    pub port_kind: Vec<Option<PortKind>>,
+    /// Per location, the codel that runs from there (`start` from `ether`).
+    pub codel_at: Vec<Option<u32>>,
+    // the requests it serves
+    pub current: Option<Ticket>,
+    pub pending: Option<Ticket>,
+    pub current_args: Option<Box<dyn core::any::Any + Send>>,
+    pub pending_args: Option<Box<dyn core::any::Any + Send>>,
+    /// The held codel last reported, and why.
+    pub held: Option<(u32, Reasons)>,
+}
+
+pub(crate) struct Tables {
+    pub kind: Vec<InterKind>,
+    pub codels: Vec<CodelTable>,
+    pub services: Vec<ServiceTable>,
+    /// Per component, the service whose activity it is.
+    pub activity_of: Vec<Option<u32>>,
+    /// (module, port) per port store entry.
+    pub ports: Vec<(String, String)>,
+}
+
+impl Tables {
+    pub fn new(system: &System) -> Result<Tables, BuildError> {
+        let mut kind: Vec<InterKind> = system
+            .interactions
+            .iter()
+            .map(|i| match system.connectors[i.connector as usize].role {
+                Role::Time => InterKind::Time,
+                Role::Environment => InterKind::Environment,
+                Role::Progress => InterKind::Progress,
+            })
+            .collect();
+        let mut t = Tables {
+            kind: Vec::new(),
+            codels: Vec::new(),
+            services: Vec::new(),
+            activity_of: vec![None; system.components.len()],
+            ports: Vec::new(),
+        };
+        let Some(map) = &system.genom else {
+            t.kind = kind;
+            return Ok(t);
+        };
+        for m in &map.modules {
+            let fields: Vec<Field> = m
+                .ids
+                .iter()
+                .map(|f| Field {
+                    name: f.name.clone(),
+                    slot: f.slot,
+                    lo: f.lo,
+                    hi: f.hi,
+                })
+                .collect();
+            if fields.len() > 64 {
+                return Err(BuildError::TooMany(
+                    format!("module {}", m.name),
+                    "ids fields",
+                ));
+            }
+            let port_base = t.ports.len();
+            for p in &m.ports {
+                t.ports.push((m.name.clone(), p.name.clone()));
+            }
+            for s in &m.services {
+                let sid = t.services.len() as u32;
+                if s.refusals.len() > 64 {
+                    return Err(BuildError::TooMany(
+                        format!("service {}.{}", m.name, s.name),
+                        "refusal conditions",
+                    ));
+                }
+                kind[s.request as usize] = if s.owned_by_model {
+                    kind[s.request as usize]
+                } else {
+                    InterKind::Request { service: sid }
+                };
+                let period_ticks = s
+                    .task
+                    .and_then(|k| m.tasks.get(k))
+                    .map_or(1, |task| u64::from(task.period));
+                let mut activity = None;
+                if let Some(comp) = s.component {
+                    t.activity_of[comp as usize] = Some(sid);
+                    activity = Some(activity_table(system, comp, t.codels.len() as u32, s)?);
+                }
+                for c in &s.codels {
+                    let cid = t.codels.len() as u32;
+                    if c.holds.len() > 64 {
+                        return Err(BuildError::TooMany(
+                            format!("codel ({}, {}, {})", m.name, s.name, c.state),
+                            "hold conditions",
+                        ));
+                    }
+                    kind[c.run as usize] = InterKind::Codel {
+                        codel: cid,
+                        fail: false,
+                    };
+                    kind[c.fail as usize] = InterKind::Codel {
+                        codel: cid,
+                        fail: true,
+                    };
+                    let ids_field: Vec<usize> = c
+                        .ids
+                        .iter()
+                        .map(|f| fields.iter().position(|x| x.slot == f.slot).unwrap_or(0))
+                        .collect();
+                    let writable = ids_field.iter().fold(0u64, |acc, &k| acc | 1 << k);
+                    let ports = c
+                        .writes
+                        .iter()
+                        .filter_map(|w| {
+                            m.ports
+                                .iter()
+                                .position(|p| &p.name == w)
+                                .map(|k| (port_base + k, w.clone()))
+                        })
+                        .collect();
+                    t.codels.push(CodelTable {
+                        map: c.clone(),
+                        service: sid,
+                        module_component: m.component,
+                        throws: c.throws.iter().map(|x| Arc::from(x.as_str())).collect(),
+                        info: CodelInfo {
+                            module: m.name.clone(),
+                            service: s.name.clone(),
+                            state: c.state.clone(),
+                            fields: fields.clone(),
+                            writable,
+                            ports,
+                        },
+                        ids_field,
+                        period_ticks,
+                    });
+                }
+                t.services.push(ServiceTable {
+                    module: m.name.clone(),
+                    name: s.name.clone(),
+                    task: s.task.and_then(|k| m.tasks.get(k)).map(|t| t.name.clone()),
+                    request: s.request,
+                    owned: s.owned_by_model,
+                    refusals: s.refusals.clone(),
+                    activity,
+                });
+            }
+        }
+        t.kind = kind;
+        Ok(t)
+    }
+
+    pub fn codel_index(&self, module: &str, service: &str, state: &str) -> Option<usize> {
+        self.codels.iter().position(|c| {
+            c.info.module == module && c.info.service == service && c.info.state == state
+        })
+    }
+
+    pub fn service_index(&self, module: &str, service: &str) -> Option<usize> {
+        self.services
+            .iter()
+            .position(|s| s.module == module && s.name == service)
+    }
+}
+
+fn activity_table(
+    system: &System,
+    comp: u32,
+    first_codel: u32,
+    s: &bip_model::genom::ServiceMap,
+) -> Result<ActivityTable, BuildError> {
+    let atom = system.atom_of(comp);
+    let c = &system.components[comp as usize];
+    let var = |name: &str| atom.var_index(name).map(|v| c.var_slot(v));
+    let codel_by_state = |state: &str| {
+        s.codels
+            .iter()
+            .position(|k| k.state == state)
+            .map(|k| first_codel + k as u32)
+    };
+    let port_kind = atom
+        .ports
+        .iter()
+        .map(|p| match p.as_str() {
+            "request" => Some(PortKind::Request),
+            "interrupt" => Some(PortKind::Interrupt),
+            "abort" => Some(PortKind::Abort),
+            "tick" => Some(PortKind::Tick),
+            other => match other.strip_suffix("_fail").and_then(codel_by_state) {
+                Some(k) => Some(PortKind::Fail(k)),
+                None => codel_by_state(other).map(PortKind::Run),
+            },
+        })
+        .collect();
+    let codel_at = atom
+        .locations
+        .iter()
+        .map(|l| {
+            if l == "ether" {
+                codel_by_state("start")
+            } else {
+                codel_by_state(l)
+            }
+        })
+        .collect();
+    let missing =
+        || BuildError::UnknownCodel(s.name.clone(), "<activity atom>".into(), "req".into());
+    Ok(ActivityTable {
+        component: comp,
+        loc_slot: c.slot,
+        ether: atom.location_index("ether").ok_or_else(missing)?,
+        req_slot: var("req").ok_or_else(missing)?,
+        paused_slot: var("paused").ok_or_else(missing)?,
+        stopping_slot: var("stopping"),
+        port_kind,
+        codel_at,
+        current: None,
+        pending: None,
+        current_args: None,
+        pending_args: None,
+        held: None,
+    })
+}

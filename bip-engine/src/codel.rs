@@ -1,0 +1,169 @@
+//! Codels: what a codel returns ([`Next`]) and what it sees ([`Ctx`]).
+
+use core::any::Any;
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use crate::ports::PortStore;
+
+/// What a codel returns: where its activity goes next, or an exception.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Next {
+    /// A yield as the model writes it: `"main"`, `"pause::main"` or `"ether"`.
+    Yield(&'static str),
+    /// One of the codel's declared `throws`.
+    Throw(&'static str),
+}
+
+impl Next {
+    /// The activity ends successfully.
+    pub const ETHER: Next = Next::Yield("ether");
+}
+
+/// A codel: a closure over a [`Ctx`]. It must be `Send` so that a task thread can run it.
+pub type CodelFn = Box<dyn FnMut(&mut Ctx<'_>) -> Next + Send>;
+
+/// An ids field of a module.
+#[derive(Clone, Debug)]
+pub(crate) struct Field {
+    pub name: String,
+    pub slot: u32,
+    pub lo: i64,
+    pub hi: i64,
+}
+
+/// What a codel may see and do, fixed when the engine is built.
+#[derive(Clone, Debug)]
+pub(crate) struct CodelInfo {
+    pub module: String,
+    pub service: String,
+    pub state: String,
+    /// The module's ids fields, in order.
+    pub fields: Vec<Field>,
+    /// The fields the codel may write (bit `k` for field `k`).
+    pub writable: u64,
+    /// The ports the codel may write: (index in the port store, name).
+    pub ports: Vec<(usize, String)>,
+}
+
+/// Something a codel did that the model does not allow; the engine makes it a fault.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum CtxFault {
+    IdsWrite(String),
+    PortWrite(String),
+}
+
+/// The codel's view: its module's ids (staged: the engine commits them with the codel's
+/// step, if the step is a normal outcome), ports, the request's arguments, the time.
+pub struct Ctx<'a> {
+    pub(crate) info: &'a CodelInfo,
+    pub(crate) ids: &'a mut [i64],
+    pub(crate) written: &'a mut u64,
+    pub(crate) fault: &'a mut Option<CtxFault>,
+    pub(crate) ports: &'a mut PortStore,
+    pub(crate) args: Option<&'a (dyn Any + Send)>,
+    pub(crate) now_us: u64,
+    pub(crate) tick: u64,
+}
+
+impl Ctx<'_> {
+    pub fn module(&self) -> &str {
+        &self.info.module
+    }
+
+    pub fn service(&self) -> &str {
+        &self.info.service
+    }
+
+    /// The codel state being run (`"start"`, `"main"`, ...).
+    pub fn state(&self) -> &str {
+        &self.info.state
+    }
+
+    fn field(&self, name: &str) -> Option<usize> {
+        self.info.fields.iter().position(|f| f.name == name)
+    }
+
+    /// The value of an ids field of the module (as this codel left it so far); `None` if
+    /// the module has no such field. Booleans are 0 and 1.
+    pub fn get(&self, field: &str) -> Option<i64> {
+        self.field(field).map(|k| self.ids[k])
+    }
+
+    pub fn get_bool(&self, field: &str) -> Option<bool> {
+        self.get(field).map(|v| v != 0)
+    }
+
+    /// Writes an ids field. The codel must list it in `writes`, and the value must be in
+    /// the field's range when the codel returns; otherwise the codel is faulty and its
+    /// activity takes its error path (no ids are written then).
+    pub fn set(&mut self, field: &str, value: i64) {
+        match self.field(field) {
+            Some(k) if self.info.writable >> k & 1 == 1 => {
+                self.ids[k] = value;
+                *self.written |= 1 << k;
+            }
+            _ => {
+                if self.fault.is_none() {
+                    *self.fault = Some(CtxFault::IdsWrite(field.to_string()));
+                }
+            }
+        }
+    }
+
+    pub fn set_bool(&mut self, field: &str, value: bool) {
+        self.set(field, i64::from(value));
+    }
+
+    /// The data last written on port `port` of module `module`, if any and of type `T`.
+    pub fn port<T: Any>(&self, module: &str, port: &str) -> Option<&T> {
+        self.ports.get(module, port)
+    }
+
+    /// The data of an out port of this codel's module that it lists in `writes`, created
+    /// with `T::default()` on first use, for the codel to update in place. Any other port,
+    /// or data of another type than the port holds, is a fault (and gives `None`).
+    ///
+    /// Port data is written in place: the model restarts the port's age only on a normal
+    /// outcome, so a reader that checks `age` (a `Fresh` constraint) never relies on data
+    /// a failed codel left half written.
+    pub fn port_mut<T: Any + Send + Default>(&mut self, port: &str) -> Option<&mut T> {
+        let slot = self
+            .info
+            .ports
+            .iter()
+            .find(|(_, name)| name == port)
+            .map(|&(k, _)| k);
+        let got = match slot {
+            Some(k) => self.ports.get_mut_or_default::<T>(k),
+            None => None,
+        };
+        if got.is_none() && self.fault.is_none() {
+            *self.fault = Some(CtxFault::PortWrite(port.to_string()));
+        }
+        got
+    }
+
+    /// Replaces the data of an out port this codel writes (see [`Ctx::port_mut`]).
+    pub fn write_port<T: Any + Send + Default>(&mut self, port: &str, value: T) {
+        if let Some(p) = self.port_mut::<T>(port) {
+            *p = value;
+        }
+    }
+
+    /// The arguments of the request the activity serves, if they are a `T`.
+    pub fn args<T: Any>(&self) -> Option<&T> {
+        self.args.and_then(|a| a.downcast_ref())
+    }
+
+    /// The engine's time, in microseconds since it started.
+    pub fn now_us(&self) -> u64 {
+        self.now_us
+    }
+
+    /// Ticks fired so far.
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+}

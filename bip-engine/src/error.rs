@@ -1,0 +1,55 @@
+//! Errors of building and running an engine.
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use bip_model::RangeError;
+
+/// The engine cannot be built as asked.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum BuildError {
+    #[error("codel ({0}, {1}, {2}) is not bound; bind it, or ask for default codels")]
+    Unbound(String, String, String),
+    #[error("the model has no codel ({0}, {1}, {2})")]
+    UnknownCodel(String, String, String),
+    #[error("codel ({0}, {1}, {2}) is bound twice")]
+    BoundTwice(String, String, String),
+    #[error("the model has no GenoM layer, so it has no codel to bind")]
+    NoGenomLayer,
+    #[error("{0} has more than 64 {1}; the engine reports them in a 64-bit set")]
+    TooMany(String, &'static str),
+    #[error("the initial state has a range error: {0}")]
+    Range(RangeError),
+    #[error("threads for tasks need the `std` feature")]
+    NoThreads,
+}
+
+/// The engine cannot go on: the model computed a value outside a range (which `bip
+/// verify` reports as a `RangeErrors` violation), or it stopped after such an error.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum EngineError {
+    #[error("range error: {0}")]
+    Range(RangeError),
+    #[error("the engine stopped after a range error: {0}")]
+    Stopped(RangeError),
+}
+
+/// A request the engine cannot even queue (the model's refusals come as replies).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum RequestError {
+    #[error("the model has no service {0}.{1}")]
+    UnknownService(String, String),
+    #[error("requests for {0}.{1} come from a component of the model, not from outside")]
+    OwnedByModel(String, String),
+}
+
+/// [`crate::Engine::step_as`] could not take the step.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum StepAsError {
+    #[error("the model does not allow this step now")]
+    NotAllowed,
+    #[error("the codel's outcome leads to another step than the one asked")]
+    Diverged,
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+}

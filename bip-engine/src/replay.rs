@@ -1,0 +1,252 @@
+//! Replaying a trace through the engine: each step must be one the engine allows at that
+//! moment ([`Engine::step_as`]: a codel step runs the codel, a request is served as a
+//! request, a tick is a tick), and the trace's verdict is checked at its end: the deadlock
+//! is reached (with the codels held and why), the invariant fails, the witness holds.
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use bip_model::{Liveness, LivenessChecker, PropertyKind, Steps, System, Trace, Verdict};
+
+use crate::engine::{DefaultCodels, Engine, Stepped};
+use crate::error::{BuildError, StepAsError};
+
+/// What the replay of one step did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ReplayedStep {
+    /// The step's name in the trace.
+    pub name: String,
+    /// What the engine did with it.
+    pub stepped: Stepped,
+}
+
+/// A trace step the engine did not take.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Refused {
+    /// 1-based.
+    pub step: usize,
+    pub name: String,
+    pub message: String,
+    /// Why, when the step is a codel or a request of the GenoM layer: the conditions that
+    /// fail now.
+    pub reasons: Vec<String>,
+}
+
+/// How the trace's verdict looks at its end.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum End {
+    /// A plain recording: nothing to check.
+    Recording,
+    /// The last state is a deadlock (no progress now or after ticks); `held` lists the
+    /// activities with work outstanding, the codel each runs next, and the conditions
+    /// that hold it.
+    Deadlock { held: Vec<String> },
+    /// The invariant fails in the last state.
+    Violation { property: String },
+    /// The reachability property holds in the last state.
+    Witness { property: String },
+    /// A step from the last state has a range error.
+    RangeError { message: String },
+    /// The verdict does not show at the end of the trace.
+    NotConfirmed { verdict: String, why: String },
+}
+
+/// The result of [`replay`].
+pub struct Replay {
+    pub steps: Vec<ReplayedStep>,
+    /// The first step the engine did not take (the replay stops there).
+    pub refused: Option<Refused>,
+    /// The verdict's check at the end (only if every step was taken).
+    pub end: Option<End>,
+    /// The engine after the replay (its state, its recording).
+    pub engine: Engine,
+}
+
+/// Replays `trace` on `system` through an engine with default codels (each does what the
+/// trace's step says).
+pub fn replay(system: System, trace: &Trace) -> Result<Replay, BuildError> {
+    let (path, error) = trace.replay_prefix(&system);
+    let mut engine = Engine::builder(system)
+        .default_codels(DefaultCodels::FirstYield)
+        .record(trace.steps.len())
+        .build()?;
+    let mut steps = Vec::with_capacity(path.len());
+    for (k, (step, state)) in path.iter().enumerate() {
+        let name = engine.system().label_name(step.label);
+        match engine.step_as(step.as_step()) {
+            Ok(stepped) if engine.state() == state => steps.push(ReplayedStep { name, stepped }),
+            Ok(_) => {
+                return Ok(refused_at(
+                    engine,
+                    steps,
+                    k + 1,
+                    name,
+                    "the engine's step leads elsewhere".into(),
+                ));
+            }
+            Err(e) => {
+                let message = match e {
+                    StepAsError::NotAllowed => "the engine does not allow it here".into(),
+                    other => other.to_string(),
+                };
+                return Ok(refused_at(engine, steps, k + 1, name, message));
+            }
+        }
+    }
+    if let Some(e) = error {
+        let name = trace
+            .steps
+            .get(e.step.wrapping_sub(1))
+            .map_or_else(String::new, |s| s.step.clone());
+        let mut r = refused_at(engine, steps, e.step, name.clone(), e.message);
+        if let Some(refused) = &mut r.refused {
+            refused.reasons = reasons_for(&r.engine, &name);
+        }
+        return Ok(r);
+    }
+    let end = check_end(&engine, &trace.verdict);
+    Ok(Replay {
+        steps,
+        refused: None,
+        end: Some(end),
+        engine,
+    })
+}
+
+fn refused_at(
+    engine: Engine,
+    steps: Vec<ReplayedStep>,
+    step: usize,
+    name: String,
+    message: String,
+) -> Replay {
+    Replay {
+        steps,
+        refused: Some(Refused {
+            step,
+            name,
+            message,
+            reasons: Vec::new(),
+        }),
+        end: None,
+        engine,
+    }
+}
+
+/// Why the GenoM step named `name` is not allowed now: a request's failing refusals, a
+/// codel's failing holds.
+fn reasons_for(engine: &Engine, name: &str) -> Vec<String> {
+    let system = engine.system();
+    let state = engine.state();
+    let Some(map) = &system.genom else {
+        return Vec::new();
+    };
+    let Some(i) = system.interaction_index(name) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for m in &map.modules {
+        for s in &m.services {
+            if s.request == i {
+                if let Ok(failed) = s.refused_by(system, state) {
+                    out.extend(failed.iter().map(|c| format!("{} ({})", c.reason, c.text)));
+                }
+            }
+            for c in &s.codels {
+                if c.run == i || c.fail == i {
+                    if let Ok(failed) = c.held_by(system, state) {
+                        out.extend(failed.iter().map(|c| format!("{} ({})", c.reason, c.text)));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+fn check_end(engine: &Engine, verdict: &Verdict) -> End {
+    let system = engine.system();
+    let state = engine.state();
+    let not = |why: &str| End::NotConfirmed {
+        verdict: format!("{verdict:?}"),
+        why: why.into(),
+    };
+    match verdict {
+        Verdict::None => End::Recording,
+        Verdict::Deadlock => {
+            let mut steps = Steps::new();
+            let mut checker = LivenessChecker::default();
+            let live = system
+                .enabled_steps(state, &mut steps)
+                .and_then(|()| system.liveness(state, &steps, &mut checker));
+            match live {
+                Ok(Liveness::Deadlock) => {
+                    let held = engine
+                        .outstanding()
+                        .unwrap_or_default()
+                        .into_iter()
+                        .map(|(c, paused, r)| {
+                            let (m, s, st) = engine.codel_name(c);
+                            let why: Vec<String> = engine.hold_texts(c, r).collect();
+                            let wait = if paused {
+                                " (waits for its period)"
+                            } else {
+                                ""
+                            };
+                            if why.is_empty() {
+                                format!("{m}.{s} codel `{st}`{wait}")
+                            } else {
+                                format!("{m}.{s} codel `{st}`{wait}, held by {}", why.join(", "))
+                            }
+                        })
+                        .collect();
+                    End::Deadlock { held }
+                }
+                Ok(Liveness::Unknown) => {
+                    not("the time steps from the last state are too many to follow")
+                }
+                Ok(_) => not("a progress step is enabled in the last state or after ticks"),
+                Err(e) => not(&format!("range error: {e}")),
+            }
+        }
+        Verdict::Violation(name) | Verdict::Witness(name) => {
+            let Some(p) = system.properties.iter().find(|p| &p.name == name) else {
+                return not("the model has no such property");
+            };
+            let expr = match &p.kind {
+                PropertyKind::Invariant(e) | PropertyKind::Reachable(e) => e,
+                PropertyKind::DeadlockFree { .. } => return not("not an invariant"),
+            };
+            match (system.holds(expr, state, name), verdict) {
+                (Ok(false), Verdict::Violation(_)) => End::Violation {
+                    property: name.clone(),
+                },
+                (Ok(true), Verdict::Witness(_)) => End::Witness {
+                    property: name.clone(),
+                },
+                (Ok(_), _) => not("the property evaluates otherwise in the last state"),
+                (Err(e), Verdict::Violation(_)) => End::RangeError {
+                    message: e.to_string(),
+                },
+                (Err(e), _) => not(&format!("range error: {e}")),
+            }
+        }
+        Verdict::RangeError(_) => {
+            let mut steps = Steps::new();
+            if let Err(e) = system.enabled_steps(state, &mut steps) {
+                return End::RangeError {
+                    message: e.to_string(),
+                };
+            }
+            let mut next = state.clone();
+            for s in steps.iter() {
+                if let Err(e) = system.fire(state, s, &mut next) {
+                    return End::RangeError {
+                        message: e.to_string(),
+                    };
+                }
+            }
+            not("no step from the last state has a range error")
+        }
+    }
+}

@@ -1,0 +1,72 @@
+//! The example controller (examples/rover_controller.rs) on robots/rover.ron: its
+//! supervisor script meets each answer the model gives, and its recording is a path of
+//! the model along which every invariant holds (the controller checks that itself and
+//! fails otherwise).
+
+#[allow(dead_code)]
+#[path = "../examples/rover_controller.rs"]
+mod controller;
+
+fn reply_texts<'a>(r: &'a controller::Report, service: &str) -> Vec<&'a str> {
+    r.replies
+        .iter()
+        .filter(|(s, _, _)| s == service)
+        .map(|(_, _, text)| text.as_str())
+        .collect()
+}
+
+#[test]
+fn the_rover_controller_plays_its_script_within_the_model() {
+    let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots/rover.ron");
+    let mut log = Vec::new();
+    let r = controller::run(&model, false, &mut |line| log.push(line))
+        .unwrap_or_else(|e| panic!("the controller fails: {e}"));
+    let log = log.join("\n");
+    // refused: TrackSpeed before Init, with the reason
+    assert!(
+        reply_texts(&r, "rflex.TrackSpeed")
+            .first()
+            .is_some_and(|t| t.starts_with("REFUSED: after rflex.Init")),
+        "{log}"
+    );
+    // held by the rover's constraints, each named
+    let held_by = |codel: &str, constraint: &str| {
+        r.held
+            .iter()
+            .any(|(c, why)| c == codel && why.iter().any(|w| w.starts_with(constraint)))
+    };
+    assert!(
+        held_by("antenna.Communicate.start", "constraint #0 (Exclusive)"),
+        "{log}"
+    );
+    assert!(
+        held_by("camera.Shoot.start", "constraint #4 (AtMost)"),
+        "{log}"
+    );
+    assert!(
+        held_by("rflex.TrackSpeed.track", "constraint #3 (Guard)"),
+        "{log}"
+    );
+    // navigation: aborted without the laser, arrives, then blocked by the rock
+    assert_eq!(
+        reply_texts(&r, "ndd.GoTo")
+            .into_iter()
+            .filter(|t| t.starts_with("done"))
+            .collect::<Vec<_>>(),
+        [
+            "done: interrupted",
+            "done: ether",
+            "done: exception e_blocked"
+        ],
+        "{log}"
+    );
+    assert!(reply_texts(&r, "antenna.Communicate").contains(&"done: ether"));
+    assert_eq!((r.overruns, r.faults), (1, 0), "{log}");
+    // the recording replays with the step relation
+    let path = r.trace.replay(&r.system).expect("a path of the model");
+    assert!(path.len() > 300, "{}", path.len());
+    assert!(
+        log.contains("every invariant holds in every state"),
+        "{log}"
+    );
+}

@@ -1,0 +1,273 @@
+//! The engine's map by names, as the expansion writes it (a recipe); once the expanded
+//! model is compiled, [`Recipe::resolve`] turns the names into the system's indices.
+
+use super::map::*;
+use crate::eval;
+use crate::syntax::{ServiceKind, Text};
+use crate::system::System;
+
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Recipe {
+    pub tick: String,
+    pub modules: Vec<RecipeModule>,
+    pub idle: Option<String>,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct RecipeModule {
+    pub name: String,
+    pub tasks: Vec<(String, i64)>,
+    /// Port names and their age caps, for ports whose age is tracked.
+    pub ports: Vec<(String, Option<i64>)>,
+    /// Ids field names, in order.
+    pub ids: Vec<String>,
+    pub services: Vec<RecipeService>,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct RecipeService {
+    pub name: String,
+    pub kind: ServiceKind,
+    pub task: Option<usize>,
+    pub component: Option<String>,
+    pub request: String,
+    pub owned_by_model: bool,
+    pub refusals: Vec<RecipeCondition>,
+    pub interrupts: Vec<String>,
+    pub codels: Vec<RecipeCodel>,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct RecipeCodel {
+    pub state: String,
+    pub run: String,
+    pub fail: String,
+    /// The yields as written, in order: the transitions of the codel's port from each
+    /// source location are generated in this order.
+    pub yields: Vec<String>,
+    /// The codel runs from `ether` (it is `start`) and/or from its own location.
+    pub from_ether: bool,
+    pub from_location: bool,
+    pub throws: Vec<String>,
+    pub writes: Vec<String>,
+    /// Written ids fields, in the module's order, and the module port that writes them.
+    pub ids: Vec<String>,
+    pub ids_port: Option<String>,
+    pub holds: Vec<RecipeCondition>,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct RecipeCondition {
+    pub reason: Reason,
+    /// The condition as an expression of the expanded model.
+    pub text: String,
+    /// The same, to compile (its span leads back to the user's text it holds, if any).
+    pub compiled: Text,
+}
+
+/// Something in the recipe that the compiled system lacks: a bug of the expansion.
+#[derive(Debug)]
+pub(crate) struct MissingName(pub String);
+
+impl Recipe {
+    /// The condition texts, in the order [`Recipe::resolve`] expects them compiled.
+    pub fn condition_texts(&self) -> Vec<Text> {
+        let mut out = Vec::new();
+        for m in &self.modules {
+            for s in &m.services {
+                out.extend(s.refusals.iter().map(|c| c.compiled.clone()));
+                for c in &s.codels {
+                    out.extend(c.holds.iter().map(|h| h.compiled.clone()));
+                }
+            }
+        }
+        if let Some(i) = &self.idle {
+            out.push(Text::from(i.as_str()));
+        }
+        out
+    }
+
+    /// Resolves names into `system`'s indices; `exprs` are the compiled
+    /// [`Recipe::condition_texts`].
+    pub fn resolve(
+        &self,
+        system: &System,
+        exprs: Vec<eval::Expr>,
+    ) -> Result<GenomMap, MissingName> {
+        let missing = |what: &str| MissingName(what.to_string());
+        let mut exprs = exprs.into_iter();
+        let mut next = |text: &str| exprs.next().ok_or_else(|| missing(text));
+        let interaction = |name: &str| system.interaction_index(name).ok_or_else(|| missing(name));
+        let component = |name: &str| system.component_index(name).ok_or_else(|| missing(name));
+        let mut modules = Vec::new();
+        for m in &self.modules {
+            let mc = component(&m.name)?;
+            let atom = system.atom_of(mc);
+            let mut ports = Vec::new();
+            for (p, cap) in &m.ports {
+                let age = match cap {
+                    None => None,
+                    Some(cap) => {
+                        let var = atom
+                            .var_index(&super::names::age_var(p))
+                            .ok_or_else(|| missing(p))?;
+                        Some(AgeMap {
+                            slot: system.components[mc as usize].var_slot(var),
+                            cap: *cap,
+                        })
+                    }
+                };
+                ports.push(PortMap {
+                    name: p.clone(),
+                    age,
+                });
+            }
+            let mut ids = Vec::new();
+            for x in &m.ids {
+                let var = atom.var_index(x).ok_or_else(|| missing(x))?;
+                let (lo, hi) = atom.vars[var as usize].ty.range();
+                ids.push(IdsField {
+                    name: x.clone(),
+                    var,
+                    slot: system.components[mc as usize].var_slot(var),
+                    lo,
+                    hi,
+                });
+            }
+            let mut services = Vec::new();
+            for s in &m.services {
+                let mut refusals = Vec::new();
+                for c in &s.refusals {
+                    refusals.push(Condition {
+                        reason: c.reason.clone(),
+                        text: c.text.clone(),
+                        expr: next(&c.text)?,
+                    });
+                }
+                let comp = match &s.component {
+                    Some(c) => Some(component(c)?),
+                    None => None,
+                };
+                let mut codels = Vec::new();
+                for c in &s.codels {
+                    let mut holds = Vec::new();
+                    for h in &c.holds {
+                        holds.push(Condition {
+                            reason: h.reason.clone(),
+                            text: h.text.clone(),
+                            expr: next(&h.text)?,
+                        });
+                    }
+                    let ac = comp.ok_or_else(|| missing(&c.state))?;
+                    let atom = system.atom_of(ac);
+                    let port = atom.port_index(&c.state).ok_or_else(|| missing(&c.state))?;
+                    let mut sources = Vec::new();
+                    if c.from_ether {
+                        sources.push(
+                            atom.location_index(super::check::ETHER)
+                                .ok_or_else(|| missing("ether"))?,
+                        );
+                    }
+                    if c.from_location {
+                        sources.push(
+                            atom.location_index(&c.state)
+                                .ok_or_else(|| missing(&c.state))?,
+                        );
+                    }
+                    let yields = c
+                        .yields
+                        .iter()
+                        .enumerate()
+                        .map(|(k, y)| {
+                            let transitions = sources
+                                .iter()
+                                .map(|&l| atom.transitions_from(l, Some(port)).start + k as u32)
+                                .collect();
+                            YieldMap {
+                                target: y.clone(),
+                                transitions,
+                            }
+                        })
+                        .collect();
+                    let matom = system.atom_of(mc);
+                    let ids_transitions = match &c.ids_port {
+                        None => 0..0,
+                        Some(p) => {
+                            let port = matom.port_index(p).ok_or_else(|| missing(p))?;
+                            matom.transitions_from(0, Some(port))
+                        }
+                    };
+                    let mut ids: Vec<IdsWrite> = Vec::new();
+                    for x in &c.ids {
+                        let var = matom.var_index(x).ok_or_else(|| missing(x))?;
+                        let (lo, hi) = matom.vars[var as usize].ty.range();
+                        ids.push(IdsWrite {
+                            name: x.clone(),
+                            var,
+                            slot: system.components[mc as usize].var_slot(var),
+                            lo,
+                            hi,
+                            stride: 1,
+                        });
+                    }
+                    // the last field varies fastest
+                    let mut stride = 1u32;
+                    for f in ids.iter_mut().rev() {
+                        f.stride = stride;
+                        stride = stride.saturating_mul((f.hi - f.lo + 1) as u32);
+                    }
+                    if !ids.is_empty() && stride as usize != ids_transitions.len() {
+                        return Err(missing("the transitions that write ids"));
+                    }
+                    codels.push(CodelMap {
+                        state: c.state.clone(),
+                        run: interaction(&c.run)?,
+                        fail: interaction(&c.fail)?,
+                        yields,
+                        throws: c.throws.clone(),
+                        writes: c.writes.clone(),
+                        ids,
+                        ids_transitions,
+                        holds,
+                    });
+                }
+                services.push(ServiceMap {
+                    name: s.name.clone(),
+                    kind: s.kind,
+                    task: s.task,
+                    component: comp,
+                    request: interaction(&s.request)?,
+                    owned_by_model: s.owned_by_model,
+                    refusals,
+                    interrupts: s.interrupts.clone(),
+                    codels,
+                });
+            }
+            modules.push(ModuleMap {
+                name: m.name.clone(),
+                component: mc,
+                tasks: m
+                    .tasks
+                    .iter()
+                    .map(|(n, p)| TaskMap {
+                        name: n.clone(),
+                        period: u32::try_from(*p).unwrap_or(u32::MAX),
+                    })
+                    .collect(),
+                ports,
+                ids,
+                services,
+            });
+        }
+        let idle = match &self.idle {
+            Some(i) => Some(next(i)?),
+            None => None,
+        };
+        Ok(GenomMap {
+            tick: interaction(&self.tick)?,
+            tick_ms: system.tick_ms,
+            modules,
+            idle,
+        })
+    }
+}

@@ -1,0 +1,178 @@
+//! The incremental enabled set against the full step relation: along random walks on random
+//! systems (the generator of `reference.rs`), `EnabledSet` updated step by step yields
+//! exactly the steps of `System::enabled_steps`, in the same order, and fails to evaluate
+//! exactly where the full relation does.
+
+use bip_model::{load_str, EnabledSet, OwnedStep, State, Steps, System};
+use proptest::prelude::*;
+
+mod support;
+use support::random_system::*;
+
+fn full(sys: &System, s: &State, buf: &mut Steps) -> Result<Vec<OwnedStep>, ()> {
+    sys.enabled_steps(s, buf).map_err(|_| ())?;
+    Ok(buf.iter().map(|st| st.to_owned()).collect())
+}
+
+fn incremental(set: &EnabledSet) -> Vec<OwnedStep> {
+    set.steps().map(|s| s.to_owned()).collect()
+}
+
+/// Random walks on one generated system; returns the number of states compared.
+fn check_system(seed: u64) -> Result<usize, TestCaseError> {
+    let g = generate(seed);
+    let text = g.to_ron();
+    let sys = load_str("generated.ron", &text)
+        .map_err(|e| TestCaseError::fail(format!("does not load: {}\n{text}", e.summary())))?;
+    let mut rng = Rng(seed ^ 0xa5a5);
+    let mut buf = Steps::new();
+    let mut copy = Steps::new();
+    let mut compared = 0;
+    for _walk in 0..3 {
+        let mut s = sys.initial_state();
+        let mut set = match EnabledSet::new(&sys, &s) {
+            Ok(set) => set,
+            Err(_) => {
+                prop_assert!(
+                    full(&sys, &s, &mut buf).is_err(),
+                    "only the set fails\n{text}"
+                );
+                break;
+            }
+        };
+        for _ in 0..40 {
+            let expected = full(&sys, &s, &mut buf);
+            let Ok(expected) = expected else {
+                return Err(TestCaseError::fail(format!(
+                    "the set evaluated a state where the relation fails\n{text}"
+                )));
+            };
+            let got = incremental(&set);
+            prop_assert_eq!(&got, &expected, "steps differ in {:?}\n{}", s.slots(), text);
+            set.copy_to(&mut copy);
+            prop_assert_eq!(copy.len(), expected.len());
+            for (k, st) in copy.iter().enumerate() {
+                prop_assert_eq!(&st.to_owned(), &expected[k]);
+                let i = match st.label {
+                    bip_model::Label::Interaction(i) => i,
+                    bip_model::Label::Internal { .. } => continue,
+                };
+                prop_assert!(set.is_enabled(i));
+            }
+            prop_assert_eq!(set.is_empty(), expected.is_empty());
+            compared += 1;
+            // fire a random step that does not fail
+            let mut order: Vec<usize> = (0..expected.len()).collect();
+            for k in (1..order.len()).rev() {
+                order.swap(k, rng.below(k + 1));
+            }
+            let mut next = s.clone();
+            let mut moved = false;
+            for k in order {
+                if sys.fire(&s, expected[k].as_step(), &mut next).is_ok() {
+                    moved = true;
+                    break;
+                }
+            }
+            if !moved {
+                break;
+            }
+            let updated = set.update(&sys, &s, &next);
+            let reference = full(&sys, &next, &mut buf);
+            match (updated, reference) {
+                (Ok(()), Ok(_)) => {}
+                (Err(_), Err(())) => {
+                    prop_assert!(!set.is_valid());
+                    break;
+                }
+                (u, r) => {
+                    return Err(TestCaseError::fail(format!(
+                        "one side fails to evaluate: set {:?}, relation {:?}\n{text}",
+                        u.is_ok(),
+                        r.is_ok()
+                    )))
+                }
+            }
+            s = next;
+        }
+    }
+    Ok(compared)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 1500, ..ProptestConfig::default() })]
+
+    #[test]
+    fn incremental_enabled_set_matches_the_step_relation(seed in any::<u64>()) {
+        check_system(seed)?;
+    }
+}
+
+/// The walks must see priorities and guarded priorities change their verdict, or the
+/// comparison proves little about the incremental priority bookkeeping.
+#[test]
+fn walks_compare_many_states_with_priorities() {
+    let mut compared = 0;
+    let mut with_when = 0;
+    for seed in 0..300u64 {
+        let g = generate(seed);
+        if g.prios.iter().any(|p| p.when.is_some()) {
+            with_when += 1;
+        }
+        compared += check_system(seed).expect("agrees");
+    }
+    assert!(
+        with_when >= 50,
+        "only {with_when} systems with guarded priorities"
+    );
+    assert!(compared > 10_000, "only {compared} states compared");
+}
+
+#[test]
+fn reset_jumps_to_any_state() {
+    let g = generate(7);
+    let sys = load_str("g.ron", &g.to_ron()).expect("loads");
+    let init = sys.initial_state();
+    let mut set = EnabledSet::new(&sys, &init).expect("evaluates");
+    let mut buf = Steps::new();
+    sys.enabled_steps(&init, &mut buf).expect("evaluates");
+    let first = buf.iter().next().map(|s| s.to_owned());
+    if let Some(st) = first {
+        let mut next = init.clone();
+        if sys.fire(&init, st.as_step(), &mut next).is_ok()
+            && sys.enabled_steps(&next, &mut buf).is_ok()
+        {
+            set.reset(&sys, &next).expect("evaluates");
+            let want: Vec<OwnedStep> = buf.iter().map(|s| s.to_owned()).collect();
+            assert_eq!(incremental(&set), want);
+        }
+    }
+}
+
+/// The GenoM models: long chains of priorities without `when`, broadcast ticks, guards that
+/// read other components. Random walks of a few thousand steps.
+#[test]
+fn robot_models_agree_along_random_walks() {
+    for model in [
+        "rover.ron",
+        "rover-deadlock.ron",
+        "satellite.ron",
+        "tests/mini.ron",
+    ] {
+        let path = format!("{}/../robots/{model}", env!("CARGO_MANIFEST_DIR"));
+        let sys = bip_model::load_file(std::path::Path::new(&path)).expect("loads");
+        let mut rng = Rng(model.len() as u64);
+        let mut s = sys.initial_state();
+        let mut set = EnabledSet::new(&sys, &s).expect("evaluates");
+        let mut buf = Steps::new();
+        let mut next = s.clone();
+        for _ in 0..3000 {
+            let want = full(&sys, &s, &mut buf).expect("evaluates");
+            assert_eq!(incremental(&set), want, "{model}");
+            let k = rng.below(want.len());
+            sys.fire(&s, want[k].as_step(), &mut next).expect("fires");
+            set.update(&sys, &s, &next).expect("evaluates");
+            std::mem::swap(&mut s, &mut next);
+        }
+    }
+}

@@ -1,0 +1,213 @@
+//! End-to-end tests of `bip simulate` and `bip replay`.
+
+use std::process::{Command, Output};
+
+fn bip(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_bip"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("bip runs")
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+#[test]
+fn simulate_checks_invariants_and_its_trace_replays_through_the_engine() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let trace = dir.path().join("run.ron");
+    let trace = trace.to_str().expect("utf-8");
+    let out = bip(&[
+        "simulate",
+        "robots/rover.ron",
+        "--steps",
+        "3000",
+        "--seed",
+        "7",
+        "--trace",
+        trace,
+    ]);
+    let text = stdout(&out);
+    let summary = text.clone();
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("3000 steps"), "{text}");
+    assert!(
+        text.contains("5 invariants and deadlock freedom held at every step"),
+        "{text}"
+    );
+    // the same seed, the same run
+    let again = bip(&[
+        "simulate",
+        "robots/rover.ron",
+        "--steps",
+        "3000",
+        "--seed",
+        "7",
+    ]);
+    assert_eq!(
+        text.lines().nth(1),
+        stdout(&again).lines().nth(1),
+        "deterministic for a seed"
+    );
+    let out = bip(&["replay", "robots/rover.ron", trace]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert_eq!(text.matches("allowed: ").count(), 3000, "{text}");
+    // the replay ran as many codels and ticks as the simulation reported
+    let counted = |what: &str| -> usize {
+        let stats = summary.lines().nth(1).expect("a statistics line");
+        let before = stats.split(&format!(" {what}")).next().expect("the count");
+        let n = before.rsplit(' ').next().expect("a number");
+        n.parse().expect("a count")
+    };
+    assert_eq!(
+        text.matches("allowed: codel ").count(),
+        counted("codels"),
+        "{text}"
+    );
+    assert_eq!(
+        text.matches("allowed: tick ").count(),
+        counted("ticks"),
+        "{text}"
+    );
+    assert!(counted("codels") > 100, "{summary}");
+    assert!(text.contains("result: every step was allowed"), "{text}");
+}
+
+#[test]
+fn simulate_finds_the_rovers_deadlock_and_replay_shows_it() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let trace = dir.path().join("dl.ron");
+    let trace = trace.to_str().expect("utf-8");
+    let out = bip(&[
+        "simulate",
+        "robots/rover-deadlock.ron",
+        "--steps",
+        "5000",
+        "--seed",
+        "1",
+        "--trace",
+        trace,
+    ]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(text.contains("DEADLOCK after step"), "{text}");
+    let out = bip(&["replay", "robots/rover-deadlock.ron", trace]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(text.contains("deadlock reached after"), "{text}");
+    assert!(
+        text.contains("waiting: ndd.GoTo codel `start`") && text.contains("(Requires)"),
+        "{text}"
+    );
+    assert!(text.contains("result: DeadlockFree fails"), "{text}");
+}
+
+#[test]
+fn simulate_runs_core_models_and_reports_their_deadlocks() {
+    let out = bip(&[
+        "simulate",
+        "robots/philosophers-asymmetric.ron",
+        "--steps",
+        "500",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stdout(&out));
+    let out = bip(&[
+        "simulate",
+        "robots/philosophers.ron",
+        "--steps",
+        "5000",
+        "--seed",
+        "2",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stdout(&out));
+    assert!(stdout(&out).contains("DEADLOCK"));
+}
+
+#[test]
+fn replay_refuses_a_trace_the_model_does_not_allow_with_the_reason() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("bad.ron");
+    std::fs::write(
+        &path,
+        r#"Trace(system: "rover_deadlock", verdict: None, steps: [
+            (step: "ndd_GoTo_request", state: {"ndd_GoTo.req": true, "ndd_GoTo.paused": true}),
+            (step: "tick", state: {"clock.n": 1, "ndd_GoTo.paused": false}),
+            (step: "ndd_GoTo_start", state: {"ndd_GoTo": "move"}),
+        ])"#,
+    )
+    .expect("writes");
+    let out = bip(&[
+        "replay",
+        "robots/rover-deadlock.ron",
+        path.to_str().expect("utf-8"),
+    ]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(2), "{text}");
+    assert!(text.contains("3  ndd_GoTo_start"), "{text}");
+    assert!(text.contains("NOT ALLOWED"), "{text}");
+    assert!(text.contains("because: constraint #1 (Requires)"), "{text}");
+}
+
+#[test]
+fn bad_input_is_exit_2() {
+    let out = bip(&["replay", "robots/rover.ron", "no/such/trace.ron"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read"));
+    let out = bip(&["replay", "robots/rover.ron", "robots/rover.ron"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a trace"));
+    let out = bip(&["simulate", "robots/tests/nope.ron"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn simulate_stops_at_the_first_state_that_breaks_an_invariant() {
+    // a codel writes `speed` (any value in 0..=3); the invariant says it stays below 3
+    let model = std::fs::read_to_string("robots/tests/mini.ron")
+        .expect("reads")
+        .replace(
+            r#"writes: ["pose"]"#,
+            r#"writes: ["pose", "speed"]"#,
+        )
+        .replace(
+            "        DeadlockFree,\n",
+            "        DeadlockFree,\n        Invariant(name: \"slow\", expr: \"rflex.speed < 3\"),\n",
+        );
+    assert!(model.contains("\"slow\"") && model.contains("\"speed\"]"));
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("fast.ron");
+    std::fs::write(&path, model).expect("writes");
+    let trace = dir.path().join("fast.trace.ron");
+    let out = bip(&[
+        "simulate",
+        path.to_str().expect("utf-8"),
+        "--steps",
+        "20000",
+        "--seed",
+        "3",
+        "--trace",
+        trace.to_str().expect("utf-8"),
+    ]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(text.contains("invariant `slow` FAILS after step"), "{text}");
+    assert!(
+        text.contains("rflex.speed: ") && text.contains("→ 3"),
+        "{text}"
+    );
+    // the saved run ends where the invariant fails, and replay shows it
+    let out = bip(&[
+        "replay",
+        path.to_str().expect("utf-8"),
+        trace.to_str().expect("utf-8"),
+    ]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("invariant `slow` fails in the last state"),
+        "{text}"
+    );
+}
