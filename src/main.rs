@@ -46,8 +46,8 @@ enum Command {
         file: PathBuf,
     },
     /// Verify a model's properties (deadlock freedom, invariants, reachability, range
-    /// errors) by exploring its states. Exit code 0: all hold, 1: some property fails,
-    /// 2: model or usage error, 3: inconclusive.
+    /// errors) by exploring its states or by symbolic proofs. Exit code 0: all hold,
+    /// 1: some property fails, 2: model or usage error, 3: inconclusive.
     Verify(verify::Args),
     /// Write the model in another tool's language (Promela, for SPIN).
     Export(export::Args),

@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use bip_model::System;
 use bip_verifier::report::human_bytes;
-use bip_verifier::{Outcome, Progress, PropertyKind, Report, Verdict};
+use bip_verifier::{Method, Outcome, Progress, PropertyKind, Report, Verdict};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::{exit, report};
@@ -19,10 +19,25 @@ pub enum Format {
     Json,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Explore every reachable state (shortest counterexamples).
+    Explicit,
+    /// Prove with z3 without enumerating states (compositional deadlock freedom,
+    /// k-induction, bounded model checking).
+    Symbolic,
+    /// Explicit within a budget, then symbolic for what is left open.
+    Auto,
+}
+
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The model file (RON).
     pub file: PathBuf,
+    /// How to verify: explicit exploration, symbolic proofs (z3), or explicit within a
+    /// budget and symbolic for what it leaves open.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub method: MethodArg,
     /// Worker threads (default: one per core).
     #[arg(short, long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -51,6 +66,21 @@ pub struct Args {
     /// No progress line and no statistics on stderr.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Symbolic method: wall-clock limit of one solver call; a call that reaches it makes
+    /// its property inconclusive.
+    #[arg(long, value_name = "SECS", value_parser = parse_seconds, default_value = "120")]
+    pub solver_timeout: Duration,
+    /// Symbolic method: deepest bounded model check and largest k of k-induction.
+    #[arg(long, value_name = "N", default_value_t = 20)]
+    pub max_depth: u32,
+    /// Symbolic method: states the explicit search confirming a candidate deadlock may
+    /// explore (0: no confirmation).
+    #[arg(long, value_name = "N", default_value_t = 200_000)]
+    pub confirm_states: u64,
+    /// Symbolic method: z3's deterministic resource limit per solver call (reproducible
+    /// budgets, for tests).
+    #[arg(long, value_name = "N", hide = true)]
+    pub rlimit: Option<u32>,
 }
 
 fn parse_size(s: &str) -> Result<u64, String> {
@@ -107,7 +137,20 @@ pub fn run(args: &Args) -> u8 {
             ));
         }
     };
-    let result = bip_verifier::verify(&system, &options, &on_progress);
+    let symbolic = bip_verifier::SymbolicOptions {
+        solver_timeout: Some(args.solver_timeout),
+        timeout: args.timeout,
+        rlimit: args.rlimit,
+        max_depth: args.max_depth,
+        confirm_states: args.confirm_states,
+        jobs: args.jobs.unwrap_or(0),
+        ..bip_verifier::SymbolicOptions::default()
+    };
+    let result = match args.method {
+        MethodArg::Explicit => bip_verifier::verify(&system, &options, &on_progress),
+        MethodArg::Symbolic => bip_verifier::symbolic::verify(&system, &symbolic),
+        MethodArg::Auto => bip_verifier::verify_auto(&system, &options, &symbolic, &on_progress),
+    };
     if let Some(bar) = bar.lock().unwrap_or_else(|e| e.into_inner()).take() {
         bar.finish_and_clear();
     }
@@ -189,6 +232,14 @@ fn file_name(name: &str) -> String {
         .collect()
 }
 
+fn method_name(method: Method) -> &'static str {
+    match method {
+        Method::Explicit => "explicit",
+        Method::Symbolic => "symbolic",
+        Method::Auto => "auto",
+    }
+}
+
 fn kind_name(kind: PropertyKind) -> &'static str {
     match kind {
         PropertyKind::DeadlockFree => "deadlock freedom",
@@ -206,14 +257,20 @@ fn text_report(
 ) -> String {
     let mut s = String::new();
     let st = &report.stats;
+    let how = match report.method {
+        Method::Explicit => format!(
+            "explicit-state exploration, {} worker{}",
+            st.jobs,
+            if st.jobs == 1 { "" } else { "s" }
+        ),
+        Method::Symbolic => "symbolic proofs (z3)".to_string(),
+        Method::Auto => "explicit exploration within a budget, then symbolic proofs".to_string(),
+    };
     let _ = writeln!(
         s,
-        "{}: system `{}`, {} exploration, {} worker{}",
+        "{}: system `{}`, {how}",
         args.file.display(),
-        report.model,
-        report.method,
-        st.jobs,
-        if st.jobs == 1 { "" } else { "s" }
+        report.model
     );
     let width = report
         .properties
@@ -222,14 +279,17 @@ fn text_report(
         .max()
         .unwrap_or(0);
     for p in &report.properties {
-        let (word, detail) = match &p.verdict {
+        let (word, mut detail) = match &p.verdict {
             Verdict::Holds { witness: Some(t) } => {
                 ("holds", format!("witness after {} steps", t.steps.len()))
             }
-            Verdict::Holds { witness: None } => ("holds", String::new()),
+            Verdict::Holds { witness: None } => ("holds", p.note.clone().unwrap_or_default()),
             Verdict::Fails { reason, .. } => ("FAILS", reason.clone()),
             Verdict::Inconclusive { reason } => ("inconclusive", reason.clone()),
         };
+        if report.method == Method::Auto {
+            detail = format!("[{}] {detail}", method_name(p.method));
+        }
         let line = format!("  {:<width$}  {:<12}  {detail}", p.name, word);
         let _ = writeln!(s, "{}", line.trim_end());
     }
@@ -266,7 +326,7 @@ fn text_report(
             "\nnote: steps that make range errors have no successor; the other verdicts are about the states reachable without them"
         );
     }
-    if !args.quiet {
+    if !args.quiet && report.method != Method::Symbolic {
         let _ = writeln!(
             s,
             "\n{} states, {} transitions, depth {}, {:.2} s ({:.0} states/s), {:.1} bytes/state ({} B packed), store {}, peak memory {}",
@@ -278,6 +338,23 @@ fn text_report(
             st.bytes_per_state,
             st.state_bytes,
             human_bytes(st.store_bytes),
+            st.peak_memory_bytes.map_or("unknown".into(), human_bytes)
+        );
+    }
+    if let (false, Some(y)) = (args.quiet, &report.symbolic) {
+        let _ = writeln!(
+            s,
+            "{}symbolic: {} components ({} with approximate values), {} places, {} semiflows, {} traps learned, {} solver calls ({:.2} s), invariants in {:.2} s, {:.2} s in all, peak memory {}",
+            if report.method == Method::Symbolic { "\n" } else { "" },
+            y.components,
+            y.approximate_components,
+            y.places,
+            y.semiflows,
+            y.traps,
+            y.solver_calls,
+            y.solver_seconds,
+            y.invariant_seconds,
+            y.seconds,
             st.peak_memory_bytes.map_or("unknown".into(), human_bytes)
         );
     }

@@ -49,7 +49,14 @@ fn exit_codes_follow_the_verdicts() {
 
 #[test]
 fn json_report_is_one_document() {
-    let o = bip(&["verify", &robot("philosophers.ron"), "--format", "json"]);
+    let o = bip(&[
+        "verify",
+        &robot("philosophers.ron"),
+        "--method",
+        "explicit",
+        "--format",
+        "json",
+    ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(
         stderr(&o).is_empty(),
@@ -201,6 +208,8 @@ fn a_hundred_million_states_under_a_state_limit_end_inconclusive() {
     let o = bip(&[
         "verify",
         &path,
+        "--method",
+        "explicit",
         "--max-states",
         "100000",
         "--format",
@@ -212,9 +221,98 @@ fn a_hundred_million_states_under_a_state_limit_end_inconclusive() {
     assert_eq!(doc["outcome"], "inconclusive");
     assert_eq!(doc["stopped"]["reason"], "max_states");
     assert_eq!(doc["properties"][0]["verdict"], "inconclusive");
-    let o = bip(&["verify", &path, "--timeout", "0.2", "-q"]);
+    let o = bip(&[
+        "verify",
+        &path,
+        "--method",
+        "explicit",
+        "--timeout",
+        "0.2",
+        "-q",
+    ]);
     assert_eq!(o.status.code(), Some(3));
     assert!(stdout(&o).contains("time limit"), "{}", stdout(&o));
+}
+
+/// `--method symbolic` and `--method auto` through the binary: exit codes follow the
+/// verdicts, auto says which method decided, and a deadlock the invariants cannot exclude
+/// is "possible" (exit 3) when confirmation is off, never "holds".
+#[test]
+fn symbolic_and_auto_methods() {
+    let o = bip(&[
+        "verify",
+        &robot("philosophers-asymmetric.ron"),
+        "--method",
+        "symbolic",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    assert!(stdout(&o).contains("symbolic proofs"), "{}", stdout(&o));
+    let o = bip(&[
+        "verify",
+        &robot("philosophers.ron"),
+        "--method",
+        "symbolic",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
+    assert!(
+        stdout(&o).contains("deadlock after 5 steps"),
+        "{}",
+        stdout(&o)
+    );
+    let dir = tempfile::tempdir().unwrap();
+    // two counters kept equal by their connector; too many values for refined places
+    let weak = write_model(
+        dir.path(),
+        "weak.ron",
+        r#"System(
+            name: "weak",
+            atoms: { "Counter": Atom(locations: ["run", "done"], initial: "run",
+                vars: [(name: "x", ty: Int(0, 100))], ports: ["tick", "end", "restart"],
+                transitions: [
+                    (from: "run", port: "tick", to: "run", guard: "x < 100", action: "x = x + 1"),
+                    (from: "run", port: "end", to: "done", guard: "x == 100"),
+                    (from: "done", port: "restart", to: "run", action: "x = 0"),
+                ]) },
+            components: [(name: "a", atom: "Counter"), (name: "b", atom: "Counter")],
+            connectors: [
+                (name: "step", ports: ["a.tick", "b.tick"]),
+                (name: "finish", ports: ["a.end", "b.end"]),
+                (name: "again", ports: ["a.restart", "b.restart"]),
+            ],
+        )"#,
+    );
+    let o = bip(&[
+        "verify",
+        &weak,
+        "--method",
+        "symbolic",
+        "--confirm-states",
+        "0",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
+    assert!(stdout(&o).contains("possible deadlock"), "{}", stdout(&o));
+    let o = bip(&["verify", &weak, "--method", "explicit", "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    // auto: past its state budget the explicit method hands over to the symbolic one
+    let huge = write_model(
+        dir.path(),
+        "huge.ron",
+        r#"System(
+            name: "huge",
+            atoms: { "C": Atom(locations: ["s"], initial: "s", vars: [(name: "v", ty: Int(0, 9))],
+                               transitions: [(from: "s", to: "s", action: "v = (v + 1) % 10")]) },
+            components: [(name: "c", atom: "C", count: 8)],
+        )"#,
+    );
+    let o = bip(&["verify", &huge, "--max-states", "10000", "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    assert!(stdout(&o).contains("[symbolic]"), "{}", stdout(&o));
+    let o = bip(&["verify", &robot("philosophers.ron"), "-q"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stdout(&o).contains("[explicit]"), "{}", stdout(&o));
 }
 
 /// SPIN on the exported Promela finds the same number of states and the same deadlock

@@ -55,7 +55,13 @@ fn task_threads_under_load_record_a_valid_trace() {
                         .insert(me);
                     k += 1;
                     // mostly go on, sometimes end
-                    Next::Yield(yields[if k % 7 == 0 { yields.len() - 1 } else { 0 }])
+                    Next::Yield(
+                        yields[if k.is_multiple_of(7) {
+                            yields.len() - 1
+                        } else {
+                            0
+                        }],
+                    )
                 });
             }
         }

@@ -16,12 +16,14 @@
 //! does not depend on the number of workers: a run with one worker and a run with eight
 //! store the same states under the same numbers and report the same traces.
 
+use std::borrow::Cow;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use bip_model::eval::{Env, Expr};
 use bip_model::{
-    Liveness, LivenessChecker, OwnedStep, PropertyKind as ModelKind, State, Steps, System, Trace,
+    Liveness, LivenessChecker, OwnedStep, Property, PropertyKind as ModelKind, State, Steps,
+    System, Trace,
 };
 use rayon::prelude::*;
 
@@ -100,19 +102,25 @@ pub const RANGE_ERRORS: &str = "RangeErrors";
 /// The properties a run checks: the model's (deadlock freedom if it has none), and range
 /// errors, which are always checked.
 fn targets(system: &System) -> Vec<Target<'_>> {
-    let mut out: Vec<Target<'_>> = system
-        .properties
-        .iter()
+    let mut out: Vec<Target<'_>> = checked_properties(system)
+        .into_iter()
         .map(|p| {
-            let (kind, check) = match &p.kind {
-                ModelKind::DeadlockFree { terminal } => (
+            let (kind, check) = match &p {
+                Cow::Borrowed(Property { kind, .. }) => match kind {
+                    ModelKind::DeadlockFree { terminal } => (
+                        PropertyKind::DeadlockFree,
+                        Check::Deadlock {
+                            terminal: terminal.as_ref(),
+                        },
+                    ),
+                    ModelKind::Invariant(e) => (PropertyKind::Invariant, Check::Invariant(e)),
+                    ModelKind::Reachable(e) => (PropertyKind::Reachable, Check::Reachable(e)),
+                },
+                // the default property: deadlock freedom without terminal states
+                Cow::Owned(_) => (
                     PropertyKind::DeadlockFree,
-                    Check::Deadlock {
-                        terminal: terminal.as_ref(),
-                    },
+                    Check::Deadlock { terminal: None },
                 ),
-                ModelKind::Invariant(e) => (PropertyKind::Invariant, Check::Invariant(e)),
-                ModelKind::Reachable(e) => (PropertyKind::Reachable, Check::Reachable(e)),
             };
             Target {
                 name: p.name.clone(),
@@ -122,14 +130,6 @@ fn targets(system: &System) -> Vec<Target<'_>> {
             }
         })
         .collect();
-    if out.is_empty() {
-        out.push(Target {
-            name: "DeadlockFree".into(),
-            kind: PropertyKind::DeadlockFree,
-            expr: String::new(),
-            check: Check::Deadlock { terminal: None },
-        });
-    }
     out.push(Target {
         name: RANGE_ERRORS.into(),
         kind: PropertyKind::RangeErrors,
@@ -137,6 +137,21 @@ fn targets(system: &System) -> Vec<Target<'_>> {
         check: Check::RangeErrors,
     });
     out
+}
+
+/// The model properties a verification checks, whatever the method: the model's, or
+/// `DeadlockFree` if it declares none. Range errors are checked besides, as
+/// [`RANGE_ERRORS`].
+pub fn checked_properties(system: &System) -> Vec<Cow<'_, Property>> {
+    if system.properties.is_empty() {
+        vec![Cow::Owned(Property {
+            name: "DeadlockFree".into(),
+            kind: ModelKind::DeadlockFree { terminal: None },
+            text: String::new(),
+        })]
+    } else {
+        system.properties.iter().map(Cow::Borrowed).collect()
+    }
 }
 
 /// What was found about a property in a state.
@@ -527,6 +542,8 @@ impl<'a> Explorer<'a> {
                 kind: t.kind,
                 expr: t.expr.clone(),
                 verdict,
+                method: Method::Explicit,
+                note: None,
             });
         }
         tracing::info!(
@@ -544,6 +561,7 @@ impl<'a> Explorer<'a> {
             properties,
             stats,
             stopped,
+            symbolic: None,
         })
     }
 

@@ -10,12 +10,18 @@ use serde::Serialize;
 pub enum Method {
     /// Breadth-first exploration of the reachable states.
     Explicit,
+    /// Proofs with z3: compositional deadlock freedom, k-induction, bounded model checking.
+    Symbolic,
+    /// Explicit exploration within a budget, then symbolic proofs for what it left open.
+    Auto,
 }
 
 impl std::fmt::Display for Method {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             Method::Explicit => "explicit-state",
+            Method::Symbolic => "symbolic",
+            Method::Auto => "auto",
         })
     }
 }
@@ -78,6 +84,11 @@ pub struct PropertyResult {
     pub expr: String,
     #[serde(flatten)]
     pub verdict: Verdict,
+    /// The method that gave the verdict (with `--method auto`, either).
+    pub method: Method,
+    /// How the verdict was obtained, when there is more to say (`2-induction`, ...).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
 
 /// Why a run ended before it had looked at every reachable state.
@@ -152,6 +163,30 @@ pub struct Report {
     pub stats: Stats,
     /// Why the run ended early, if it did.
     pub stopped: Option<Stop>,
+    /// Figures of the symbolic method, when it ran.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub symbolic: Option<SymbolicStats>,
+}
+
+/// Figures of a symbolic run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct SymbolicStats {
+    pub components: usize,
+    /// Components whose variables' values could not be enumerated (only their ranges and
+    /// reachable locations are used).
+    pub approximate_components: usize,
+    /// Places (locations) and transition groups (interactions, internal moves) of the net.
+    pub places: usize,
+    pub net_groups: usize,
+    /// Linear invariants (P-semiflows) found.
+    pub semiflows: usize,
+    /// Traps learned from candidates.
+    pub traps: usize,
+    pub solver_calls: u64,
+    pub solver_seconds: f64,
+    /// Seconds to compute the component invariants, the net and the semiflows.
+    pub invariant_seconds: f64,
+    pub seconds: f64,
 }
 
 /// The overall outcome, which decides the exit code.
@@ -208,6 +243,8 @@ mod tests {
             kind: PropertyKind::Invariant,
             expr: String::new(),
             verdict,
+            method: Method::Explicit,
+            note: None,
         }
     }
 
@@ -218,6 +255,7 @@ mod tests {
             properties: verdicts.into_iter().map(result).collect(),
             stats: Stats::default(),
             stopped: None,
+            symbolic: None,
         }
     }
 

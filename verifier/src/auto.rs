@@ -1,0 +1,76 @@
+//! `--method auto`: the explicit method when the model is small enough, the symbolic one
+//! for what it leaves open.
+//!
+//! The explicit exploration runs first within a budget (at most [`AUTO_STATES`] states and
+//! [`AUTO_BYTES`] of stored states, or the user's smaller limits). Every verdict it reaches
+//! stands: a failure with its shortest trace, a witness, and, when it explored every
+//! reachable state, every "holds". The properties it leaves undecided go to the symbolic
+//! method. Each property's result says which method decided it.
+
+use std::time::{Duration, Instant};
+
+use bip_model::System;
+
+use crate::explore::{verify, Options, Progress, VerifyError};
+use crate::report::{Method, Report, Verdict};
+use crate::symbolic::{self, SymbolicOptions};
+
+/// States the explicit phase may store.
+pub const AUTO_STATES: u64 = 1_000_000;
+/// Bytes of stored states the explicit phase may use.
+pub const AUTO_BYTES: u64 = 256 << 20;
+
+pub fn verify_auto(
+    system: &System,
+    options: &Options,
+    symbolic_options: &SymbolicOptions,
+    progress: &(dyn Fn(&Progress) + Sync),
+) -> Result<Report, VerifyError> {
+    let started = Instant::now();
+    // a stored state costs its packed bytes, a parent link and about as much again of table
+    let per_state = system.layout.bytes() as u64 * 2 + 12;
+    let budget = AUTO_STATES.min(AUTO_BYTES / per_state).max(1);
+    let explicit_options = Options {
+        max_states: Some(options.max_states.map_or(budget, |m| m.min(budget))),
+        ..options.clone()
+    };
+    let explicit = verify(system, &explicit_options, progress)?;
+    let open = explicit
+        .properties
+        .iter()
+        .any(|p| matches!(p.verdict, Verdict::Inconclusive { .. }));
+    if !open || explicit.properties.iter().any(|p| p.verdict.fails()) && options.stop_at_first {
+        return Ok(Report {
+            method: Method::Auto,
+            ..explicit
+        });
+    }
+    let mut sym_options = symbolic_options.clone();
+    if let Some(t) = options.timeout {
+        let left = t.saturating_sub(started.elapsed());
+        sym_options.timeout = Some(sym_options.timeout.map_or(left, |s| s.min(left)));
+        if left.is_zero() {
+            sym_options.timeout = Some(Duration::ZERO);
+        }
+    }
+    let symbolic = symbolic::verify(system, &sym_options)?;
+    let mut report = explicit;
+    for (mine, theirs) in report.properties.iter_mut().zip(symbolic.properties) {
+        if matches!(mine.verdict, Verdict::Inconclusive { .. }) {
+            *mine = theirs;
+        }
+    }
+    let undecided = report
+        .properties
+        .iter()
+        .any(|p| matches!(p.verdict, Verdict::Inconclusive { .. }));
+    if !undecided {
+        report.stopped = None;
+    } else if report.stopped.is_none() {
+        report.stopped = symbolic.stopped;
+    }
+    report.method = Method::Auto;
+    report.symbolic = symbolic.symbolic;
+    report.stats.seconds = started.elapsed().as_secs_f64();
+    Ok(report)
+}
