@@ -383,9 +383,10 @@ impl<'a> Explorer<'a> {
                     stopped = Some(Stop::FirstFailure);
                     break 'levels;
                 }
+                // finish the level first: where a batch ends depends on the worker count,
+                // and the states stored must not
                 if self.all_decided() {
                     self.stopped_decided = true;
-                    break 'levels;
                 }
                 if last_progress.elapsed() >= Duration::from_millis(250) {
                     last_progress = Instant::now();
@@ -399,6 +400,9 @@ impl<'a> Explorer<'a> {
                         store_bytes: self.store_bytes(),
                     });
                 }
+            }
+            if self.stopped_decided {
+                break;
             }
             level += 1;
         }
