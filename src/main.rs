@@ -70,6 +70,7 @@ pub mod exit {
 }
 
 fn main() -> ExitCode {
+    restore_sigpipe();
     let cli = Cli::parse();
     init_logging(cli.verbose);
     let code = match cli.command {
@@ -81,6 +82,17 @@ fn main() -> ExitCode {
         Command::Replay(args) => replay::run(&args),
     };
     ExitCode::from(code)
+}
+
+/// Rust ignores SIGPIPE, so printing into a closed pipe (`bip replay ... | head`) would
+/// panic; restore the default, and end quietly as `head`'s other writers do.
+fn restore_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any thread exists; SIG_DFL is a valid
+    // disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
 }
 
 fn init_logging(verbose: u8) {

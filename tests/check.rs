@@ -179,3 +179,21 @@ fn usage_errors_exit_2() {
     assert_eq!(bip(&["check"]).status.code(), Some(2));
     assert_eq!(bip(&["frobnicate"]).status.code(), Some(2));
 }
+
+/// A reader that goes away (`bip expand model | head -1`) ends bip quietly, as it ends
+/// other Unix tools, not with a panic about a broken pipe.
+#[test]
+fn a_closed_pipe_is_no_panic() {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_bip"))
+        .args(["expand", "robots/rover.ron"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("bip runs");
+    drop(child.stdout.take()); // the reader is gone before bip writes
+    let out = child.wait_with_output().expect("bip ends");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_ne!(out.status.code(), Some(101), "{stderr}");
+}
