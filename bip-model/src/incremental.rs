@@ -1,11 +1,12 @@
 //! The enabled steps of a state, kept up to date as the state moves.
 //!
 //! [`System::enabled_steps`] evaluates every interaction in every state. A runtime engine
-//! takes one step at a time, and a step moves a few components: only the interactions that
-//! read those components can change. [`EnabledSet`] caches, per interaction, its steps
-//! before priorities, and after a step re-evaluates only the interactions whose participants
-//! or read components (`Interaction::reads`) moved, with the same function the full
-//! relation uses ([`System::push_interaction_steps`]); priorities are applied by looking
+//! takes one step at a time, and a step writes a few slots: only the interactions that
+//! read those slots can change. [`EnabledSet`] caches, per interaction, its steps before
+//! priorities, and after a step re-evaluates only the interactions that read a slot that
+//! changed (a participant's location, a variable that a guard of a participant's
+//! transitions on its port reads, a slot the connector's guard reads), with the same
+//! function the full relation uses ([`System::push_interaction_steps`]); priorities are applied by looking
 //! up, for a lower interaction, whether one of its higher interactions has steps (a sparse
 //! bit mask per lower interaction), or with [`System::is_suppressed`] itself for
 //! interactions under a rule with a `when`. It is not a second notion of "enabled": it
@@ -32,10 +33,12 @@ use crate::system::{RangeError, System};
 #[derive(Clone, Debug)]
 pub struct EnabledSet {
     // ---- tables of the system (fixed) ----
-    /// Per component, its slots: `slots[comp_slots[c]..comp_slots[c + 1]]`.
-    comp_slots: Vec<u32>,
-    /// Per component, the interactions that read it (as a participant, or in a guard or
-    /// action): `deps[deps_start[c]..deps_start[c + 1]]`.
+    /// Per slot, the component it belongs to.
+    slot_comp: Vec<u32>,
+    /// Per slot, the interactions whose steps (before priorities) depend on it: a
+    /// participant's location, a variable a guard of a participant's transitions on its
+    /// port reads, a slot the connector's guard reads.
+    /// `deps[deps_start[s]..deps_start[s + 1]]`.
     deps_start: Vec<u32>,
     deps: Vec<u32>,
     /// Per interaction, its higher interactions under rules without a `when`, as a sparse
@@ -68,6 +71,7 @@ pub struct EnabledSet {
     // ---- scratch ----
     scratch: Steps,
     stamp: Vec<u32>,
+    comp_stamp: Vec<u32>,
     epoch: u32,
     dirty: Vec<u32>,
     /// False after an update failed: the set must be [`EnabledSet::reset`].
@@ -94,23 +98,40 @@ impl EnabledSet {
         let n_comp = system.components.len();
         let words = n_inter.div_ceil(64);
 
-        let mut comp_slots: Vec<u32> = system.components.iter().map(|c| c.slot).collect();
-        comp_slots.push(system.slot_count() as u32);
+        let n_slots = system.slot_count();
+        let mut slot_comp = vec![0u32; n_slots];
+        for (c, comp) in system.components.iter().enumerate() {
+            let end = system
+                .components
+                .get(c + 1)
+                .map_or(n_slots, |next| next.slot as usize);
+            slot_comp[comp.slot as usize..end].fill(c as u32);
+        }
 
-        // component -> interactions reading it (participants and reads), deduplicated
-        let mut per_comp: Vec<Vec<u32>> = vec![Vec::new(); n_comp];
+        // slot -> interactions whose steps read it, deduplicated
+        let mut per_slot: Vec<Vec<u32>> = vec![Vec::new(); n_slots];
         for (i, inter) in system.interactions.iter().enumerate() {
             let i = i as u32;
-            for c in inter
-                .ports
-                .iter()
-                .map(|p| p.component)
-                .chain(inter.reads.iter().copied())
-            {
-                let list = &mut per_comp[c as usize];
-                if list.last() != Some(&i) && !list.contains(&i) {
+            let mut add = |s: u32| {
+                let list = &mut per_slot[s as usize];
+                if !list.contains(&i) {
                     list.push(i);
                 }
+            };
+            for p in &inter.ports {
+                let comp = &system.components[p.component as usize];
+                add(comp.slot);
+                // an atom's guards read only its own variables
+                for t in &system.atoms[comp.atom as usize].transitions {
+                    if let (Some(port), Some(g)) = (t.port, &t.guard) {
+                        if port == p.port {
+                            g.for_each_slot(comp.slot + 1, &mut add);
+                        }
+                    }
+                }
+            }
+            if let Some(g) = &inter.guard {
+                g.for_each_slot(0, &mut add);
             }
         }
         // rules with a `when`: the interactions under them are re-decided in every state,
@@ -127,7 +148,7 @@ impl EnabledSet {
             }
         }
         let any_when = rule_has_when.iter().any(|&w| w);
-        let (deps_start, deps) = flatten(&per_comp);
+        let (deps_start, deps) = flatten(&per_slot);
 
         // lower interaction -> the words of `pre` holding its higher ones (no `when`)
         let mut is_high = vec![0u64; words];
@@ -157,7 +178,7 @@ impl EnabledSet {
         }
 
         let mut set = EnabledSet {
-            comp_slots,
+            slot_comp,
             deps_start,
             deps,
             highs_start,
@@ -173,6 +194,7 @@ impl EnabledSet {
             internal: vec![Vec::new(); n_comp],
             scratch: Steps::new(),
             stamp: vec![0; n_inter],
+            comp_stamp: vec![0; n_comp],
             epoch: 0,
             dirty: Vec::with_capacity(n_inter),
             valid: false,
@@ -206,7 +228,8 @@ impl EnabledSet {
     }
 
     /// Brings the set from `before` (the state it describes) to `after`, the state a step
-    /// led to, re-evaluating only what reads a component whose slots differ.
+    /// led to, re-evaluating only the interactions that read a slot that differs (and the
+    /// internal transitions of the components owning one).
     ///
     /// On a range error (a guard that cannot be evaluated in `after`), the set is left
     /// unusable until [`EnabledSet::reset`]; so is any state of a system other than the
@@ -221,22 +244,21 @@ impl EnabledSet {
         self.epoch = self.epoch.wrapping_add(1);
         if self.epoch == 0 {
             self.stamp.fill(0);
+            self.comp_stamp.fill(0);
             self.epoch = 1;
         }
         self.dirty.clear();
         let (a, b) = (before.slots(), after.slots());
-        for c in 0..self.comp_slots.len() - 1 {
-            let (lo, hi) = (self.comp_slots[c] as usize, self.comp_slots[c + 1] as usize);
-            if a[lo..hi] == b[lo..hi] {
+        debug_assert!(a.len() == self.slot_comp.len() && b.len() == self.slot_comp.len());
+        // a step writes few slots: find them a chunk at a time
+        const CHUNK: usize = 8;
+        for (k, (ca, cb)) in a.chunks(CHUNK).zip(b.chunks(CHUNK)).enumerate() {
+            if ca == cb {
                 continue;
             }
-            self.eval_internal(system, after, c as u32)?;
-            let (s, e) = (self.deps_start[c] as usize, self.deps_start[c + 1] as usize);
-            for k in s..e {
-                let i = self.deps[k];
-                if self.stamp[i as usize] != self.epoch {
-                    self.stamp[i as usize] = self.epoch;
-                    self.dirty.push(i);
+            for (j, (x, y)) in ca.iter().zip(cb).enumerate() {
+                if x != y {
+                    self.slot_changed(system, after, (k * CHUNK + j) as u32)?;
                 }
             }
         }
@@ -250,6 +272,29 @@ impl EnabledSet {
         }
         self.settle(system, after)?;
         self.valid = true;
+        Ok(())
+    }
+
+    /// Marks the interactions reading slot `s` dirty, and re-evaluates the internal
+    /// transitions of its component (once per update).
+    #[inline]
+    fn slot_changed(&mut self, system: &System, after: &State, s: u32) -> Result<(), RangeError> {
+        let c = self.slot_comp[s as usize];
+        if self.comp_stamp[c as usize] != self.epoch {
+            self.comp_stamp[c as usize] = self.epoch;
+            self.eval_internal(system, after, c)?;
+        }
+        let (lo, hi) = (
+            self.deps_start[s as usize] as usize,
+            self.deps_start[s as usize + 1] as usize,
+        );
+        for k in lo..hi {
+            let i = self.deps[k];
+            if self.stamp[i as usize] != self.epoch {
+                self.stamp[i as usize] = self.epoch;
+                self.dirty.push(i);
+            }
+        }
         Ok(())
     }
 

@@ -180,11 +180,6 @@ pub struct Interaction {
     pub trigger: Option<u32>,
     pub guard: Option<Expr>,
     pub action: Vec<Assign>,
-    /// Components whose slots the guard of this interaction reads, besides its
-    /// participants: what its enabledness depends on, for incremental re-evaluation (the
-    /// action does not decide it; [`crate::EnabledSet`] handles what priorities read
-    /// itself).
-    pub reads: Vec<u32>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

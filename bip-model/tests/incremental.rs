@@ -176,3 +176,64 @@ fn robot_models_agree_along_random_walks() {
         }
     }
 }
+
+/// Dependencies are per slot: a step that changes only a variable (no location moves)
+/// must re-evaluate the interactions whose atom guards (on that port) or connector guards
+/// read it, and may skip the others. Each step here flips one flag and nothing else.
+#[test]
+fn variable_only_steps_reach_the_guards_that_read_them() {
+    let sys = load_str(
+        "flags.ron",
+        r#"System(name: "flags",
+        atoms: { "A": Atom(locations: ["s"], initial: "s", ports: ["p", "flip", "bump"],
+            vars: [(name: "f", ty: Bool), (name: "n", ty: Int(0, 1))],
+            transitions: [
+                (from: "s", port: "p", to: "s", guard: "f"),
+                (from: "s", port: "flip", to: "s", action: "f = !f"),
+                (from: "s", port: "bump", to: "s", action: "n = 1 - n"),
+            ]) },
+        components: [(name: "a", atom: "A"), (name: "b", atom: "A")],
+        connectors: [
+            (name: "own_guard", ports: ["a.p"]),
+            (name: "flip_a", ports: ["a.flip"]),
+            (name: "bump_a", ports: ["a.bump"]),
+            (name: "flip_b", ports: ["b.flip"]),
+            (name: "watch", ports: ["b.bump"], guard: "a.n == 1"),
+        ],
+    )"#,
+    )
+    .expect("loads");
+    let mut s = sys.initial_state();
+    let mut set = EnabledSet::new(&sys, &s).expect("evaluates");
+    let mut buf = Steps::new();
+    let mut next = s.clone();
+    let names = |set: &EnabledSet| -> Vec<String> {
+        set.steps().map(|st| sys.label_name(st.label)).collect()
+    };
+    assert!(!names(&set).contains(&"own_guard".to_string()));
+    assert!(!names(&set).contains(&"watch".to_string()));
+    for (take, own_guard, watch) in [
+        ("flip_a", true, false),
+        ("bump_a", true, true),
+        ("flip_b", true, true),
+        ("flip_a", false, true),
+        ("bump_a", false, false),
+    ] {
+        let want = full(&sys, &s, &mut buf).expect("evaluates");
+        let step = want
+            .iter()
+            .find(|st| sys.label_name(st.label) == take)
+            .expect("enabled");
+        sys.fire(&s, step.as_step(), &mut next).expect("fires");
+        set.update(&sys, &s, &next).expect("evaluates");
+        std::mem::swap(&mut s, &mut next);
+        assert_eq!(incremental(&set), full(&sys, &s, &mut buf).expect("ok"));
+        let got = names(&set);
+        assert_eq!(
+            got.contains(&"own_guard".to_string()),
+            own_guard,
+            "after {take}"
+        );
+        assert_eq!(got.contains(&"watch".to_string()), watch, "after {take}");
+    }
+}

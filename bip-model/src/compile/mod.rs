@@ -868,19 +868,6 @@ impl Compiler {
                 });
             }
         }
-        // components the guard reads besides the participants, for incremental
-        // re-evaluation (the action does not decide whether the interaction is enabled)
-        let mut reads: Vec<u32> = Vec::new();
-        let mut note = |slot: u32| {
-            let c = self.component_of_slot(slot);
-            if !refs.iter().any(|p| p.component == c) && !reads.contains(&c) {
-                reads.push(c);
-            }
-        };
-        if let Some(g) = &guard {
-            g.for_each_slot(0, &mut note);
-        }
-        reads.sort_unstable();
         Ok(Interaction {
             name,
             connector: id,
@@ -888,12 +875,7 @@ impl Compiler {
             trigger: trigger_pos,
             guard,
             action: assigns,
-            reads,
         })
-    }
-
-    fn component_of_slot(&self, slot: u32) -> u32 {
-        (self.components.partition_point(|c| c.slot <= slot) - 1) as u32
     }
 
     fn priorities(&mut self, def: &SystemDef) -> (Vec<PriorityRule>, Vec<Vec<u32>>) {
