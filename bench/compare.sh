@@ -46,7 +46,7 @@ printf "%-10s %-16s %12s %9s %12s %9s %9s\n" model tool states seconds states/s 
 for m in "${models[@]}"; do
     name=$(basename "$m" .ron)
     for jobs in 1 2; do
-        read -r secs kib < <(measure "$BIP" verify "$m" -j "$jobs" --format json)
+        read -r secs kib < <(measure "$BIP" verify "$m" --method explicit -j "$jobs" --format json)
         states=$(python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); print(d["stats"]["states"], d["stats"]["bytes_per_state"], d["stats"]["seconds"])' "$WORK/out")
         read -r n bps inner <<<"$states"
         printf "%-10s %-16s %12s %9.2f %12.0f %9.1f %9.1f\n" "$name" "bip -j$jobs" "$n" "$inner" "$(python3 -c "print($n/max($inner,1e-9))")" "$(python3 -c "print($kib/1024)")" "$bps"
