@@ -189,22 +189,6 @@ pub fn run(args: &Args) -> u8 {
     code
 }
 
-/// The services a client may request.
-fn requestable(system: &System) -> Vec<(String, String)> {
-    let Some(map) = &system.genom else {
-        return Vec::new();
-    };
-    map.modules
-        .iter()
-        .flat_map(|m| {
-            m.services
-                .iter()
-                .filter(|s| !s.owned_by_model)
-                .map(move |s| (m.name.clone(), s.name.clone()))
-        })
-        .collect()
-}
-
 /// A random enabled environment step of a model without a GenoM layer.
 fn environment_step(
     system: &System,
@@ -252,4 +236,14 @@ fn check(
         Ok(_) => None,
         Err(e) => Some(Stop::RangeError(e.to_string())),
     }
+}
+
+/// The services a client may request, owned (the engine takes the system).
+fn requestable(system: &System) -> Vec<(String, String)> {
+    system
+        .genom
+        .iter()
+        .flat_map(|g| g.requestable())
+        .map(|(m, s)| (m.to_string(), s.to_string()))
+        .collect()
 }

@@ -2,6 +2,8 @@
 //! that `bip check` reads back with the same sizes, and bad GenoM input gets a diagnostic
 //! with its position and exit code 2.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -281,13 +283,7 @@ fn the_satellite_verifies() {
 /// models (an independent check of the expansion's step relation through the exporter).
 #[test]
 fn spin_counts_the_same_states_on_expanded_models() {
-    let have = |tool: &str| {
-        Command::new("sh")
-            .args(["-c", &format!("command -v {tool}")])
-            .output()
-            .is_ok_and(|o| o.status.success())
-    };
-    if !have("spin") || !have("gcc") {
+    if !common::have("spin") || !common::have("gcc") {
         println!("note: spin or gcc is not on PATH; the SPIN cross-check was NOT run (apt-get install spin)");
         return;
     }

@@ -1,5 +1,7 @@
 //! End-to-end tests of `bip verify` and `bip export --promela`.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -320,13 +322,7 @@ fn symbolic_and_auto_methods() {
 /// finds dead (bip keeps every variable).
 #[test]
 fn spin_agrees_on_the_examples() {
-    let have = |tool: &str| {
-        Command::new("sh")
-            .args(["-c", &format!("command -v {tool}")])
-            .output()
-            .is_ok_and(|o| o.status.success())
-    };
-    if !have("spin") || !have("gcc") {
+    if !common::have("spin") || !common::have("gcc") {
         println!("note: spin or gcc is not on PATH; the SPIN cross-check was NOT run (apt-get install spin)");
         return;
     }

@@ -86,21 +86,6 @@ fn random_codels(system: &System, rng: Arc<Mutex<Rng>>) -> EngineBuilder {
     b
 }
 
-fn services(system: &System) -> Vec<(String, String)> {
-    let Some(map) = &system.genom else {
-        return Vec::new();
-    };
-    map.modules
-        .iter()
-        .flat_map(|m| {
-            m.services
-                .iter()
-                .filter(|s| !s.owned_by_model)
-                .map(move |s| (m.name.clone(), s.name.clone()))
-        })
-        .collect()
-}
-
 fn run_case(model: usize, seed: u64) -> Result<(), TestCaseError> {
     let system = match model {
         0 => load("rover.ron"),
@@ -115,7 +100,7 @@ fn run_case(model: usize, seed: u64) -> Result<(), TestCaseError> {
         .record(2000)
         .build()
         .map_err(|e| TestCaseError::fail(e.to_string()))?;
-    let services = services(&system);
+    let services = requestable(&system);
     let mut done: HashMap<Ticket, usize> = HashMap::new();
     while engine.stats().steps < 600 {
         let (request, chunk) = {
@@ -232,4 +217,14 @@ fn silence_injected_panics() {
             }
         }));
     });
+}
+
+/// The services a client may request, owned (the engine takes the system).
+fn requestable(system: &System) -> Vec<(String, String)> {
+    system
+        .genom
+        .iter()
+        .flat_map(|g| g.requestable())
+        .map(|(m, s)| (m.to_string(), s.to_string()))
+        .collect()
 }

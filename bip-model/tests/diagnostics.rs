@@ -1,25 +1,9 @@
 //! Bad input: every case gets an error that points at the offending text, never a panic.
 
+mod support;
+use support::errors::{assert_error, first_error};
+
 use bip_model::{load_file, load_str, LoadError};
-
-/// Loads `text`, expects it to fail, and returns the first error's message and the text
-/// its span covers.
-fn first_error(text: &str) -> (String, String, (usize, usize)) {
-    let err = match load_str("bad.ron", text) {
-        Ok(_) => panic!("expected the model to be rejected"),
-        Err(e) => e,
-    };
-    let e = err.errors().first().expect("at least one error").clone();
-    let covered = text.get(e.span.start..e.span.end).unwrap_or("").to_string();
-    (e.message, covered, err.positions()[0])
-}
-
-/// Asserts that the first error mentions `words` and points at `covered`.
-fn assert_error(text: &str, words: &str, covered: &str) {
-    let (msg, got, pos) = first_error(text);
-    assert!(msg.contains(words), "message `{msg}` lacks `{words}`");
-    assert_eq!(got, covered, "span of `{msg}` at {pos:?}");
-}
 
 /// A small valid model with `{ATOM}`-style holes filled by each test.
 fn model(atoms: &str, components: &str, connectors: &str, extra: &str) -> String {

@@ -1,27 +1,12 @@
 //! The GenoM layer from the outside: bad input gets an error at the offending text, the
 //! expanded model reloads with the same behaviour, and the engine's map fits the system.
 
+mod support;
+use support::errors::{assert_error, first_error};
+
 use std::collections::HashSet;
 
 use bip_model::{expand_str, load_str, parse_str, State, System};
-
-/// Loads `text`, expects it to fail; the first error's message, the text its span covers,
-/// and its (line, column).
-fn first_error(text: &str) -> (String, String, (usize, usize)) {
-    let err = match load_str("bad.ron", text) {
-        Ok(_) => panic!("expected the model to be rejected"),
-        Err(e) => e,
-    };
-    let e = err.errors().first().expect("at least one error").clone();
-    let covered = text.get(e.span.start..e.span.end).unwrap_or("").to_string();
-    (e.message, covered, err.positions()[0])
-}
-
-fn assert_error(text: &str, words: &str, covered: &str) {
-    let (msg, got, pos) = first_error(text);
-    assert!(msg.contains(words), "message `{msg}` lacks `{words}`");
-    assert_eq!(got, covered, "span of `{msg}` at {pos:?}");
-}
 
 /// A valid model: `sick` and `ndd`, one constraint; each test breaks one thing.
 const GOOD: &str = r#"System(

@@ -198,6 +198,17 @@ impl core::fmt::Display for Reason {
 }
 
 impl GenomMap {
+    /// The services a client of the layer may request, as `(module, service)`: all but
+    /// those whose requests a component of the model sends.
+    pub fn requestable(&self) -> impl Iterator<Item = (&str, &str)> + '_ {
+        self.modules.iter().flat_map(|m| {
+            m.services
+                .iter()
+                .filter(|s| !s.owned_by_model)
+                .map(move |s| (m.name.as_str(), s.name.as_str()))
+        })
+    }
+
     pub fn module(&self, name: &str) -> Option<&ModuleMap> {
         self.modules.iter().find(|m| m.name == name)
     }
