@@ -15,20 +15,7 @@ use bip_model::System;
 use common::*;
 use proptest::prelude::*;
 
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
+use bip_model::Rng;
 
 fn leak(s: &str) -> &'static str {
     Box::leak(s.to_string().into_boxed_str())
@@ -62,7 +49,7 @@ fn random_codels(system: &System, rng: Arc<Mutex<Rng>>) -> EngineBuilder {
                         }
                     }
                     for &p in &ports {
-                        ctx.write_port(p, r.next());
+                        ctx.write_port(p, r.next_u64());
                     }
                     let roll = r.below(100);
                     if roll < 3 {

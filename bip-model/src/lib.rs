@@ -46,6 +46,7 @@ mod incremental;
 mod load;
 pub mod ops;
 mod ordered_map;
+mod rng;
 #[cfg(feature = "std")]
 pub mod source;
 mod state;
@@ -70,6 +71,7 @@ pub use load::{
     ron_options,
 };
 pub use ordered_map::OrderedMap;
+pub use rng::Rng;
 pub use state::{State, StateLayout};
 pub use step::{Label, OwnedStep, Pick, Step, Steps};
 pub use system::{
