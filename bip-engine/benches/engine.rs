@@ -9,6 +9,11 @@
 //!
 //! The engine runs on a virtual clock, so ticks come as soon as nothing else is left to
 //! do: the run measures the engine, not the rover's 100 ms period.
+//!
+//! For counting instructions instead of time (a noisy machine, or one without hardware
+//! counters), run only the first part, shorter, under callgrind:
+//!
+//!     valgrind --tool=callgrind target/release/deps/engine-HASH --empty-only --steps 200000 --runs 1
 
 use std::hint::black_box;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -119,17 +124,52 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-const RUNS: usize = 5;
+/// The command line: `--steps N` (timed steps with empty codels, default 2,000,000),
+/// `--runs N` (default 5), `--empty-only` (skip the 2 µs codels).
+struct Options {
+    steps: u64,
+    runs: usize,
+    empty_only: bool,
+}
+
+fn options() -> Options {
+    let mut o = Options {
+        steps: 2_000_000,
+        runs: 5,
+        empty_only: false,
+    };
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        let mut number = |what: &str| -> u64 {
+            match args.next().map(|v| v.parse()) {
+                Some(Ok(n)) if n > 0 => n,
+                _ => panic!("{what} needs a positive number"),
+            }
+        };
+        match a.as_str() {
+            "--steps" => o.steps = number("--steps"),
+            "--runs" => o.runs = number("--runs") as usize,
+            "--empty-only" => o.empty_only = true,
+            // cargo bench passes `--bench`
+            _ => {}
+        }
+    }
+    o
+}
 
 fn main() {
+    let o = options();
     let system = rover();
-    println!("rover.ron, one thread, virtual clock; median of {RUNS} runs");
+    println!(
+        "rover.ron, one thread, virtual clock; median of {} runs",
+        o.runs
+    );
 
     // 1. empty codels
-    let steps = 2_000_000;
+    let steps = o.steps;
     let mut rates = Vec::new();
     let mut codel_share = 0.0;
-    for _ in 0..RUNS {
+    for _ in 0..o.runs {
         let mut e = running(&system, empty);
         let (t, codels) = timed(&mut e, steps);
         rates.push(steps as f64 / t.as_secs_f64());
@@ -142,6 +182,9 @@ fn main() {
         1e9 / rate,
         codel_share * 100.0
     );
+    if o.empty_only {
+        return;
+    }
 
     // 2. codels of about 2 µs
     calibrate(Duration::from_micros(2));
@@ -149,7 +192,7 @@ fn main() {
     let mut overheads = Vec::new();
     let mut per_codel = Vec::new();
     let mut work_us = 0.0;
-    for _ in 0..RUNS {
+    for _ in 0..o.runs {
         let mut e = running(&system, work);
         let (t, codels) = timed(&mut e, steps);
         let alone = work_alone(codels);
