@@ -65,6 +65,23 @@ pub enum EvalError {
     IndexOutOfBounds { family: u32, index: i64, count: u32 },
 }
 
+/// What an evaluation reports when it fails: the details, or only the fact.
+trait Failure: Sized {
+    fn of(e: EvalError) -> Self;
+}
+
+impl Failure for EvalError {
+    #[inline(always)]
+    fn of(e: EvalError) -> Self {
+        e
+    }
+}
+
+impl Failure for () {
+    #[inline(always)]
+    fn of(_: EvalError) -> Self {}
+}
+
 /// The values an expression reads: state slots, the slot base of the component whose own
 /// variables `Local` refers to, and the quantified variables.
 pub struct Env<'a> {
@@ -89,19 +106,30 @@ impl Expr {
     }
 
     pub fn eval(&self, env: &mut Env<'_>) -> Result<i64, EvalError> {
+        // Evaluation is pure: on the rare failure, evaluating again with the details
+        // costs nothing in the common case, where a small error keeps the result in
+        // registers.
+        match self.eval_as::<()>(env) {
+            Ok(v) => Ok(v),
+            Err(()) => self.eval_as::<EvalError>(env),
+        }
+    }
+
+    /// Evaluation with failures of type `F` (the details, or only that it failed).
+    fn eval_as<F: Failure>(&self, env: &mut Env<'_>) -> Result<i64, F> {
         Ok(match self {
             Expr::Const(v) => *v,
             Expr::Slot(s) => env.slots[*s as usize],
             Expr::Local(n) => env.slots[(env.base + n) as usize],
             Expr::At(s, loc) => (env.slots[*s as usize] == i64::from(*loc)) as i64,
             Expr::Indexed(ix) => {
-                let i = ix.index.eval(env)?;
+                let i = ix.index.eval_as(env)?;
                 if i < 0 || i >= i64::from(ix.count) {
-                    return Err(EvalError::IndexOutOfBounds {
+                    return Err(F::of(EvalError::IndexOutOfBounds {
                         family: ix.family,
                         index: i,
                         count: ix.count,
-                    });
+                    }));
                 }
                 let slot =
                     ix.first_slot as usize + i as usize * ix.stride as usize + ix.offset as usize;
@@ -111,19 +139,22 @@ impl Expr {
                 }
             }
             Expr::Bound(d) => env.bound[*d as usize],
-            Expr::Not(e) => (e.eval(env)? == 0) as i64,
-            Expr::Neg(e) => e.eval(env)?.checked_neg().ok_or(EvalError::Overflow)?,
+            Expr::Not(e) => (e.eval_as(env)? == 0) as i64,
+            Expr::Neg(e) => e
+                .eval_as(env)?
+                .checked_neg()
+                .ok_or(F::of(EvalError::Overflow))?,
             Expr::Binary(op, a, b) => match op {
-                BinOp::And => (a.eval(env)? != 0 && b.eval(env)? != 0) as i64,
-                BinOp::Or => (a.eval(env)? != 0 || b.eval(env)? != 0) as i64,
-                BinOp::Implies => (a.eval(env)? == 0 || b.eval(env)? != 0) as i64,
-                _ => binary(*op, a.eval(env)?, b.eval(env)?)?,
+                BinOp::And => (a.eval_as(env)? != 0 && b.eval_as(env)? != 0) as i64,
+                BinOp::Or => (a.eval_as(env)? != 0 || b.eval_as(env)? != 0) as i64,
+                BinOp::Implies => (a.eval_as(env)? == 0 || b.eval_as(env)? != 0) as i64,
+                _ => binary(*op, a.eval_as(env)?, b.eval_as(env)?).map_err(F::of)?,
             },
             Expr::Cond(c, a, b) => {
-                if c.eval(env)? != 0 {
-                    a.eval(env)?
+                if c.eval_as(env)? != 0 {
+                    a.eval_as(env)?
                 } else {
-                    b.eval(env)?
+                    b.eval_as(env)?
                 }
             }
             Expr::Quant(q) => {
@@ -134,11 +165,13 @@ impl Expr {
                 };
                 for i in q.lo..q.hi {
                     env.bound[d] = i;
-                    let v = q.body.eval(env)?;
+                    let v = q.body.eval_as(env)?;
                     match q.kind {
                         QuantKind::Forall if v == 0 => return Ok(0),
                         QuantKind::Exists if v != 0 => return Ok(1),
-                        QuantKind::Sum => acc = acc.checked_add(v).ok_or(EvalError::Overflow)?,
+                        QuantKind::Sum => {
+                            acc = acc.checked_add(v).ok_or(F::of(EvalError::Overflow))?
+                        }
                         QuantKind::Count => acc += (v != 0) as i64,
                         _ => {}
                     }
@@ -256,6 +289,7 @@ impl Expr {
 }
 
 /// The arithmetic and comparison operators on integers (booleans are 0 and 1).
+#[inline]
 pub fn binary(op: BinOp, a: i64, b: i64) -> Result<i64, EvalError> {
     Ok(match op {
         BinOp::Add => a.checked_add(b).ok_or(EvalError::Overflow)?,

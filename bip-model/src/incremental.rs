@@ -22,7 +22,7 @@
 use crate::prelude::*;
 
 use crate::state::State;
-use crate::step::{Label, Pick, Step, Steps};
+use crate::step::{Choices, Label, Pick, Step, Steps};
 use crate::system::{RangeError, System};
 
 /// The enabled steps of one state of one system (after priorities), maintained
@@ -33,14 +33,15 @@ use crate::system::{RangeError, System};
 #[derive(Clone, Debug)]
 pub struct EnabledSet {
     // ---- tables of the system (fixed) ----
-    /// Per slot, the component it belongs to.
+    /// Per slot, the component it belongs to, and that component's location slot.
     slot_comp: Vec<u32>,
+    slot_loc: Vec<u32>,
     /// Per slot, the interactions whose steps (before priorities) depend on it: a
-    /// participant's location, a variable a guard of a participant's transitions on its
-    /// port reads, a slot the connector's guard reads.
-    /// `deps[deps_start[s]..deps_start[s + 1]]`.
+    /// participant's location, a variable that a guard of a participant's transitions on its
+    /// port reads (in the locations those transitions leave), a slot the connector's guard
+    /// reads. `deps[deps_start[s]..deps_start[s + 1]]`.
     deps_start: Vec<u32>,
-    deps: Vec<u32>,
+    deps: Vec<Dep>,
     /// Per interaction, its higher interactions under rules without a `when`, as a sparse
     /// bit mask: `(word, bits)` pairs over `pre`,
     /// `highs[highs_start[i]..highs_start[i + 1]]`.
@@ -69,13 +70,29 @@ pub struct EnabledSet {
     internal: Vec<Vec<Pick>>,
 
     // ---- scratch ----
-    scratch: Steps,
+    scratch: Choices,
     stamp: Vec<u32>,
     comp_stamp: Vec<u32>,
     epoch: u32,
     dirty: Vec<u32>,
     /// False after an update failed: the set must be [`EnabledSet::reset`].
     valid: bool,
+}
+
+/// An interaction whose steps read a slot, in the locations (of the slot's component)
+/// where the read matters.
+#[derive(Clone, Copy, Debug)]
+struct Dep {
+    interaction: u32,
+    locations: u64,
+}
+
+/// Every location.
+const ANYWHERE: u64 = u64::MAX;
+
+/// The bit of a location in [`Dep::locations`]; locations from 63 on share the last bit.
+fn location_bit(loc: u32) -> u64 {
+    1 << loc.min(63)
 }
 
 fn bit(bits: &[u64], i: u32) -> bool {
@@ -100,38 +117,49 @@ impl EnabledSet {
 
         let n_slots = system.slot_count();
         let mut slot_comp = vec![0u32; n_slots];
+        let mut slot_loc = vec![0u32; n_slots];
         for (c, comp) in system.components.iter().enumerate() {
             let end = system
                 .components
                 .get(c + 1)
                 .map_or(n_slots, |next| next.slot as usize);
             slot_comp[comp.slot as usize..end].fill(c as u32);
+            slot_loc[comp.slot as usize..end].fill(comp.slot);
         }
 
-        // slot -> interactions whose steps read it, deduplicated
-        let mut per_slot: Vec<Vec<u32>> = vec![Vec::new(); n_slots];
+        // slot -> interactions whose steps read it, each with the locations of the slot's
+        // component in which the read matters
+        let mut per_slot: Vec<Vec<Dep>> = vec![Vec::new(); n_slots];
         for (i, inter) in system.interactions.iter().enumerate() {
             let i = i as u32;
-            let mut add = |s: u32| {
+            let mut add = |s: u32, locations: u64| {
                 let list = &mut per_slot[s as usize];
-                if !list.contains(&i) {
-                    list.push(i);
+                match list.iter_mut().find(|d| d.interaction == i) {
+                    Some(d) => d.locations |= locations,
+                    None => list.push(Dep {
+                        interaction: i,
+                        locations,
+                    }),
                 }
             };
             for p in &inter.ports {
                 let comp = &system.components[p.component as usize];
-                add(comp.slot);
-                // an atom's guards read only its own variables
+                add(comp.slot, ANYWHERE);
+                // a transition's guard matters only where the transition starts (an
+                // atom's guards read only its own variables; anything else, anywhere)
                 for t in &system.atoms[comp.atom as usize].transitions {
                     if let (Some(port), Some(g)) = (t.port, &t.guard) {
                         if port == p.port {
-                            g.for_each_slot(comp.slot + 1, &mut add);
+                            g.for_each_slot(comp.slot + 1, &mut |s| {
+                                let own = slot_comp[s as usize] == p.component;
+                                add(s, if own { location_bit(t.from) } else { ANYWHERE })
+                            });
                         }
                     }
                 }
             }
             if let Some(g) = &inter.guard {
-                g.for_each_slot(0, &mut add);
+                g.for_each_slot(0, &mut |s| add(s, ANYWHERE));
             }
         }
         // rules with a `when`: the interactions under them are re-decided in every state,
@@ -179,6 +207,7 @@ impl EnabledSet {
 
         let mut set = EnabledSet {
             slot_comp,
+            slot_loc,
             deps_start,
             deps,
             highs_start,
@@ -192,7 +221,7 @@ impl EnabledSet {
             stale: vec![0; words],
             when_suppressed: vec![0; words],
             internal: vec![Vec::new(); n_comp],
-            scratch: Steps::new(),
+            scratch: Choices::default(),
             stamp: vec![0; n_inter],
             comp_stamp: vec![0; n_comp],
             epoch: 0,
@@ -288,8 +317,17 @@ impl EnabledSet {
             self.deps_start[s as usize] as usize,
             self.deps_start[s as usize + 1] as usize,
         );
+        let here = location_bit(after.slots()[self.slot_loc[s as usize] as usize] as u32);
         for k in lo..hi {
-            let i = self.deps[k];
+            let Dep {
+                interaction: i,
+                locations,
+            } = self.deps[k];
+            if locations & here == 0 {
+                // no guard that reads the slot can be taken from where its component is;
+                // if the component moved, its location slot marks the interaction
+                continue;
+            }
             if self.stamp[i as usize] != self.epoch {
                 self.stamp[i as usize] = self.epoch;
                 self.dirty.push(i);
@@ -323,10 +361,7 @@ impl EnabledSet {
     fn eval_internal(&mut self, system: &System, state: &State, c: u32) -> Result<(), RangeError> {
         let out = &mut self.internal[c as usize];
         out.clear();
-        self.scratch.clear();
-        system.push_internal_steps_of(state, c, &mut self.scratch)?;
-        out.extend_from_slice(&self.scratch.picks);
-        Ok(())
+        system.internal_picks(state, c, out)
     }
 
     fn eval_interaction(
@@ -335,14 +370,11 @@ impl EnabledSet {
         state: &State,
         i: u32,
     ) -> Result<(), RangeError> {
-        self.scratch.clear();
-        system.push_interaction_steps(state, i, &mut self.scratch)?;
-        let steps = self.scratch.len();
         let picks = &mut self.picks[i as usize];
         picks.clear();
-        picks.extend_from_slice(&self.scratch.picks);
-        self.width[i as usize] = picks.len().checked_div(steps).unwrap_or(0) as u32;
-        set_bit(&mut self.pre, i, steps > 0);
+        let width = system.interaction_picks(state, i, &mut self.scratch, picks)?;
+        self.width[i as usize] = width as u32;
+        set_bit(&mut self.pre, i, width > 0);
         Ok(())
     }
 

@@ -40,6 +40,7 @@ pub mod diag;
 pub mod eval;
 #[cfg(feature = "std")]
 pub mod expr;
+mod fast_path;
 pub mod genom;
 mod incremental;
 #[cfg(feature = "std")]

@@ -9,8 +9,9 @@
 use crate::prelude::*;
 
 use crate::eval::{Env, EvalError};
+use crate::fast_path::{ActionCode, FlatCode, GuardCode};
 use crate::state::State;
-use crate::system::{Assign, RangeError, RangeErrorKind, System, Target};
+use crate::system::{Assign, RangeError, RangeErrorKind, System};
 
 /// What a step is: an internal transition of one component, or an interaction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -72,14 +73,21 @@ impl OwnedStep {
 pub struct Steps {
     entries: Vec<StepEntry>,
     pub(crate) picks: Vec<Pick>,
-    /// Scratch: enabled transitions per port of the interaction being expanded.
-    choices: Vec<Pick>,
-    bounds: Vec<(u32, u32)>,
-    cursor: Vec<u32>,
+    choices: Choices,
     /// Scratch: which interactions are enabled before priorities, and which of those are
     /// suppressed (one bit each).
     enabled: Vec<u64>,
     suppressed: Vec<u64>,
+}
+
+/// Scratch for expanding an interaction into steps: the enabled transitions of each
+/// joining port, and an odometer over their combinations.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Choices {
+    choices: Vec<Pick>,
+    /// Per joining port, `(start, len)` in `choices`.
+    bounds: Vec<(u32, u32)>,
+    cursor: Vec<u32>,
 }
 
 impl Steps {
@@ -135,6 +143,14 @@ pub(crate) struct EnableIndex {
     ports: Vec<PortCell>,
     /// One per component: where its internal transitions are.
     internal: Vec<PortCell>,
+    /// The flat forms of the guards and actions: per atom, from `atom_code[atom]` on, one
+    /// per transition; per interaction, its connector's.
+    flat: FlatCode,
+    atom_code: Vec<u32>,
+    guards: Vec<GuardCode>,
+    actions: Vec<ActionCode>,
+    inter_guards: Vec<GuardCode>,
+    inter_actions: Vec<ActionCode>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -146,6 +162,10 @@ struct PortCell {
     stride: u32,
     /// A broadcast receiver, which does not block the interaction.
     optional: bool,
+    /// Where the atom's transitions start in the flat code tables.
+    code: u32,
+    /// The slot of the component's first variable (what `Local` reads are relative to).
+    vars: u32,
 }
 
 impl EnableIndex {
@@ -157,10 +177,25 @@ impl EnableIndex {
     ) -> EnableIndex {
         let mut cells = Vec::new();
         let mut atom_base = Vec::with_capacity(atoms.len());
+        let mut flat = FlatCode::default();
+        let (mut atom_code, mut guards, mut actions) = (Vec::new(), Vec::new(), Vec::new());
         for a in atoms {
             atom_base.push(cells.len() as u32);
             cells.extend(a.by_loc_port.iter().map(|r| (r.start, r.end)));
+            atom_code.push(guards.len() as u32);
+            for t in &a.transitions {
+                guards.push(flat.guard(t.guard.as_ref()));
+                actions.push(flat.action(&t.action));
+            }
         }
+        let inter_guards = interactions
+            .iter()
+            .map(|i| flat.guard(i.guard.as_ref()))
+            .collect();
+        let inter_actions = interactions
+            .iter()
+            .map(|i| flat.action(&i.action))
+            .collect();
         let cell = |component: u32, col: usize, optional: bool| {
             let comp = &components[component as usize];
             let atom = &atoms[comp.atom as usize];
@@ -170,6 +205,8 @@ impl EnableIndex {
                 base: atom_base[comp.atom as usize] + col as u32,
                 stride: atom.ports.len() as u32 + 1,
                 optional,
+                code: atom_code[comp.atom as usize],
+                vars: comp.slot + 1,
             }
         };
         let mut ports = Vec::new();
@@ -193,6 +230,12 @@ impl EnableIndex {
             inter_ports,
             ports,
             internal,
+            flat,
+            atom_code,
+            guards,
+            actions,
+            inter_guards,
+            inter_actions,
         }
     }
 
@@ -240,19 +283,33 @@ impl System {
         c: u32,
         out: &mut Steps,
     ) -> Result<(), RangeError> {
+        let start = out.picks.len();
+        self.internal_picks(state, c, &mut out.picks)?;
+        for k in start..out.picks.len() {
+            out.entries.push(StepEntry {
+                label: Label::Internal { component: c },
+                picks_start: k as u32,
+                picks_end: k as u32 + 1,
+            });
+        }
+        Ok(())
+    }
+
+    /// Appends to `out` the enabled internal transitions of component `c` in `state`.
+    pub(crate) fn internal_picks(
+        &self,
+        state: &State,
+        c: u32,
+        out: &mut Vec<Pick>,
+    ) -> Result<(), RangeError> {
         let cell = &self.enable_index.internal[c as usize];
         let (start, end) = self.enable_index.transitions(cell, state.slots());
         for t in start..end {
-            if self.transition_guard(state, cell.component, t)? {
-                out.push(
-                    Label::Internal {
-                        component: cell.component,
-                    },
-                    [Pick {
-                        component: cell.component,
-                        transition: t,
-                    }],
-                );
+            if self.cell_guard(state, cell, t)? {
+                out.push(Pick {
+                    component: cell.component,
+                    transition: t,
+                });
             }
         }
         Ok(())
@@ -284,7 +341,20 @@ impl System {
         Ok(false)
     }
 
-    #[inline]
+    /// The guard of transition `t` of the component of `cell`, in flat form if it has one.
+    #[inline(always)]
+    fn cell_guard(&self, state: &State, cell: &PortCell, t: u32) -> Result<bool, RangeError> {
+        let idx = &self.enable_index;
+        match idx.guards[(cell.code + t) as usize] {
+            GuardCode::Always => Ok(true),
+            GuardCode::Tests { start, end } => {
+                Ok(idx.flat.all_hold(start, end, state.slots(), cell.vars))
+            }
+            GuardCode::Tree => self.transition_guard(state, cell.component, t),
+        }
+    }
+
+    #[inline(never)]
     fn transition_guard(&self, state: &State, c: u32, t: u32) -> Result<bool, RangeError> {
         let comp = &self.components[c as usize];
         let atom = &self.atoms[comp.atom as usize];
@@ -306,7 +376,32 @@ impl System {
         i: u32,
         out: &mut Steps,
     ) -> Result<(), RangeError> {
-        let inter = &self.interactions[i as usize];
+        let start = out.picks.len();
+        let width = self.interaction_picks(state, i, &mut out.choices, &mut out.picks)?;
+        if width == 0 {
+            return Ok(());
+        }
+        for first in (start..out.picks.len()).step_by(width) {
+            out.entries.push(StepEntry {
+                label: Label::Interaction(i),
+                picks_start: first as u32,
+                picks_end: (first + width) as u32,
+            });
+        }
+        Ok(())
+    }
+
+    /// Appends to `out` the picks of the steps of interaction `i` in `state` (before
+    /// priorities), one step after the other, and returns how many picks a step has (0:
+    /// no step). Every step of an interaction in a state has the same participants: the
+    /// required ports and the broadcast receivers that can join.
+    pub(crate) fn interaction_picks(
+        &self,
+        state: &State,
+        i: u32,
+        scratch: &mut Choices,
+        out: &mut Vec<Pick>,
+    ) -> Result<usize, RangeError> {
         let slots = state.slots();
         let idx = &self.enable_index;
         let (first, last) = idx.inter_ports[i as usize];
@@ -316,67 +411,84 @@ impl System {
             if !cell.optional {
                 let (start, end) = idx.transitions(cell, slots);
                 if start == end {
-                    return Ok(());
+                    return Ok(0);
                 }
             }
         }
-        out.choices.clear();
-        out.bounds.clear();
+        let Choices {
+            choices,
+            bounds,
+            cursor,
+        } = scratch;
+        choices.clear();
+        bounds.clear();
+        let mut combinations = 1usize;
         for cell in ports {
             let (from, to) = idx.transitions(cell, slots);
-            let start = out.choices.len() as u32;
+            let start = choices.len() as u32;
             for t in from..to {
-                if self.transition_guard(state, cell.component, t)? {
-                    out.choices.push(Pick {
+                if self.cell_guard(state, cell, t)? {
+                    choices.push(Pick {
                         component: cell.component,
                         transition: t,
                     });
                 }
             }
-            let len = out.choices.len() as u32 - start;
+            let len = choices.len() as u32 - start;
             if len == 0 {
                 if !cell.optional {
-                    return Ok(()); // a required port is not enabled
+                    return Ok(0); // a required port is not enabled
                 }
                 continue; // a broadcast receiver that does not join
             }
-            out.bounds.push((start, len));
+            combinations = combinations.saturating_mul(len as usize);
+            bounds.push((start, len));
         }
-        if let Some(g) = &inter.guard {
-            let ok = g
-                .holds(&mut Env::new(slots, 0))
-                .map_err(|e| self.range_error(e, &format!("guard of {}", inter.name)))?;
-            if !ok {
-                return Ok(());
-            }
+        let ok = match idx.inter_guards[i as usize] {
+            GuardCode::Always => true,
+            GuardCode::Tests { start, end } => idx.flat.all_hold(start, end, slots, 0),
+            GuardCode::Tree => self.connector_guard(state, i)?,
+        };
+        if !ok {
+            return Ok(0);
+        }
+        let width = bounds.len();
+        if combinations == 1 {
+            // the common case: one enabled transition per joining port
+            out.extend_from_slice(choices);
+            return Ok(width);
         }
         // every combination of one enabled transition per joining port, in port order
-        out.cursor.clear();
-        out.cursor.resize(out.bounds.len(), 0);
+        cursor.clear();
+        cursor.resize(width, 0);
         loop {
-            let start = out.picks.len() as u32;
-            for (k, &(s, _)) in out.bounds.iter().enumerate() {
-                let pick = out.choices[(s + out.cursor[k]) as usize];
-                out.picks.push(pick);
+            for (k, &(s, _)) in bounds.iter().enumerate() {
+                out.push(choices[(s + cursor[k]) as usize]);
             }
-            out.entries.push(StepEntry {
-                label: Label::Interaction(i),
-                picks_start: start,
-                picks_end: out.picks.len() as u32,
-            });
             // advance the odometer, last port fastest
-            let mut k = out.bounds.len();
+            let mut k = width;
             loop {
                 if k == 0 {
-                    return Ok(());
+                    return Ok(width);
                 }
                 k -= 1;
-                out.cursor[k] += 1;
-                if out.cursor[k] < out.bounds[k].1 {
+                cursor[k] += 1;
+                if cursor[k] < bounds[k].1 {
                     break;
                 }
-                out.cursor[k] = 0;
+                cursor[k] = 0;
             }
+        }
+    }
+
+    #[inline(never)]
+    fn connector_guard(&self, state: &State, i: u32) -> Result<bool, RangeError> {
+        let inter = &self.interactions[i as usize];
+        match &inter.guard {
+            Some(g) => g
+                .holds(&mut Env::new(state.slots(), 0))
+                .map_err(|e| self.range_error(e, &format!("guard of {}", inter.name))),
+            None => Ok(true),
         }
     }
 
@@ -455,24 +567,27 @@ impl System {
     /// On a range error, `to` holds a partial result and must not be used as a state.
     pub fn fire(&self, from: &State, step: Step<'_>, to: &mut State) -> Result<(), RangeError> {
         to.copy_from(from);
+        let idx = &self.enable_index;
         if let Label::Interaction(i) = step.label {
             let inter = &self.interactions[i as usize];
-            self.run_action(&inter.action, 0, to)
+            self.run_action(idx.inter_actions[i as usize], &inter.action, 0, to)
                 .map_err(|e| self.name_error(e, &format!("action of {}", inter.name)))?;
         }
         for p in step.picks {
             let comp = &self.components[p.component as usize];
             let atom = &self.atoms[comp.atom as usize];
             let t = &atom.transitions[p.transition as usize];
-            self.run_action(&t.action, comp.slot + 1, to).map_err(|e| {
-                self.name_error(
-                    e,
-                    &format!(
-                        "action of {}",
-                        self.describe_transition(p.component, p.transition)
-                    ),
-                )
-            })?;
+            let code = idx.actions[(idx.atom_code[comp.atom as usize] + p.transition) as usize];
+            self.run_action(code, &t.action, comp.slot + 1, to)
+                .map_err(|e| {
+                    self.name_error(
+                        e,
+                        &format!(
+                            "action of {}",
+                            self.describe_transition(p.component, p.transition)
+                        ),
+                    )
+                })?;
         }
         for p in step.picks {
             let comp = &self.components[p.component as usize];
@@ -483,21 +598,25 @@ impl System {
         Ok(())
     }
 
-    /// Runs assignments left to right on `state`, each seeing the ones before it.
+    /// Runs assignments left to right on `state`, each seeing the ones before it (in flat
+    /// form where an assignment has one).
     fn run_action(
         &self,
+        code: ActionCode,
         action: &[Assign],
         base: u32,
         state: &mut State,
     ) -> Result<(), ActionError> {
-        for a in action {
-            let v = a
-                .value
-                .eval(&mut Env::new(state.slots(), base))
-                .map_err(ActionError::Eval)?;
-            let slot = match a.target {
-                Target::Local(n) => base + n,
-                Target::Slot(s) => s,
+        for (k, a) in self.enable_index.flat.assigns(code).iter().enumerate() {
+            let (slot, v) = match a.eval(state.slots(), base) {
+                Some(r) => r.map_err(ActionError::Eval)?,
+                None => {
+                    let v = action[k]
+                        .value
+                        .eval(&mut Env::new(state.slots(), base))
+                        .map_err(ActionError::Eval)?;
+                    (a.slot(base), v)
+                }
             };
             let (lo, hi) = self.slot_ranges[slot as usize];
             if v < lo || v > hi {

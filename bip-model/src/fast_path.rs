@@ -1,0 +1,405 @@
+//! Flat forms of the guards and actions the step relation evaluates most often.
+//!
+//! Most guards a model (and every GenoM expansion) writes are conjunctions of tests of one
+//! slot against a constant: a flag (`!paused`), a location (`antenna@ether`), a bound
+//! (`level > RESERVE`). Most assignments write a constant, a slot, or a slot plus a
+//! constant. Walking the expression tree for these costs several times the test itself,
+//! so they are compiled once, with the system, into the flat forms below; everything else
+//! keeps the tree ([`Expr`]). A flat form means exactly what its expression means: tests
+//! cannot fail, and an assignment fails with the error the tree would give.
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use crate::eval::{EvalError, Expr};
+use crate::ops::BinOp;
+use crate::system::{Assign, Target};
+
+/// How a guard is evaluated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum GuardCode {
+    /// No guard, or one that folded to true.
+    Always,
+    /// Every test in `tests[start..end]` holds.
+    Tests { start: u32, end: u32 },
+    /// The expression tree.
+    Tree,
+}
+
+/// `slot op value`; the slot is relative to the component's variables if `local`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Test {
+    slot: u32,
+    local: bool,
+    op: Cmp,
+    value: i64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Cmp {
+    Eq,
+    Ne,
+    Lt,
+    Le,
+    Gt,
+    Ge,
+}
+
+impl Cmp {
+    fn of(op: BinOp) -> Option<Cmp> {
+        Some(match op {
+            BinOp::Eq => Cmp::Eq,
+            BinOp::Ne => Cmp::Ne,
+            BinOp::Lt => Cmp::Lt,
+            BinOp::Le => Cmp::Le,
+            BinOp::Gt => Cmp::Gt,
+            BinOp::Ge => Cmp::Ge,
+            _ => return None,
+        })
+    }
+
+    /// `!(a op b)` as `a op' b`.
+    fn negated(self) -> Cmp {
+        match self {
+            Cmp::Eq => Cmp::Ne,
+            Cmp::Ne => Cmp::Eq,
+            Cmp::Lt => Cmp::Ge,
+            Cmp::Le => Cmp::Gt,
+            Cmp::Gt => Cmp::Le,
+            Cmp::Ge => Cmp::Lt,
+        }
+    }
+
+    /// `a op b` as `b op' a`.
+    fn swapped(self) -> Cmp {
+        match self {
+            Cmp::Eq | Cmp::Ne => self,
+            Cmp::Lt => Cmp::Gt,
+            Cmp::Le => Cmp::Ge,
+            Cmp::Gt => Cmp::Lt,
+            Cmp::Ge => Cmp::Le,
+        }
+    }
+}
+
+impl Test {
+    #[inline]
+    fn holds(&self, slots: &[i64], base: u32) -> bool {
+        let at = if self.local {
+            base + self.slot
+        } else {
+            self.slot
+        };
+        let v = slots[at as usize];
+        match self.op {
+            Cmp::Eq => v == self.value,
+            Cmp::Ne => v != self.value,
+            Cmp::Lt => v < self.value,
+            Cmp::Le => v <= self.value,
+            Cmp::Gt => v > self.value,
+            Cmp::Ge => v >= self.value,
+        }
+    }
+}
+
+/// A slot an expression reads directly: `(slot, local)`.
+fn read(e: &Expr) -> Option<(u32, bool)> {
+    match e {
+        Expr::Slot(s) => Some((*s, false)),
+        Expr::Local(n) => Some((*n, true)),
+        _ => None,
+    }
+}
+
+/// The one test `e` is, if it is one.
+fn test_of(e: &Expr) -> Option<Test> {
+    let test = |(slot, local): (u32, bool), op, value| Test {
+        slot,
+        local,
+        op,
+        value,
+    };
+    match e {
+        // a slot as a condition: non-zero
+        Expr::Slot(_) | Expr::Local(_) => Some(test(read(e)?, Cmp::Ne, 0)),
+        Expr::At(s, loc) => Some(test((*s, false), Cmp::Eq, i64::from(*loc))),
+        Expr::Not(inner) => {
+            let t = test_of(inner)?;
+            Some(Test {
+                op: t.op.negated(),
+                ..t
+            })
+        }
+        Expr::Binary(op, a, b) => {
+            let op = Cmp::of(*op)?;
+            match (read(a), &**b, &**a, read(b)) {
+                (Some(r), Expr::Const(v), _, _) => Some(test(r, op, *v)),
+                (_, _, Expr::Const(v), Some(r)) => Some(test(r, op.swapped(), *v)),
+                _ => None,
+            }
+        }
+        _ => None,
+    }
+}
+
+/// Appends the tests of `e` if it is a conjunction of tests (tests cannot fail, so their
+/// order does not matter); false if it is not.
+fn conjunction(e: &Expr, out: &mut Vec<Test>) -> bool {
+    match e {
+        Expr::Const(v) => *v != 0,
+        Expr::Binary(BinOp::And, a, b) => conjunction(a, out) && conjunction(b, out),
+        _ => match test_of(e) {
+            Some(t) => {
+                out.push(t);
+                true
+            }
+            None => false,
+        },
+    }
+}
+
+/// The value an assignment writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Value {
+    Const(i64),
+    /// A slot plus a constant (0 for a copy).
+    Offset {
+        slot: u32,
+        local: bool,
+        add: i64,
+    },
+    /// The assignment's expression tree.
+    Tree,
+}
+
+/// An assignment, in flat form if its value has one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct FlatAssign {
+    target: Target,
+    value: Value,
+}
+
+fn value_of(e: &Expr) -> Value {
+    let offset = |(slot, local): (u32, bool), add| Value::Offset { slot, local, add };
+    let flat = match e {
+        Expr::Const(v) => Some(Value::Const(*v)),
+        Expr::Slot(_) | Expr::Local(_) => read(e).map(|r| offset(r, 0)),
+        Expr::Binary(BinOp::Add, a, b) => match (read(a), &**b, &**a, read(b)) {
+            (Some(r), Expr::Const(v), _, _) | (_, _, Expr::Const(v), Some(r)) => {
+                Some(offset(r, *v))
+            }
+            _ => None,
+        },
+        // `x - v` as `x + (-v)` unless `-v` overflows
+        Expr::Binary(BinOp::Sub, a, b) => match (read(a), &**b) {
+            (Some(r), Expr::Const(v)) => v.checked_neg().map(|add| offset(r, add)),
+            _ => None,
+        },
+        _ => None,
+    };
+    flat.unwrap_or(Value::Tree)
+}
+
+impl FlatAssign {
+    /// The slot written.
+    #[inline]
+    pub(crate) fn slot(&self, base: u32) -> u32 {
+        match self.target {
+            Target::Local(n) => base + n,
+            Target::Slot(s) => s,
+        }
+    }
+
+    /// The slot written and the value, or the error the expression would give; `None` if
+    /// the expression tree must be evaluated.
+    #[inline]
+    pub(crate) fn eval(&self, slots: &[i64], base: u32) -> Option<Result<(u32, i64), EvalError>> {
+        let value = match self.value {
+            Value::Const(v) => v,
+            Value::Offset { slot, local, add } => {
+                let at = if local { base + slot } else { slot };
+                match slots[at as usize].checked_add(add) {
+                    Some(v) => v,
+                    None => return Some(Err(EvalError::Overflow)),
+                }
+            }
+            Value::Tree => return None,
+        };
+        Some(Ok((self.slot(base), value)))
+    }
+}
+
+/// Where an action's assignments are in [`FlatCode`], one per assignment in order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct ActionCode {
+    start: u32,
+    end: u32,
+}
+
+/// The flat forms of a system's guards and actions, in one table each.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct FlatCode {
+    tests: Vec<Test>,
+    assigns: Vec<FlatAssign>,
+}
+
+impl FlatCode {
+    pub(crate) fn guard(&mut self, guard: Option<&Expr>) -> GuardCode {
+        let Some(e) = guard else {
+            return GuardCode::Always;
+        };
+        let start = self.tests.len();
+        if !conjunction(e, &mut self.tests) {
+            self.tests.truncate(start);
+            return GuardCode::Tree;
+        }
+        if self.tests.len() == start {
+            return GuardCode::Always;
+        }
+        GuardCode::Tests {
+            start: start as u32,
+            end: self.tests.len() as u32,
+        }
+    }
+
+    pub(crate) fn action(&mut self, action: &[Assign]) -> ActionCode {
+        let start = self.assigns.len() as u32;
+        self.assigns.extend(action.iter().map(|a| FlatAssign {
+            target: a.target,
+            value: value_of(&a.value),
+        }));
+        ActionCode {
+            start,
+            end: self.assigns.len() as u32,
+        }
+    }
+
+    /// True if every test of a [`GuardCode::Tests`] holds.
+    #[inline]
+    pub(crate) fn all_hold(&self, start: u32, end: u32, slots: &[i64], base: u32) -> bool {
+        self.tests[start as usize..end as usize]
+            .iter()
+            .all(|t| t.holds(slots, base))
+    }
+
+    pub(crate) fn assigns(&self, code: ActionCode) -> &[FlatAssign] {
+        &self.assigns[code.start as usize..code.end as usize]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::Env;
+
+    fn b(e: Expr) -> Box<Expr> {
+        Box::new(e)
+    }
+
+    /// Every state of two slots in -3..=3 (and the base 1 for locals).
+    fn states() -> impl Iterator<Item = [i64; 3]> {
+        (-3..=3).flat_map(|x| (-3..=3).map(move |y| [x, y, x - y]))
+    }
+
+    fn agrees(e: Expr) {
+        let mut code = FlatCode::default();
+        let GuardCode::Tests { start, end } = code.guard(Some(&e)) else {
+            panic!("{e:?} has a flat form")
+        };
+        for s in states() {
+            let tree = e.holds(&mut Env::new(&s, 1)).expect("evaluates");
+            assert_eq!(code.all_hold(start, end, &s, 1), tree, "{e:?} in {s:?}");
+        }
+    }
+
+    #[test]
+    fn flat_guards_mean_what_their_trees_mean() {
+        use Expr::*;
+        for op in [
+            BinOp::Eq,
+            BinOp::Ne,
+            BinOp::Lt,
+            BinOp::Le,
+            BinOp::Gt,
+            BinOp::Ge,
+        ] {
+            agrees(Binary(op, b(Slot(0)), b(Const(1))));
+            agrees(Binary(op, b(Const(-1)), b(Local(0))));
+            agrees(Not(b(Binary(op, b(Local(1)), b(Const(0))))));
+        }
+        agrees(Slot(1));
+        agrees(Not(b(Local(0))));
+        agrees(Not(b(Not(b(Slot(0))))));
+        agrees(At(0, 2));
+        agrees(Not(b(At(1, 0))));
+        agrees(Binary(
+            BinOp::And,
+            b(Binary(BinOp::And, b(Slot(0)), b(Const(1)))),
+            b(Not(b(Slot(1)))),
+        ));
+    }
+
+    #[test]
+    fn other_guards_keep_their_trees() {
+        use Expr::*;
+        let mut code = FlatCode::default();
+        for e in [
+            Binary(BinOp::Or, b(Slot(0)), b(Slot(1))),
+            Binary(BinOp::Lt, b(Slot(0)), b(Slot(1))),
+            Binary(
+                BinOp::And,
+                b(Slot(0)),
+                b(Binary(BinOp::Or, b(Slot(0)), b(Slot(1)))),
+            ),
+            Const(0),
+        ] {
+            assert_eq!(code.guard(Some(&e)), GuardCode::Tree, "{e:?}");
+        }
+        assert_eq!(code.guard(Some(&Const(1))), GuardCode::Always);
+        assert_eq!(code.guard(None), GuardCode::Always);
+    }
+
+    #[test]
+    fn flat_assignments_compute_what_their_trees_compute() {
+        use Expr::*;
+        let values = [
+            Const(7),
+            Slot(0),
+            Local(1),
+            Binary(BinOp::Add, b(Local(0)), b(Const(2))),
+            Binary(BinOp::Add, b(Const(-2)), b(Slot(1))),
+            Binary(BinOp::Sub, b(Slot(0)), b(Const(3))),
+        ];
+        for value in values {
+            let mut code = FlatCode::default();
+            let a = Assign {
+                target: Target::Local(0),
+                value: value.clone(),
+            };
+            let c = code.action(core::slice::from_ref(&a));
+            let flat = code.assigns(c)[0];
+            for s in [[0, 5, -4], [i64::MAX, 1, i64::MIN], [i64::MIN, 0, i64::MAX]] {
+                let tree = value.eval(&mut Env::new(&s, 1));
+                let Some(r) = flat.eval(&s, 1) else {
+                    panic!("{value:?} has a flat form")
+                };
+                assert_eq!(r.map(|(_, v)| v), tree, "{value:?} in {s:?}");
+                assert_eq!(flat.slot(1), 1, "the target, after the base");
+            }
+        }
+        // `x - i64::MIN` has no flat form (its negation overflows), nor has `x * 2`
+        let mut code = FlatCode::default();
+        let action = [
+            Assign {
+                target: Target::Slot(0),
+                value: Binary(BinOp::Sub, b(Slot(0)), b(Const(i64::MIN))),
+            },
+            Assign {
+                target: Target::Slot(0),
+                value: Binary(BinOp::Mul, b(Slot(0)), b(Const(2))),
+            },
+        ];
+        let c = code.action(&action);
+        assert!(code.assigns(c).iter().all(|a| a.eval(&[1], 0).is_none()));
+    }
+}
