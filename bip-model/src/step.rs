@@ -395,6 +395,7 @@ impl System {
     /// priorities), one step after the other, and returns how many picks a step has (0:
     /// no step). Every step of an interaction in a state has the same participants: the
     /// required ports and the broadcast receivers that can join.
+    #[inline]
     pub(crate) fn interaction_picks(
         &self,
         state: &State,
@@ -420,29 +421,32 @@ impl System {
             bounds,
             cursor,
         } = scratch;
-        choices.clear();
+        // the enabled transitions of each joining port go straight to `out`: in the
+        // common case (one per port) they are the one step
+        let first = out.len();
         bounds.clear();
-        let mut combinations = 1usize;
+        let mut several = false;
         for cell in ports {
             let (from, to) = idx.transitions(cell, slots);
-            let start = choices.len() as u32;
+            let start = out.len();
             for t in from..to {
                 if self.cell_guard(state, cell, t)? {
-                    choices.push(Pick {
+                    out.push(Pick {
                         component: cell.component,
                         transition: t,
                     });
                 }
             }
-            let len = choices.len() as u32 - start;
+            let len = out.len() - start;
             if len == 0 {
                 if !cell.optional {
+                    out.truncate(first);
                     return Ok(0); // a required port is not enabled
                 }
                 continue; // a broadcast receiver that does not join
             }
-            combinations = combinations.saturating_mul(len as usize);
-            bounds.push((start, len));
+            several |= len > 1;
+            bounds.push(((start - first) as u32, len as u32));
         }
         let ok = match idx.inter_guards[i as usize] {
             GuardCode::Always => true,
@@ -450,15 +454,17 @@ impl System {
             GuardCode::Tree => self.connector_guard(state, i)?,
         };
         if !ok {
+            out.truncate(first);
             return Ok(0);
         }
         let width = bounds.len();
-        if combinations == 1 {
-            // the common case: one enabled transition per joining port
-            out.extend_from_slice(choices);
+        if !several {
             return Ok(width);
         }
         // every combination of one enabled transition per joining port, in port order
+        choices.clear();
+        choices.extend_from_slice(&out[first..]);
+        out.truncate(first);
         cursor.clear();
         cursor.resize(width, 0);
         loop {
