@@ -4,14 +4,16 @@
 //! slot against a constant: a flag (`!paused`), a location (`antenna@ether`), a bound
 //! (`level > RESERVE`). Most assignments write a constant, a slot, or a slot plus a
 //! constant. Walking the expression tree for these costs several times the test itself,
-//! so they are compiled once, with the system, into the flat forms below; everything else
-//! keeps the tree ([`Expr`]). A flat form means exactly what its expression means: tests
-//! cannot fail, and an assignment fails with the error the tree would give.
+//! so they are compiled once, with the system, into the flat forms below. The other
+//! expressions without families or quantifiers (a GenoM tick's `paused && n % 2 != 0`,
+//! `age < 3 ? age + 1 : 3`) become code for a small stack machine; the rest keeps the tree
+//! ([`Expr`]). A flat form means exactly what its expression means: tests cannot fail, and
+//! when stack code fails the caller evaluates the tree, which gives the error's details.
 
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use crate::eval::{EvalError, Expr};
+use crate::eval::{binary, EvalError, Expr};
 use crate::ops::BinOp;
 use crate::system::{Assign, Target};
 
@@ -22,6 +24,8 @@ pub(crate) enum GuardCode {
     Always,
     /// Every test in `tests[start..end]` holds.
     Tests { start: u32, end: u32 },
+    /// Stack code `ops[start..end]` computes a non-zero value.
+    Code { start: u32, end: u32 },
     /// The expression tree.
     Tree,
 }
@@ -168,6 +172,11 @@ enum Value {
         local: bool,
         add: i64,
     },
+    /// Stack code `ops[start..end]`.
+    Code {
+        start: u32,
+        end: u32,
+    },
     /// The assignment's expression tree.
     Tree,
 }
@@ -179,7 +188,7 @@ pub(crate) struct FlatAssign {
     value: Value,
 }
 
-fn value_of(e: &Expr) -> Value {
+fn value_of(e: &Expr, ops: &mut Vec<Op>) -> Value {
     let offset = |(slot, local): (u32, bool), add| Value::Offset { slot, local, add };
     let flat = match e {
         Expr::Const(v) => Some(Value::Const(*v)),
@@ -197,7 +206,13 @@ fn value_of(e: &Expr) -> Value {
         },
         _ => None,
     };
-    flat.unwrap_or(Value::Tree)
+    match flat {
+        Some(v) => v,
+        None => match compile(e, ops) {
+            Some((start, end)) => Value::Code { start, end },
+            None => Value::Tree,
+        },
+    }
 }
 
 impl FlatAssign {
@@ -213,7 +228,12 @@ impl FlatAssign {
     /// The slot written and the value, or the error the expression would give; `None` if
     /// the expression tree must be evaluated.
     #[inline]
-    pub(crate) fn eval(&self, slots: &[i64], base: u32) -> Option<Result<(u32, i64), EvalError>> {
+    pub(crate) fn eval(
+        &self,
+        code: &FlatCode,
+        slots: &[i64],
+        base: u32,
+    ) -> Option<Result<(u32, i64), EvalError>> {
         let value = match self.value {
             Value::Const(v) => v,
             Value::Offset { slot, local, add } => {
@@ -223,6 +243,8 @@ impl FlatAssign {
                     None => return Some(Err(EvalError::Overflow)),
                 }
             }
+            // on failure the tree tells which error
+            Value::Code { start, end } => code.run(start, end, slots, base).ok()?,
             Value::Tree => return None,
         };
         Some(Ok((self.slot(base), value)))
@@ -241,6 +263,7 @@ pub(crate) struct ActionCode {
 pub(crate) struct FlatCode {
     tests: Vec<Test>,
     assigns: Vec<FlatAssign>,
+    ops: Vec<Op>,
 }
 
 impl FlatCode {
@@ -251,7 +274,10 @@ impl FlatCode {
         let start = self.tests.len();
         if !conjunction(e, &mut self.tests) {
             self.tests.truncate(start);
-            return GuardCode::Tree;
+            return match compile(e, &mut self.ops) {
+                Some((start, end)) => GuardCode::Code { start, end },
+                None => GuardCode::Tree,
+            };
         }
         if self.tests.len() == start {
             return GuardCode::Always;
@@ -264,10 +290,13 @@ impl FlatCode {
 
     pub(crate) fn action(&mut self, action: &[Assign]) -> ActionCode {
         let start = self.assigns.len() as u32;
-        self.assigns.extend(action.iter().map(|a| FlatAssign {
-            target: a.target,
-            value: value_of(&a.value),
-        }));
+        for a in action {
+            let value = value_of(&a.value, &mut self.ops);
+            self.assigns.push(FlatAssign {
+                target: a.target,
+                value,
+            });
+        }
         ActionCode {
             start,
             end: self.assigns.len() as u32,
@@ -285,6 +314,190 @@ impl FlatCode {
     pub(crate) fn assigns(&self, code: ActionCode) -> &[FlatAssign] {
         &self.assigns[code.start as usize..code.end as usize]
     }
+
+    /// Runs stack code `ops[start..end]`; `Err` if the expression fails (its tree says how).
+    pub(crate) fn run(&self, start: u32, end: u32, slots: &[i64], base: u32) -> Result<i64, ()> {
+        let mut stack = [0i64; STACK];
+        let mut sp = 0usize;
+        let mut pc = start as usize;
+        while pc < end as usize {
+            match self.ops[pc] {
+                Op::Const(v) => {
+                    stack[sp] = v;
+                    sp += 1;
+                }
+                Op::Slot(s) => {
+                    stack[sp] = slots[s as usize];
+                    sp += 1;
+                }
+                Op::Local(n) => {
+                    stack[sp] = slots[(base + n) as usize];
+                    sp += 1;
+                }
+                Op::At(s, loc) => {
+                    stack[sp] = (slots[s as usize] == i64::from(loc)) as i64;
+                    sp += 1;
+                }
+                Op::Not => stack[sp - 1] = (stack[sp - 1] == 0) as i64,
+                Op::Neg => stack[sp - 1] = stack[sp - 1].checked_neg().ok_or(())?,
+                Op::Bool => stack[sp - 1] = (stack[sp - 1] != 0) as i64,
+                Op::Bin(op) => {
+                    sp -= 1;
+                    stack[sp - 1] = binary(op, stack[sp - 1], stack[sp]).map_err(|_| ())?;
+                }
+                Op::And(to) => {
+                    // a zero left operand is the result
+                    if stack[sp - 1] == 0 {
+                        pc = to as usize;
+                        continue;
+                    }
+                    sp -= 1;
+                }
+                Op::Or(to) => {
+                    if stack[sp - 1] != 0 {
+                        stack[sp - 1] = 1;
+                        pc = to as usize;
+                        continue;
+                    }
+                    sp -= 1;
+                }
+                Op::Implies(to) => {
+                    if stack[sp - 1] == 0 {
+                        stack[sp - 1] = 1;
+                        pc = to as usize;
+                        continue;
+                    }
+                    sp -= 1;
+                }
+                Op::Else(to) => {
+                    sp -= 1;
+                    if stack[sp] == 0 {
+                        pc = to as usize;
+                        continue;
+                    }
+                }
+                Op::Jump(to) => {
+                    pc = to as usize;
+                    continue;
+                }
+            }
+            pc += 1;
+        }
+        Ok(stack[0])
+    }
+}
+
+/// The deepest stack code may use; deeper expressions keep their trees.
+const STACK: usize = 16;
+
+/// An instruction of the stack machine. Jumps are to absolute positions in `ops`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Op {
+    Const(i64),
+    Slot(u32),
+    Local(u32),
+    At(u32, u32),
+    Not,
+    Neg,
+    /// The top as a boolean (0 or 1).
+    Bool,
+    /// Pops the right operand and replaces the left one by the result.
+    Bin(BinOp),
+    /// `a && b`, `a || b`, `a => b` with `a` on top: jumps to the end with the result if
+    /// `a` decides it, else pops `a` (then `b` and `Bool` follow).
+    And(u32),
+    Or(u32),
+    Implies(u32),
+    /// Pops the condition of `c ? a : b`; jumps to `b` if it is zero.
+    Else(u32),
+    Jump(u32),
+}
+
+/// Appends stack code for `e` to `ops`: its `(start, end)`, or `None` (nothing appended)
+/// if `e` reads a family by index, has a quantifier, or needs too deep a stack.
+fn compile(e: &Expr, ops: &mut Vec<Op>) -> Option<(u32, u32)> {
+    let start = ops.len();
+    if emit(e, ops, 1) {
+        Some((start as u32, ops.len() as u32))
+    } else {
+        ops.truncate(start);
+        None
+    }
+}
+
+/// Emits code leaving the value of `e` at stack depth `depth`.
+fn emit(e: &Expr, ops: &mut Vec<Op>, depth: usize) -> bool {
+    if depth > STACK {
+        return false;
+    }
+    let patch = |ops: &mut Vec<Op>, at: usize| {
+        let to = ops.len() as u32;
+        ops[at] = match ops[at] {
+            Op::And(_) => Op::And(to),
+            Op::Or(_) => Op::Or(to),
+            Op::Implies(_) => Op::Implies(to),
+            Op::Else(_) => Op::Else(to),
+            Op::Jump(_) => Op::Jump(to),
+            op => op,
+        };
+    };
+    match e {
+        Expr::Const(v) => ops.push(Op::Const(*v)),
+        Expr::Slot(s) => ops.push(Op::Slot(*s)),
+        Expr::Local(n) => ops.push(Op::Local(*n)),
+        Expr::At(s, loc) => ops.push(Op::At(*s, *loc)),
+        Expr::Indexed(_) | Expr::Bound(_) | Expr::Quant(_) => return false,
+        Expr::Not(a) | Expr::Neg(a) => {
+            if !emit(a, ops, depth) {
+                return false;
+            }
+            ops.push(if matches!(e, Expr::Not(_)) {
+                Op::Not
+            } else {
+                Op::Neg
+            });
+        }
+        Expr::Binary(op @ (BinOp::And | BinOp::Or | BinOp::Implies), a, b) => {
+            if !emit(a, ops, depth) {
+                return false;
+            }
+            let at = ops.len();
+            ops.push(match op {
+                BinOp::And => Op::And(0),
+                BinOp::Or => Op::Or(0),
+                _ => Op::Implies(0),
+            });
+            if !emit(b, ops, depth) {
+                return false;
+            }
+            ops.push(Op::Bool);
+            patch(ops, at);
+        }
+        Expr::Binary(op, a, b) => {
+            if !emit(a, ops, depth) || !emit(b, ops, depth + 1) {
+                return false;
+            }
+            ops.push(Op::Bin(*op));
+        }
+        Expr::Cond(c, a, b) => {
+            if !emit(c, ops, depth) {
+                return false;
+            }
+            let at_else = ops.len();
+            ops.push(Op::Else(0));
+            if !emit(a, ops, depth) {
+                return false;
+            }
+            let at_jump = ops.len();
+            ops.push(Op::Jump(0));
+            patch(ops, at_else);
+            if !emit(b, ops, depth) {
+                return false;
+            }
+            patch(ops, at_jump);
+        }
+    }
+    true
 }
 
 #[cfg(test)]
@@ -340,7 +553,7 @@ mod tests {
     }
 
     #[test]
-    fn other_guards_keep_their_trees() {
+    fn other_guards_become_stack_code() {
         use Expr::*;
         let mut code = FlatCode::default();
         for e in [
@@ -353,8 +566,17 @@ mod tests {
             ),
             Const(0),
         ] {
-            assert_eq!(code.guard(Some(&e)), GuardCode::Tree, "{e:?}");
+            let g = code.guard(Some(&e));
+            assert!(matches!(g, GuardCode::Code { .. }), "{e:?}: {g:?}");
         }
+        let quantified = Quant(Box::new(crate::eval::Quant {
+            kind: crate::ops::QuantKind::Exists,
+            lo: 0,
+            hi: 2,
+            depth: 0,
+            body: Bound(0),
+        }));
+        assert_eq!(code.guard(Some(&quantified)), GuardCode::Tree);
         assert_eq!(code.guard(Some(&Const(1))), GuardCode::Always);
         assert_eq!(code.guard(None), GuardCode::Always);
     }
@@ -380,7 +602,7 @@ mod tests {
             let flat = code.assigns(c)[0];
             for s in [[0, 5, -4], [i64::MAX, 1, i64::MIN], [i64::MIN, 0, i64::MAX]] {
                 let tree = value.eval(&mut Env::new(&s, 1));
-                let Some(r) = flat.eval(&s, 1) else {
+                let Some(r) = flat.eval(&code, &s, 1) else {
                     panic!("{value:?} has a flat form")
                 };
                 assert_eq!(r.map(|(_, v)| v), tree, "{value:?} in {s:?}");
@@ -400,6 +622,84 @@ mod tests {
             },
         ];
         let c = code.action(&action);
-        assert!(code.assigns(c).iter().all(|a| a.eval(&[1], 0).is_none()));
+        let ops = code.ops.len();
+        assert!(code.assigns(c)[0].eval(&code, &[1], 0).is_none());
+        assert!(matches!(code.assigns(c)[1].value, Value::Code { .. }) && ops > 0);
+    }
+
+    /// A random expression over slots 0..3 (locals from base 1), without families or
+    /// quantifiers, with every operator.
+    fn random_expr(rng: &mut crate::Rng, depth: u32) -> Expr {
+        use Expr::*;
+        if depth == 0 || rng.chance(25) {
+            return match rng.below(4) {
+                0 => Const(rng.range(-3, 3)),
+                1 => Slot(rng.below(3) as u32),
+                2 => Local(rng.below(2) as u32),
+                _ => At(rng.below(3) as u32, rng.below(3) as u32),
+            };
+        }
+        let ops = [
+            BinOp::Mul,
+            BinOp::Div,
+            BinOp::Rem,
+            BinOp::Add,
+            BinOp::Sub,
+            BinOp::Lt,
+            BinOp::Le,
+            BinOp::Gt,
+            BinOp::Ge,
+            BinOp::Eq,
+            BinOp::Ne,
+            BinOp::And,
+            BinOp::Or,
+            BinOp::Implies,
+        ];
+        match rng.below(5) {
+            0 => Not(b(random_expr(rng, depth - 1))),
+            1 => Neg(b(random_expr(rng, depth - 1))),
+            2 => Cond(
+                b(random_expr(rng, depth - 1)),
+                b(random_expr(rng, depth - 1)),
+                b(random_expr(rng, depth - 1)),
+            ),
+            _ => Binary(
+                ops[rng.below(ops.len())],
+                b(random_expr(rng, depth - 1)),
+                b(random_expr(rng, depth - 1)),
+            ),
+        }
+    }
+
+    #[test]
+    fn stack_code_computes_what_the_tree_computes() {
+        let mut rng = crate::Rng::new(7);
+        let extremes = [i64::MIN, -1, 0, 1, 2, i64::MAX];
+        let (mut failures, mut values) = (0, 0);
+        for _ in 0..20_000 {
+            let e = random_expr(&mut rng, 5);
+            let mut code = FlatCode::default();
+            let (start, end) = compile(&e, &mut code.ops).expect("no family, no quantifier");
+            for _ in 0..8 {
+                let mut s = [0i64; 3];
+                for v in &mut s {
+                    *v = if rng.chance(20) {
+                        extremes[rng.below(extremes.len())]
+                    } else {
+                        rng.range(-2, 2)
+                    };
+                }
+                let tree = e.eval(&mut Env::new(&s, 1));
+                let run = code.run(start, end, &s, 1);
+                assert_eq!(run.ok(), tree.ok(), "{e:?} in {s:?}");
+                if tree.is_err() {
+                    failures += 1;
+                } else {
+                    values += 1;
+                }
+            }
+        }
+        // both outcomes were exercised
+        assert!(failures > 1_000 && values > 100_000, "{failures} {values}");
     }
 }

@@ -350,6 +350,12 @@ impl System {
             GuardCode::Tests { start, end } => {
                 Ok(idx.flat.all_hold(start, end, state.slots(), cell.vars))
             }
+            GuardCode::Code { start, end } => {
+                match idx.flat.run(start, end, state.slots(), cell.vars) {
+                    Ok(v) => Ok(v != 0),
+                    Err(()) => self.transition_guard(state, cell.component, t),
+                }
+            }
             GuardCode::Tree => self.transition_guard(state, cell.component, t),
         }
     }
@@ -451,6 +457,10 @@ impl System {
         let ok = match idx.inter_guards[i as usize] {
             GuardCode::Always => true,
             GuardCode::Tests { start, end } => idx.flat.all_hold(start, end, slots, 0),
+            GuardCode::Code { start, end } => match idx.flat.run(start, end, slots, 0) {
+                Ok(v) => v != 0,
+                Err(()) => self.connector_guard(state, i)?,
+            },
             GuardCode::Tree => self.connector_guard(state, i)?,
         };
         if !ok {
@@ -614,7 +624,7 @@ impl System {
         state: &mut State,
     ) -> Result<(), ActionError> {
         for (k, a) in self.enable_index.flat.assigns(code).iter().enumerate() {
-            let (slot, v) = match a.eval(state.slots(), base) {
+            let (slot, v) = match a.eval(&self.enable_index.flat, state.slots(), base) {
                 Some(r) => r.map_err(ActionError::Eval)?,
                 None => {
                     let v = action[k]
