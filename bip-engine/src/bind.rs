@@ -95,6 +95,9 @@ pub(crate) struct Tables {
     pub activity_of: Vec<Option<u32>>,
     /// (module, port) per port store entry.
     pub ports: Vec<(String, String)>,
+    /// The system has internal transitions: without any, the engine need not look for
+    /// their steps (a GenoM layer has none).
+    pub has_internal: bool,
 }
 
 impl Tables {
@@ -114,6 +117,7 @@ impl Tables {
             services: Vec::new(),
             activity_of: vec![None; system.components.len()],
             ports: Vec::new(),
+            has_internal: system.summary().internal_transitions > 0,
         };
         let Some(map) = &system.genom else {
             t.kind = kind;

@@ -726,6 +726,9 @@ impl Engine {
                 InterKind::Request { .. } | InterKind::Time | InterKind::Environment => {}
             }
         }
+        if !self.t.has_internal {
+            return;
+        }
         let mut last = None;
         let mut k = 0;
         for s in self.enabled.internal_steps() {
