@@ -1373,32 +1373,34 @@ impl Engine {
         };
         for k in 0..self.picks.len() {
             let p = self.picks[k];
-            let Some(s) = self.t.activity_of[p.component as usize] else {
+            let Some(svc) = self.t.activity_of[p.component as usize] else {
                 continue;
             };
-            let atom = self.system.atom_of(p.component);
-            let tr = &atom.transitions[p.transition as usize];
+            let tr = &self.system.atom_of(p.component).transitions[p.transition as usize];
             let Some(port) = tr.port else { continue };
-            let slots = self.state.slots();
-            let svc = s;
-            let Some(a) = self.t.services[s as usize].activity.as_mut() else {
+            let Some(a) = self.t.services[svc as usize].activity.as_mut() else {
                 continue;
             };
+            // a tick moves no request along; it is most of the picks of a tick step
+            let kind = match a.port_kind.get(port as usize).copied().flatten() {
+                Some(PortKind::Tick) | None => continue,
+                Some(kind) => kind,
+            };
+            let slots = self.state.slots();
             let req_before = slots[a.req_slot as usize] != 0;
             let stopping_before = a.stopping_slot.is_some_and(|sl| slots[sl as usize] != 0);
             let from_ether = tr.from == a.ether;
             let to_ether = tr.to == a.ether;
-            let mut replies: [(Option<Ticket>, Option<Outcome>); 3] =
-                [(None, None), (None, None), (None, None)];
+            let mut replies: [Option<(Ticket, Outcome)>; 3] = [None, None, None];
             let mut n = 0;
             let mut reply = |t: Option<Ticket>, o: Outcome| {
-                if t.is_some() {
-                    replies[n] = (t, Some(o));
+                if let Some(t) = t {
+                    replies[n] = Some((t, o));
                     n += 1;
                 }
             };
-            match a.port_kind.get(port as usize).copied().flatten() {
-                Some(PortKind::Request) => {
+            match kind {
+                PortKind::Request => {
                     let (ticket, args) = if req_service == Some(svc) {
                         (req_ticket.take(), req_args.take())
                     } else {
@@ -1414,7 +1416,7 @@ impl Engine {
                     a.pending = ticket;
                     a.pending_args = args;
                 }
-                Some(PortKind::Interrupt) | Some(PortKind::Abort) => {
+                PortKind::Interrupt | PortKind::Abort => {
                     if !from_ether && !stopping_before {
                         reply(a.current.take(), Outcome::Interrupted);
                         a.current_args = None;
@@ -1424,7 +1426,7 @@ impl Engine {
                         a.pending_args = None;
                     }
                 }
-                Some(PortKind::Run(_)) => {
+                PortKind::Run(_) => {
                     if from_ether {
                         a.current = a.pending.take();
                         a.current_args = a.pending_args.take();
@@ -1434,7 +1436,7 @@ impl Engine {
                         a.current_args = None;
                     }
                 }
-                Some(PortKind::Fail(_)) => {
+                PortKind::Fail(_) => {
                     if from_ether {
                         a.current = a.pending.take();
                         a.current_args = a.pending_args.take();
@@ -1446,10 +1448,11 @@ impl Engine {
                     reply(a.current.take(), o);
                     a.current_args = None;
                 }
-                Some(PortKind::Tick) | None => {}
+                PortKind::Tick => {}
             }
-            for (t, o) in replies.into_iter().take(n) {
-                if let (Some(ticket), Some(o)) = (t, o) {
+            // taken in place: moving the array out would copy all three outcomes
+            for r in &mut replies[..n] {
+                if let Some((ticket, o)) = r.take() {
                     self.emit(Event::Reply {
                         ticket,
                         service: ServiceId(svc),
