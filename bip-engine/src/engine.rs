@@ -981,13 +981,10 @@ impl Engine {
         // the step the outcome names
         let (run, fail) = (self.t.codels[ck].map.run, self.t.codels[ck].map.fail);
         let (label, verdict) = match verdict {
-            Verdict2::Normal { yield_k } => match self.find_run_step(ck, yield_k, forced) {
-                Some(k) => {
-                    self.copy_step(Label::Interaction(run), k);
-                    (Label::Interaction(run), Verdict2::Normal { yield_k })
-                }
-                None if forced => return Err(StepAsError::Diverged),
-                None => (
+            Verdict2::Normal { yield_k } => match self.take_run_step(ck, yield_k, forced) {
+                true => (Label::Interaction(run), Verdict2::Normal { yield_k }),
+                false if forced => return Err(StepAsError::Diverged),
+                false => (
                     Label::Interaction(fail),
                     Verdict2::Error(Outcome::Fault(Fault {
                         codel: CodelId(c),
@@ -1244,17 +1241,23 @@ impl Engine {
             .any(|s| s.picks == &self.forced[..])
     }
 
-    /// The index, among the enabled steps of the codel's run interaction, of a step that
-    /// takes yield `yield_k` and writes the staged ids; chosen by the policy if several.
-    fn find_run_step(&mut self, ck: usize, yield_k: usize, forced: bool) -> Option<u32> {
+    /// Copies into the scratch picks a step of the codel's run interaction that takes
+    /// yield `yield_k` and writes the staged ids, chosen by the policy if several (with
+    /// `forced`, the forced step if it is one); false if there is none.
+    fn take_run_step(&mut self, ck: usize, yield_k: usize, forced: bool) -> bool {
         let c = &self.t.codels[ck];
-        let activity = self.t.services[c.service as usize].activity.as_ref()?;
+        let Some(activity) = self.t.services[c.service as usize].activity.as_ref() else {
+            return false;
+        };
         let comp = activity.component;
         let want_ids = if c.map.ids.is_empty() {
             None
         } else {
             let ids = &self.ids_buf;
-            Some(c.map.ids_transition(|j| ids[c.ids_field[j]])?)
+            match c.map.ids_transition(|j| ids[c.ids_field[j]]) {
+                Some(t) => Some(t),
+                None => return false,
+            }
         };
         let yields = &c.map.yields[yield_k].transitions;
         let matches = |s: &Step<'_>| {
@@ -1267,28 +1270,30 @@ impl Engine {
                         .any(|p| p.component == c.module_component && p.transition == t)
                 })
         };
-        if forced {
-            return self
-                .enabled
-                .steps_of(c.map.run)
-                .position(|s| s.picks == &self.forced[..] && matches(&s))
-                .map(|k| k as u32);
-        }
-        let n = self
-            .enabled
-            .steps_of(c.map.run)
-            .filter(|s| matches(s))
-            .count();
-        if n == 0 {
-            return None;
-        }
-        let pick = self.chooser.choose(n);
-        self.enabled
-            .steps_of(c.map.run)
-            .enumerate()
-            .filter(|(_, s)| matches(s))
-            .nth(pick)
-            .map(|(k, _)| k as u32)
+        let run = c.map.run;
+        let step = if forced {
+            self.enabled
+                .steps_of(run)
+                .find(|s| s.picks == &self.forced[..] && matches(s))
+        } else {
+            // one pass counts the matches and keeps the first, which is the choice when
+            // there is only one; the chooser sees the same count as ever
+            let mut n = 0;
+            let mut first = None;
+            for s in self.enabled.steps_of(run).filter(|s| matches(s)) {
+                first = first.or(Some(s));
+                n += 1;
+            }
+            let Some(first) = first else { return false };
+            match self.chooser.choose(n) {
+                0 => Some(first),
+                k => self.enabled.steps_of(run).filter(|s| matches(s)).nth(k),
+            }
+        };
+        let Some(step) = step else { return false };
+        self.picks.clear();
+        self.picks.extend_from_slice(step.picks);
+        true
     }
 
     // ---------------------------------------------------------------------------------
