@@ -689,9 +689,7 @@ impl Engine {
     }
 
     fn fire_time(&mut self, i: u32) -> Result<(), EngineError> {
-        let n = self.enabled.steps_of(i).count();
-        let k = self.chooser.choose(n) as u32;
-        self.copy_step(Label::Interaction(i), k);
+        self.take_step_of(i);
         self.commit(Label::Interaction(i), Cause::Other)?;
         self.count_tick();
         Ok(())
@@ -743,7 +741,6 @@ impl Engine {
 
     /// Copies the `k`-th enabled step with `label` into the scratch picks.
     fn copy_step(&mut self, label: Label, k: u32) {
-        self.picks.clear();
         let step = match label {
             Label::Interaction(i) => self.enabled.steps_of(i).nth(k as usize),
             Label::Internal { .. } => self
@@ -752,9 +749,14 @@ impl Engine {
                 .filter(|s| s.label == label)
                 .nth(k as usize),
         };
-        if let Some(s) = step {
-            self.picks.extend_from_slice(s.picks);
-        }
+        set_picks(&mut self.picks, step);
+    }
+
+    /// Copies one of the enabled steps of interaction `i`, chosen by the policy, into the
+    /// scratch picks (none if it has none).
+    fn take_step_of(&mut self, i: u32) {
+        let step = choose_step(&mut self.chooser, || self.enabled.steps_of(i));
+        set_picks(&mut self.picks, step);
     }
 
     // ---------------------------------------------------------------------------------
@@ -768,9 +770,7 @@ impl Engine {
     ) -> Result<Stepped, EngineError> {
         let i = self.t.services[service as usize].request;
         if self.enabled.is_enabled(i) {
-            let n = self.enabled.steps_of(i).count();
-            let k = self.chooser.choose(n) as u32;
-            self.copy_step(Label::Interaction(i), k);
+            self.take_step_of(i);
             self.accept_request(ticket, service, args, Label::Interaction(i))?;
             return Ok(Stepped::Request {
                 ticket,
@@ -995,19 +995,17 @@ impl Engine {
             e @ Verdict2::Error(_) => (Label::Interaction(fail), e),
         };
         if let (Label::Interaction(i), Verdict2::Error(_)) = (label, &verdict) {
-            let n = self.enabled.steps_of(i).count();
             if forced {
                 let same = self
                     .enabled
                     .steps_of(i)
-                    .position(|s| s.picks == &self.forced[..]);
-                match same {
-                    Some(k) => self.copy_step(label, k as u32),
-                    None => return Err(StepAsError::Diverged),
+                    .find(|s| s.picks == &self.forced[..]);
+                if same.is_none() {
+                    return Err(StepAsError::Diverged);
                 }
+                set_picks(&mut self.picks, same);
             } else {
-                let k = self.chooser.choose(n.max(1)) as u32;
-                self.copy_step(label, k);
+                self.take_step_of(i);
             }
             if self.picks.is_empty() {
                 // run and fail share their guard, so this cannot happen; report it
@@ -1276,24 +1274,13 @@ impl Engine {
                 .steps_of(run)
                 .find(|s| s.picks == &self.forced[..] && matches(s))
         } else {
-            // one pass counts the matches and keeps the first, which is the choice when
-            // there is only one; the chooser sees the same count as ever
-            let mut n = 0;
-            let mut first = None;
-            for s in self.enabled.steps_of(run).filter(|s| matches(s)) {
-                first = first.or(Some(s));
-                n += 1;
-            }
-            let Some(first) = first else { return false };
-            match self.chooser.choose(n) {
-                0 => Some(first),
-                k => self.enabled.steps_of(run).filter(|s| matches(s)).nth(k),
-            }
+            choose_step(&mut self.chooser, || {
+                self.enabled.steps_of(run).filter(|s| matches(s))
+            })
         };
-        let Some(step) = step else { return false };
-        self.picks.clear();
-        self.picks.extend_from_slice(step.picks);
-        true
+        let found = step.is_some();
+        set_picks(&mut self.picks, step);
+        found
     }
 
     // ---------------------------------------------------------------------------------
@@ -1485,6 +1472,34 @@ impl Engine {
             self.stats.events_dropped += 1;
         }
         self.events.push_back(e);
+    }
+}
+
+/// One of the steps `steps` yields, chosen by `chooser` among them all (`None` if there
+/// are none). One pass counts them and keeps the first, the choice whenever there is only
+/// one; the chooser sees the count either way, so seeded runs do not change.
+fn choose_step<'a, I: Iterator<Item = Step<'a>>>(
+    chooser: &mut Chooser,
+    steps: impl Fn() -> I,
+) -> Option<Step<'a>> {
+    let mut n = 0;
+    let mut first = None;
+    for s in steps() {
+        first = first.or(Some(s));
+        n += 1;
+    }
+    let first = first?;
+    match chooser.choose(n) {
+        0 => Some(first),
+        k => steps().nth(k),
+    }
+}
+
+/// Makes `step` the scratch picks (none if `None`).
+fn set_picks(picks: &mut Vec<Pick>, step: Option<Step<'_>>) {
+    picks.clear();
+    if let Some(s) = step {
+        picks.extend_from_slice(s.picks);
     }
 }
 
