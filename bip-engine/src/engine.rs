@@ -1298,7 +1298,11 @@ impl Engine {
             return Err(EngineError::Range(e));
         }
         let updated = self.enabled.update(&self.system, &self.state, &self.next);
-        self.track(cause);
+        if let Label::Interaction(i) = label {
+            if self.t.moves_requests[i as usize] {
+                self.track(cause);
+            }
+        }
         if let Some(r) = &mut self.recording {
             r.push(Step {
                 label,
