@@ -89,12 +89,19 @@ pub(crate) struct ActivityTable {
 
 pub(crate) struct Tables {
     pub kind: Vec<InterKind>,
+    /// Per interaction, whether a step of it can move a request along an activity's life
+    /// cycle (a port of an activity's atom other than its tick): the others, ticks first,
+    /// need no tracking.
+    pub moves_requests: Vec<bool>,
     pub codels: Vec<CodelTable>,
     pub services: Vec<ServiceTable>,
     /// Per component, the service whose activity it is.
     pub activity_of: Vec<Option<u32>>,
     /// (module, port) per port store entry.
     pub ports: Vec<(String, String)>,
+    /// The system has internal transitions: without any, the engine need not look for
+    /// their steps (a GenoM layer has none).
+    pub has_internal: bool,
 }
 
 impl Tables {
@@ -110,14 +117,15 @@ impl Tables {
             .collect();
         let mut t = Tables {
             kind: Vec::new(),
+            moves_requests: Vec::new(),
             codels: Vec::new(),
             services: Vec::new(),
             activity_of: vec![None; system.components.len()],
             ports: Vec::new(),
+            has_internal: system.summary().internal_transitions > 0,
         };
         let Some(map) = &system.genom else {
-            t.kind = kind;
-            return Ok(t);
+            return Ok(t.finish(system, kind));
         };
         for m in &map.modules {
             let fields: Vec<Field> = m
@@ -222,8 +230,26 @@ impl Tables {
                 });
             }
         }
-        t.kind = kind;
-        Ok(t)
+        Ok(t.finish(system, kind))
+    }
+
+    fn finish(mut self, system: &System, kind: Vec<InterKind>) -> Tables {
+        self.moves_requests = system
+            .interactions
+            .iter()
+            .map(|i| {
+                i.ports.iter().any(|p| {
+                    let activity = self.activity_of[p.component as usize]
+                        .and_then(|s| self.services[s as usize].activity.as_ref());
+                    activity.is_some_and(|a| {
+                        let port = a.port_kind.get(p.port as usize).copied().flatten();
+                        port.is_some_and(|k| k != PortKind::Tick)
+                    })
+                })
+            })
+            .collect();
+        self.kind = kind;
+        self
     }
 
     pub fn codel_index(&self, module: &str, service: &str, state: &str) -> Option<usize> {

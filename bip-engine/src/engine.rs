@@ -689,9 +689,7 @@ impl Engine {
     }
 
     fn fire_time(&mut self, i: u32) -> Result<(), EngineError> {
-        let n = self.enabled.steps_of(i).count();
-        let k = self.chooser.choose(n) as u32;
-        self.copy_step(Label::Interaction(i), k);
+        self.take_step_of(i);
         self.commit(Label::Interaction(i), Cause::Other)?;
         self.count_tick();
         Ok(())
@@ -726,6 +724,9 @@ impl Engine {
                 InterKind::Request { .. } | InterKind::Time | InterKind::Environment => {}
             }
         }
+        if !self.t.has_internal {
+            return;
+        }
         let mut last = None;
         let mut k = 0;
         for s in self.enabled.internal_steps() {
@@ -740,7 +741,6 @@ impl Engine {
 
     /// Copies the `k`-th enabled step with `label` into the scratch picks.
     fn copy_step(&mut self, label: Label, k: u32) {
-        self.picks.clear();
         let step = match label {
             Label::Interaction(i) => self.enabled.steps_of(i).nth(k as usize),
             Label::Internal { .. } => self
@@ -749,9 +749,14 @@ impl Engine {
                 .filter(|s| s.label == label)
                 .nth(k as usize),
         };
-        if let Some(s) = step {
-            self.picks.extend_from_slice(s.picks);
-        }
+        set_picks(&mut self.picks, step);
+    }
+
+    /// Copies one of the enabled steps of interaction `i`, chosen by the policy, into the
+    /// scratch picks (none if it has none).
+    fn take_step_of(&mut self, i: u32) {
+        let step = choose_step(&mut self.chooser, || self.enabled.steps_of(i));
+        set_picks(&mut self.picks, step);
     }
 
     // ---------------------------------------------------------------------------------
@@ -765,9 +770,7 @@ impl Engine {
     ) -> Result<Stepped, EngineError> {
         let i = self.t.services[service as usize].request;
         if self.enabled.is_enabled(i) {
-            let n = self.enabled.steps_of(i).count();
-            let k = self.chooser.choose(n) as u32;
-            self.copy_step(Label::Interaction(i), k);
+            self.take_step_of(i);
             self.accept_request(ticket, service, args, Label::Interaction(i))?;
             return Ok(Stepped::Request {
                 ticket,
@@ -978,13 +981,10 @@ impl Engine {
         // the step the outcome names
         let (run, fail) = (self.t.codels[ck].map.run, self.t.codels[ck].map.fail);
         let (label, verdict) = match verdict {
-            Verdict2::Normal { yield_k } => match self.find_run_step(ck, yield_k, forced) {
-                Some(k) => {
-                    self.copy_step(Label::Interaction(run), k);
-                    (Label::Interaction(run), Verdict2::Normal { yield_k })
-                }
-                None if forced => return Err(StepAsError::Diverged),
-                None => (
+            Verdict2::Normal { yield_k } => match self.take_run_step(ck, yield_k, forced) {
+                true => (Label::Interaction(run), Verdict2::Normal { yield_k }),
+                false if forced => return Err(StepAsError::Diverged),
+                false => (
                     Label::Interaction(fail),
                     Verdict2::Error(Outcome::Fault(Fault {
                         codel: CodelId(c),
@@ -995,19 +995,17 @@ impl Engine {
             e @ Verdict2::Error(_) => (Label::Interaction(fail), e),
         };
         if let (Label::Interaction(i), Verdict2::Error(_)) = (label, &verdict) {
-            let n = self.enabled.steps_of(i).count();
             if forced {
                 let same = self
                     .enabled
                     .steps_of(i)
-                    .position(|s| s.picks == &self.forced[..]);
-                match same {
-                    Some(k) => self.copy_step(label, k as u32),
-                    None => return Err(StepAsError::Diverged),
+                    .find(|s| s.picks == &self.forced[..]);
+                if same.is_none() {
+                    return Err(StepAsError::Diverged);
                 }
+                set_picks(&mut self.picks, same);
             } else {
-                let k = self.chooser.choose(n.max(1)) as u32;
-                self.copy_step(label, k);
+                self.take_step_of(i);
             }
             if self.picks.is_empty() {
                 // run and fail share their guard, so this cannot happen; report it
@@ -1241,17 +1239,23 @@ impl Engine {
             .any(|s| s.picks == &self.forced[..])
     }
 
-    /// The index, among the enabled steps of the codel's run interaction, of a step that
-    /// takes yield `yield_k` and writes the staged ids; chosen by the policy if several.
-    fn find_run_step(&mut self, ck: usize, yield_k: usize, forced: bool) -> Option<u32> {
+    /// Copies into the scratch picks a step of the codel's run interaction that takes
+    /// yield `yield_k` and writes the staged ids, chosen by the policy if several (with
+    /// `forced`, the forced step if it is one); false if there is none.
+    fn take_run_step(&mut self, ck: usize, yield_k: usize, forced: bool) -> bool {
         let c = &self.t.codels[ck];
-        let activity = self.t.services[c.service as usize].activity.as_ref()?;
+        let Some(activity) = self.t.services[c.service as usize].activity.as_ref() else {
+            return false;
+        };
         let comp = activity.component;
         let want_ids = if c.map.ids.is_empty() {
             None
         } else {
             let ids = &self.ids_buf;
-            Some(c.map.ids_transition(|j| ids[c.ids_field[j]])?)
+            match c.map.ids_transition(|j| ids[c.ids_field[j]]) {
+                Some(t) => Some(t),
+                None => return false,
+            }
         };
         let yields = &c.map.yields[yield_k].transitions;
         let matches = |s: &Step<'_>| {
@@ -1264,28 +1268,19 @@ impl Engine {
                         .any(|p| p.component == c.module_component && p.transition == t)
                 })
         };
-        if forced {
-            return self
-                .enabled
-                .steps_of(c.map.run)
-                .position(|s| s.picks == &self.forced[..] && matches(&s))
-                .map(|k| k as u32);
-        }
-        let n = self
-            .enabled
-            .steps_of(c.map.run)
-            .filter(|s| matches(s))
-            .count();
-        if n == 0 {
-            return None;
-        }
-        let pick = self.chooser.choose(n);
-        self.enabled
-            .steps_of(c.map.run)
-            .enumerate()
-            .filter(|(_, s)| matches(s))
-            .nth(pick)
-            .map(|(k, _)| k as u32)
+        let run = c.map.run;
+        let step = if forced {
+            self.enabled
+                .steps_of(run)
+                .find(|s| s.picks == &self.forced[..] && matches(s))
+        } else {
+            choose_step(&mut self.chooser, || {
+                self.enabled.steps_of(run).filter(|s| matches(s))
+            })
+        };
+        let found = step.is_some();
+        set_picks(&mut self.picks, step);
+        found
     }
 
     // ---------------------------------------------------------------------------------
@@ -1303,7 +1298,11 @@ impl Engine {
             return Err(EngineError::Range(e));
         }
         let updated = self.enabled.update(&self.system, &self.state, &self.next);
-        self.track(cause);
+        if let Label::Interaction(i) = label {
+            if self.t.moves_requests[i as usize] {
+                self.track(cause);
+            }
+        }
         if let Some(r) = &mut self.recording {
             r.push(Step {
                 label,
@@ -1370,32 +1369,34 @@ impl Engine {
         };
         for k in 0..self.picks.len() {
             let p = self.picks[k];
-            let Some(s) = self.t.activity_of[p.component as usize] else {
+            let Some(svc) = self.t.activity_of[p.component as usize] else {
                 continue;
             };
-            let atom = self.system.atom_of(p.component);
-            let tr = &atom.transitions[p.transition as usize];
+            let tr = &self.system.atom_of(p.component).transitions[p.transition as usize];
             let Some(port) = tr.port else { continue };
-            let slots = self.state.slots();
-            let svc = s;
-            let Some(a) = self.t.services[s as usize].activity.as_mut() else {
+            let Some(a) = self.t.services[svc as usize].activity.as_mut() else {
                 continue;
             };
+            // a tick moves no request along; it is most of the picks of a tick step
+            let kind = match a.port_kind.get(port as usize).copied().flatten() {
+                Some(PortKind::Tick) | None => continue,
+                Some(kind) => kind,
+            };
+            let slots = self.state.slots();
             let req_before = slots[a.req_slot as usize] != 0;
             let stopping_before = a.stopping_slot.is_some_and(|sl| slots[sl as usize] != 0);
             let from_ether = tr.from == a.ether;
             let to_ether = tr.to == a.ether;
-            let mut replies: [(Option<Ticket>, Option<Outcome>); 3] =
-                [(None, None), (None, None), (None, None)];
+            let mut replies: [Option<(Ticket, Outcome)>; 3] = [None, None, None];
             let mut n = 0;
             let mut reply = |t: Option<Ticket>, o: Outcome| {
-                if t.is_some() {
-                    replies[n] = (t, Some(o));
+                if let Some(t) = t {
+                    replies[n] = Some((t, o));
                     n += 1;
                 }
             };
-            match a.port_kind.get(port as usize).copied().flatten() {
-                Some(PortKind::Request) => {
+            match kind {
+                PortKind::Request => {
                     let (ticket, args) = if req_service == Some(svc) {
                         (req_ticket.take(), req_args.take())
                     } else {
@@ -1411,7 +1412,7 @@ impl Engine {
                     a.pending = ticket;
                     a.pending_args = args;
                 }
-                Some(PortKind::Interrupt) | Some(PortKind::Abort) => {
+                PortKind::Interrupt | PortKind::Abort => {
                     if !from_ether && !stopping_before {
                         reply(a.current.take(), Outcome::Interrupted);
                         a.current_args = None;
@@ -1421,7 +1422,7 @@ impl Engine {
                         a.pending_args = None;
                     }
                 }
-                Some(PortKind::Run(_)) => {
+                PortKind::Run(_) => {
                     if from_ether {
                         a.current = a.pending.take();
                         a.current_args = a.pending_args.take();
@@ -1431,7 +1432,7 @@ impl Engine {
                         a.current_args = None;
                     }
                 }
-                Some(PortKind::Fail(_)) => {
+                PortKind::Fail(_) => {
                     if from_ether {
                         a.current = a.pending.take();
                         a.current_args = a.pending_args.take();
@@ -1443,10 +1444,11 @@ impl Engine {
                     reply(a.current.take(), o);
                     a.current_args = None;
                 }
-                Some(PortKind::Tick) | None => {}
+                PortKind::Tick => {}
             }
-            for (t, o) in replies.into_iter().take(n) {
-                if let (Some(ticket), Some(o)) = (t, o) {
+            // taken in place: moving the array out would copy all three outcomes
+            for r in &mut replies[..n] {
+                if let Some((ticket, o)) = r.take() {
                     self.emit(Event::Reply {
                         ticket,
                         service: ServiceId(svc),
@@ -1474,6 +1476,34 @@ impl Engine {
             self.stats.events_dropped += 1;
         }
         self.events.push_back(e);
+    }
+}
+
+/// One of the steps `steps` yields, chosen by `chooser` among them all (`None` if there
+/// are none). One pass counts them and keeps the first, the choice whenever there is only
+/// one; the chooser sees the count either way, so seeded runs do not change.
+fn choose_step<'a, I: Iterator<Item = Step<'a>>>(
+    chooser: &mut Chooser,
+    steps: impl Fn() -> I,
+) -> Option<Step<'a>> {
+    let mut n = 0;
+    let mut first = None;
+    for s in steps() {
+        first = first.or(Some(s));
+        n += 1;
+    }
+    let first = first?;
+    match chooser.choose(n) {
+        0 => Some(first),
+        k => steps().nth(k),
+    }
+}
+
+/// Makes `step` the scratch picks (none if `None`).
+fn set_picks(picks: &mut Vec<Pick>, step: Option<Step<'_>>) {
+    picks.clear();
+    if let Some(s) = step {
+        picks.extend_from_slice(s.picks);
     }
 }
 
