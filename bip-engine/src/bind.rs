@@ -102,6 +102,9 @@ pub(crate) struct Tables {
     /// The system has internal transitions: without any, the engine need not look for
     /// their steps (a GenoM layer has none).
     pub has_internal: bool,
+    /// One bit per interaction that can be a progress candidate (a codel's run or error
+    /// path, a progress connector): requests and ticks are looked at elsewhere.
+    pub progress_mask: Vec<u64>,
 }
 
 impl Tables {
@@ -123,6 +126,7 @@ impl Tables {
             activity_of: vec![None; system.components.len()],
             ports: Vec::new(),
             has_internal: system.summary().internal_transitions > 0,
+            progress_mask: Vec::new(),
         };
         let Some(map) = &system.genom else {
             return Ok(t.finish(system, kind));
@@ -234,6 +238,12 @@ impl Tables {
     }
 
     fn finish(mut self, system: &System, kind: Vec<InterKind>) -> Tables {
+        self.progress_mask = vec![0; kind.len().div_ceil(64)];
+        for (i, k) in kind.iter().enumerate() {
+            if matches!(k, InterKind::Codel { .. } | InterKind::Progress) {
+                self.progress_mask[i / 64] |= 1 << (i % 64);
+            }
+        }
         self.moves_requests = system
             .interactions
             .iter()

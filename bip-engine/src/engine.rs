@@ -706,7 +706,7 @@ impl Engine {
             self.codel_stamp = vec![u32::MAX; self.t.codels.len()];
         }
         let epoch = self.stats.steps as u32;
-        for i in self.enabled.interactions() {
+        for i in self.enabled.interactions_in(&self.t.progress_mask) {
             match self.t.kind[i as usize] {
                 InterKind::Codel { codel, .. } => {
                     if self.codel_stamp[codel as usize] != epoch {

@@ -60,6 +60,14 @@ fn check_system(seed: u64) -> Result<usize, TestCaseError> {
                 prop_assert!(set.is_enabled(i));
             }
             prop_assert_eq!(set.is_empty(), expected.is_empty());
+            // a mask selects exactly the enabled interactions it names
+            let n = sys.interactions.len();
+            let mut masks = bip_model::Rng::new(compared as u64);
+            let mask: Vec<u64> = (0..n.div_ceil(64)).map(|_| masks.next_u64()).collect();
+            let named = |i: &u32| mask[*i as usize / 64] >> (i % 64) & 1 == 1;
+            let among: Vec<u32> = set.interactions_in(&mask).collect();
+            let filtered: Vec<u32> = set.interactions().filter(named).collect();
+            prop_assert_eq!(among, filtered);
             compared += 1;
             // fire a random step that does not fail
             let mut order: Vec<usize> = (0..expected.len()).collect();
