@@ -36,6 +36,8 @@ pub struct EnabledSet {
     /// Per slot, the component it belongs to, and that component's location slot.
     slot_comp: Vec<u32>,
     slot_loc: Vec<u32>,
+    /// Per component, whether its atom has internal transitions (none in a GenoM layer).
+    has_internal: Vec<bool>,
     /// Per slot, the interactions whose steps (before priorities) depend on it: a
     /// participant's location, a variable that a guard of a participant's transitions on its
     /// port reads (in the locations those transitions leave), a slot the connector's guard
@@ -205,9 +207,18 @@ impl EnabledSet {
             set_bit(&mut lazy, i, !bit(&is_high, i) && !bit(&under_when, i));
         }
 
+        let has_internal = system
+            .components
+            .iter()
+            .map(|c| {
+                let atom = &system.atoms[c.atom as usize];
+                atom.transitions.iter().any(|t| t.port.is_none())
+            })
+            .collect();
         let mut set = EnabledSet {
             slot_comp,
             slot_loc,
+            has_internal,
             deps_start,
             deps,
             highs_start,
@@ -315,7 +326,7 @@ impl EnabledSet {
     #[inline]
     fn slot_changed(&mut self, system: &System, after: &State, s: u32) -> Result<(), RangeError> {
         let c = self.slot_comp[s as usize];
-        if self.comp_stamp[c as usize] != self.epoch {
+        if self.has_internal[c as usize] && self.comp_stamp[c as usize] != self.epoch {
             self.comp_stamp[c as usize] = self.epoch;
             self.eval_internal(system, after, c)?;
         }
