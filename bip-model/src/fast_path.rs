@@ -317,53 +317,57 @@ impl FlatCode {
 
     /// Runs stack code `ops[start..end]`; `Err` if the expression fails (its tree says how).
     pub(crate) fn run(&self, start: u32, end: u32, slots: &[i64], base: u32) -> Result<i64, ()> {
+        // compile() keeps every stack position below STACK; masking the positions tells
+        // the compiler so, which drops the bounds checks of the inner loop
+        const M: usize = STACK - 1;
         let mut stack = [0i64; STACK];
         let mut sp = 0usize;
         let mut pc = start as usize;
         while pc < end as usize {
             match self.ops[pc] {
                 Op::Const(v) => {
-                    stack[sp] = v;
+                    stack[sp & M] = v;
                     sp += 1;
                 }
                 Op::Slot(s) => {
-                    stack[sp] = slots[s as usize];
+                    stack[sp & M] = slots[s as usize];
                     sp += 1;
                 }
                 Op::Local(n) => {
-                    stack[sp] = slots[(base + n) as usize];
+                    stack[sp & M] = slots[(base + n) as usize];
                     sp += 1;
                 }
                 Op::At(s, loc) => {
-                    stack[sp] = (slots[s as usize] == i64::from(loc)) as i64;
+                    stack[sp & M] = (slots[s as usize] == i64::from(loc)) as i64;
                     sp += 1;
                 }
-                Op::Not => stack[sp - 1] = (stack[sp - 1] == 0) as i64,
-                Op::Neg => stack[sp - 1] = stack[sp - 1].checked_neg().ok_or(())?,
-                Op::Bool => stack[sp - 1] = (stack[sp - 1] != 0) as i64,
+                Op::Not => stack[(sp - 1) & M] = (stack[(sp - 1) & M] == 0) as i64,
+                Op::Neg => stack[(sp - 1) & M] = stack[(sp - 1) & M].checked_neg().ok_or(())?,
+                Op::Bool => stack[(sp - 1) & M] = (stack[(sp - 1) & M] != 0) as i64,
                 Op::Bin(op) => {
                     sp -= 1;
-                    stack[sp - 1] = binary(op, stack[sp - 1], stack[sp]).map_err(|_| ())?;
+                    let (a, b) = (stack[(sp - 1) & M], stack[sp & M]);
+                    stack[(sp - 1) & M] = binary(op, a, b).map_err(|_| ())?;
                 }
                 Op::And(to) => {
                     // a zero left operand is the result
-                    if stack[sp - 1] == 0 {
+                    if stack[(sp - 1) & M] == 0 {
                         pc = to as usize;
                         continue;
                     }
                     sp -= 1;
                 }
                 Op::Or(to) => {
-                    if stack[sp - 1] != 0 {
-                        stack[sp - 1] = 1;
+                    if stack[(sp - 1) & M] != 0 {
+                        stack[(sp - 1) & M] = 1;
                         pc = to as usize;
                         continue;
                     }
                     sp -= 1;
                 }
                 Op::Implies(to) => {
-                    if stack[sp - 1] == 0 {
-                        stack[sp - 1] = 1;
+                    if stack[(sp - 1) & M] == 0 {
+                        stack[(sp - 1) & M] = 1;
                         pc = to as usize;
                         continue;
                     }
@@ -371,7 +375,7 @@ impl FlatCode {
                 }
                 Op::Else(to) => {
                     sp -= 1;
-                    if stack[sp] == 0 {
+                    if stack[sp & M] == 0 {
                         pc = to as usize;
                         continue;
                     }
@@ -387,7 +391,7 @@ impl FlatCode {
     }
 }
 
-/// The deepest stack code may use; deeper expressions keep their trees.
+/// The deepest stack code may use (a power of two); deeper expressions keep their trees.
 const STACK: usize = 16;
 
 /// An instruction of the stack machine. Jumps are to absolute positions in `ops`.
