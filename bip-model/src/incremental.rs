@@ -4,10 +4,11 @@
 //! takes one step at a time, and a step writes a few slots: only the interactions that
 //! read those slots can change. [`EnabledSet`] caches, per interaction, its steps before
 //! priorities, and after a step re-evaluates only the interactions that read a slot that
-//! changed (a participant's location, a variable that a guard of a participant's
-//! transitions on its port reads, a slot the connector's guard reads), with the same
-//! function the full relation uses ([`System::push_interaction_steps`]); priorities are applied by looking
-//! up, for a lower interaction, whether one of its higher interactions has steps (a sparse
+//! changed where the read matters (a participant's location; a variable that a guard of a
+//! participant's transitions on its port reads, while the participant is where those
+//! transitions start; a slot the connector's guard reads, while a required participant
+//! is where it has transitions on its port), with the same function the full relation
+//! uses ([`System::push_interaction_steps`]); priorities are applied by looking up, for a lower interaction, whether one of its higher interactions has steps (a sparse
 //! bit mask per lower interaction), or with [`System::is_suppressed`] itself for
 //! interactions under a rule with a `when`. It is not a second notion of "enabled": it
 //! yields exactly the steps of [`System::enabled_steps`], in the same order (a property
@@ -33,15 +34,15 @@ use crate::system::{RangeError, System};
 #[derive(Clone, Debug)]
 pub struct EnabledSet {
     // ---- tables of the system (fixed) ----
-    /// Per slot, the component it belongs to, and that component's location slot.
+    /// Per slot, the component it belongs to.
     slot_comp: Vec<u32>,
-    slot_loc: Vec<u32>,
     /// Per component, whether its atom has internal transitions (none in a GenoM layer).
     has_internal: Vec<bool>,
     /// Per slot, the interactions whose steps (before priorities) depend on it: a
     /// participant's location, a variable that a guard of a participant's transitions on its
-    /// port reads (in the locations those transitions leave), a slot the connector's guard
-    /// reads. `deps[deps_start[s]..deps_start[s + 1]]`.
+    /// port reads (while the participant is where those transitions start), a slot the
+    /// connector's guard reads (while a required participant is where it has transitions
+    /// on its port). `deps[deps_start[s]..deps_start[s + 1]]`.
     deps_start: Vec<u32>,
     deps: Vec<Dep>,
     /// Per interaction, its higher interactions under rules without a `when`, as a sparse
@@ -81,11 +82,13 @@ pub struct EnabledSet {
     valid: bool,
 }
 
-/// An interaction whose steps read a slot, in the locations (of the slot's component)
-/// where the read matters.
+/// An interaction whose steps read a slot, when the component whose location is slot
+/// `watch` is at one of `locations` (elsewhere the interaction has no step that the slot
+/// could change, and if that component moves, its location slot marks the interaction).
 #[derive(Clone, Copy, Debug)]
 struct Dep {
     interaction: u32,
+    watch: u32,
     locations: u64,
 }
 
@@ -119,34 +122,39 @@ impl EnabledSet {
 
         let n_slots = system.slot_count();
         let mut slot_comp = vec![0u32; n_slots];
-        let mut slot_loc = vec![0u32; n_slots];
         for (c, comp) in system.components.iter().enumerate() {
             let end = system
                 .components
                 .get(c + 1)
                 .map_or(n_slots, |next| next.slot as usize);
             slot_comp[comp.slot as usize..end].fill(c as u32);
-            slot_loc[comp.slot as usize..end].fill(comp.slot);
         }
 
-        // slot -> interactions whose steps read it, each with the locations of the slot's
-        // component in which the read matters
+        // slot -> interactions whose steps read it, each with where the read matters
         let mut per_slot: Vec<Vec<Dep>> = vec![Vec::new(); n_slots];
+        // the locations of a participant from which it has transitions on its port
+        let ready_at = |p: &crate::system::PortRef| {
+            let atom = system.atom_of(p.component);
+            let from = atom.transitions.iter().filter(|t| t.port == Some(p.port));
+            from.fold(0u64, |m, t| m | location_bit(t.from))
+        };
         for (i, inter) in system.interactions.iter().enumerate() {
             let i = i as u32;
-            let mut add = |s: u32, locations: u64| {
+            let mut add = |s: u32, watch: u32, locations: u64| {
                 let list = &mut per_slot[s as usize];
-                match list.iter_mut().find(|d| d.interaction == i) {
+                let same = |d: &&mut Dep| d.interaction == i && d.watch == watch;
+                match list.iter_mut().find(same) {
                     Some(d) => d.locations |= locations,
                     None => list.push(Dep {
                         interaction: i,
+                        watch,
                         locations,
                     }),
                 }
             };
             for p in &inter.ports {
                 let comp = &system.components[p.component as usize];
-                add(comp.slot, ANYWHERE);
+                add(comp.slot, comp.slot, ANYWHERE);
                 // a transition's guard matters only where the transition starts (an
                 // atom's guards read only its own variables; anything else, anywhere)
                 for t in &system.atoms[comp.atom as usize].transitions {
@@ -154,14 +162,26 @@ impl EnabledSet {
                         if port == p.port {
                             g.for_each_slot(comp.slot + 1, &mut |s| {
                                 let own = slot_comp[s as usize] == p.component;
-                                add(s, if own { location_bit(t.from) } else { ANYWHERE })
+                                let at = if own { location_bit(t.from) } else { ANYWHERE };
+                                add(s, comp.slot, at)
                             });
                         }
                     }
                 }
             }
+            // the connector's guard matters only where a required participant is ready:
+            // watch the one ready in the fewest locations
             if let Some(g) = &inter.guard {
-                g.for_each_slot(0, &mut |s| add(s, ANYWHERE));
+                let required = inter
+                    .ports
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| inter.trigger.is_none_or(|tr| tr as usize == *k));
+                let watched = required
+                    .map(|(_, p)| (ready_at(p), system.components[p.component as usize].slot))
+                    .min_by_key(|(m, _)| m.count_ones());
+                let (at, watch) = watched.unwrap_or((ANYWHERE, 0));
+                g.for_each_slot(0, &mut |s| add(s, watch, at));
             }
         }
         // rules with a `when`: the interactions under them are re-decided in every state,
@@ -217,7 +237,6 @@ impl EnabledSet {
             .collect();
         let mut set = EnabledSet {
             slot_comp,
-            slot_loc,
             has_internal,
             deps_start,
             deps,
@@ -334,15 +353,14 @@ impl EnabledSet {
             self.deps_start[s as usize] as usize,
             self.deps_start[s as usize + 1] as usize,
         );
-        let here = location_bit(after.slots()[self.slot_loc[s as usize] as usize] as u32);
+        let slots = after.slots();
         for k in lo..hi {
             let Dep {
                 interaction: i,
+                watch,
                 locations,
             } = self.deps[k];
-            if locations & here == 0 {
-                // no guard that reads the slot can be taken from where its component is;
-                // if the component moved, its location slot marks the interaction
+            if locations & location_bit(slots[watch as usize] as u32) == 0 {
                 continue;
             }
             if self.stamp[i as usize] != self.epoch {
