@@ -22,6 +22,7 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
+use crate::priority_masks::{bit, flatten, set_bit, PriorityMasks};
 use crate::state::State;
 use crate::step::{Choices, Label, Pick, Step, Steps};
 use crate::system::{RangeError, System};
@@ -45,18 +46,8 @@ pub struct EnabledSet {
     /// on its port). `deps[deps_start[s]..deps_start[s + 1]]`.
     deps_start: Vec<u32>,
     deps: Vec<Dep>,
-    /// Per interaction, its higher interactions under rules without a `when`, as a sparse
-    /// bit mask: `(word, bits)` pairs over `pre`,
-    /// `highs[highs_start[i]..highs_start[i + 1]]`.
-    highs_start: Vec<u32>,
-    highs: Vec<(u32, u64)>,
-    /// Interactions that no rule names as higher and no `when` decides: they are left
-    /// unevaluated while suppressed.
-    lazy: Vec<u64>,
-    /// Interactions under some rule with a `when`: their suppression is decided by
-    /// [`System::is_suppressed`] in each state.
-    under_when: Vec<u64>,
-    any_when: bool,
+    /// The system's priorities as sparse masks over `pre`.
+    masks: PriorityMasks,
 
     // ---- the state's enabled steps ----
     /// Per interaction, the picks of its steps before priorities, `width` picks per step.
@@ -98,19 +89,6 @@ const ANYWHERE: u64 = u64::MAX;
 /// The bit of a location in [`Dep::locations`]; locations from 63 on share the last bit.
 fn location_bit(loc: u32) -> u64 {
     1 << loc.min(63)
-}
-
-fn bit(bits: &[u64], i: u32) -> bool {
-    bits[i as usize / 64] >> (i % 64) & 1 == 1
-}
-
-fn set_bit(bits: &mut [u64], i: u32, on: bool) {
-    let w = &mut bits[i as usize / 64];
-    if on {
-        *w |= 1 << (i % 64);
-    } else {
-        *w &= !(1 << (i % 64));
-    }
 }
 
 impl EnabledSet {
@@ -184,48 +162,7 @@ impl EnabledSet {
                 g.for_each_slot(0, &mut |s| add(s, watch, at));
             }
         }
-        // rules with a `when`: the interactions under them are re-decided in every state,
-        // so the components their `when`s read need no table
-        let rule_has_when: Vec<bool> = system
-            .priorities
-            .iter()
-            .map(|r| !r.when.is_empty())
-            .collect();
-        let mut under_when = vec![0u64; words];
-        for (i, rules) in system.rules_by_low.iter().enumerate() {
-            if rules.iter().any(|&r| rule_has_when[r as usize]) {
-                set_bit(&mut under_when, i as u32, true);
-            }
-        }
-        let any_when = rule_has_when.iter().any(|&w| w);
         let (deps_start, deps) = flatten(&per_slot);
-
-        // lower interaction -> the words of `pre` holding its higher ones (no `when`)
-        let mut is_high = vec![0u64; words];
-        let mut per_low: Vec<Vec<(u32, u64)>> = vec![Vec::new(); n_inter];
-        for (rule, &when) in system.priorities.iter().zip(&rule_has_when) {
-            for h in rule.high.clone() {
-                set_bit(&mut is_high, h, true);
-            }
-            if when {
-                continue;
-            }
-            for l in rule.low.clone() {
-                let masks = &mut per_low[l as usize];
-                for h in rule.high.clone() {
-                    let (w, b) = (h / 64, 1u64 << (h % 64));
-                    match masks.iter_mut().find(|(mw, _)| *mw == w) {
-                        Some((_, m)) => *m |= b,
-                        None => masks.push((w, b)),
-                    }
-                }
-            }
-        }
-        let (highs_start, highs) = flatten(&per_low);
-        let mut lazy = vec![0u64; words];
-        for i in 0..n_inter as u32 {
-            set_bit(&mut lazy, i, !bit(&is_high, i) && !bit(&under_when, i));
-        }
 
         let has_internal = system
             .components
@@ -240,11 +177,7 @@ impl EnabledSet {
             has_internal,
             deps_start,
             deps,
-            highs_start,
-            highs,
-            lazy,
-            under_when,
-            any_when,
+            masks: system.priority_masks.clone(),
             picks: vec![Vec::new(); n_inter],
             width: vec![0; n_inter],
             pre: vec![0; words],
@@ -275,9 +208,9 @@ impl EnabledSet {
             self.eval_internal(system, state, c)?;
         }
         // the lazy ones are left for `settle`, once the others are known
-        self.stale.clone_from(&self.lazy);
+        self.stale.clone_from(&self.masks.lazy);
         for i in 0..system.interactions.len() as u32 {
-            if !bit(&self.lazy, i) {
+            if !bit(&self.masks.lazy, i) {
                 self.eval_interaction(system, state, i)?;
             }
         }
@@ -329,7 +262,7 @@ impl EnabledSet {
         }
         for k in 0..self.dirty.len() {
             let i = self.dirty[k];
-            if bit(&self.lazy, i) {
+            if bit(&self.masks.lazy, i) {
                 set_bit(&mut self.stale, i, true);
             } else {
                 self.eval_interaction(system, after, i)?;
@@ -416,22 +349,16 @@ impl EnabledSet {
     /// True if a higher interaction of a rule without `when` over `i` has steps.
     #[inline]
     fn blocked(&self, i: u32) -> bool {
-        let (s, e) = (
-            self.highs_start[i as usize] as usize,
-            self.highs_start[i as usize + 1] as usize,
-        );
-        self.highs[s..e]
-            .iter()
-            .any(|&(w, m)| self.pre[w as usize] & m != 0)
+        self.masks.blocked(i, &self.pre)
     }
 
     /// Decides suppression of the enabled interactions under a rule with a `when`.
     fn decide_whens(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
-        if !self.any_when {
+        if !self.masks.any_when {
             return Ok(());
         }
         for w in 0..self.pre.len() {
-            let mut bits = self.pre[w] & self.under_when[w];
+            let mut bits = self.pre[w] & self.masks.under_when[w];
             while bits != 0 {
                 let i = (w * 64) as u32 + bits.trailing_zeros();
                 bits &= bits - 1;
@@ -456,7 +383,7 @@ impl EnabledSet {
 
     #[inline]
     fn is_suppressed(&self, i: u32) -> bool {
-        if bit(&self.under_when, i) {
+        if bit(&self.masks.under_when, i) {
             bit(&self.when_suppressed, i)
         } else {
             self.blocked(i)
@@ -540,16 +467,4 @@ impl EnabledSet {
     pub fn is_empty(&self) -> bool {
         self.internal.iter().all(Vec::is_empty) && self.interactions().next().is_none()
     }
-}
-
-/// Lists of lists as one array and start offsets (one more than lists).
-fn flatten<T: Copy>(lists: &[Vec<T>]) -> (Vec<u32>, Vec<T>) {
-    let mut start = Vec::with_capacity(lists.len() + 1);
-    let mut flat = Vec::new();
-    for l in lists {
-        start.push(flat.len() as u32);
-        flat.extend_from_slice(l);
-    }
-    start.push(flat.len() as u32);
-    (start, flat)
 }

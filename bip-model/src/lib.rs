@@ -47,6 +47,7 @@ mod incremental;
 mod load;
 pub mod ops;
 mod ordered_map;
+mod priority_masks;
 mod rng;
 #[cfg(feature = "std")]
 pub mod source;

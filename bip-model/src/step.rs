@@ -554,6 +554,10 @@ impl System {
         i: u32,
         enabled: &[u64],
     ) -> Result<bool, RangeError> {
+        let masks = &self.priority_masks;
+        if !crate::priority_masks::bit(&masks.under_when, i) {
+            return Ok(masks.blocked(i, enabled));
+        }
         for &r in &self.rules_by_low[i as usize] {
             let rule = &self.priorities[r as usize];
             if !any_bit(enabled, rule.high.clone()) {

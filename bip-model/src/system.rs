@@ -59,6 +59,8 @@ pub struct System {
     pub genom: Option<crate::genom::GenomMap>,
     /// Flat tables for the step relation's inner loop.
     pub(crate) enable_index: crate::step::EnableIndex,
+    /// The priorities as sparse bit masks, for deciding suppression quickly.
+    pub(crate) priority_masks: crate::priority_masks::PriorityMasks,
 }
 
 /// An atom type: locations, ports, variables and transitions.

@@ -72,6 +72,8 @@ pub(crate) fn compile_core(
     let (rules, rules_by_low) = priorities;
     let layout = StateLayout::new(&c.slot_ranges);
     let enable_index = crate::step::EnableIndex::new(&c.atoms, &c.components, &c.interactions);
+    let priority_masks =
+        crate::priority_masks::PriorityMasks::new(&rules, &rules_by_low, c.interactions.len());
     let system = System {
         name: def.name.value.clone(),
         tick_ms,
@@ -90,6 +92,7 @@ pub(crate) fn compile_core(
         slot_ranges: c.slot_ranges,
         genom: None,
         enable_index,
+        priority_masks,
     };
     Ok((system, extra))
 }
