@@ -303,6 +303,20 @@ impl FlatCode {
         }
     }
 
+    /// The verdict of a guard, or `None` if its tree must decide (it has no flat form,
+    /// or its stack code failed and the tree gives the error's details).
+    #[inline(always)]
+    pub(crate) fn decide(&self, code: GuardCode, slots: &[i64], base: u32) -> Option<bool> {
+        match code {
+            GuardCode::Always => Some(true),
+            GuardCode::Tests { start, end } => Some(self.all_hold(start, end, slots, base)),
+            GuardCode::Code { start, end } => {
+                self.run(start, end, slots, base).ok().map(|v| v != 0)
+            }
+            GuardCode::Tree => None,
+        }
+    }
+
     /// True if every test of a [`GuardCode::Tests`] holds.
     #[inline]
     pub(crate) fn all_hold(&self, start: u32, end: u32, slots: &[i64], base: u32) -> bool {

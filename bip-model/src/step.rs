@@ -345,18 +345,10 @@ impl System {
     #[inline(always)]
     fn cell_guard(&self, state: &State, cell: &PortCell, t: u32) -> Result<bool, RangeError> {
         let idx = &self.enable_index;
-        match idx.guards[(cell.code + t) as usize] {
-            GuardCode::Always => Ok(true),
-            GuardCode::Tests { start, end } => {
-                Ok(idx.flat.all_hold(start, end, state.slots(), cell.vars))
-            }
-            GuardCode::Code { start, end } => {
-                match idx.flat.run(start, end, state.slots(), cell.vars) {
-                    Ok(v) => Ok(v != 0),
-                    Err(()) => self.transition_guard(state, cell.component, t),
-                }
-            }
-            GuardCode::Tree => self.transition_guard(state, cell.component, t),
+        let code = idx.guards[(cell.code + t) as usize];
+        match idx.flat.decide(code, state.slots(), cell.vars) {
+            Some(ok) => Ok(ok),
+            None => self.transition_guard(state, cell.component, t),
         }
     }
 
@@ -454,14 +446,9 @@ impl System {
             several |= len > 1;
             bounds.push(((start - first) as u32, len as u32));
         }
-        let ok = match idx.inter_guards[i as usize] {
-            GuardCode::Always => true,
-            GuardCode::Tests { start, end } => idx.flat.all_hold(start, end, slots, 0),
-            GuardCode::Code { start, end } => match idx.flat.run(start, end, slots, 0) {
-                Ok(v) => v != 0,
-                Err(()) => self.connector_guard(state, i)?,
-            },
-            GuardCode::Tree => self.connector_guard(state, i)?,
+        let ok = match idx.flat.decide(idx.inter_guards[i as usize], slots, 0) {
+            Some(ok) => ok,
+            None => self.connector_guard(state, i)?,
         };
         if !ok {
             out.truncate(first);
