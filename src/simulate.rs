@@ -42,7 +42,7 @@ pub fn run(args: &Args) -> u8 {
             return exit::ERROR;
         }
     };
-    let services = requestable(&system);
+    let services: Vec<(&str, &str)> = system.requestable().collect();
     let mut engine = match Engine::builder(system.clone())
         .default_codels(DefaultCodels::Random(args.seed))
         .policy(Policy::Seeded(args.seed))
@@ -225,14 +225,4 @@ fn check(
         Ok(_) => None,
         Err(e) => Some(Stop::RangeError(e.to_string())),
     }
-}
-
-/// The services a client may request, owned (the engine takes the system).
-fn requestable(system: &System) -> Vec<(String, String)> {
-    system
-        .genom
-        .iter()
-        .flat_map(|g| g.requestable())
-        .map(|(m, s)| (m.to_string(), s.to_string()))
-        .collect()
 }

@@ -1377,7 +1377,7 @@ impl Engine {
             let Some(a) = self.t.services[svc as usize].activity.as_mut() else {
                 continue;
             };
-            // a tick moves no request along; it is most of the picks of a tick step
+            // a tick moves no request along (tick steps skip `track`; a mixed step may not)
             let kind = match a.port_kind.get(port as usize).copied().flatten() {
                 Some(PortKind::Tick) | None => continue,
                 Some(kind) => kind,

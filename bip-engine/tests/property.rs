@@ -87,18 +87,18 @@ fn run_case(model: usize, seed: u64) -> Result<(), TestCaseError> {
         .record(2000)
         .build()
         .map_err(|e| TestCaseError::fail(e.to_string()))?;
-    let services = requestable(&system);
+    let services: Vec<(&str, &str)> = system.requestable().collect();
     let mut done: HashMap<Ticket, usize> = HashMap::new();
     while engine.stats().steps < 600 {
         let (request, chunk) = {
             let mut r = rng.lock().unwrap_or_else(|e| e.into_inner());
             let request = (!services.is_empty() && r.below(3) == 0)
-                .then(|| services[r.below(services.len())].clone());
+                .then(|| services[r.below(services.len())]);
             (request, 1 + r.below(12) as u64)
         };
         if let Some((m, s)) = request {
             engine
-                .request(&m, &s, ())
+                .request(m, s, ())
                 .map_err(|e| TestCaseError::fail(e.to_string()))?;
         }
         engine
@@ -204,14 +204,4 @@ fn silence_injected_panics() {
             }
         }));
     });
-}
-
-/// The services a client may request, owned (the engine takes the system).
-fn requestable(system: &System) -> Vec<(String, String)> {
-    system
-        .genom
-        .iter()
-        .flat_map(|g| g.requestable())
-        .map(|(m, s)| (m.to_string(), s.to_string()))
-        .collect()
 }

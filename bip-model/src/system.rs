@@ -269,6 +269,12 @@ impl core::fmt::Display for RangeError {
 impl core::error::Error for RangeError {}
 
 impl System {
+    /// The services a client of the GenoM layer may request, as `(module, service)`
+    /// (none without a layer): see [`crate::GenomMap::requestable`].
+    pub fn requestable(&self) -> impl Iterator<Item = (&str, &str)> + '_ {
+        self.genom.iter().flat_map(|g| g.requestable())
+    }
+
     /// The initial state.
     pub fn initial_state(&self) -> State {
         self.initial.clone()
