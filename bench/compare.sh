@@ -7,12 +7,7 @@
 #   -O2 -DSAFETY -DNOREDUCE (no partial-order reduction) and SPIN's default (with it; one
 #   process, so it reduces nothing here), both with -DMEMLIM large enough.
 # bip runs with one worker and with two. Wall time and peak RSS from /usr/bin/time.
-set -euo pipefail
-cd "$(dirname "$0")/.."
-cargo build --release -q
-BIP=$PWD/target/release/bip
-WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
+source "$(dirname "$0")/common.sh"
 
 models=()
 gen() { # name template constant value

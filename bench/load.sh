@@ -1,12 +1,7 @@
 #!/usr/bin/env bash
 # Load time of `bip check` on a model with N components and N connectors (the shape of
 # bip-model's huge_file_loads test). By hand, not in CI:  bench/load.sh [N...]
-set -euo pipefail
-cd "$(dirname "$0")/.."
-cargo build --release -q
-BIP=$PWD/target/release/bip
-WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
+source "$(dirname "$0")/common.sh"
 sizes=("$@")
 ((${#sizes[@]})) || sizes=(50000 100000)
 for n in "${sizes[@]}"; do
