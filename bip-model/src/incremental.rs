@@ -7,8 +7,10 @@
 //! changed where the read matters (a participant's location; a variable that a guard of a
 //! participant's transitions on its port reads, while the participant is where those
 //! transitions start; a slot the connector's guard reads, while a required participant
-//! is where it has transitions on its port), with the same function the full relation
-//! uses ([`System::push_interaction_steps`]); priorities are applied by looking up, for a lower interaction, whether one of its higher interactions has steps (a sparse
+//! is where it has transitions on its port and every required port had an enabled
+//! transition when the interaction was last evaluated), with the same function the full
+//! relation uses ([`System::push_interaction_steps`]); priorities are applied by looking
+//! up, for a lower interaction, whether one of its higher interactions has steps (a sparse
 //! bit mask per lower interaction), or with [`System::is_suppressed`] itself for
 //! interactions under a rule with a `when`. It is not a second notion of "enabled": it
 //! yields exactly the steps of [`System::enabled_steps`], in the same order (a property
@@ -55,6 +57,9 @@ pub struct EnabledSet {
     width: Vec<u32>,
     /// Interactions with steps before priorities (one bit each).
     pre: Vec<u64>,
+    /// Interactions whose required ports all had an enabled transition when last
+    /// evaluated (one bit each): only then does what the connector's guard reads matter.
+    ready: Vec<u64>,
     /// Lazy interactions not evaluated since they were suppressed: their `picks` and
     /// `pre` bit are out of date (and do not matter while they stay suppressed).
     stale: Vec<u64>,
@@ -76,11 +81,15 @@ pub struct EnabledSet {
 /// An interaction whose steps read a slot, when the component whose location is slot
 /// `watch` is at one of `locations` (elsewhere the interaction has no step that the slot
 /// could change, and if that component moves, its location slot marks the interaction).
+/// With `connector_only`, only the connector's guard reads the slot, and the read matters
+/// only while the interaction's required ports all have an enabled transition (when that
+/// changes, a location or a transition guard's read marks the interaction).
 #[derive(Clone, Copy, Debug)]
 struct Dep {
     interaction: u32,
     watch: u32,
     locations: u64,
+    connector_only: bool,
 }
 
 /// Every location.
@@ -118,21 +127,24 @@ impl EnabledSet {
         };
         for (i, inter) in system.interactions.iter().enumerate() {
             let i = i as u32;
-            let mut add = |s: u32, watch: u32, locations: u64| {
+            let mut add = |s: u32, watch: u32, locations: u64, connector_only: bool| {
                 let list = &mut per_slot[s as usize];
-                let same = |d: &&mut Dep| d.interaction == i && d.watch == watch;
+                let same = |d: &&mut Dep| {
+                    d.interaction == i && d.watch == watch && d.connector_only == connector_only
+                };
                 match list.iter_mut().find(same) {
                     Some(d) => d.locations |= locations,
                     None => list.push(Dep {
                         interaction: i,
                         watch,
                         locations,
+                        connector_only,
                     }),
                 }
             };
             for p in &inter.ports {
                 let comp = &system.components[p.component as usize];
-                add(comp.slot, comp.slot, ANYWHERE);
+                add(comp.slot, comp.slot, ANYWHERE, false);
                 // a transition's guard matters only where the transition starts (an
                 // atom's guards read only its own variables; anything else, anywhere)
                 for t in &system.atoms[comp.atom as usize].transitions {
@@ -141,7 +153,7 @@ impl EnabledSet {
                             g.for_each_slot(comp.slot + 1, &mut |s| {
                                 let own = slot_comp[s as usize] == p.component;
                                 let at = if own { location_bit(t.from) } else { ANYWHERE };
-                                add(s, comp.slot, at)
+                                add(s, comp.slot, at, false)
                             });
                         }
                     }
@@ -159,7 +171,7 @@ impl EnabledSet {
                     .map(|(_, p)| (ready_at(p), system.components[p.component as usize].slot))
                     .min_by_key(|(m, _)| m.count_ones());
                 let (at, watch) = watched.unwrap_or((ANYWHERE, 0));
-                g.for_each_slot(0, &mut |s| add(s, watch, at));
+                g.for_each_slot(0, &mut |s| add(s, watch, at, true));
             }
         }
         let (deps_start, deps) = flatten(&per_slot);
@@ -181,6 +193,7 @@ impl EnabledSet {
             picks: vec![Vec::new(); n_inter],
             width: vec![0; n_inter],
             pre: vec![0; words],
+            ready: vec![0; words],
             stale: vec![0; words],
             when_suppressed: vec![0; words],
             internal: vec![Vec::new(); n_comp],
@@ -292,8 +305,11 @@ impl EnabledSet {
                 interaction: i,
                 watch,
                 locations,
+                connector_only,
             } = self.deps[k];
-            if locations & location_bit(slots[watch as usize] as u32) == 0 {
+            if locations & location_bit(slots[watch as usize] as u32) == 0
+                || (connector_only && !bit(&self.ready, i))
+            {
                 continue;
             }
             if self.stamp[i as usize] != self.epoch {
@@ -340,9 +356,10 @@ impl EnabledSet {
     ) -> Result<(), RangeError> {
         let picks = &mut self.picks[i as usize];
         picks.clear();
-        let width = system.interaction_picks(state, i, &mut self.scratch, picks)?;
+        let (width, ready) = system.interaction_picks_ready(state, i, &mut self.scratch, picks)?;
         self.width[i as usize] = width as u32;
         set_bit(&mut self.pre, i, width > 0);
+        set_bit(&mut self.ready, i, ready);
         Ok(())
     }
 

@@ -401,6 +401,22 @@ impl System {
         scratch: &mut Choices,
         out: &mut Vec<Pick>,
     ) -> Result<usize, RangeError> {
+        self.interaction_picks_ready(state, i, scratch, out)
+            .map(|(width, _)| width)
+    }
+
+    /// [`System::interaction_picks`], and whether every required port has an enabled
+    /// transition (the connector's guard was looked at, or would have been if it had one):
+    /// if not, no value of what only the connector's guard reads can give the interaction
+    /// a step.
+    #[inline]
+    pub(crate) fn interaction_picks_ready(
+        &self,
+        state: &State,
+        i: u32,
+        scratch: &mut Choices,
+        out: &mut Vec<Pick>,
+    ) -> Result<(usize, bool), RangeError> {
         let slots = state.slots();
         let idx = &self.enable_index;
         let (first, last) = idx.inter_ports[i as usize];
@@ -410,7 +426,7 @@ impl System {
             if !cell.optional {
                 let (start, end) = idx.transitions(cell, slots);
                 if start == end {
-                    return Ok(0);
+                    return Ok((0, false));
                 }
             }
         }
@@ -439,7 +455,7 @@ impl System {
             if len == 0 {
                 if !cell.optional {
                     out.truncate(first);
-                    return Ok(0); // a required port is not enabled
+                    return Ok((0, false)); // a required port is not enabled
                 }
                 continue; // a broadcast receiver that does not join
             }
@@ -452,11 +468,11 @@ impl System {
         };
         if !ok {
             out.truncate(first);
-            return Ok(0);
+            return Ok((0, true));
         }
         let width = bounds.len();
         if !several {
-            return Ok(width);
+            return Ok((width, true));
         }
         // every combination of one enabled transition per joining port, in port order
         choices.clear();
@@ -472,7 +488,7 @@ impl System {
             let mut k = width;
             loop {
                 if k == 0 {
-                    return Ok(width);
+                    return Ok((width, true));
                 }
                 k -= 1;
                 cursor[k] += 1;
