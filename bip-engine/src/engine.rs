@@ -236,6 +236,7 @@ impl EngineBuilder {
         let now = clock.now_us();
         Ok(Engine {
             next: state.clone(),
+            step_slots: Vec::new(),
             state,
             enabled,
             bodies: out,
@@ -317,7 +318,10 @@ pub struct Engine {
     system: System,
     t: Tables,
     state: State,
+    /// Equal to `state` between steps: a step is fired onto it, and only the slots the
+    /// step wrote (`step_slots`) are compared and copied back.
     next: State,
+    step_slots: Vec<u32>,
     enabled: EnabledSet,
     bodies: Vec<Body>,
     pub(crate) ports: PortStore,
@@ -1293,11 +1297,18 @@ impl Engine {
             label,
             picks: &self.picks,
         };
-        if let Err(e) = self.system.fire(&self.state, step, &mut self.next) {
+        self.step_slots.clear();
+        let fired = self
+            .system
+            .fire_in_place(step, &mut self.next, &mut self.step_slots);
+        if let Err(e) = fired {
+            self.next.copy_from(&self.state);
             self.stopped = Some(e.clone());
             return Err(EngineError::Range(e));
         }
-        let updated = self.enabled.update(&self.system, &self.state, &self.next);
+        let updated =
+            self.enabled
+                .update_written(&self.system, &self.state, &self.next, &self.step_slots);
         if let Label::Interaction(i) = label {
             if self.t.moves_requests[i as usize] {
                 self.track(cause);
@@ -1313,6 +1324,9 @@ impl Engine {
             self.trace_step(label);
         }
         core::mem::swap(&mut self.state, &mut self.next);
+        for &s in &self.step_slots {
+            self.next.slots_mut()[s as usize] = self.state.slots()[s as usize];
+        }
         self.stats.steps += 1;
         self.quiescent_dirty = true;
         if let Err(e) = updated {

@@ -245,14 +245,7 @@ impl EnabledSet {
         before: &State,
         after: &State,
     ) -> Result<(), RangeError> {
-        self.valid = false;
-        self.epoch = self.epoch.wrapping_add(1);
-        if self.epoch == 0 {
-            self.stamp.fill(0);
-            self.comp_stamp.fill(0);
-            self.epoch = 1;
-        }
-        self.dirty.clear();
+        self.begin_update();
         let (a, b) = (before.slots(), after.slots());
         debug_assert!(a.len() == self.slot_comp.len() && b.len() == self.slot_comp.len());
         // a step writes few slots: skip unchanged ones four at a time (xor, no call)
@@ -273,6 +266,42 @@ impl EnabledSet {
                 self.slot_changed(system, after, s as u32)?;
             }
         }
+        self.finish_update(system, after)
+    }
+
+    /// [`EnabledSet::update`] when the caller knows which slots may differ between
+    /// `before` and `after`: those in `written` ([`System::fire_in_place`] lists them);
+    /// the others are not looked at.
+    pub fn update_written(
+        &mut self,
+        system: &System,
+        before: &State,
+        after: &State,
+        written: &[u32],
+    ) -> Result<(), RangeError> {
+        self.begin_update();
+        let (a, b) = (before.slots(), after.slots());
+        for &s in written {
+            if a[s as usize] != b[s as usize] {
+                self.slot_changed(system, after, s)?;
+            }
+        }
+        self.finish_update(system, after)
+    }
+
+    fn begin_update(&mut self) {
+        self.valid = false;
+        self.epoch = self.epoch.wrapping_add(1);
+        if self.epoch == 0 {
+            self.stamp.fill(0);
+            self.comp_stamp.fill(0);
+            self.epoch = 1;
+        }
+        self.dirty.clear();
+    }
+
+    /// Re-evaluates the interactions [`EnabledSet::slot_changed`] marked.
+    fn finish_update(&mut self, system: &System, after: &State) -> Result<(), RangeError> {
         for k in 0..self.dirty.len() {
             let i = self.dirty[k];
             if bit(&self.masks.lazy, i) {

@@ -590,10 +590,37 @@ impl System {
     /// On a range error, `to` holds a partial result and must not be used as a state.
     pub fn fire(&self, from: &State, step: Step<'_>, to: &mut State) -> Result<(), RangeError> {
         to.copy_from(from);
+        self.fire_with(step, to, &mut ())
+    }
+
+    /// Fires `step` on `state` in place, as [`System::fire`] would from it, and appends to
+    /// `written` every slot the step writes (a slot may appear more than once, and may
+    /// keep its value). For a caller that keeps a copy of the state: the two differ only
+    /// in `written`, so the copy is brought along (and an [`crate::EnabledSet`] updated,
+    /// [`crate::EnabledSet::update_written`]) without looking at the other slots.
+    ///
+    /// On a range error, `state` holds a partial result: the slots in `written` may have
+    /// changed.
+    pub fn fire_in_place(
+        &self,
+        step: Step<'_>,
+        state: &mut State,
+        written: &mut Vec<u32>,
+    ) -> Result<(), RangeError> {
+        self.fire_with(step, state, written)
+    }
+
+    #[inline]
+    fn fire_with<W: Written>(
+        &self,
+        step: Step<'_>,
+        to: &mut State,
+        written: &mut W,
+    ) -> Result<(), RangeError> {
         let idx = &self.enable_index;
         if let Label::Interaction(i) = step.label {
             let inter = &self.interactions[i as usize];
-            self.run_action(idx.inter_actions[i as usize], &inter.action, 0, to)
+            self.run_action(idx.inter_actions[i as usize], &inter.action, 0, to, written)
                 .map_err(|e| self.name_error(e, &format!("action of {}", inter.name)))?;
         }
         for p in step.picks {
@@ -601,7 +628,7 @@ impl System {
             let atom = &self.atoms[comp.atom as usize];
             let t = &atom.transitions[p.transition as usize];
             let code = idx.actions[(idx.atom_code[comp.atom as usize] + p.transition) as usize];
-            self.run_action(code, &t.action, comp.slot + 1, to)
+            self.run_action(code, &t.action, comp.slot + 1, to, written)
                 .map_err(|e| {
                     self.name_error(
                         e,
@@ -615,20 +642,24 @@ impl System {
         for p in step.picks {
             let comp = &self.components[p.component as usize];
             let atom = &self.atoms[comp.atom as usize];
-            to.slots_mut()[comp.slot as usize] =
-                i64::from(atom.transitions[p.transition as usize].to);
+            let t = &atom.transitions[p.transition as usize];
+            if t.to != t.from {
+                to.slots_mut()[comp.slot as usize] = i64::from(t.to);
+                written.wrote(comp.slot);
+            }
         }
         Ok(())
     }
 
     /// Runs assignments left to right on `state`, each seeing the ones before it (in flat
     /// form where an assignment has one).
-    fn run_action(
+    fn run_action<W: Written>(
         &self,
         code: ActionCode,
         action: &[Assign],
         base: u32,
         state: &mut State,
+        written: &mut W,
     ) -> Result<(), ActionError> {
         for (k, a) in self.enable_index.flat.assigns(code).iter().enumerate() {
             let (slot, v) = match a.eval(&self.enable_index.flat, state.slots(), base) {
@@ -646,6 +677,7 @@ impl System {
                 return Err(ActionError::OutOfRange { slot, value: v });
             }
             state.slots_mut()[slot as usize] = v;
+            written.wrote(slot);
         }
         Ok(())
     }
@@ -715,6 +747,24 @@ fn any_bit(bits: &[u64], range: core::ops::Range<u32>) -> bool {
         i += 1;
     }
     false
+}
+
+/// Where [`System::fire_with`] notes the slots it writes: nowhere (the verifier compares
+/// whole states) or in a list (the engine's incremental update).
+trait Written {
+    fn wrote(&mut self, slot: u32);
+}
+
+impl Written for () {
+    #[inline(always)]
+    fn wrote(&mut self, _: u32) {}
+}
+
+impl Written for Vec<u32> {
+    #[inline(always)]
+    fn wrote(&mut self, slot: u32) {
+        self.push(slot);
+    }
 }
 
 #[cfg(test)]

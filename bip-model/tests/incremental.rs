@@ -1,7 +1,9 @@
 //! The incremental enabled set against the full step relation: along random walks on random
 //! systems (the generator of `reference.rs`), `EnabledSet` updated step by step yields
 //! exactly the steps of `System::enabled_steps`, in the same order, and fails to evaluate
-//! exactly where the full relation does.
+//! exactly where the full relation does. Every other walk moves as the engine does: the
+//! step is fired in place (`System::fire_in_place`, checked against `System::fire`) and
+//! the set is told which slots it wrote (`EnabledSet::update_written`).
 
 use bip_model::{load_str, EnabledSet, OwnedStep, State, Steps, System};
 use proptest::prelude::*;
@@ -28,7 +30,8 @@ fn check_system(seed: u64) -> Result<usize, TestCaseError> {
     let mut buf = Steps::new();
     let mut copy = Steps::new();
     let mut compared = 0;
-    for _walk in 0..3 {
+    for walk in 0..3 {
+        let in_place = walk % 2 == 1;
         let mut s = sys.initial_state();
         let mut set = match EnabledSet::new(&sys, &s) {
             Ok(set) => set,
@@ -76,8 +79,19 @@ fn check_system(seed: u64) -> Result<usize, TestCaseError> {
             }
             let mut next = s.clone();
             let mut moved = false;
+            let mut written = Vec::new();
             for k in order {
-                if sys.fire(&s, expected[k].as_step(), &mut next).is_ok() {
+                let step = expected[k].as_step();
+                let fired = sys.fire(&s, step, &mut next);
+                let mut here = s.clone();
+                written.clear();
+                let here_fired = sys.fire_in_place(step, &mut here, &mut written);
+                prop_assert_eq!(fired.is_ok(), here_fired.is_ok(), "in place\n{}", text);
+                if fired.is_ok() {
+                    prop_assert_eq!(&here, &next, "fired in place\n{}", text);
+                    for (slot, (a, b)) in s.slots().iter().zip(next.slots()).enumerate() {
+                        prop_assert!(a == b || written.contains(&(slot as u32)));
+                    }
                     moved = true;
                     break;
                 }
@@ -85,7 +99,11 @@ fn check_system(seed: u64) -> Result<usize, TestCaseError> {
             if !moved {
                 break;
             }
-            let updated = set.update(&sys, &s, &next);
+            let updated = if in_place {
+                set.update_written(&sys, &s, &next, &written)
+            } else {
+                set.update(&sys, &s, &next)
+            };
             let reference = full(&sys, &next, &mut buf);
             match (updated, reference) {
                 (Ok(()), Ok(_)) => {}
