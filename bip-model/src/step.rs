@@ -421,6 +421,21 @@ impl System {
         let idx = &self.enable_index;
         let (first, last) = idx.inter_ports[i as usize];
         let ports = &idx.ports[first as usize..last as usize];
+        // one required port (a GenoM layer's codels and requests): each enabled
+        // transition is a step of one pick, in transition order
+        if let [cell] = ports {
+            if !cell.optional {
+                let first = out.len();
+                if self.push_enabled(state, cell, out)? == 0 {
+                    return Ok((0, false));
+                }
+                if !self.connector_holds(state, i)? {
+                    out.truncate(first);
+                    return Ok((0, true));
+                }
+                return Ok((1, true));
+            }
+        }
         // most interactions are disabled in most states: reject them on the locations alone
         for cell in ports {
             if !cell.optional {
@@ -441,17 +456,8 @@ impl System {
         bounds.clear();
         let mut several = false;
         for cell in ports {
-            let (from, to) = idx.transitions(cell, slots);
             let start = out.len();
-            for t in from..to {
-                if self.cell_guard(state, cell, t)? {
-                    out.push(Pick {
-                        component: cell.component,
-                        transition: t,
-                    });
-                }
-            }
-            let len = out.len() - start;
+            let len = self.push_enabled(state, cell, out)?;
             if len == 0 {
                 if !cell.optional {
                     out.truncate(first);
@@ -462,11 +468,7 @@ impl System {
             several |= len > 1;
             bounds.push(((start - first) as u32, len as u32));
         }
-        let ok = match idx.flat.decide(idx.inter_guards[i as usize], slots, 0) {
-            Some(ok) => ok,
-            None => self.connector_guard(state, i)?,
-        };
-        if !ok {
+        if !self.connector_holds(state, i)? {
             out.truncate(first);
             return Ok((0, true));
         }
@@ -497,6 +499,40 @@ impl System {
                 }
                 cursor[k] = 0;
             }
+        }
+    }
+
+    /// Pushes a pick for each enabled transition of the port of `cell`; how many.
+    #[inline(always)]
+    fn push_enabled(
+        &self,
+        state: &State,
+        cell: &PortCell,
+        out: &mut Vec<Pick>,
+    ) -> Result<usize, RangeError> {
+        let (from, to) = self.enable_index.transitions(cell, state.slots());
+        let start = out.len();
+        for t in from..to {
+            if self.cell_guard(state, cell, t)? {
+                out.push(Pick {
+                    component: cell.component,
+                    transition: t,
+                });
+            }
+        }
+        Ok(out.len() - start)
+    }
+
+    /// The guard of interaction `i`'s connector, in flat form if it has one.
+    #[inline(always)]
+    fn connector_holds(&self, state: &State, i: u32) -> Result<bool, RangeError> {
+        let idx = &self.enable_index;
+        match idx
+            .flat
+            .decide(idx.inter_guards[i as usize], state.slots(), 0)
+        {
+            Some(ok) => Ok(ok),
+            None => self.connector_guard(state, i),
         }
     }
 
