@@ -258,6 +258,14 @@ pub(crate) struct ActionCode {
     end: u32,
 }
 
+impl ActionCode {
+    /// True for an action without assignments (most transitions of a GenoM layer).
+    #[inline(always)]
+    pub(crate) fn is_empty(self) -> bool {
+        self.start == self.end
+    }
+}
+
 /// The flat forms of a system's guards and actions, in one table each.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct FlatCode {

@@ -656,14 +656,20 @@ impl System {
         let idx = &self.enable_index;
         if let Label::Interaction(i) = step.label {
             let inter = &self.interactions[i as usize];
-            self.run_action(idx.inter_actions[i as usize], &inter.action, 0, to, written)
-                .map_err(|e| self.name_error(e, &format!("action of {}", inter.name)))?;
+            let code = idx.inter_actions[i as usize];
+            if !code.is_empty() {
+                self.run_action(code, &inter.action, 0, to, written)
+                    .map_err(|e| self.name_error(e, &format!("action of {}", inter.name)))?;
+            }
         }
         for p in step.picks {
             let comp = &self.components[p.component as usize];
             let atom = &self.atoms[comp.atom as usize];
             let t = &atom.transitions[p.transition as usize];
             let code = idx.actions[(idx.atom_code[comp.atom as usize] + p.transition) as usize];
+            if code.is_empty() {
+                continue;
+            }
             self.run_action(code, &t.action, comp.slot + 1, to, written)
                 .map_err(|e| {
                     self.name_error(
