@@ -371,6 +371,10 @@ impl FlatCode {
                     let (a, b) = (stack[(sp - 1) & M], stack[sp & M]);
                     stack[(sp - 1) & M] = binary(op, a, b).map_err(|_| ())?;
                 }
+                Op::BinConst(op, b) => {
+                    let a = stack[(sp - 1) & M];
+                    stack[(sp - 1) & M] = binary(op, a, b).map_err(|_| ())?;
+                }
                 Op::And(to) => {
                     // a zero left operand is the result
                     if stack[(sp - 1) & M] == 0 {
@@ -429,6 +433,8 @@ enum Op {
     Bool,
     /// Pops the right operand and replaces the left one by the result.
     Bin(BinOp),
+    /// Replaces the top by the top `op` a constant (a right operand that is a constant).
+    BinConst(BinOp, i64),
     /// `a && b`, `a || b`, `a => b` with `a` on top: jumps to the end with the result if
     /// `a` decides it, else pops `a` (then `b` and `Bool` follow).
     And(u32),
@@ -448,6 +454,17 @@ fn compile(e: &Expr, ops: &mut Vec<Op>) -> Option<(u32, u32)> {
     } else {
         ops.truncate(start);
         None
+    }
+}
+
+/// True if `e`'s value is always 0 or 1 (it needs no [`Op::Bool`]).
+fn is_boolean(e: &Expr) -> bool {
+    use BinOp::*;
+    match e {
+        Expr::Const(v) => *v == 0 || *v == 1,
+        Expr::At(..) | Expr::Not(_) => true,
+        Expr::Binary(op, _, _) => matches!(op, Lt | Le | Gt | Ge | Eq | Ne | And | Or | Implies),
+        _ => false,
     }
 }
 
@@ -496,8 +513,17 @@ fn emit(e: &Expr, ops: &mut Vec<Op>, depth: usize) -> bool {
             if !emit(b, ops, depth) {
                 return false;
             }
-            ops.push(Op::Bool);
+            if !is_boolean(b) {
+                ops.push(Op::Bool);
+            }
             patch(ops, at);
+        }
+        Expr::Binary(op, a, b) if matches!(**b, Expr::Const(_)) => {
+            let Expr::Const(c) = **b else { return false };
+            if !emit(a, ops, depth) {
+                return false;
+            }
+            ops.push(Op::BinConst(*op, c));
         }
         Expr::Binary(op, a, b) => {
             if !emit(a, ops, depth) || !emit(b, ops, depth + 1) {
