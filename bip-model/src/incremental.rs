@@ -437,7 +437,7 @@ impl EnabledSet {
     }
 
     /// The interactions with enabled steps (after priorities), in index order.
-    pub fn interactions(&self) -> impl Iterator<Item = u32> + '_ {
+    pub fn interactions(&self) -> Enabled<'_> {
         self.enabled_among(None)
     }
 
@@ -445,27 +445,17 @@ impl EnabledSet {
     /// in `mask` (bit `i % 64` of word `i / 64` for interaction `i`), in index order.
     /// Cheaper than filtering [`EnabledSet::interactions`]: priorities are looked at only
     /// for the interactions in the mask.
-    pub fn interactions_in<'a>(&'a self, mask: &'a [u64]) -> impl Iterator<Item = u32> + 'a {
+    pub fn interactions_in<'a>(&'a self, mask: &'a [u64]) -> Enabled<'a> {
         self.enabled_among(Some(mask))
     }
 
-    fn enabled_among<'a>(&'a self, mask: Option<&'a [u64]>) -> impl Iterator<Item = u32> + 'a {
-        self.pre.iter().enumerate().flat_map(move |(w, &word)| {
-            let mut bits = match mask {
-                None => word,
-                Some(m) => word & m.get(w).copied().unwrap_or(0),
-            };
-            core::iter::from_fn(move || {
-                while bits != 0 {
-                    let i = (w * 64) as u32 + bits.trailing_zeros();
-                    bits &= bits - 1;
-                    if !self.is_suppressed(i) {
-                        return Some(i);
-                    }
-                }
-                None
-            })
-        })
+    fn enabled_among<'a>(&'a self, mask: Option<&'a [u64]>) -> Enabled<'a> {
+        Enabled {
+            set: self,
+            mask,
+            word: 0,
+            bits: 0,
+        }
     }
 
     /// The steps of interaction `i` (none if it is not enabled after priorities).
@@ -512,5 +502,40 @@ impl EnabledSet {
     /// True if no step is enabled.
     pub fn is_empty(&self) -> bool {
         self.internal.iter().all(Vec::is_empty) && self.interactions().next().is_none()
+    }
+}
+
+/// The interactions with enabled steps (after priorities), in index order, optionally
+/// among those of a mask: [`EnabledSet::interactions`], [`EnabledSet::interactions_in`].
+#[derive(Clone, Debug)]
+pub struct Enabled<'a> {
+    set: &'a EnabledSet,
+    mask: Option<&'a [u64]>,
+    /// The next word of `pre` to load.
+    word: usize,
+    /// The candidates of word `word - 1` not yet looked at.
+    bits: u64,
+}
+
+impl Iterator for Enabled<'_> {
+    type Item = u32;
+
+    #[inline]
+    fn next(&mut self) -> Option<u32> {
+        loop {
+            while self.bits != 0 {
+                let i = ((self.word - 1) * 64) as u32 + self.bits.trailing_zeros();
+                self.bits &= self.bits - 1;
+                if !self.set.is_suppressed(i) {
+                    return Some(i);
+                }
+            }
+            let pre = self.set.pre.get(self.word)?;
+            self.bits = match self.mask {
+                None => *pre,
+                Some(m) => pre & m.get(self.word).copied().unwrap_or(0),
+            };
+            self.word += 1;
+        }
     }
 }

@@ -66,7 +66,7 @@ pub use diag::{LoadError, ModelError};
 #[cfg(feature = "std")]
 pub use genom::expand;
 pub use genom::GenomMap;
-pub use incremental::EnabledSet;
+pub use incremental::{Enabled, EnabledSet};
 #[cfg(feature = "std")]
 pub use load::{
     compile_def, expand_file, expand_str, load_file, load_str, parse_str, read_model_file,
