@@ -1396,11 +1396,15 @@ impl Engine {
                 Some(PortKind::Tick) | None => continue,
                 Some(kind) => kind,
             };
+            let from_ether = tr.from == a.ether;
+            let to_ether = tr.to == a.ether;
+            // a codel that neither starts nor ends its activity moves no request
+            if matches!(kind, PortKind::Run(_)) && !from_ether && !to_ether {
+                continue;
+            }
             let slots = self.state.slots();
             let req_before = slots[a.req_slot as usize] != 0;
             let stopping_before = a.stopping_slot.is_some_and(|sl| slots[sl as usize] != 0);
-            let from_ether = tr.from == a.ether;
-            let to_ether = tr.to == a.ether;
             let mut replies: [Option<(Ticket, Outcome)>; 3] = [None, None, None];
             let mut n = 0;
             let mut reply = |t: Option<Ticket>, o: Outcome| {
