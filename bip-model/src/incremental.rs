@@ -385,7 +385,7 @@ impl EnabledSet {
     ) -> Result<(), RangeError> {
         let picks = &mut self.picks[i as usize];
         picks.clear();
-        let (width, ready) = system.interaction_picks_ready(state, i, &mut self.scratch, picks)?;
+        let (width, ready) = system.interaction_picks(state, i, &mut self.scratch, picks)?;
         self.width[i as usize] = width as u32;
         set_bit(&mut self.pre, i, width > 0);
         set_bit(&mut self.ready, i, ready);

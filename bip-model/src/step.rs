@@ -375,7 +375,7 @@ impl System {
         out: &mut Steps,
     ) -> Result<(), RangeError> {
         let start = out.picks.len();
-        let width = self.interaction_picks(state, i, &mut out.choices, &mut out.picks)?;
+        let (width, _) = self.interaction_picks(state, i, &mut out.choices, &mut out.picks)?;
         if width == 0 {
             return Ok(());
         }
@@ -390,27 +390,13 @@ impl System {
     }
 
     /// Appends to `out` the picks of the steps of interaction `i` in `state` (before
-    /// priorities), one step after the other, and returns how many picks a step has (0:
-    /// no step). Every step of an interaction in a state has the same participants: the
-    /// required ports and the broadcast receivers that can join.
+    /// priorities), one step after the other. Returns how many picks a step has (0: no
+    /// step; every step of an interaction in a state has the same participants, the
+    /// required ports and the broadcast receivers that can join), and whether every
+    /// required port has an enabled transition (if not, no value of what only the
+    /// connector's guard reads can give the interaction a step).
     #[inline]
     pub(crate) fn interaction_picks(
-        &self,
-        state: &State,
-        i: u32,
-        scratch: &mut Choices,
-        out: &mut Vec<Pick>,
-    ) -> Result<usize, RangeError> {
-        self.interaction_picks_ready(state, i, scratch, out)
-            .map(|(width, _)| width)
-    }
-
-    /// [`System::interaction_picks`], and whether every required port has an enabled
-    /// transition (the connector's guard was looked at, or would have been if it had one):
-    /// if not, no value of what only the connector's guard reads can give the interaction
-    /// a step.
-    #[inline]
-    pub(crate) fn interaction_picks_ready(
         &self,
         state: &State,
         i: u32,
