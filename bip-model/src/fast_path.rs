@@ -518,18 +518,20 @@ fn emit(e: &Expr, ops: &mut Vec<Op>, depth: usize) -> bool {
             }
             patch(ops, at);
         }
-        Expr::Binary(op, a, b) if matches!(**b, Expr::Const(_)) => {
-            let Expr::Const(c) = **b else { return false };
+        Expr::Binary(op, a, b) => {
             if !emit(a, ops, depth) {
                 return false;
             }
-            ops.push(Op::BinConst(*op, c));
-        }
-        Expr::Binary(op, a, b) => {
-            if !emit(a, ops, depth) || !emit(b, ops, depth + 1) {
-                return false;
+            // a constant right operand goes into the instruction
+            match **b {
+                Expr::Const(c) => ops.push(Op::BinConst(*op, c)),
+                _ => {
+                    if !emit(b, ops, depth + 1) {
+                        return false;
+                    }
+                    ops.push(Op::Bin(*op));
+                }
             }
-            ops.push(Op::Bin(*op));
         }
         Expr::Cond(c, a, b) => {
             if !emit(c, ops, depth) {
