@@ -26,8 +26,8 @@ fn print_summary(path: &std::path::Path, system: &bip_model::System) {
         s.components, s.families, s.atoms
     );
     println!(
-        "  interactions  {} ({} connectors), {} internal transitions",
-        s.interactions, s.connectors, s.internal_transitions
+        "  interactions  {} ({} connectors, {} with step tables), {} internal transitions",
+        s.interactions, s.connectors, s.tabulated_interactions, s.internal_transitions
     );
     println!("  locations     {} (summed over components)", s.locations);
     println!("  variables     {}", s.variables);

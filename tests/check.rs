@@ -63,7 +63,7 @@ fn summary_counts_the_philosophers() {
         "{stdout}"
     );
     assert!(
-        stdout.contains("interactions  15 (3 connectors)"),
+        stdout.contains("interactions  15 (3 connectors, 15 with step tables)"),
         "{stdout}"
     );
     assert!(stdout.contains("locations     25"), "{stdout}");

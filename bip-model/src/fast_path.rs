@@ -6,9 +6,12 @@
 //! constant. Walking the expression tree for these costs several times the test itself,
 //! so they are compiled once, with the system, into the flat forms below. The other
 //! expressions without families or quantifiers (a GenoM tick's `paused && n % 2 != 0`,
-//! `age < 3 ? age + 1 : 3`) become code for a small stack machine; the rest keeps the tree
-//! ([`Expr`]). A flat form means exactly what its expression means: tests cannot fail, and
-//! when stack code fails the caller evaluates the tree, which gives the error's details.
+//! `age < 3 ? age + 1 : 3`) are tabulated when the slots they read take few values in all
+//! (a flag and a counter modulo 2: four entries, each computed once by the tree), and
+//! otherwise become code for a small stack machine; the rest keeps the tree ([`Expr`]). A
+//! flat form means exactly what its expression means: tests cannot fail, and where a table
+//! has no entry (the tree failed there) or stack code fails, the caller evaluates the tree,
+//! which gives the error's details.
 
 #[allow(unused_imports)]
 use crate::prelude::*;
@@ -26,6 +29,8 @@ pub(crate) enum GuardCode {
     Tests { start: u32, end: u32 },
     /// Stack code `ops[start..end]` computes a non-zero value.
     Code { start: u32, end: u32 },
+    /// Table `tables[n]` holds a non-zero value.
+    Table(u32),
     /// The expression tree.
     Tree,
 }
@@ -177,6 +182,8 @@ enum Value {
         start: u32,
         end: u32,
     },
+    /// Table `tables[n]`.
+    Table(u32),
     /// The assignment's expression tree.
     Tree,
 }
@@ -188,7 +195,7 @@ pub(crate) struct FlatAssign {
     value: Value,
 }
 
-fn value_of(e: &Expr, ops: &mut Vec<Op>) -> Value {
+fn value_of(e: &Expr, code: &mut FlatCode, ranges: &Ranges<'_>) -> Value {
     let offset = |(slot, local): (u32, bool), add| Value::Offset { slot, local, add };
     let flat = match e {
         Expr::Const(v) => Some(Value::Const(*v)),
@@ -206,12 +213,15 @@ fn value_of(e: &Expr, ops: &mut Vec<Op>) -> Value {
         },
         _ => None,
     };
-    match flat {
-        Some(v) => v,
-        None => match compile(e, ops) {
-            Some((start, end)) => Value::Code { start, end },
-            None => Value::Tree,
-        },
+    if let Some(v) = flat {
+        return v;
+    }
+    if let Some(t) = code.tabulate(e, ranges) {
+        return Value::Table(t);
+    }
+    match compile(e, &mut code.ops) {
+        Some((start, end)) => Value::Code { start, end },
+        None => Value::Tree,
     }
 }
 
@@ -245,6 +255,7 @@ impl FlatAssign {
             }
             // on failure the tree tells which error
             Value::Code { start, end } => code.run(start, end, slots, base).ok()?,
+            Value::Table(t) => code.lookup(t, slots, base)?,
             Value::Tree => return None,
         };
         Some(Ok((self.slot(base), value)))
@@ -266,22 +277,165 @@ impl ActionCode {
     }
 }
 
+/// The ranges of the values an expression may read: the state's slots, and the variables
+/// of the component whose transition it belongs to (read as [`Expr::Local`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Ranges<'a> {
+    pub slots: &'a [(i64, i64)],
+    pub locals: &'a [(i64, i64)],
+}
+
+/// The most entries one expression's table may have, and all of a system's tables.
+const MAX_TABLE: u64 = 1024;
+const MAX_TABLE_VALUES: usize = 1 << 18;
+
+/// An expression's values over every combination of the values of the slots it reads:
+/// `values[start + Σ digit × stride]`, `None` where the expression fails.
+#[derive(Clone, Copy, Debug)]
+struct Table {
+    inputs: (u32, u32),
+    start: u32,
+}
+
+/// A slot an expression table reads: its value minus `lo` is a digit of radix `radix` and
+/// weight `stride`; relative to the component's variables if `local`.
+#[derive(Clone, Copy, Debug)]
+struct TableInput {
+    slot: u32,
+    local: bool,
+    lo: i64,
+    radix: u64,
+    stride: u64,
+}
+
 /// The flat forms of a system's guards and actions, in one table each.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct FlatCode {
     tests: Vec<Test>,
     assigns: Vec<FlatAssign>,
     ops: Vec<Op>,
+    tables: Vec<Table>,
+    table_inputs: Vec<TableInput>,
+    table_values: Vec<Option<i64>>,
+    /// While the code is made: the state tables are computed on ([`FlatCode::done`] frees it).
+    scratch: Vec<i64>,
+}
+
+/// Appends the slots `e` reads (with repeats) to `out`; false if it reads a family by
+/// index or has a quantifier.
+fn reads(e: &Expr, out: &mut Vec<(u32, bool)>) -> bool {
+    match e {
+        Expr::Const(_) => true,
+        Expr::Slot(s) | Expr::At(s, _) => {
+            out.push((*s, false));
+            true
+        }
+        Expr::Local(n) => {
+            out.push((*n, true));
+            true
+        }
+        Expr::Indexed(_) | Expr::Bound(_) | Expr::Quant(_) => false,
+        Expr::Not(a) | Expr::Neg(a) => reads(a, out),
+        Expr::Binary(_, a, b) => reads(a, out) && reads(b, out),
+        Expr::Cond(c, a, b) => reads(c, out) && reads(a, out) && reads(b, out),
+    }
 }
 
 impl FlatCode {
-    pub(crate) fn guard(&mut self, guard: Option<&Expr>) -> GuardCode {
+    /// Tabulates `e` over the values of the slots it reads, if they take at most
+    /// [`MAX_TABLE`] combinations: each entry is what the tree computes there.
+    fn tabulate(&mut self, e: &Expr, ranges: &Ranges<'_>) -> Option<u32> {
+        let mut read = Vec::new();
+        if !reads(e, &mut read) {
+            return None;
+        }
+        read.sort_unstable();
+        read.dedup();
+        let mut inputs = Vec::with_capacity(read.len());
+        let mut fixed = Vec::new();
+        let mut size = 1u64;
+        for &(slot, local) in &read {
+            let (lo, hi) = match local {
+                false => *ranges.slots.get(slot as usize)?,
+                true => *ranges.locals.get(slot as usize)?,
+            };
+            let radix = (hi.checked_sub(lo)? as u64).checked_add(1)?;
+            if radix == 1 {
+                fixed.push((slot, local, lo)); // one value: no digit
+                continue;
+            }
+            inputs.push(TableInput {
+                slot,
+                local,
+                lo,
+                radix,
+                stride: size,
+            });
+            size = size.saturating_mul(radix);
+        }
+        if size > MAX_TABLE || self.table_values.len() + size as usize > MAX_TABLE_VALUES {
+            return None;
+        }
+        // the tree evaluates on a scratch state (the slots, then the component's variables)
+        // in which every slot it reads is set
+        let base = ranges.slots.len() as u32;
+        let scratch = &mut self.scratch;
+        if scratch.len() < ranges.slots.len() + ranges.locals.len() {
+            scratch.resize(ranges.slots.len() + ranges.locals.len(), 0);
+        }
+        let at = |slot: u32, local: bool| (if local { base + slot } else { slot }) as usize;
+        for &(slot, local, v) in &fixed {
+            scratch[at(slot, local)] = v;
+        }
+        let start = self.table_values.len();
+        for key in 0..size {
+            for inp in &inputs {
+                scratch[at(inp.slot, inp.local)] = inp.lo + ((key / inp.stride) % inp.radix) as i64;
+            }
+            let v = e.eval(&mut crate::eval::Env::new(scratch, base)).ok();
+            self.table_values.push(v);
+        }
+        let inputs_start = self.table_inputs.len();
+        self.table_inputs.extend_from_slice(&inputs);
+        self.tables.push(Table {
+            inputs: (inputs_start as u32, self.table_inputs.len() as u32),
+            start: start as u32,
+        });
+        Some(self.tables.len() as u32 - 1)
+    }
+
+    /// Frees what only making the code needed.
+    pub(crate) fn done(&mut self) {
+        self.scratch = Vec::new();
+    }
+
+    /// The value table `t` holds for the state, or `None` if the tree must compute it (it
+    /// fails there, or a slot is outside the range the table was made for).
+    #[inline]
+    pub(crate) fn lookup(&self, t: u32, slots: &[i64], base: u32) -> Option<i64> {
+        let table = self.tables[t as usize];
+        let mut key = 0u64;
+        for inp in &self.table_inputs[table.inputs.0 as usize..table.inputs.1 as usize] {
+            let at = if inp.local { base + inp.slot } else { inp.slot };
+            let digit = slots[at as usize].wrapping_sub(inp.lo) as u64;
+            if digit >= inp.radix {
+                return None;
+            }
+            key += digit * inp.stride;
+        }
+        self.table_values[table.start as usize + key as usize]
+    }
+
+    pub(crate) fn guard(&mut self, guard: Option<&Expr>, ranges: &Ranges<'_>) -> GuardCode {
         let Some(e) = guard else {
             return GuardCode::Always;
         };
         let start = self.tests.len();
         if !conjunction(e, &mut self.tests) {
             self.tests.truncate(start);
+            if let Some(t) = self.tabulate(e, ranges) {
+                return GuardCode::Table(t);
+            }
             return match compile(e, &mut self.ops) {
                 Some((start, end)) => GuardCode::Code { start, end },
                 None => GuardCode::Tree,
@@ -296,10 +450,10 @@ impl FlatCode {
         }
     }
 
-    pub(crate) fn action(&mut self, action: &[Assign]) -> ActionCode {
+    pub(crate) fn action(&mut self, action: &[Assign], ranges: &Ranges<'_>) -> ActionCode {
         let start = self.assigns.len() as u32;
         for a in action {
-            let value = value_of(&a.value, &mut self.ops);
+            let value = value_of(&a.value, self, ranges);
             self.assigns.push(FlatAssign {
                 target: a.target,
                 value,
@@ -321,6 +475,7 @@ impl FlatCode {
             GuardCode::Code { start, end } => {
                 self.run(start, end, slots, base).ok().map(|v| v != 0)
             }
+            GuardCode::Table(t) => self.lookup(t, slots, base).map(|v| v != 0),
             GuardCode::Tree => None,
         }
     }
@@ -559,6 +714,12 @@ mod tests {
     use super::*;
     use crate::eval::Env;
 
+    /// No ranges known: nothing is tabulated.
+    const UNKNOWN: Ranges<'static> = Ranges {
+        slots: &[],
+        locals: &[],
+    };
+
     fn b(e: Expr) -> Box<Expr> {
         Box::new(e)
     }
@@ -570,7 +731,7 @@ mod tests {
 
     fn agrees(e: Expr) {
         let mut code = FlatCode::default();
-        let GuardCode::Tests { start, end } = code.guard(Some(&e)) else {
+        let GuardCode::Tests { start, end } = code.guard(Some(&e), &UNKNOWN) else {
             panic!("{e:?} has a flat form")
         };
         for s in states() {
@@ -607,10 +768,10 @@ mod tests {
     }
 
     #[test]
-    fn other_guards_become_stack_code() {
+    fn other_guards_become_tables_or_stack_code() {
         use Expr::*;
         let mut code = FlatCode::default();
-        for e in [
+        let others = [
             Binary(BinOp::Or, b(Slot(0)), b(Slot(1))),
             Binary(BinOp::Lt, b(Slot(0)), b(Slot(1))),
             Binary(
@@ -618,11 +779,25 @@ mod tests {
                 b(Slot(0)),
                 b(Binary(BinOp::Or, b(Slot(0)), b(Slot(1)))),
             ),
-            Const(0),
-        ] {
-            let g = code.guard(Some(&e));
+        ];
+        // without the slots' ranges, stack code
+        for e in &others {
+            let g = code.guard(Some(e), &UNKNOWN);
             assert!(matches!(g, GuardCode::Code { .. }), "{e:?}: {g:?}");
         }
+        // with them, tables
+        let ranges = Ranges {
+            slots: &[(0, 3), (0, 1)],
+            locals: &[],
+        };
+        for e in &others {
+            let g = code.guard(Some(e), &ranges);
+            assert!(matches!(g, GuardCode::Table(_)), "{e:?}: {g:?}");
+        }
+        // a constant false guard reads nothing: a table of one entry
+        let g = code.guard(Some(&Const(0)), &UNKNOWN);
+        assert!(matches!(g, GuardCode::Table(_)), "{g:?}");
+        assert_eq!(code.decide(g, &[], 0), Some(false));
         let quantified = Quant(Box::new(crate::eval::Quant {
             kind: crate::ops::QuantKind::Exists,
             lo: 0,
@@ -630,9 +805,9 @@ mod tests {
             depth: 0,
             body: Bound(0),
         }));
-        assert_eq!(code.guard(Some(&quantified)), GuardCode::Tree);
-        assert_eq!(code.guard(Some(&Const(1))), GuardCode::Always);
-        assert_eq!(code.guard(None), GuardCode::Always);
+        assert_eq!(code.guard(Some(&quantified), &UNKNOWN), GuardCode::Tree);
+        assert_eq!(code.guard(Some(&Const(1)), &UNKNOWN), GuardCode::Always);
+        assert_eq!(code.guard(None, &UNKNOWN), GuardCode::Always);
     }
 
     #[test]
@@ -652,7 +827,7 @@ mod tests {
                 target: Target::Local(0),
                 value: value.clone(),
             };
-            let c = code.action(core::slice::from_ref(&a));
+            let c = code.action(core::slice::from_ref(&a), &UNKNOWN);
             let flat = code.assigns(c)[0];
             for s in [[0, 5, -4], [i64::MAX, 1, i64::MIN], [i64::MIN, 0, i64::MAX]] {
                 let tree = value.eval(&mut Env::new(&s, 1));
@@ -675,7 +850,7 @@ mod tests {
                 value: Binary(BinOp::Mul, b(Slot(0)), b(Const(2))),
             },
         ];
-        let c = code.action(&action);
+        let c = code.action(&action, &UNKNOWN);
         let ops = code.ops.len();
         assert!(code.assigns(c)[0].eval(&code, &[1], 0).is_none());
         assert!(matches!(code.assigns(c)[1].value, Value::Code { .. }) && ops > 0);
@@ -755,5 +930,61 @@ mod tests {
         }
         // both outcomes were exercised
         assert!(failures > 1_000 && values > 100_000, "{failures} {values}");
+    }
+
+    #[test]
+    fn tables_hold_what_the_tree_computes() {
+        // slots 0..3 with small ranges, locals from base 3 (the ranges' slot count)
+        let slots = [(-2, 2), (0, 1), (0, 2)];
+        let locals = [(0, 1), (-1, 1)];
+        let ranges = Ranges {
+            slots: &slots,
+            locals: &locals,
+        };
+        let mut rng = crate::Rng::new(11);
+        let (mut tabulated, mut failures, mut values) = (0, 0, 0);
+        for _ in 0..5_000 {
+            let e = random_expr(&mut rng, 4);
+            let mut code = FlatCode::default();
+            let Some(t) = code.tabulate(&e, &ranges) else {
+                continue;
+            };
+            tabulated += 1;
+            // every state in range: the table's entry, or none where the tree fails
+            for x in -2..=2 {
+                for y in 0..=1 {
+                    for z in 0..=2 {
+                        for l0 in 0..=1 {
+                            for l1 in -1..=1 {
+                                let s = [x, y, z, l0, l1];
+                                let tree = e.eval(&mut Env::new(&s, 3));
+                                assert_eq!(code.lookup(t, &s, 3), tree.ok(), "{e:?} in {s:?}");
+                                match tree {
+                                    Ok(_) => values += 1,
+                                    Err(_) => failures += 1,
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            // outside the ranges, the tree decides
+            if code.table_inputs.iter().any(|i| !i.local && i.slot == 0) {
+                assert_eq!(code.lookup(t, &[3, 0, 0, 0, 0], 3), None, "{e:?}");
+            }
+        }
+        assert!(tabulated > 2_000 && failures > 1_000 && values > 100_000);
+        // an expression over more combinations than a table may hold is not tabulated
+        let wide = [(0, 1000), (0, 1000)];
+        let e = Expr::Binary(BinOp::Mul, b(Expr::Slot(0)), b(Expr::Slot(1)));
+        let ranges = Ranges {
+            slots: &wide,
+            locals: &[],
+        };
+        assert_eq!(FlatCode::default().tabulate(&e, &ranges), None);
+        assert!(matches!(
+            FlatCode::default().guard(Some(&e), &ranges),
+            GuardCode::Code { .. }
+        ));
     }
 }

@@ -53,6 +53,7 @@ mod rng;
 pub mod source;
 mod state;
 mod step;
+mod step_tables;
 #[cfg(feature = "std")]
 pub mod syntax;
 mod system;

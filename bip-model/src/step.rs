@@ -9,7 +9,7 @@
 use crate::prelude::*;
 
 use crate::eval::{Env, EvalError};
-use crate::fast_path::{ActionCode, FlatCode, GuardCode};
+use crate::fast_path::{ActionCode, FlatCode, GuardCode, Ranges};
 use crate::state::State;
 use crate::system::{Assign, RangeError, RangeErrorKind, System};
 
@@ -151,6 +151,9 @@ pub(crate) struct EnableIndex {
     actions: Vec<ActionCode>,
     inter_guards: Vec<GuardCode>,
     inter_actions: Vec<ActionCode>,
+    /// The interactions' steps tabulated over their arguments (filled once the system
+    /// exists, since the relation computes them).
+    pub(crate) tables: crate::step_tables::StepTables,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -174,28 +177,41 @@ impl EnableIndex {
         atoms: &[crate::system::Atom],
         components: &[crate::system::Component],
         interactions: &[crate::system::Interaction],
+        slot_ranges: &[(i64, i64)],
     ) -> EnableIndex {
         let mut cells = Vec::new();
         let mut atom_base = Vec::with_capacity(atoms.len());
         let mut flat = FlatCode::default();
         let (mut atom_code, mut guards, mut actions) = (Vec::new(), Vec::new(), Vec::new());
+        let mut locals = Vec::new();
         for a in atoms {
             atom_base.push(cells.len() as u32);
             cells.extend(a.by_loc_port.iter().map(|r| (r.start, r.end)));
             atom_code.push(guards.len() as u32);
+            locals.clear();
+            locals.extend(a.vars.iter().map(|v| v.ty.range()));
+            let ranges = Ranges {
+                slots: slot_ranges,
+                locals: &locals,
+            };
             for t in &a.transitions {
-                guards.push(flat.guard(t.guard.as_ref()));
-                actions.push(flat.action(&t.action));
+                guards.push(flat.guard(t.guard.as_ref(), &ranges));
+                actions.push(flat.action(&t.action, &ranges));
             }
         }
+        let ranges = Ranges {
+            slots: slot_ranges,
+            locals: &[],
+        };
         let inter_guards = interactions
             .iter()
-            .map(|i| flat.guard(i.guard.as_ref()))
+            .map(|i| flat.guard(i.guard.as_ref(), &ranges))
             .collect();
         let inter_actions = interactions
             .iter()
-            .map(|i| flat.action(&i.action))
+            .map(|i| flat.action(&i.action, &ranges))
             .collect();
+        flat.done();
         let cell = |component: u32, col: usize, optional: bool| {
             let comp = &components[component as usize];
             let atom = &atoms[comp.atom as usize];
@@ -236,6 +252,7 @@ impl EnableIndex {
             actions,
             inter_guards,
             inter_actions,
+            tables: Default::default(),
         }
     }
 
@@ -397,6 +414,46 @@ impl System {
     /// connector's guard reads can give the interaction a step).
     #[inline]
     pub(crate) fn interaction_picks(
+        &self,
+        state: &State,
+        i: u32,
+        scratch: &mut Choices,
+        out: &mut Vec<Pick>,
+    ) -> Result<(usize, bool), RangeError> {
+        let tables = &self.enable_index.tables;
+        if let Some(e) = tables.lookup(i, state.slots()) {
+            let (picks, width, ready) = tables.steps(e);
+            out.extend_from_slice(picks);
+            return Ok((width, ready));
+        }
+        self.compute_interaction_picks(state, i, scratch, out)
+    }
+
+    /// Every slot the steps of interaction `i` (before priorities) depend on, as
+    /// [`System::compute_interaction_picks`] reads them: its participants' locations, the
+    /// slots the guards of their transitions on its ports read, and those its connector's
+    /// guard reads (a slot may come more than once).
+    pub(crate) fn interaction_reads(&self, i: u32, f: &mut impl FnMut(u32)) {
+        let inter = &self.interactions[i as usize];
+        for p in &inter.ports {
+            let comp = &self.components[p.component as usize];
+            f(comp.slot);
+            for t in &self.atoms[comp.atom as usize].transitions {
+                if let (Some(port), Some(g)) = (t.port, &t.guard) {
+                    if port == p.port {
+                        g.for_each_slot(comp.slot + 1, f);
+                    }
+                }
+            }
+        }
+        if let Some(g) = &inter.guard {
+            g.for_each_slot(0, f);
+        }
+    }
+
+    /// [`System::interaction_picks`] computed from the state, without the tables.
+    #[inline]
+    pub(crate) fn compute_interaction_picks(
         &self,
         state: &State,
         i: u32,

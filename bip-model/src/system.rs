@@ -445,6 +445,9 @@ pub struct Summary {
     pub components: usize,
     pub connectors: usize,
     pub interactions: usize,
+    /// Interactions whose steps are tabulated over the slots they depend on (the rest are
+    /// computed from the state each time).
+    pub tabulated_interactions: usize,
     pub internal_transitions: usize,
     /// Locations summed over components.
     pub locations: usize,
@@ -470,6 +473,7 @@ impl System {
             components: self.components.len(),
             connectors: self.connectors.len(),
             interactions: self.interactions.len(),
+            tabulated_interactions: self.enable_index.tables.tabulated(),
             internal_transitions: per_comp(&|a| {
                 a.transitions.iter().filter(|t| t.port.is_none()).count()
             }),

@@ -71,10 +71,11 @@ pub(crate) fn compile_core(
     }
     let (rules, rules_by_low) = priorities;
     let layout = StateLayout::new(&c.slot_ranges);
-    let enable_index = crate::step::EnableIndex::new(&c.atoms, &c.components, &c.interactions);
+    let enable_index =
+        crate::step::EnableIndex::new(&c.atoms, &c.components, &c.interactions, &c.slot_ranges);
     let priority_masks =
         crate::priority_masks::PriorityMasks::new(&rules, &rules_by_low, c.interactions.len());
-    let system = System {
+    let mut system = System {
         name: def.name.value.clone(),
         tick_ms,
         constants: c.const_list,
@@ -94,6 +95,7 @@ pub(crate) fn compile_core(
         enable_index,
         priority_masks,
     };
+    system.enable_index.tables = crate::step_tables::StepTables::build(&system);
     Ok((system, extra))
 }
 
