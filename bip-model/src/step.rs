@@ -143,18 +143,25 @@ pub(crate) struct EnableIndex {
     ports: Vec<PortCell>,
     /// One per component: where its internal transitions are.
     internal: Vec<PortCell>,
-    /// The flat forms of the guards and actions: per atom, from `atom_code[atom]` on, one
-    /// per transition; per interaction, its connector's.
+    /// The flat forms of the guards and actions: per atom, from its components'
+    /// `comp_code` on, one per transition; per interaction, its connector's.
     flat: FlatCode,
-    atom_code: Vec<u32>,
     guards: Vec<GuardCode>,
     actions: Vec<ActionCode>,
+    /// Per transition (indexed like `actions`), the location it moves to, or [`STAYS`].
+    moves: Vec<u32>,
+    /// Per component, where its atom's transitions start in `guards`, `actions` and `moves`,
+    /// and its location slot.
+    comp_code: Vec<(u32, u32)>,
     inter_guards: Vec<GuardCode>,
     inter_actions: Vec<ActionCode>,
     /// The interactions' steps tabulated over their arguments (filled once the system
     /// exists, since the relation computes them).
     pub(crate) tables: crate::step_tables::StepTables,
 }
+
+/// A transition that stays where it is.
+const STAYS: u32 = u32::MAX;
 
 #[derive(Clone, Copy, Debug)]
 struct PortCell {
@@ -183,6 +190,7 @@ impl EnableIndex {
         let mut atom_base = Vec::with_capacity(atoms.len());
         let mut flat = FlatCode::default();
         let (mut atom_code, mut guards, mut actions) = (Vec::new(), Vec::new(), Vec::new());
+        let mut moves = Vec::new();
         let mut locals = Vec::new();
         for a in atoms {
             atom_base.push(cells.len() as u32);
@@ -197,6 +205,7 @@ impl EnableIndex {
             for t in &a.transitions {
                 guards.push(flat.guard(t.guard.as_ref(), &ranges));
                 actions.push(flat.action(&t.action, &ranges));
+                moves.push(if t.to == t.from { STAYS } else { t.to });
             }
         }
         let ranges = Ranges {
@@ -235,6 +244,10 @@ impl EnableIndex {
             }
             inter_ports.push((start, ports.len() as u32));
         }
+        let comp_code = components
+            .iter()
+            .map(|c| (atom_code[c.atom as usize], c.slot))
+            .collect();
         let internal = (0..components.len() as u32)
             .map(|c| {
                 let ports = atoms[components[c as usize].atom as usize].ports.len();
@@ -247,9 +260,10 @@ impl EnableIndex {
             ports,
             internal,
             flat,
-            atom_code,
             guards,
             actions,
+            moves,
+            comp_code,
             inter_guards,
             inter_actions,
             tables: Default::default(),
@@ -698,22 +712,24 @@ impl System {
     ) -> Result<(), RangeError> {
         let idx = &self.enable_index;
         if let Label::Interaction(i) = step.label {
-            let inter = &self.interactions[i as usize];
             let code = idx.inter_actions[i as usize];
             if !code.is_empty() {
-                self.run_action(code, &inter.action, 0, to, written)
+                let inter = &self.interactions[i as usize];
+                self.run_action(code, || &inter.action, 0, to, written)
                     .map_err(|e| self.name_error(e, &format!("action of {}", inter.name)))?;
             }
         }
         for p in step.picks {
-            let comp = &self.components[p.component as usize];
-            let atom = &self.atoms[comp.atom as usize];
-            let t = &atom.transitions[p.transition as usize];
-            let code = idx.actions[(idx.atom_code[comp.atom as usize] + p.transition) as usize];
+            let (code_base, slot) = idx.comp_code[p.component as usize];
+            let code = idx.actions[(code_base + p.transition) as usize];
             if code.is_empty() {
                 continue;
             }
-            self.run_action(code, &t.action, comp.slot + 1, to, written)
+            let tree = || {
+                let atom = self.atom_of(p.component);
+                &atom.transitions[p.transition as usize].action[..]
+            };
+            self.run_action(code, tree, slot + 1, to, written)
                 .map_err(|e| {
                     self.name_error(
                         e,
@@ -725,23 +741,22 @@ impl System {
                 })?;
         }
         for p in step.picks {
-            let comp = &self.components[p.component as usize];
-            let atom = &self.atoms[comp.atom as usize];
-            let t = &atom.transitions[p.transition as usize];
-            if t.to != t.from {
-                to.slots_mut()[comp.slot as usize] = i64::from(t.to);
-                written.wrote(comp.slot);
+            let (code_base, slot) = idx.comp_code[p.component as usize];
+            let dest = idx.moves[(code_base + p.transition) as usize];
+            if dest != STAYS {
+                to.slots_mut()[slot as usize] = i64::from(dest);
+                written.wrote(slot);
             }
         }
         Ok(())
     }
 
     /// Runs assignments left to right on `state`, each seeing the ones before it (in flat
-    /// form where an assignment has one).
-    fn run_action<W: Written>(
-        &self,
+    /// form where an assignment has one; `tree` gives the assignments where it has not).
+    fn run_action<'a, W: Written>(
+        &'a self,
         code: ActionCode,
-        action: &[Assign],
+        tree: impl Fn() -> &'a [Assign],
         base: u32,
         state: &mut State,
         written: &mut W,
@@ -750,7 +765,7 @@ impl System {
             let (slot, v) = match a.eval(&self.enable_index.flat, state.slots(), base) {
                 Some(r) => r.map_err(ActionError::Eval)?,
                 None => {
-                    let v = action[k]
+                    let v = tree()[k]
                         .value
                         .eval(&mut Env::new(state.slots(), base))
                         .map_err(ActionError::Eval)?;
