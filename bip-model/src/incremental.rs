@@ -24,10 +24,11 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use crate::priority_masks::{bit, flatten, set_bit, PriorityMasks};
+use crate::priority_masks::{bit, set_bit, PriorityMasks};
 use crate::state::State;
 use crate::step::{Choices, Label, Pick, Step, Steps};
 use crate::system::{RangeError, System};
+use crate::watches::{location_bit, Dep, Watches, ANYWHERE};
 
 /// The enabled steps of one state of one system (after priorities), maintained
 /// incrementally with [`EnabledSet::update`].
@@ -45,9 +46,8 @@ pub struct EnabledSet {
     /// participant's location, a variable that a guard of a participant's transitions on its
     /// port reads (while the participant is where those transitions start), a slot the
     /// connector's guard reads (while a required participant is where it has transitions
-    /// on its port). `deps[deps_start[s]..deps_start[s + 1]]`.
-    deps_start: Vec<u32>,
-    deps: Vec<Dep>,
+    /// on its port).
+    watches: Watches,
     /// The system's priorities as sparse masks over `pre`.
     masks: PriorityMasks,
 
@@ -76,28 +76,6 @@ pub struct EnabledSet {
     dirty: Vec<u32>,
     /// False after an update failed: the set must be [`EnabledSet::reset`].
     valid: bool,
-}
-
-/// An interaction whose steps read a slot, when the component whose location is slot
-/// `watch` is at one of `locations` (elsewhere the interaction has no step that the slot
-/// could change, and if that component moves, its location slot marks the interaction).
-/// With `connector_only`, only the connector's guard reads the slot, and the read matters
-/// only while the interaction's required ports all have an enabled transition (when that
-/// changes, a location or a transition guard's read marks the interaction).
-#[derive(Clone, Copy, Debug)]
-struct Dep {
-    interaction: u32,
-    watch: u32,
-    locations: u64,
-    connector_only: bool,
-}
-
-/// Every location.
-const ANYWHERE: u64 = u64::MAX;
-
-/// The bit of a location in [`Dep::locations`]; locations from 63 on share the last bit.
-fn location_bit(loc: u32) -> u64 {
-    1 << loc.min(63)
 }
 
 impl EnabledSet {
@@ -174,7 +152,9 @@ impl EnabledSet {
                 g.for_each_slot(0, &mut |s| add(s, watch, at, true));
             }
         }
-        let (deps_start, deps) = flatten(&per_slot);
+        let watches = Watches::new(&per_slot, |slot| {
+            (system.slot_ranges()[slot as usize].1 + 1).clamp(1, i64::from(u32::MAX)) as u32
+        });
 
         let has_internal = system
             .components
@@ -187,8 +167,7 @@ impl EnabledSet {
         let mut set = EnabledSet {
             slot_comp,
             has_internal,
-            deps_start,
-            deps,
+            watches,
             masks: system.priority_masks.clone(),
             picks: vec![Vec::new(); n_inter],
             width: vec![0; n_inter],
@@ -324,28 +303,18 @@ impl EnabledSet {
             self.comp_stamp[c as usize] = self.epoch;
             self.eval_internal(system, after, c)?;
         }
-        let (lo, hi) = (
-            self.deps_start[s as usize] as usize,
-            self.deps_start[s as usize + 1] as usize,
-        );
-        let slots = after.slots();
-        for k in lo..hi {
-            let Dep {
-                interaction: i,
-                watch,
-                locations,
-                connector_only,
-            } = self.deps[k];
-            if locations & location_bit(slots[watch as usize] as u32) == 0
-                || (connector_only && !bit(&self.ready, i))
-            {
-                continue;
+        let (ready, stamp, dirty, epoch) =
+            (&self.ready, &mut self.stamp, &mut self.dirty, self.epoch);
+        self.watches.for_each(s, after.slots(), |m| {
+            let i = m.interaction;
+            if m.connector_only && !bit(ready, i) {
+                return;
             }
-            if self.stamp[i as usize] != self.epoch {
-                self.stamp[i as usize] = self.epoch;
-                self.dirty.push(i);
+            if stamp[i as usize] != epoch {
+                stamp[i as usize] = epoch;
+                dirty.push(i);
             }
-        }
+        });
         Ok(())
     }
 

@@ -58,6 +58,7 @@ mod step_tables;
 pub mod syntax;
 mod system;
 pub mod trace;
+mod watches;
 
 #[cfg(feature = "std")]
 pub use compile::{compile, Ty};
