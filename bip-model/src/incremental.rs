@@ -24,6 +24,8 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
+use alloc::sync::Arc;
+
 use crate::priority_masks::{bit, set_bit, PriorityMasks};
 use crate::state::State;
 use crate::step::{Choices, Label, Pick, Step, Steps};
@@ -52,8 +54,13 @@ pub struct EnabledSet {
     masks: PriorityMasks,
 
     // ---- the state's enabled steps ----
-    /// Per interaction, the picks of its steps before priorities, `width` picks per step.
+    /// Per interaction, the picks of its steps before priorities, `width` picks per step:
+    /// `pool[span]` if its bit in `in_pool` is set (an entry of the system's step tables),
+    /// else `picks` (computed).
     picks: Vec<Vec<Pick>>,
+    pool: Arc<[Pick]>,
+    span: Vec<(u32, u32)>,
+    in_pool: Vec<u64>,
     width: Vec<u32>,
     /// Interactions with steps before priorities (one bit each).
     pre: Vec<u64>,
@@ -170,6 +177,9 @@ impl EnabledSet {
             watches,
             masks: system.priority_masks.clone(),
             picks: vec![Vec::new(); n_inter],
+            pool: system.enable_index.tables.pool(),
+            span: vec![(0, 0); n_inter],
+            in_pool: vec![0; words],
             width: vec![0; n_inter],
             pre: vec![0; words],
             ready: vec![0; words],
@@ -195,6 +205,7 @@ impl EnabledSet {
         for p in &mut self.picks {
             p.clear();
         }
+        self.in_pool.fill(0);
         self.width.fill(0);
         for c in 0..system.components.len() as u32 {
             self.eval_internal(system, state, c)?;
@@ -352,9 +363,20 @@ impl EnabledSet {
         state: &State,
         i: u32,
     ) -> Result<(), RangeError> {
-        let picks = &mut self.picks[i as usize];
-        picks.clear();
-        let (width, ready) = system.interaction_picks(state, i, &mut self.scratch, picks)?;
+        let tables = &system.enable_index.tables;
+        let (width, ready) = match tables.lookup(i, state.slots()) {
+            Some(e) => {
+                self.span[i as usize] = e.span();
+                set_bit(&mut self.in_pool, i, true);
+                (e.width(), e.ready())
+            }
+            None => {
+                set_bit(&mut self.in_pool, i, false);
+                let picks = &mut self.picks[i as usize];
+                picks.clear();
+                system.compute_interaction_picks(state, i, &mut self.scratch, picks)?
+            }
+        };
         self.width[i as usize] = width as u32;
         set_bit(&mut self.pre, i, width > 0);
         set_bit(&mut self.ready, i, ready);
@@ -431,10 +453,13 @@ impl EnabledSet {
     pub fn steps_of(&self, i: u32) -> impl Iterator<Item = Step<'_>> + '_ {
         let enabled = self.is_enabled(i);
         let w = self.width[i as usize].max(1) as usize;
-        let picks: &[Pick] = if enabled {
-            &self.picks[i as usize]
-        } else {
+        let picks: &[Pick] = if !enabled {
             &[]
+        } else if bit(&self.in_pool, i) {
+            let (start, len) = self.span[i as usize];
+            &self.pool[start as usize..(start + len) as usize]
+        } else {
+            &self.picks[i as usize]
         };
         picks.chunks(w).map(move |p| Step {
             label: Label::Interaction(i),

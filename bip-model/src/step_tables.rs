@@ -22,6 +22,8 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
+use alloc::sync::Arc;
+
 use crate::step::{Choices, Pick};
 use crate::system::System;
 
@@ -43,7 +45,9 @@ pub(crate) struct StepTables {
     tables: Vec<Table>,
     inputs: Vec<Input>,
     entries: Vec<Entry>,
-    picks: Vec<Pick>,
+    /// Every entry's picks, shared with the [`crate::EnabledSet`]s of the system, which
+    /// point into it instead of copying.
+    picks: Arc<[Pick]>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -74,6 +78,26 @@ pub(crate) struct Entry {
     known: bool,
 }
 
+impl Entry {
+    /// Where its picks are in the tables' pool.
+    #[inline(always)]
+    pub(crate) fn span(&self) -> (u32, u32) {
+        (self.start, self.len)
+    }
+
+    /// Picks per step.
+    #[inline(always)]
+    pub(crate) fn width(&self) -> usize {
+        self.width as usize
+    }
+
+    /// Every required port had an enabled transition.
+    #[inline(always)]
+    pub(crate) fn ready(&self) -> bool {
+        self.ready
+    }
+}
+
 impl StepTables {
     /// Tabulates the interactions of `system` that fit (the system's own tables must be
     /// empty: its steps are computed by the relation).
@@ -82,6 +106,7 @@ impl StepTables {
             of: vec![NONE; system.interactions.len()],
             ..StepTables::default()
         };
+        let mut picks = Vec::new();
         let mut state = system.initial_state();
         let mut scratch = Choices::default();
         let mut reads = Vec::new();
@@ -114,25 +139,25 @@ impl StepTables {
                 t.inputs.truncate(inputs_start);
                 continue;
             }
-            let (entries_start, picks_start) = (t.entries.len(), t.picks.len());
+            let (entries_start, picks_start) = (t.entries.len(), picks.len());
             let inputs = inputs_start..t.inputs.len();
             for key in 0..size {
                 for inp in &t.inputs[inputs.clone()] {
                     let digit = (key / inp.stride) % inp.radix;
                     state.slots_mut()[inp.slot as usize] = inp.lo + digit as i64;
                 }
-                let start = t.picks.len();
+                let start = picks.len();
                 let entry =
-                    match system.compute_interaction_picks(&state, i, &mut scratch, &mut t.picks) {
+                    match system.compute_interaction_picks(&state, i, &mut scratch, &mut picks) {
                         Ok((width, ready)) => Entry {
                             start: start as u32,
-                            len: (t.picks.len() - start) as u32,
+                            len: (picks.len() - start) as u32,
                             width: width as u16,
                             ready,
                             known: u16::try_from(width).is_ok(),
                         },
                         Err(_) => {
-                            t.picks.truncate(start);
+                            picks.truncate(start);
                             Entry::default()
                         }
                     };
@@ -142,9 +167,9 @@ impl StepTables {
             for inp in &t.inputs[inputs.clone()] {
                 state.slots_mut()[inp.slot as usize] = system.initial.slots()[inp.slot as usize];
             }
-            if t.picks.len() > MAX_PICKS {
+            if picks.len() > MAX_PICKS {
                 t.entries.truncate(entries_start);
-                t.picks.truncate(picks_start);
+                picks.truncate(picks_start);
                 t.inputs.truncate(inputs_start);
                 continue;
             }
@@ -154,6 +179,7 @@ impl StepTables {
                 entries: entries_start as u32,
             });
         }
+        t.picks = picks.into();
         t
     }
 
@@ -183,12 +209,40 @@ impl StepTables {
     /// was ready.
     #[inline(always)]
     pub(crate) fn steps(&self, e: &Entry) -> (&[Pick], usize, bool) {
-        let picks = &self.picks[e.start as usize..(e.start + e.len) as usize];
-        (picks, e.width as usize, e.ready)
+        (self.picks_of(e.span()), e.width as usize, e.ready)
+    }
+
+    /// The picks of `span` (an entry's [`Entry::span`]).
+    #[inline(always)]
+    pub(crate) fn picks_of(&self, (start, len): (u32, u32)) -> &[Pick] {
+        &self.picks[start as usize..(start + len) as usize]
+    }
+
+    /// Every entry's picks, to share.
+    pub(crate) fn pool(&self) -> Arc<[Pick]> {
+        Arc::clone(&self.picks)
     }
 
     /// How many interactions have a table.
     pub(crate) fn tabulated(&self) -> usize {
-        self.tables.len()
+        self.of.iter().filter(|&&t| t != NONE).count()
+    }
+
+    /// Forgets the tables of the interactions `which` selects.
+    pub(crate) fn drop_where(&mut self, which: impl Fn(u32) -> bool) {
+        for (i, t) in self.of.iter_mut().enumerate() {
+            if which(i as u32) {
+                *t = NONE;
+            }
+        }
+    }
+}
+
+impl System {
+    /// Computes the steps of the interactions `which` selects from the state each time,
+    /// without their step tables: for tests that check the tables against the computation,
+    /// and to measure what the tables bring. The steps are the same either way.
+    pub fn drop_step_tables(&mut self, which: impl Fn(u32) -> bool) {
+        self.enable_index.tables.drop_where(which);
     }
 }
