@@ -54,19 +54,13 @@ pub struct EnabledSet {
     masks: PriorityMasks,
 
     // ---- the state's enabled steps ----
-    /// Per interaction, the picks of its steps before priorities, `width` picks per step:
-    /// `pool[span]` if its bit in `in_pool` is set (an entry of the system's step tables),
-    /// else `picks` (computed).
+    /// Per interaction, what its last evaluation found (see [`Found`]); its picks are in
+    /// `pool` (the system's step tables) or in `picks` (computed).
+    found: Vec<Found>,
     picks: Vec<Vec<Pick>>,
     pool: Arc<[Pick]>,
-    span: Vec<(u32, u32)>,
-    in_pool: Vec<u64>,
-    width: Vec<u32>,
     /// Interactions with steps before priorities (one bit each).
     pre: Vec<u64>,
-    /// Interactions whose required ports all had an enabled transition when last
-    /// evaluated (one bit each): only then does what the connector's guard reads matter.
-    ready: Vec<u64>,
     /// Lazy interactions not evaluated since they were suppressed: their `picks` and
     /// `pre` bit are out of date (and do not matter while they stay suppressed).
     stale: Vec<u64>,
@@ -178,11 +172,8 @@ impl EnabledSet {
             masks: system.priority_masks.clone(),
             picks: vec![Vec::new(); n_inter],
             pool: system.enable_index.tables.pool(),
-            span: vec![(0, 0); n_inter],
-            in_pool: vec![0; words],
-            width: vec![0; n_inter],
+            found: vec![Found::default(); n_inter],
             pre: vec![0; words],
-            ready: vec![0; words],
             stale: vec![0; words],
             when_suppressed: vec![0; words],
             internal: vec![Vec::new(); n_comp],
@@ -205,8 +196,7 @@ impl EnabledSet {
         for p in &mut self.picks {
             p.clear();
         }
-        self.in_pool.fill(0);
-        self.width.fill(0);
+        self.found.fill(Found::default());
         for c in 0..system.components.len() as u32 {
             self.eval_internal(system, state, c)?;
         }
@@ -314,11 +304,11 @@ impl EnabledSet {
             self.comp_stamp[c as usize] = self.epoch;
             self.eval_internal(system, after, c)?;
         }
-        let (ready, stamp, dirty, epoch) =
-            (&self.ready, &mut self.stamp, &mut self.dirty, self.epoch);
+        let (found, stamp, dirty, epoch) =
+            (&self.found, &mut self.stamp, &mut self.dirty, self.epoch);
         self.watches.for_each(s, after.slots(), |m| {
             let i = m.interaction;
-            if m.connector_only && !bit(ready, i) {
+            if m.connector_only && !found[i as usize].ready {
                 return;
             }
             if stamp[i as usize] != epoch {
@@ -364,22 +354,31 @@ impl EnabledSet {
         i: u32,
     ) -> Result<(), RangeError> {
         let tables = &system.enable_index.tables;
-        let (width, ready) = match tables.lookup(i, state.slots()) {
+        let found = match tables.lookup(i, state.slots()) {
             Some(e) => {
-                self.span[i as usize] = e.span();
-                set_bit(&mut self.in_pool, i, true);
-                (e.width(), e.ready())
+                let (start, len) = e.span();
+                Found {
+                    start,
+                    len,
+                    width: e.width() as u32,
+                    ready: e.ready(),
+                    in_pool: true,
+                }
             }
             None => {
-                set_bit(&mut self.in_pool, i, false);
                 let picks = &mut self.picks[i as usize];
                 picks.clear();
-                system.compute_interaction_picks(state, i, &mut self.scratch, picks)?
+                let (width, ready) =
+                    system.compute_interaction_picks(state, i, &mut self.scratch, picks)?;
+                Found {
+                    width: width as u32,
+                    ready,
+                    ..Found::default()
+                }
             }
         };
-        self.width[i as usize] = width as u32;
-        set_bit(&mut self.pre, i, width > 0);
-        set_bit(&mut self.ready, i, ready);
+        set_bit(&mut self.pre, i, found.width > 0);
+        self.found[i as usize] = found;
         Ok(())
     }
 
@@ -452,12 +451,12 @@ impl EnabledSet {
     /// The steps of interaction `i` (none if it is not enabled after priorities).
     pub fn steps_of(&self, i: u32) -> impl Iterator<Item = Step<'_>> + '_ {
         let enabled = self.is_enabled(i);
-        let w = self.width[i as usize].max(1) as usize;
+        let f = self.found[i as usize];
+        let w = f.width.max(1) as usize;
         let picks: &[Pick] = if !enabled {
             &[]
-        } else if bit(&self.in_pool, i) {
-            let (start, len) = self.span[i as usize];
-            &self.pool[start as usize..(start + len) as usize]
+        } else if f.in_pool {
+            &self.pool[f.start as usize..(f.start + f.len) as usize]
         } else {
             &self.picks[i as usize]
         };
@@ -497,6 +496,18 @@ impl EnabledSet {
     pub fn is_empty(&self) -> bool {
         self.internal.iter().all(Vec::is_empty) && self.interactions().next().is_none()
     }
+}
+
+/// What the last evaluation of an interaction found: `width` picks per step (0: no step),
+/// in `pool[start..start + len]` if `in_pool`; `ready` if its required ports all had an
+/// enabled transition (only then does what the connector's guard reads matter).
+#[derive(Clone, Copy, Debug, Default)]
+struct Found {
+    start: u32,
+    len: u32,
+    width: u32,
+    ready: bool,
+    in_pool: bool,
 }
 
 /// The interactions with enabled steps (after priorities), in index order, optionally

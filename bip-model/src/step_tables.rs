@@ -40,9 +40,8 @@ const NONE: u32 = u32::MAX;
 /// The tables of one system.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct StepTables {
-    /// Per interaction, its table in `tables`, or [`NONE`].
-    of: Vec<u32>,
-    tables: Vec<Table>,
+    /// Per interaction, its table (`entries` is [`NONE`] for none).
+    of: Vec<Table>,
     inputs: Vec<Input>,
     entries: Vec<Entry>,
     /// Every entry's picks, shared with the [`crate::EnabledSet`]s of the system, which
@@ -102,8 +101,12 @@ impl StepTables {
     /// Tabulates the interactions of `system` that fit (the system's own tables must be
     /// empty: its steps are computed by the relation).
     pub(crate) fn build(system: &System) -> StepTables {
+        let none = Table {
+            inputs: (0, 0),
+            entries: NONE,
+        };
         let mut t = StepTables {
-            of: vec![NONE; system.interactions.len()],
+            of: vec![none; system.interactions.len()],
             ..StepTables::default()
         };
         let mut picks = Vec::new();
@@ -173,11 +176,10 @@ impl StepTables {
                 t.inputs.truncate(inputs_start);
                 continue;
             }
-            t.of[i as usize] = t.tables.len() as u32;
-            t.tables.push(Table {
+            t.of[i as usize] = Table {
                 inputs: (inputs.start as u32, inputs.end as u32),
                 entries: entries_start as u32,
-            });
+            };
         }
         t.picks = picks.into();
         t
@@ -187,11 +189,10 @@ impl StepTables {
     /// for the state's values.
     #[inline(always)]
     pub(crate) fn lookup(&self, i: u32, slots: &[i64]) -> Option<&Entry> {
-        let t = *self.of.get(i as usize)?;
-        if t == NONE {
+        let table = *self.of.get(i as usize)?;
+        if table.entries == NONE {
             return None;
         }
-        let table = self.tables[t as usize];
         let mut key = 0u64;
         for inp in &self.inputs[table.inputs.0 as usize..table.inputs.1 as usize] {
             let digit = slots[inp.slot as usize].wrapping_sub(inp.lo) as u64;
@@ -225,14 +226,14 @@ impl StepTables {
 
     /// How many interactions have a table.
     pub(crate) fn tabulated(&self) -> usize {
-        self.of.iter().filter(|&&t| t != NONE).count()
+        self.of.iter().filter(|t| t.entries != NONE).count()
     }
 
     /// Forgets the tables of the interactions `which` selects.
     pub(crate) fn drop_where(&mut self, which: impl Fn(u32) -> bool) {
         for (i, t) in self.of.iter_mut().enumerate() {
             if which(i as u32) {
-                *t = NONE;
+                t.entries = NONE;
             }
         }
     }
