@@ -262,12 +262,17 @@ impl FlatAssign {
     }
 }
 
-/// Where an action's assignments are in [`FlatCode`], one per assignment in order.
+/// Where an action's assignments are in [`FlatCode`], one per assignment in order, and
+/// its table of the values they write, if it has one ([`NO_TABLE`] if not).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct ActionCode {
     start: u32,
     end: u32,
+    table: u32,
 }
+
+/// An action without a table.
+const NO_TABLE: u32 = u32::MAX;
 
 impl ActionCode {
     /// True for an action without assignments (most transitions of a GenoM layer).
@@ -285,20 +290,25 @@ pub(crate) struct Ranges<'a> {
     pub locals: &'a [(i64, i64)],
 }
 
-/// The most entries one expression's table may have, and all of a system's tables.
+/// The most entries one table may have, and the most values all of a system's tables may
+/// hold.
 const MAX_TABLE: u64 = 1024;
 const MAX_TABLE_VALUES: usize = 1 << 18;
 
-/// An expression's values over every combination of the values of the slots it reads:
-/// `values[start + Σ digit × stride]`, `None` where the expression fails.
+/// A function of a few slots over every combination of their values: an expression's value
+/// (`width` 1), or the values an action's assignments write (`width` of them). The entry of
+/// key `Σ digit × stride` is `values[start + key × width..][..width]` if `known[key]`;
+/// unknown where the expression fails or an assignment leaves its range.
 #[derive(Clone, Copy, Debug)]
 struct Table {
     inputs: (u32, u32),
     start: u32,
+    known: u32,
+    width: u32,
 }
 
-/// A slot an expression table reads: its value minus `lo` is a digit of radix `radix` and
-/// weight `stride`; relative to the component's variables if `local`.
+/// A slot a table reads: its value minus `lo` is a digit of radix `radix` and weight
+/// `stride`; relative to the component's variables if `local`.
 #[derive(Clone, Copy, Debug)]
 struct TableInput {
     slot: u32,
@@ -316,7 +326,8 @@ pub(crate) struct FlatCode {
     ops: Vec<Op>,
     tables: Vec<Table>,
     table_inputs: Vec<TableInput>,
-    table_values: Vec<Option<i64>>,
+    table_values: Vec<i64>,
+    table_known: Vec<bool>,
     /// While the code is made: the state tables are computed on ([`FlatCode::done`] frees it).
     scratch: Vec<i64>,
 }
@@ -349,12 +360,69 @@ impl FlatCode {
         if !reads(e, &mut read) {
             return None;
         }
+        self.tabulate_fn(&mut read, 1, ranges, |scratch, base, out| {
+            match e.eval(&mut crate::eval::Env::new(scratch, base)) {
+                Ok(v) => {
+                    out.push(v);
+                    true
+                }
+                Err(_) => false,
+            }
+        })
+    }
+
+    /// Tabulates the values an action's assignments write, in order, as a function of the
+    /// slots they read before the action runs (an assignment sees the ones before it), if
+    /// they take at most [`MAX_TABLE`] combinations. An entry is unknown where an
+    /// assignment fails or leaves its target's range, so the action runs there and reports
+    /// the error.
+    fn tabulate_action(&mut self, action: &[Assign], ranges: &Ranges<'_>) -> Option<u32> {
+        let mut read = Vec::new();
+        for a in action {
+            if !reads(&a.value, &mut read) {
+                return None;
+            }
+        }
+        let targets: Vec<(usize, (i64, i64))> = action
+            .iter()
+            .map(|a| match a.target {
+                Target::Local(n) => Some((
+                    ranges.slots.len() + n as usize,
+                    *ranges.locals.get(n as usize)?,
+                )),
+                Target::Slot(s) => Some((s as usize, *ranges.slots.get(s as usize)?)),
+            })
+            .collect::<Option<_>>()?;
+        self.tabulate_fn(&mut read, action.len(), ranges, |scratch, base, out| {
+            for (a, &(at, (lo, hi))) in action.iter().zip(&targets) {
+                match a.value.eval(&mut crate::eval::Env::new(scratch, base)) {
+                    Ok(v) if lo <= v && v <= hi => {
+                        scratch[at] = v;
+                        out.push(v);
+                    }
+                    _ => return false,
+                }
+            }
+            true
+        })
+    }
+
+    /// Tabulates `f` over the slots in `read`: for each combination of their values, set in
+    /// a scratch state (the slots, then the component's variables from `base`), `f` pushes
+    /// the entry's `width` values, or returns false where it has none.
+    fn tabulate_fn(
+        &mut self,
+        read: &mut Vec<(u32, bool)>,
+        width: usize,
+        ranges: &Ranges<'_>,
+        mut f: impl FnMut(&mut [i64], u32, &mut Vec<i64>) -> bool,
+    ) -> Option<u32> {
         read.sort_unstable();
         read.dedup();
         let mut inputs = Vec::with_capacity(read.len());
         let mut fixed = Vec::new();
         let mut size = 1u64;
-        for &(slot, local) in &read {
+        for &(slot, local) in read.iter() {
             let (lo, hi) = match local {
                 false => *ranges.slots.get(slot as usize)?,
                 true => *ranges.locals.get(slot as usize)?,
@@ -373,33 +441,42 @@ impl FlatCode {
             });
             size = size.saturating_mul(radix);
         }
-        if size > MAX_TABLE || self.table_values.len() + size as usize > MAX_TABLE_VALUES {
+        let values = size.saturating_mul(width as u64);
+        if size > MAX_TABLE
+            || (self.table_values.len() as u64).saturating_add(values) > MAX_TABLE_VALUES as u64
+        {
             return None;
         }
-        // the tree evaluates on a scratch state (the slots, then the component's variables)
-        // in which every slot it reads is set
         let base = ranges.slots.len() as u32;
-        let scratch = &mut self.scratch;
+        let mut scratch = core::mem::take(&mut self.scratch);
         if scratch.len() < ranges.slots.len() + ranges.locals.len() {
             scratch.resize(ranges.slots.len() + ranges.locals.len(), 0);
         }
         let at = |slot: u32, local: bool| (if local { base + slot } else { slot }) as usize;
-        for &(slot, local, v) in &fixed {
-            scratch[at(slot, local)] = v;
-        }
-        let start = self.table_values.len();
+        let (start, known) = (self.table_values.len(), self.table_known.len());
+        let mut entry = Vec::with_capacity(width);
         for key in 0..size {
+            // every slot the function reads is set
+            for &(slot, local, v) in &fixed {
+                scratch[at(slot, local)] = v;
+            }
             for inp in &inputs {
                 scratch[at(inp.slot, inp.local)] = inp.lo + ((key / inp.stride) % inp.radix) as i64;
             }
-            let v = e.eval(&mut crate::eval::Env::new(scratch, base)).ok();
-            self.table_values.push(v);
+            entry.clear();
+            let ok = f(&mut scratch, base, &mut entry) && entry.len() == width;
+            entry.resize(width, 0);
+            self.table_values.extend_from_slice(&entry);
+            self.table_known.push(ok);
         }
+        self.scratch = scratch;
         let inputs_start = self.table_inputs.len();
         self.table_inputs.extend_from_slice(&inputs);
         self.tables.push(Table {
             inputs: (inputs_start as u32, self.table_inputs.len() as u32),
             start: start as u32,
+            known: known as u32,
+            width: width as u32,
         });
         Some(self.tables.len() as u32 - 1)
     }
@@ -409,10 +486,11 @@ impl FlatCode {
         self.scratch = Vec::new();
     }
 
-    /// The value table `t` holds for the state, or `None` if the tree must compute it (it
-    /// fails there, or a slot is outside the range the table was made for).
+    /// The entry of table `t` for the state, or `None` if it is unknown there (the tree or
+    /// the assignments must compute it and report the error) or a slot is outside the
+    /// range the table was made for.
     #[inline]
-    pub(crate) fn lookup(&self, t: u32, slots: &[i64], base: u32) -> Option<i64> {
+    fn entry(&self, t: u32, slots: &[i64], base: u32) -> Option<&[i64]> {
         let table = self.tables[t as usize];
         let mut key = 0u64;
         for inp in &self.table_inputs[table.inputs.0 as usize..table.inputs.1 as usize] {
@@ -423,7 +501,32 @@ impl FlatCode {
             }
             key += digit * inp.stride;
         }
-        self.table_values[table.start as usize + key as usize]
+        if !self.table_known[(table.known as u64 + key) as usize] {
+            return None;
+        }
+        let first = table.start as usize + key as usize * table.width as usize;
+        Some(&self.table_values[first..first + table.width as usize])
+    }
+
+    /// The value expression table `t` holds for the state (see [`FlatCode::entry`]).
+    #[inline]
+    pub(crate) fn lookup(&self, t: u32, slots: &[i64], base: u32) -> Option<i64> {
+        self.entry(t, slots, base).map(|v| v[0])
+    }
+
+    /// The values the assignments of an action with a table write in the state, in order
+    /// (see [`FlatCode::entry`]).
+    #[inline]
+    pub(crate) fn action_values(
+        &self,
+        code: ActionCode,
+        slots: &[i64],
+        base: u32,
+    ) -> Option<&[i64]> {
+        match code.table {
+            NO_TABLE => None,
+            t => self.entry(t, slots, base),
+        }
     }
 
     pub(crate) fn guard(&mut self, guard: Option<&Expr>, ranges: &Ranges<'_>) -> GuardCode {
@@ -459,9 +562,16 @@ impl FlatCode {
                 value,
             });
         }
+        // an action of several assignments is tabulated as a whole, if it can be (one
+        // assignment has its own table, if any)
+        let table = match action.len() {
+            0 | 1 => None,
+            _ => self.tabulate_action(action, ranges),
+        };
         ActionCode {
             start,
             end: self.assigns.len() as u32,
+            table: table.unwrap_or(NO_TABLE),
         }
     }
 
@@ -986,5 +1096,81 @@ mod tests {
             FlatCode::default().guard(Some(&e), &ranges),
             GuardCode::Code { .. }
         ));
+    }
+
+    #[test]
+    fn action_tables_hold_what_the_assignments_write() {
+        let slots = [(-2, 2), (0, 1), (0, 2)];
+        let locals = [(0, 1), (-1, 1)];
+        let ranges = Ranges {
+            slots: &slots,
+            locals: &locals,
+        };
+        let mut rng = crate::Rng::new(13);
+        let (mut tabulated, mut failures, mut values) = (0, 0, 0);
+        for _ in 0..3_000 {
+            let n = 2 + rng.below(2);
+            let action: Vec<Assign> = (0..n)
+                .map(|_| Assign {
+                    target: match rng.below(2) {
+                        0 => Target::Slot(rng.below(3) as u32),
+                        _ => Target::Local(rng.below(2) as u32),
+                    },
+                    value: random_expr(&mut rng, 3),
+                })
+                .collect();
+            let mut code = FlatCode::default();
+            let c = code.action(&action, &ranges);
+            if c.table == NO_TABLE {
+                continue;
+            }
+            tabulated += 1;
+            for x in -2..=2 {
+                for y in 0..=1 {
+                    for z in 0..=2 {
+                        for l0 in 0..=1 {
+                            for l1 in -1..=1 {
+                                let start = [x, y, z, l0, l1];
+                                // the assignments in order, each seeing the ones before
+                                let mut s = start;
+                                let mut want = Some(Vec::new());
+                                for a in &action {
+                                    let (at, (lo, hi)) = match a.target {
+                                        Target::Slot(k) => (k as usize, slots[k as usize]),
+                                        Target::Local(k) => (3 + k as usize, locals[k as usize]),
+                                    };
+                                    match a.value.eval(&mut Env::new(&s, 3)) {
+                                        Ok(v) if lo <= v && v <= hi => {
+                                            s[at] = v;
+                                            if let Some(w) = &mut want {
+                                                w.push(v);
+                                            }
+                                        }
+                                        _ => {
+                                            want = None;
+                                            break;
+                                        }
+                                    }
+                                }
+                                let got = code.action_values(c, &start, 3).map(<[i64]>::to_vec);
+                                assert_eq!(got, want, "{action:?} from {start:?}");
+                                match want {
+                                    Some(_) => values += 1,
+                                    None => failures += 1,
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(tabulated > 1_000 && failures > 10_000 && values > 10_000);
+        // one assignment has no action table (its value has its own form)
+        let one = [Assign {
+            target: Target::Slot(0),
+            value: Expr::Binary(BinOp::Mul, b(Expr::Slot(0)), b(Expr::Slot(1))),
+        }];
+        let mut code = FlatCode::default();
+        assert_eq!(code.action(&one, &ranges).table, NO_TABLE);
     }
 }

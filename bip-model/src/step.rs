@@ -761,7 +761,17 @@ impl System {
         state: &mut State,
         written: &mut W,
     ) -> Result<(), ActionError> {
-        for (k, a) in self.enable_index.flat.assigns(code).iter().enumerate() {
+        let flat = &self.enable_index.flat;
+        if let Some(values) = flat.action_values(code, state.slots(), base) {
+            // the whole action's values, in range: computed when the system was compiled
+            for (a, &v) in flat.assigns(code).iter().zip(values) {
+                let slot = a.slot(base);
+                state.slots_mut()[slot as usize] = v;
+                written.wrote(slot);
+            }
+            return Ok(());
+        }
+        for (k, a) in flat.assigns(code).iter().enumerate() {
             let (slot, v) = match a.eval(&self.enable_index.flat, state.slots(), base) {
                 Some(r) => r.map_err(ActionError::Eval)?,
                 None => {
