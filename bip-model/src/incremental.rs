@@ -42,8 +42,10 @@ pub struct EnabledSet {
     // ---- tables of the system (fixed) ----
     /// Per slot, the component it belongs to.
     slot_comp: Vec<u32>,
-    /// Per component, whether its atom has internal transitions (none in a GenoM layer).
+    /// Per component, whether its atom has internal transitions (none in a GenoM layer),
+    /// and whether any has.
     has_internal: Vec<bool>,
+    any_internal: bool,
     /// Per slot, the interactions whose steps (before priorities) depend on it: a
     /// participant's location, a variable that a guard of a participant's transitions on its
     /// port reads (while the participant is where those transitions start), a slot the
@@ -157,7 +159,7 @@ impl EnabledSet {
             (system.slot_ranges()[slot as usize].1 + 1).clamp(1, i64::from(u32::MAX)) as u32
         });
 
-        let has_internal = system
+        let has_internal: Vec<bool> = system
             .components
             .iter()
             .map(|c| {
@@ -165,8 +167,10 @@ impl EnabledSet {
                 atom.transitions.iter().any(|t| t.port.is_none())
             })
             .collect();
+        let any_internal = has_internal.iter().any(|&h| h);
         let mut set = EnabledSet {
             slot_comp,
+            any_internal,
             has_internal,
             watches,
             masks: system.priority_masks.clone(),
@@ -297,12 +301,10 @@ impl EnabledSet {
 
     /// Marks the interactions reading slot `s` dirty, and re-evaluates the internal
     /// transitions of its component (once per update).
-    #[inline]
+    #[inline(always)]
     fn slot_changed(&mut self, system: &System, after: &State, s: u32) -> Result<(), RangeError> {
-        let c = self.slot_comp[s as usize];
-        if self.has_internal[c as usize] && self.comp_stamp[c as usize] != self.epoch {
-            self.comp_stamp[c as usize] = self.epoch;
-            self.eval_internal(system, after, c)?;
+        if self.any_internal {
+            self.internal_changed(system, after, s)?;
         }
         let (found, stamp, dirty, epoch) =
             (&self.found, &mut self.stamp, &mut self.dirty, self.epoch);
@@ -316,6 +318,22 @@ impl EnabledSet {
                 dirty.push(i);
             }
         });
+        Ok(())
+    }
+
+    /// Re-evaluates the internal transitions of the component of slot `s`, once per update.
+    #[inline(never)]
+    fn internal_changed(
+        &mut self,
+        system: &System,
+        after: &State,
+        s: u32,
+    ) -> Result<(), RangeError> {
+        let c = self.slot_comp[s as usize];
+        if self.has_internal[c as usize] && self.comp_stamp[c as usize] != self.epoch {
+            self.comp_stamp[c as usize] = self.epoch;
+            self.eval_internal(system, after, c)?;
+        }
         Ok(())
     }
 
@@ -347,6 +365,27 @@ impl EnabledSet {
         system.internal_picks(state, c, out)
     }
 
+    /// The steps of interaction `i` computed from the state, into `picks` (out of line:
+    /// most interactions have step tables).
+    #[inline(never)]
+    fn compute_interaction(
+        &mut self,
+        system: &System,
+        state: &State,
+        i: u32,
+    ) -> Result<Found, RangeError> {
+        let picks = &mut self.picks[i as usize];
+        picks.clear();
+        let (width, ready) =
+            system.compute_interaction_picks(state, i, &mut self.scratch, picks)?;
+        Ok(Found {
+            width: width as u32,
+            ready,
+            ..Found::default()
+        })
+    }
+
+    #[inline(always)]
     fn eval_interaction(
         &mut self,
         system: &System,
@@ -365,17 +404,7 @@ impl EnabledSet {
                     in_pool: true,
                 }
             }
-            None => {
-                let picks = &mut self.picks[i as usize];
-                picks.clear();
-                let (width, ready) =
-                    system.compute_interaction_picks(state, i, &mut self.scratch, picks)?;
-                Found {
-                    width: width as u32,
-                    ready,
-                    ..Found::default()
-                }
-            }
+            None => self.compute_interaction(system, state, i)?,
         };
         set_bit(&mut self.pre, i, found.width > 0);
         self.found[i as usize] = found;
