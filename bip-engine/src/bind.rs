@@ -97,6 +97,8 @@ pub(crate) struct Tables {
     pub services: Vec<ServiceTable>,
     /// Per component, the service whose activity it is.
     pub activity_of: Vec<Option<u32>>,
+    /// The services that have an activity, in order: the only ones that can hold a codel.
+    pub activities: Vec<u32>,
     /// (module, port) per port store entry.
     pub ports: Vec<(String, String)>,
     /// The system has internal transitions: without any, the engine need not look for
@@ -124,6 +126,7 @@ impl Tables {
             codels: Vec::new(),
             services: Vec::new(),
             activity_of: vec![None; system.components.len()],
+            activities: Vec::new(),
             ports: Vec::new(),
             has_internal: system.summary().internal_transitions > 0,
             progress_mask: Vec::new(),
@@ -172,6 +175,7 @@ impl Tables {
                 let mut activity = None;
                 if let Some(comp) = s.component {
                     t.activity_of[comp as usize] = Some(sid);
+                    t.activities.push(sid);
                     activity = Some(activity_table(system, comp, t.codels.len() as u32, s)?);
                 }
                 for c in &s.codels {
@@ -272,6 +276,16 @@ impl Tables {
         self.services
             .iter()
             .position(|s| s.module == module && s.name == service)
+    }
+}
+
+impl ActivityTable {
+    /// True if the activity has no work now (not requested and in `ether`), or waits for
+    /// its task's period: then none of its codels is held, whatever the conditions.
+    pub fn at_rest(&self, slots: &[i64]) -> bool {
+        slots[self.paused_slot as usize] != 0
+            || (slots[self.loc_slot as usize] == i64::from(self.ether)
+                && slots[self.req_slot as usize] == 0)
     }
 }
 

@@ -850,10 +850,16 @@ impl Engine {
     /// At a quiescent point: activities with work that cannot run (a start held by
     /// `Exclusive`, a codel held by `Requires`...), reported once per change.
     fn report_held(&mut self) -> Result<(), EngineError> {
-        for s in 0..self.t.services.len() {
+        for k in 0..self.t.activities.len() {
+            let s = self.t.activities[k] as usize;
             let Some(a) = &self.t.services[s].activity else {
                 continue;
             };
+            // most activities wait for their period at a quiescent point: nothing is held,
+            // and nothing was reported held before
+            if a.held.is_none() && a.at_rest(self.state.slots()) {
+                continue;
+            }
             let held = self.held_codel(s)?;
             let loc = self.state.slots()[a.loc_slot as usize] as u32;
             let ticket = if loc == a.ether { a.pending } else { a.current };
@@ -924,12 +930,10 @@ impl Engine {
             return Ok(None);
         };
         let slots = self.state.slots();
-        let loc = slots[a.loc_slot as usize] as u32;
-        let req = slots[a.req_slot as usize] != 0;
-        let paused = slots[a.paused_slot as usize] != 0;
-        if (loc == a.ether && !req) || paused {
+        if a.at_rest(slots) {
             return Ok(None);
         }
+        let loc = slots[a.loc_slot as usize] as u32;
         let Some(c) = a.codel_at.get(loc as usize).copied().flatten() else {
             return Ok(None);
         };
