@@ -104,6 +104,8 @@ pub(crate) struct Tables {
     /// The system has internal transitions: without any, the engine need not look for
     /// their steps (a GenoM layer has none).
     pub has_internal: bool,
+    /// The `Time` interactions, in index order.
+    pub time: Vec<u32>,
     /// One bit per interaction that can be a progress candidate (a codel's run or error
     /// path, a progress connector): requests and ticks are looked at elsewhere.
     pub progress_mask: Vec<u64>,
@@ -129,6 +131,7 @@ impl Tables {
             activities: Vec::new(),
             ports: Vec::new(),
             has_internal: system.summary().internal_transitions > 0,
+            time: Vec::new(),
             progress_mask: Vec::new(),
         };
         let Some(map) = &system.genom else {
@@ -246,6 +249,9 @@ impl Tables {
         for (i, k) in kind.iter().enumerate() {
             if matches!(k, InterKind::Codel { .. } | InterKind::Progress) {
                 self.progress_mask[i / 64] |= 1 << (i % 64);
+            }
+            if *k == InterKind::Time {
+                self.time.push(i as u32);
             }
         }
         self.moves_requests = system

@@ -687,9 +687,12 @@ impl Engine {
 
     /// The first enabled time interaction.
     fn enabled_time(&self) -> Option<u32> {
-        self.enabled
-            .interactions()
-            .find(|&i| self.t.kind[i as usize] == InterKind::Time)
+        // a model has one or two: asking each is cheaper than walking the enabled ones
+        self.t
+            .time
+            .iter()
+            .copied()
+            .find(|&i| self.enabled.is_enabled(i))
     }
 
     fn fire_time(&mut self, i: u32) -> Result<(), EngineError> {
