@@ -8,7 +8,7 @@ use crate::prelude::*;
 use alloc::sync::Arc;
 
 use bip_model::genom::{CodelMap, Condition};
-use bip_model::{Role, System};
+use bip_model::{Pick, Role, System};
 
 use crate::codel::{CodelInfo, Field};
 use crate::error::BuildError;
@@ -93,6 +93,13 @@ pub(crate) struct Tables {
     /// cycle (a port of an activity's atom other than its tick): the others, ticks first,
     /// need no tracking.
     pub moves_requests: Vec<bool>,
+    /// Per transition of an activity's atom (`moving[moving_start[c] + t]` for transition
+    /// `t` of component `c`), whether taking it moves a request along the life cycle: a
+    /// request, interrupt, abort or error path, or a codel that starts or ends its
+    /// activity. A codel step that moves none (the codel runs again, or pauses) needs no
+    /// tracking.
+    pub moving_start: Vec<u32>,
+    pub moving: Vec<bool>,
     pub codels: Vec<CodelTable>,
     pub services: Vec<ServiceTable>,
     /// Per component, the service whose activity it is.
@@ -125,6 +132,8 @@ impl Tables {
         let mut t = Tables {
             kind: Vec::new(),
             moves_requests: Vec::new(),
+            moving_start: Vec::new(),
+            moving: Vec::new(),
             codels: Vec::new(),
             services: Vec::new(),
             activity_of: vec![None; system.components.len()],
@@ -268,8 +277,34 @@ impl Tables {
                 })
             })
             .collect();
+        for c in 0..system.components.len() {
+            self.moving_start.push(self.moving.len() as u32);
+            let activity =
+                self.activity_of[c].and_then(|s| self.services[s as usize].activity.as_ref());
+            let Some(a) = activity else { continue };
+            for tr in &system.atom_of(c as u32).transitions {
+                let port = tr
+                    .port
+                    .and_then(|p| a.port_kind.get(p as usize).copied().flatten());
+                self.moving.push(match port {
+                    None | Some(PortKind::Tick) => false,
+                    Some(PortKind::Run(_)) => tr.from == a.ether || tr.to == a.ether,
+                    Some(_) => true,
+                });
+            }
+        }
+        self.moving_start.push(self.moving.len() as u32);
         self.kind = kind;
         self
+    }
+
+    /// Whether the pick moves a request along its activity's life cycle (see `moving`).
+    pub fn moves_request(&self, p: Pick) -> bool {
+        let (start, end) = (
+            self.moving_start[p.component as usize],
+            self.moving_start[p.component as usize + 1],
+        );
+        start + p.transition < end && self.moving[(start + p.transition) as usize]
     }
 
     pub fn codel_index(&self, module: &str, service: &str, state: &str) -> Option<usize> {

@@ -1316,10 +1316,18 @@ impl Engine {
         let updated =
             self.enabled
                 .update_written(&self.system, &self.state, &self.next, &self.step_slots);
-        if let Label::Interaction(i) = label {
-            if self.t.moves_requests[i as usize] {
-                self.track(cause);
+        let moves = match label {
+            Label::Interaction(i) => {
+                self.t.moves_requests[i as usize]
+                    && self.picks.iter().any(|&p| self.t.moves_request(p))
             }
+            Label::Internal { .. } => false,
+        };
+        if moves {
+            self.track(cause);
+        } else if let Cause::Other | Cause::Codel { error: None } = cause {
+            // what most steps carry owns nothing: the drop glue need not be called
+            core::mem::forget(cause);
         }
         if let Some(r) = &mut self.recording {
             r.push(Step {
@@ -1390,6 +1398,10 @@ impl Engine {
         };
         for k in 0..self.picks.len() {
             let p = self.picks[k];
+            // a tick, a codel that neither starts nor ends its activity, another component
+            if !self.t.moves_request(p) {
+                continue;
+            }
             let Some(svc) = self.t.activity_of[p.component as usize] else {
                 continue;
             };
@@ -1398,17 +1410,12 @@ impl Engine {
             let Some(a) = self.t.services[svc as usize].activity.as_mut() else {
                 continue;
             };
-            // a tick moves no request along (tick steps skip `track`; a mixed step may not)
             let kind = match a.port_kind.get(port as usize).copied().flatten() {
                 Some(PortKind::Tick) | None => continue,
                 Some(kind) => kind,
             };
             let from_ether = tr.from == a.ether;
             let to_ether = tr.to == a.ether;
-            // a codel that neither starts nor ends its activity moves no request
-            if matches!(kind, PortKind::Run(_)) && !from_ether && !to_ether {
-                continue;
-            }
             let slots = self.state.slots();
             let req_before = slots[a.req_slot as usize] != 0;
             let stopping_before = a.stopping_slot.is_some_and(|sl| slots[sl as usize] != 0);
