@@ -1269,10 +1269,13 @@ impl Engine {
             }
         };
         let yields = &c.map.yields[yield_k].transitions;
+        // one or two transitions: a plain loop, not `contains`'s wide search
+        #[allow(clippy::manual_contains)]
+        let takes_yield = |t: u32| yields.iter().any(|&y| y == t);
         let matches = |s: &Step<'_>| {
             s.picks
                 .iter()
-                .any(|p| p.component == comp && yields.contains(&p.transition))
+                .any(|p| p.component == comp && takes_yield(p.transition))
                 && want_ids.is_none_or(|t| {
                     s.picks
                         .iter()
