@@ -349,8 +349,9 @@ pub struct Engine {
     /// Something moved since the held codels were last looked at.
     quiescent_dirty: bool,
     stopped: Option<RangeError>,
-    /// Scratch for deduplicating codel candidates.
-    codel_stamp: Vec<u32>,
+    /// Scratch for deduplicating codel candidates: per codel, the step count at which it
+    /// was last collected (64 bits: the count does not come back to a stamp).
+    codel_stamp: Vec<u64>,
     #[cfg(feature = "std")]
     workers: Option<crate::threads::Workers>,
     #[cfg(feature = "std")]
@@ -710,9 +711,9 @@ impl Engine {
     fn collect_candidates(&mut self) {
         self.candidates.clear();
         if self.codel_stamp.len() != self.t.codels.len() {
-            self.codel_stamp = vec![u32::MAX; self.t.codels.len()];
+            self.codel_stamp = vec![u64::MAX; self.t.codels.len()];
         }
-        let epoch = self.stats.steps as u32;
+        let epoch = self.stats.steps;
         for i in self.enabled.interactions_in(&self.t.progress_mask) {
             match self.t.kind[i as usize] {
                 InterKind::Codel { codel, .. } => {
