@@ -6,6 +6,7 @@
 use crate::prelude::*;
 
 use alloc::sync::Arc;
+use core::cell::Cell;
 
 use bip_model::genom::{CodelMap, Condition};
 use bip_model::{Pick, Role, System};
@@ -53,6 +54,26 @@ pub(crate) struct CodelTable {
     pub ids_field: Vec<usize>,
     /// Its task's period in ticks.
     pub period_ticks: u64,
+    /// The last yield it returned, by the address and length of its `&'static str`, and
+    /// its index in `map.yields`. A codel returns the same literals again and again, and
+    /// the text at a `&'static str`'s address never changes (it is never freed), so the
+    /// same address and length are the same yield without comparing the text.
+    pub last_yield: Cell<Option<(usize, usize, usize)>>,
+}
+
+impl CodelTable {
+    /// The index of yield `y` (as a codel returns it) among the codel's yields.
+    pub fn yield_index(&self, y: &'static str) -> Option<usize> {
+        let key = (y.as_ptr() as usize, y.len());
+        if let Some((at, len, k)) = self.last_yield.get() {
+            if (at, len) == key {
+                return Some(k);
+            }
+        }
+        let k = self.map.yields.iter().position(|x| x.target == y)?;
+        self.last_yield.set(Some((key.0, key.1, k)));
+        Some(k)
+    }
 }
 
 pub(crate) struct ServiceTable {
@@ -237,6 +258,7 @@ impl Tables {
                         },
                         ids_field,
                         period_ticks,
+                        last_yield: Cell::new(None),
                     });
                 }
                 t.services.push(ServiceTable {

@@ -1161,7 +1161,7 @@ impl Engine {
             });
         }
         match next {
-            Next::Yield(y) => match c.map.yields.iter().position(|x| x.target == y) {
+            Next::Yield(y) => match c.yield_index(y) {
                 None => fault(FaultKind::BadTransition(y)),
                 Some(k) => {
                     for (j, f) in c.info.fields.iter().enumerate() {
