@@ -319,7 +319,7 @@ pub struct Engine {
     t: Tables,
     state: State,
     /// Equal to `state` between steps: a step is fired onto it, and only the slots the
-    /// step wrote (`step_slots`) are compared and copied back.
+    /// step wrote (`step_slots`) are compared and copied to `state`.
     next: State,
     step_slots: Vec<u32>,
     enabled: EnabledSet,
@@ -1342,9 +1342,9 @@ impl Engine {
         if tracing::enabled!(target: "bip_engine", tracing::Level::DEBUG) {
             self.trace_step(label);
         }
-        core::mem::swap(&mut self.state, &mut self.next);
+        let (state, next) = (self.state.slots_mut(), self.next.slots());
         for &s in &self.step_slots {
-            self.next.slots_mut()[s as usize] = self.state.slots()[s as usize];
+            state[s as usize] = next[s as usize];
         }
         self.stats.steps += 1;
         self.quiescent_dirty = true;
