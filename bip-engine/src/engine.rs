@@ -990,34 +990,36 @@ impl Engine {
         };
         let took = self.clock.now_us().saturating_sub(t0);
         let period_us = self.t.codels[ck].period_ticks.saturating_mul(self.tick_us);
-        // the step the outcome names
+        // the step the outcome names, and the outcome of a run that failed
         let (run, fail) = (self.t.codels[ck].map.run, self.t.codels[ck].map.fail);
-        let (label, verdict) = match verdict {
-            Verdict2::Normal { yield_k } => match self.take_run_step(ck, yield_k, forced) {
-                true => (Label::Interaction(run), Verdict2::Normal { yield_k }),
-                false if forced => return Err(StepAsError::Diverged),
-                false => (
-                    Label::Interaction(fail),
-                    Verdict2::Error(Outcome::Fault(Fault {
+        let (label, error) = match verdict {
+            Verdict2::Normal { yield_k } => {
+                if self.take_run_step(ck, yield_k, forced) {
+                    (run, None)
+                } else if forced {
+                    return Err(StepAsError::Diverged);
+                } else {
+                    let fault = Fault {
                         codel: CodelId(c),
                         kind: FaultKind::NotAllowed,
-                    })),
-                ),
-            },
-            e @ Verdict2::Error(_) => (Label::Interaction(fail), e),
+                    };
+                    (fail, Some(Outcome::Fault(fault)))
+                }
+            }
+            Verdict2::Error(o) => (fail, Some(o)),
         };
-        if let (Label::Interaction(i), Verdict2::Error(_)) = (label, &verdict) {
+        if error.is_some() {
             if forced {
                 let same = self
                     .enabled
-                    .steps_of(i)
+                    .steps_of(fail)
                     .find(|s| s.picks == &self.forced[..]);
                 if same.is_none() {
                     return Err(StepAsError::Diverged);
                 }
                 set_picks(&mut self.picks, same);
             } else {
-                self.take_step_of(i);
+                self.take_step_of(fail);
             }
             if self.picks.is_empty() {
                 // run and fail share their guard, so this cannot happen; report it
@@ -1042,29 +1044,23 @@ impl Engine {
                 period_us,
             });
         }
-        let failed = matches!(verdict, Verdict2::Error(_));
-        let error = match verdict {
-            Verdict2::Error(o) => {
-                match &o {
-                    // a replayed error path is what the trace says, not a fault seen now
-                    Outcome::Fault(f) if f.kind == FaultKind::Replayed => {}
-                    Outcome::Fault(f) => {
-                        self.stats.faults += 1;
-                        let i = &self.t.codels[ck].info;
-                        tracing::warn!(target: "bip_engine", module = i.module.as_str(),
-                            service = i.service.as_str(), codel = i.state.as_str(),
-                            fault = %f.kind, "codel fault: its error path is taken");
-                        self.emit(Event::Fault(f.clone()));
-                    }
-                    _ => self.stats.exceptions += 1,
-                }
-                Some(o)
+        let failed = error.is_some();
+        match &error {
+            // a replayed error path is what the trace says, not a fault seen now
+            Some(Outcome::Fault(f)) if f.kind == FaultKind::Replayed => {}
+            Some(Outcome::Fault(f)) => {
+                self.stats.faults += 1;
+                let i = &self.t.codels[ck].info;
+                tracing::warn!(target: "bip_engine", module = i.module.as_str(),
+                    service = i.service.as_str(), codel = i.state.as_str(),
+                    fault = %f.kind, "codel fault: its error path is taken");
+                self.emit(Event::Fault(f.clone()));
             }
-            Verdict2::Normal { .. } => {
-                // the codel's ids writes are part of the step: the module pick set them
-                None
-            }
-        };
+            Some(_) => self.stats.exceptions += 1,
+            // the codel's ids writes are part of the step: the module pick set them
+            None => {}
+        }
+        let label = Label::Interaction(label);
         self.commit(label, Cause::Codel { error })?;
         Ok(Stepped::Codel {
             codel: CodelId(c),
