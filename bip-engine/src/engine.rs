@@ -713,25 +713,13 @@ impl Engine {
         if self.codel_stamp.len() != self.t.codels.len() {
             self.codel_stamp = vec![u64::MAX; self.t.codels.len()];
         }
-        let epoch = self.stats.steps;
-        for i in self.enabled.interactions_in(&self.t.progress_mask) {
-            match self.t.kind[i as usize] {
-                InterKind::Codel { codel, .. } => {
-                    if self.codel_stamp[codel as usize] != epoch {
-                        self.codel_stamp[codel as usize] = epoch;
-                        self.candidates.push(Candidate::Codel(codel));
-                    }
-                }
-                InterKind::Progress => {
-                    let n = self.enabled.steps_of(i).count() as u32;
-                    for k in 0..n {
-                        self.candidates
-                            .push(Candidate::Step(Label::Interaction(i), k));
-                    }
-                }
-                InterKind::Request { .. } | InterKind::Time | InterKind::Environment => {}
-            }
-        }
+        collect_progress(
+            &self.enabled,
+            &self.t,
+            &mut self.codel_stamp,
+            self.stats.steps,
+            &mut self.candidates,
+        );
         if !self.t.has_internal {
             return;
         }
@@ -1542,6 +1530,38 @@ fn choose_step<'a, I: Iterator<Item = Step<'a>>>(
     match chooser.choose(n) {
         0 => Some(first),
         k => steps().nth(k),
+    }
+}
+
+/// Appends to `out` the progress candidates among the enabled interactions of
+/// `t.progress_mask`, in index order: each codel once, where its first enabled interaction
+/// (run or error path) is (`stamp`: the step count `epoch` when it was last collected),
+/// and each step of a progress connector. A function of its own: the compiler then knows
+/// that a push onto `out` changes nothing of the set it walks, and does not load the
+/// set's tables again after each push.
+fn collect_progress(
+    enabled: &EnabledSet,
+    t: &Tables,
+    stamp: &mut [u64],
+    epoch: u64,
+    out: &mut Vec<Candidate>,
+) {
+    for i in enabled.interactions_in(&t.progress_mask) {
+        match t.kind[i as usize] {
+            InterKind::Codel { codel, .. } => {
+                if stamp[codel as usize] != epoch {
+                    stamp[codel as usize] = epoch;
+                    out.push(Candidate::Codel(codel));
+                }
+            }
+            InterKind::Progress => {
+                let n = enabled.steps_of(i).count() as u32;
+                for k in 0..n {
+                    out.push(Candidate::Step(Label::Interaction(i), k));
+                }
+            }
+            InterKind::Request { .. } | InterKind::Time | InterKind::Environment => {}
+        }
     }
 }
 
