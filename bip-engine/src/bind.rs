@@ -6,9 +6,10 @@
 use crate::prelude::*;
 
 use alloc::sync::Arc;
+use core::cell::Cell;
 
 use bip_model::genom::{CodelMap, Condition};
-use bip_model::{Role, System};
+use bip_model::{Pick, Role, System};
 
 use crate::codel::{CodelInfo, Field};
 use crate::error::BuildError;
@@ -53,6 +54,26 @@ pub(crate) struct CodelTable {
     pub ids_field: Vec<usize>,
     /// Its task's period in ticks.
     pub period_ticks: u64,
+    /// The last yield it returned, by the address and length of its `&'static str`, and
+    /// its index in `map.yields`. A codel returns the same literals again and again, and
+    /// the text at a `&'static str`'s address never changes (it is never freed), so the
+    /// same address and length are the same yield without comparing the text.
+    pub last_yield: Cell<Option<(usize, usize, usize)>>,
+}
+
+impl CodelTable {
+    /// The index of yield `y` (as a codel returns it) among the codel's yields.
+    pub fn yield_index(&self, y: &'static str) -> Option<usize> {
+        let key = (y.as_ptr() as usize, y.len());
+        if let Some((at, len, k)) = self.last_yield.get() {
+            if (at, len) == key {
+                return Some(k);
+            }
+        }
+        let k = self.map.yields.iter().position(|x| x.target == y)?;
+        self.last_yield.set(Some((key.0, key.1, k)));
+        Some(k)
+    }
 }
 
 pub(crate) struct ServiceTable {
@@ -93,15 +114,26 @@ pub(crate) struct Tables {
     /// cycle (a port of an activity's atom other than its tick): the others, ticks first,
     /// need no tracking.
     pub moves_requests: Vec<bool>,
+    /// Per transition of an activity's atom (`moving[moving_start[c] + t]` for transition
+    /// `t` of component `c`), whether taking it moves a request along the life cycle: a
+    /// request, interrupt, abort or error path, or a codel that starts or ends its
+    /// activity. A codel step that moves none (the codel runs again, or pauses) needs no
+    /// tracking.
+    pub moving_start: Vec<u32>,
+    pub moving: Vec<bool>,
     pub codels: Vec<CodelTable>,
     pub services: Vec<ServiceTable>,
     /// Per component, the service whose activity it is.
     pub activity_of: Vec<Option<u32>>,
+    /// The services that have an activity, in order: the only ones that can hold a codel.
+    pub activities: Vec<u32>,
     /// (module, port) per port store entry.
     pub ports: Vec<(String, String)>,
     /// The system has internal transitions: without any, the engine need not look for
     /// their steps (a GenoM layer has none).
     pub has_internal: bool,
+    /// The `Time` interactions, in index order.
+    pub time: Vec<u32>,
     /// One bit per interaction that can be a progress candidate (a codel's run or error
     /// path, a progress connector): requests and ticks are looked at elsewhere.
     pub progress_mask: Vec<u64>,
@@ -121,11 +153,15 @@ impl Tables {
         let mut t = Tables {
             kind: Vec::new(),
             moves_requests: Vec::new(),
+            moving_start: Vec::new(),
+            moving: Vec::new(),
             codels: Vec::new(),
             services: Vec::new(),
             activity_of: vec![None; system.components.len()],
+            activities: Vec::new(),
             ports: Vec::new(),
             has_internal: system.summary().internal_transitions > 0,
+            time: Vec::new(),
             progress_mask: Vec::new(),
         };
         let Some(map) = &system.genom else {
@@ -172,6 +208,7 @@ impl Tables {
                 let mut activity = None;
                 if let Some(comp) = s.component {
                     t.activity_of[comp as usize] = Some(sid);
+                    t.activities.push(sid);
                     activity = Some(activity_table(system, comp, t.codels.len() as u32, s)?);
                 }
                 for c in &s.codels {
@@ -221,6 +258,7 @@ impl Tables {
                         },
                         ids_field,
                         period_ticks,
+                        last_yield: Cell::new(None),
                     });
                 }
                 t.services.push(ServiceTable {
@@ -243,6 +281,9 @@ impl Tables {
             if matches!(k, InterKind::Codel { .. } | InterKind::Progress) {
                 self.progress_mask[i / 64] |= 1 << (i % 64);
             }
+            if *k == InterKind::Time {
+                self.time.push(i as u32);
+            }
         }
         self.moves_requests = system
             .interactions
@@ -258,8 +299,34 @@ impl Tables {
                 })
             })
             .collect();
+        for c in 0..system.components.len() {
+            self.moving_start.push(self.moving.len() as u32);
+            let activity =
+                self.activity_of[c].and_then(|s| self.services[s as usize].activity.as_ref());
+            let Some(a) = activity else { continue };
+            for tr in &system.atom_of(c as u32).transitions {
+                let port = tr
+                    .port
+                    .and_then(|p| a.port_kind.get(p as usize).copied().flatten());
+                self.moving.push(match port {
+                    None | Some(PortKind::Tick) => false,
+                    Some(PortKind::Run(_)) => tr.from == a.ether || tr.to == a.ether,
+                    Some(_) => true,
+                });
+            }
+        }
+        self.moving_start.push(self.moving.len() as u32);
         self.kind = kind;
         self
+    }
+
+    /// Whether the pick moves a request along its activity's life cycle (see `moving`).
+    pub fn moves_request(&self, p: Pick) -> bool {
+        let (start, end) = (
+            self.moving_start[p.component as usize],
+            self.moving_start[p.component as usize + 1],
+        );
+        start + p.transition < end && self.moving[(start + p.transition) as usize]
     }
 
     pub fn codel_index(&self, module: &str, service: &str, state: &str) -> Option<usize> {
@@ -272,6 +339,16 @@ impl Tables {
         self.services
             .iter()
             .position(|s| s.module == module && s.name == service)
+    }
+}
+
+impl ActivityTable {
+    /// True if the activity has no work now (not requested and in `ether`), or waits for
+    /// its task's period: then none of its codels is held, whatever the conditions.
+    pub fn at_rest(&self, slots: &[i64]) -> bool {
+        slots[self.paused_slot as usize] != 0
+            || (slots[self.loc_slot as usize] == i64::from(self.ether)
+                && slots[self.req_slot as usize] == 0)
     }
 }
 

@@ -319,7 +319,7 @@ pub struct Engine {
     t: Tables,
     state: State,
     /// Equal to `state` between steps: a step is fired onto it, and only the slots the
-    /// step wrote (`step_slots`) are compared and copied back.
+    /// step wrote (`step_slots`) are compared and copied to `state`.
     next: State,
     step_slots: Vec<u32>,
     enabled: EnabledSet,
@@ -349,8 +349,9 @@ pub struct Engine {
     /// Something moved since the held codels were last looked at.
     quiescent_dirty: bool,
     stopped: Option<RangeError>,
-    /// Scratch for deduplicating codel candidates.
-    codel_stamp: Vec<u32>,
+    /// Scratch for deduplicating codel candidates: per codel, the step count at which it
+    /// was last collected (64 bits: the count does not come back to a stamp).
+    codel_stamp: Vec<u64>,
     #[cfg(feature = "std")]
     workers: Option<crate::threads::Workers>,
     #[cfg(feature = "std")]
@@ -687,9 +688,12 @@ impl Engine {
 
     /// The first enabled time interaction.
     fn enabled_time(&self) -> Option<u32> {
-        self.enabled
-            .interactions()
-            .find(|&i| self.t.kind[i as usize] == InterKind::Time)
+        // a model has one or two: asking each is cheaper than walking the enabled ones
+        self.t
+            .time
+            .iter()
+            .copied()
+            .find(|&i| self.enabled.is_enabled(i))
     }
 
     fn fire_time(&mut self, i: u32) -> Result<(), EngineError> {
@@ -707,27 +711,15 @@ impl Engine {
     fn collect_candidates(&mut self) {
         self.candidates.clear();
         if self.codel_stamp.len() != self.t.codels.len() {
-            self.codel_stamp = vec![u32::MAX; self.t.codels.len()];
+            self.codel_stamp = vec![u64::MAX; self.t.codels.len()];
         }
-        let epoch = self.stats.steps as u32;
-        for i in self.enabled.interactions_in(&self.t.progress_mask) {
-            match self.t.kind[i as usize] {
-                InterKind::Codel { codel, .. } => {
-                    if self.codel_stamp[codel as usize] != epoch {
-                        self.codel_stamp[codel as usize] = epoch;
-                        self.candidates.push(Candidate::Codel(codel));
-                    }
-                }
-                InterKind::Progress => {
-                    let n = self.enabled.steps_of(i).count() as u32;
-                    for k in 0..n {
-                        self.candidates
-                            .push(Candidate::Step(Label::Interaction(i), k));
-                    }
-                }
-                InterKind::Request { .. } | InterKind::Time | InterKind::Environment => {}
-            }
-        }
+        collect_progress(
+            &self.enabled,
+            &self.t,
+            &mut self.codel_stamp,
+            self.stats.steps,
+            &mut self.candidates,
+        );
         if !self.t.has_internal {
             return;
         }
@@ -850,10 +842,16 @@ impl Engine {
     /// At a quiescent point: activities with work that cannot run (a start held by
     /// `Exclusive`, a codel held by `Requires`...), reported once per change.
     fn report_held(&mut self) -> Result<(), EngineError> {
-        for s in 0..self.t.services.len() {
+        for k in 0..self.t.activities.len() {
+            let s = self.t.activities[k] as usize;
             let Some(a) = &self.t.services[s].activity else {
                 continue;
             };
+            // most activities wait for their period at a quiescent point: nothing is held,
+            // and nothing was reported held before
+            if a.held.is_none() && a.at_rest(self.state.slots()) {
+                continue;
+            }
             let held = self.held_codel(s)?;
             let loc = self.state.slots()[a.loc_slot as usize] as u32;
             let ticket = if loc == a.ether { a.pending } else { a.current };
@@ -924,12 +922,10 @@ impl Engine {
             return Ok(None);
         };
         let slots = self.state.slots();
-        let loc = slots[a.loc_slot as usize] as u32;
-        let req = slots[a.req_slot as usize] != 0;
-        let paused = slots[a.paused_slot as usize] != 0;
-        if (loc == a.ether && !req) || paused {
+        if a.at_rest(slots) {
             return Ok(None);
         }
+        let loc = slots[a.loc_slot as usize] as u32;
         let Some(c) = a.codel_at.get(loc as usize).copied().flatten() else {
             return Ok(None);
         };
@@ -982,34 +978,36 @@ impl Engine {
         };
         let took = self.clock.now_us().saturating_sub(t0);
         let period_us = self.t.codels[ck].period_ticks.saturating_mul(self.tick_us);
-        // the step the outcome names
+        // the step the outcome names, and the outcome of a run that failed
         let (run, fail) = (self.t.codels[ck].map.run, self.t.codels[ck].map.fail);
-        let (label, verdict) = match verdict {
-            Verdict2::Normal { yield_k } => match self.take_run_step(ck, yield_k, forced) {
-                true => (Label::Interaction(run), Verdict2::Normal { yield_k }),
-                false if forced => return Err(StepAsError::Diverged),
-                false => (
-                    Label::Interaction(fail),
-                    Verdict2::Error(Outcome::Fault(Fault {
+        let (label, error) = match verdict {
+            Verdict2::Normal { yield_k } => {
+                if self.take_run_step(ck, yield_k, forced) {
+                    (run, None)
+                } else if forced {
+                    return Err(StepAsError::Diverged);
+                } else {
+                    let fault = Fault {
                         codel: CodelId(c),
                         kind: FaultKind::NotAllowed,
-                    })),
-                ),
-            },
-            e @ Verdict2::Error(_) => (Label::Interaction(fail), e),
+                    };
+                    (fail, Some(Outcome::Fault(fault)))
+                }
+            }
+            Verdict2::Error(o) => (fail, Some(o)),
         };
-        if let (Label::Interaction(i), Verdict2::Error(_)) = (label, &verdict) {
+        if error.is_some() {
             if forced {
                 let same = self
                     .enabled
-                    .steps_of(i)
+                    .steps_of(fail)
                     .find(|s| s.picks == &self.forced[..]);
                 if same.is_none() {
                     return Err(StepAsError::Diverged);
                 }
                 set_picks(&mut self.picks, same);
             } else {
-                self.take_step_of(i);
+                self.take_step_of(fail);
             }
             if self.picks.is_empty() {
                 // run and fail share their guard, so this cannot happen; report it
@@ -1034,29 +1032,23 @@ impl Engine {
                 period_us,
             });
         }
-        let failed = matches!(verdict, Verdict2::Error(_));
-        let error = match verdict {
-            Verdict2::Error(o) => {
-                match &o {
-                    // a replayed error path is what the trace says, not a fault seen now
-                    Outcome::Fault(f) if f.kind == FaultKind::Replayed => {}
-                    Outcome::Fault(f) => {
-                        self.stats.faults += 1;
-                        let i = &self.t.codels[ck].info;
-                        tracing::warn!(target: "bip_engine", module = i.module.as_str(),
-                            service = i.service.as_str(), codel = i.state.as_str(),
-                            fault = %f.kind, "codel fault: its error path is taken");
-                        self.emit(Event::Fault(f.clone()));
-                    }
-                    _ => self.stats.exceptions += 1,
-                }
-                Some(o)
+        let failed = error.is_some();
+        match &error {
+            // a replayed error path is what the trace says, not a fault seen now
+            Some(Outcome::Fault(f)) if f.kind == FaultKind::Replayed => {}
+            Some(Outcome::Fault(f)) => {
+                self.stats.faults += 1;
+                let i = &self.t.codels[ck].info;
+                tracing::warn!(target: "bip_engine", module = i.module.as_str(),
+                    service = i.service.as_str(), codel = i.state.as_str(),
+                    fault = %f.kind, "codel fault: its error path is taken");
+                self.emit(Event::Fault(f.clone()));
             }
-            Verdict2::Normal { .. } => {
-                // the codel's ids writes are part of the step: the module pick set them
-                None
-            }
-        };
+            Some(_) => self.stats.exceptions += 1,
+            // the codel's ids writes are part of the step: the module pick set them
+            None => {}
+        }
+        let label = Label::Interaction(label);
         self.commit(label, Cause::Codel { error })?;
         Ok(Stepped::Codel {
             codel: CodelId(c),
@@ -1153,7 +1145,7 @@ impl Engine {
             });
         }
         match next {
-            Next::Yield(y) => match c.map.yields.iter().position(|x| x.target == y) {
+            Next::Yield(y) => match c.yield_index(y) {
                 None => fault(FaultKind::BadTransition(y)),
                 Some(k) => {
                     for (j, f) in c.info.fields.iter().enumerate() {
@@ -1262,10 +1254,13 @@ impl Engine {
             }
         };
         let yields = &c.map.yields[yield_k].transitions;
+        // one or two transitions: a plain loop, not `contains`'s wide search
+        #[allow(clippy::manual_contains)]
+        let takes_yield = |t: u32| yields.iter().any(|&y| y == t);
         let matches = |s: &Step<'_>| {
             s.picks
                 .iter()
-                .any(|p| p.component == comp && yields.contains(&p.transition))
+                .any(|p| p.component == comp && takes_yield(p.transition))
                 && want_ids.is_none_or(|t| {
                     s.picks
                         .iter()
@@ -1278,9 +1273,23 @@ impl Engine {
                 .steps_of(run)
                 .find(|s| s.picks == &self.forced[..] && matches(s))
         } else {
-            choose_step(&mut self.chooser, || {
-                self.enabled.steps_of(run).filter(|s| matches(s))
-            })
+            // `choose_step` written out: through its closure and a `filter`, this path (one
+            // per codel run) costs a few more instructions
+            let mut n = 0;
+            let mut first = None;
+            for s in self.enabled.steps_of(run) {
+                if matches(&s) {
+                    first = first.or(Some(s));
+                    n += 1;
+                }
+            }
+            match first {
+                None => None,
+                Some(first) => match self.chooser.choose(n) {
+                    0 => Some(first),
+                    k => self.enabled.steps_of(run).filter(|s| matches(s)).nth(k),
+                },
+            }
         };
         let found = step.is_some();
         set_picks(&mut self.picks, step);
@@ -1309,10 +1318,18 @@ impl Engine {
         let updated =
             self.enabled
                 .update_written(&self.system, &self.state, &self.next, &self.step_slots);
-        if let Label::Interaction(i) = label {
-            if self.t.moves_requests[i as usize] {
-                self.track(cause);
+        let moves = match label {
+            Label::Interaction(i) => {
+                self.t.moves_requests[i as usize]
+                    && self.picks.iter().any(|&p| self.t.moves_request(p))
             }
+            Label::Internal { .. } => false,
+        };
+        if moves {
+            self.track(cause);
+        } else if let Cause::Other | Cause::Codel { error: None } = cause {
+            // what most steps carry owns nothing: the drop glue need not be called
+            core::mem::forget(cause);
         }
         if let Some(r) = &mut self.recording {
             r.push(Step {
@@ -1323,9 +1340,9 @@ impl Engine {
         if tracing::enabled!(target: "bip_engine", tracing::Level::DEBUG) {
             self.trace_step(label);
         }
-        core::mem::swap(&mut self.state, &mut self.next);
+        let (state, next) = (self.state.slots_mut(), self.next.slots());
         for &s in &self.step_slots {
-            self.next.slots_mut()[s as usize] = self.state.slots()[s as usize];
+            state[s as usize] = next[s as usize];
         }
         self.stats.steps += 1;
         self.quiescent_dirty = true;
@@ -1383,6 +1400,10 @@ impl Engine {
         };
         for k in 0..self.picks.len() {
             let p = self.picks[k];
+            // a tick, a codel that neither starts nor ends its activity, another component
+            if !self.t.moves_request(p) {
+                continue;
+            }
             let Some(svc) = self.t.activity_of[p.component as usize] else {
                 continue;
             };
@@ -1391,17 +1412,12 @@ impl Engine {
             let Some(a) = self.t.services[svc as usize].activity.as_mut() else {
                 continue;
             };
-            // a tick moves no request along (tick steps skip `track`; a mixed step may not)
             let kind = match a.port_kind.get(port as usize).copied().flatten() {
                 Some(PortKind::Tick) | None => continue,
                 Some(kind) => kind,
             };
             let from_ether = tr.from == a.ether;
             let to_ether = tr.to == a.ether;
-            // a codel that neither starts nor ends its activity moves no request
-            if matches!(kind, PortKind::Run(_)) && !from_ether && !to_ether {
-                continue;
-            }
             let slots = self.state.slots();
             let req_before = slots[a.req_slot as usize] != 0;
             let stopping_before = a.stopping_slot.is_some_and(|sl| slots[sl as usize] != 0);
@@ -1514,6 +1530,38 @@ fn choose_step<'a, I: Iterator<Item = Step<'a>>>(
     match chooser.choose(n) {
         0 => Some(first),
         k => steps().nth(k),
+    }
+}
+
+/// Appends to `out` the progress candidates among the enabled interactions of
+/// `t.progress_mask`, in index order: each codel once, where its first enabled interaction
+/// (run or error path) is (`stamp`: the step count `epoch` when it was last collected),
+/// and each step of a progress connector. A function of its own: the compiler then knows
+/// that a push onto `out` changes nothing of the set it walks, and does not load the
+/// set's tables again after each push.
+fn collect_progress(
+    enabled: &EnabledSet,
+    t: &Tables,
+    stamp: &mut [u64],
+    epoch: u64,
+    out: &mut Vec<Candidate>,
+) {
+    for i in enabled.interactions_in(&t.progress_mask) {
+        match t.kind[i as usize] {
+            InterKind::Codel { codel, .. } => {
+                if stamp[codel as usize] != epoch {
+                    stamp[codel as usize] = epoch;
+                    out.push(Candidate::Codel(codel));
+                }
+            }
+            InterKind::Progress => {
+                let n = enabled.steps_of(i).count() as u32;
+                for k in 0..n {
+                    out.push(Candidate::Step(Label::Interaction(i), k));
+                }
+            }
+            InterKind::Request { .. } | InterKind::Time | InterKind::Environment => {}
+        }
     }
 }
 

@@ -112,6 +112,36 @@ fn a_yield_outside_the_declared_yields_is_a_bad_transition() {
 }
 
 #[test]
+fn a_yield_is_told_by_its_text_not_by_where_the_text_is() {
+    // after a declared yield, an undeclared one that starts at the same address (a longer
+    // text) and one of the same length (another text) are still bad transitions
+    let long: &'static str = "pause::mainX";
+    let short: &'static str = &long[..11];
+    let same_length: &'static str = "pause::xxxx";
+    let runs = Arc::new(AtomicU32::new(0));
+    let r = runs.clone();
+    let (mut e, events) = run_main(
+        move |_| match r.fetch_add(1, Ordering::SeqCst) {
+            0 => Next::Yield(short),
+            1 => Next::Yield(long),
+            2 => Next::Yield(same_length),
+            _ => Next::Yield(short),
+        },
+        None,
+    );
+    assert_eq!(runs.load(Ordering::SeqCst), 2);
+    assert_eq!(faults(&events), [FaultKind::BadTransition("pause::mainX")]);
+    e.request("m", "S", ()).expect("queued");
+    e.run_until(Until::Ticks(12)).expect("runs");
+    let events: Vec<Event> = e.events().collect();
+    assert_eq!(faults(&events), [FaultKind::BadTransition("pause::xxxx")]);
+    e.request("m", "S", ()).expect("queued");
+    e.run_until(Until::Ticks(6)).expect("runs");
+    let events: Vec<Event> = e.events().collect();
+    assert!(faults(&events).is_empty(), "{events:?}");
+}
+
+#[test]
 fn an_undeclared_exception_is_a_fault_and_a_declared_one_an_outcome() {
     let (e, events) = run_main(|_| Next::Throw("e_other"), None);
     assert_eq!(

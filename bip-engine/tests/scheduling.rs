@@ -36,3 +36,103 @@ fn internal_transitions_are_taken_as_progress_then_the_engine_is_idle() {
     let steps: Vec<String> = e.record().steps.iter().map(|s| s.step.clone()).collect();
     assert_eq!(steps, ["a.internal", "solo"]);
 }
+
+#[test]
+fn a_tick_fires_the_first_enabled_time_connector() {
+    let system = load_str(
+        r#"System(
+            name: "two_clocks",
+            tick_ms: 1,
+            atoms: {
+                "A": Atom(
+                    locations: ["l0"],
+                    initial: "l0",
+                    ports: ["p", "q"],
+                    vars: [(name: "x", ty: Int(0, 3))],
+                    transitions: [
+                        (from: "l0", port: "p", to: "l0", guard: "x < 2", action: "x = x + 1"),
+                        (from: "l0", port: "q", to: "l0"),
+                    ],
+                ),
+            },
+            components: [(name: "a", atom: "A")],
+            connectors: [
+                (name: "tp", ports: ["a.p"], role: Time),
+                (name: "tq", ports: ["a.q"], role: Time),
+            ],
+        )"#,
+    );
+    let mut e = Engine::builder(system).record(8).build().expect("builds");
+    e.run_until(Until::Ticks(4)).expect("runs");
+    let steps: Vec<String> = e.record().steps.iter().map(|s| s.step.clone()).collect();
+    assert_eq!(steps, ["tp", "tp", "tq", "tq"]);
+}
+
+/// A codel connector extended by an atom with two transitions on its port: each yield of
+/// the codel has two steps, and the policy chooses between them.
+const TWO_STEPS_PER_YIELD: &str = r#"System(
+    name: "dice",
+    tick_ms: 10,
+    atoms: {
+        "Dice": Atom(
+            locations: ["l"],
+            initial: "l",
+            ports: ["roll"],
+            vars: [(name: "x", ty: Int(0, 1))],
+            transitions: [
+                (from: "l", port: "roll", to: "l", action: "x = 0"),
+                (from: "l", port: "roll", to: "l", action: "x = 1"),
+            ],
+        ),
+    },
+    components: [(name: "dice", atom: "Dice")],
+    modules: [(
+        name: "m",
+        tasks: [(name: "t", period: 1)],
+        services: [
+            (name: "S", kind: Activity, task: "t", codels: [
+                (state: "start", yields: ["pause::main"]),
+                (state: "main", yields: ["pause::main", "ether"]),
+            ]),
+        ],
+    )],
+    connectors: [(name: "m_S_main", ports: ["dice.roll"])],
+)"#;
+
+/// The values the dice takes at each run of `main`, under `policy`.
+fn rolls(policy: Policy) -> Vec<i64> {
+    let system = load_str(TWO_STEPS_PER_YIELD);
+    let dice = system.component_index("dice").expect("dice");
+    let x = system.atom_of(dice).var_index("x").expect("x");
+    let mut e = Engine::builder(system.clone())
+        .codel(("m", "S", "start"), |_| Next::Yield("pause::main"))
+        .codel(("m", "S", "main"), |_| Next::Yield("pause::main"))
+        .policy(policy)
+        .build()
+        .expect("builds");
+    let main = e.codel_id("m", "S", "main").expect("main");
+    e.request("m", "S", ()).expect("queued");
+    let mut out = Vec::new();
+    while out.len() < 8 {
+        match e.step().expect("steps") {
+            Stepped::Codel { codel, failed } if codel == main => {
+                assert!(!failed);
+                out.push(system.value(e.state(), dice, x));
+            }
+            Stepped::Idle {
+                next_tick_us: Some(t),
+            } => e.wait_until(t),
+            _ => {}
+        }
+    }
+    out
+}
+
+#[test]
+fn the_policy_chooses_among_the_steps_of_a_codels_yield() {
+    assert_eq!(rolls(Policy::First), [0; 8]);
+    assert_eq!(rolls(Policy::RoundRobin), [1, 0, 1, 0, 1, 0, 1, 0]);
+    let seeded = rolls(Policy::Seeded(3));
+    assert!(seeded.contains(&0) && seeded.contains(&1), "{seeded:?}");
+    assert_eq!(seeded, rolls(Policy::Seeded(3)));
+}
