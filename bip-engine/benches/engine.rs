@@ -182,6 +182,12 @@ fn main() {
         1e9 / rate,
         codel_share * 100.0
     );
+    // what the engine costs per codel run, ticks included, with nothing else running
+    let engine_ns = 1e9 / rate / codel_share;
+    println!(
+        "  the engine's own time per codel run: {engine_ns:.0} ns ({:.1}% of a 2 µs codel)",
+        engine_ns / 20.0
+    );
     if o.empty_only {
         return;
     }
@@ -194,8 +200,16 @@ fn main() {
     let mut work_us = 0.0;
     for _ in 0..o.runs {
         let mut e = running(&system, work);
+        // the codels' own time, measured just before and just after the run (the machine's
+        // speed drifts; one measurement apart from the run moves the overhead by percents)
+        let codels = steps * 3 / 4;
+        let before = work_alone(codels);
         let (t, codels) = timed(&mut e, steps);
-        let alone = work_alone(codels);
+        let after = work_alone(codels);
+        let alone = (before.as_secs_f64() * codels as f64 / (steps * 3 / 4) as f64
+            + after.as_secs_f64())
+            / 2.0;
+        let alone = Duration::from_secs_f64(alone);
         work_us = alone.as_secs_f64() * 1e6 / codels as f64;
         let extra = t.as_secs_f64() - alone.as_secs_f64();
         overheads.push(extra / alone.as_secs_f64());
