@@ -51,17 +51,8 @@ fn allocations_during(f: impl FnOnce()) -> u64 {
 #[test]
 fn steady_state_steps_allocate_nothing() {
     let system = load("rover.ron");
-    let mut b = Engine::builder(system.clone()).event_capacity(256);
-    let map = system.genom.clone().expect("layer");
-    for m in &map.modules {
-        for s in &m.services {
-            for c in &s.codels {
-                let first: &'static str = Box::leak(c.yields[0].target.clone().into_boxed_str());
-                b = b.codel((&m.name, &s.name, &c.state), move |_| Next::Yield(first));
-            }
-        }
-    }
-    let mut e = b.build().expect("builds");
+    let b = Engine::builder(system.clone()).event_capacity(256);
+    let mut e = first_yields(b, &system).build().expect("builds");
     for (m, s) in [
         ("rflex", "Init"),
         ("rflex", "TrackSpeed"),

@@ -268,23 +268,3 @@ fn a_codel_longer_than_its_period_is_an_overrun() {
     let states = states_of(e.system(), &e.record());
     assert_invariants(e.system(), &states);
 }
-
-fn silence_injected_panics() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let default = std::panic::take_hook();
-        std::panic::set_hook(Box::new(move |info| {
-            let injected = info
-                .payload()
-                .downcast_ref::<&str>()
-                .is_some_and(|m| m.contains("injected"))
-                || info
-                    .payload()
-                    .downcast_ref::<String>()
-                    .is_some_and(|m| m.contains("injected"));
-            if !injected {
-                default(info);
-            }
-        }));
-    });
-}

@@ -21,10 +21,6 @@ use bip_engine::*;
 use bip_model::{Rng, System};
 use common::*;
 
-fn leak(s: &str) -> &'static str {
-    Box::leak(s.to_string().into_boxed_str())
-}
-
 /// FNV-1a: stable across runs and platforms, unlike the standard library's hashers.
 fn fnv(text: &str) -> u64 {
     text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
@@ -49,63 +45,12 @@ fn bind(
     rng: Arc<Mutex<Rng>>,
     clock: &VirtualClock,
 ) -> EngineBuilder {
-    let mut b = Engine::builder(system.clone()).clock(clock.clone());
-    if let Codels::Default = codels {
-        return b.default_codels(DefaultCodels::Random(7));
+    let b = Engine::builder(system.clone()).clock(clock.clone());
+    match codels {
+        Codels::First => first_yields(b, system),
+        Codels::Random => random_codels(b, system, rng, Some(clock.clone())),
+        Codels::Default => b.default_codels(DefaultCodels::Random(7)),
     }
-    let Some(map) = &system.genom else { return b };
-    for m in &map.modules {
-        for s in &m.services {
-            for c in &s.codels {
-                let yields: Vec<&'static str> = c.yields.iter().map(|y| leak(&y.target)).collect();
-                let throws: Vec<&'static str> = c.throws.iter().map(|t| leak(t)).collect();
-                let ids: Vec<(&'static str, i64, i64)> =
-                    c.ids.iter().map(|f| (leak(&f.name), f.lo, f.hi)).collect();
-                let ports: Vec<&'static str> = c.writes.iter().map(|p| leak(p)).collect();
-                let rng = rng.clone();
-                let clock = clock.clone();
-                b = b.codel((&m.name, &s.name, &c.state), move |ctx| {
-                    if let Codels::First = codels {
-                        return Next::Yield(yields[0]);
-                    }
-                    let mut r = rng.lock().unwrap_or_else(|e| e.into_inner());
-                    for &(name, lo, hi) in &ids {
-                        if r.below(2) == 0 {
-                            let span = (hi - lo + 1) as usize;
-                            let v = if r.below(10) == 0 {
-                                hi + 1
-                            } else {
-                                lo + r.below(span) as i64
-                            };
-                            ctx.set(name, v);
-                        }
-                    }
-                    for &p in &ports {
-                        ctx.write_port(p, r.next_u64());
-                    }
-                    if r.below(40) == 0 {
-                        clock.advance(1_000_000);
-                    }
-                    let roll = r.below(100);
-                    if roll < 3 {
-                        drop(r);
-                        panic!("injected fault");
-                    }
-                    if roll < 6 {
-                        return Next::Yield("no_such_state");
-                    }
-                    if roll < 9 {
-                        return Next::Throw("e_undeclared");
-                    }
-                    if roll < 20 && !throws.is_empty() {
-                        return Next::Throw(throws[r.below(throws.len())]);
-                    }
-                    Next::Yield(yields[r.below(yields.len())])
-                });
-            }
-        }
-    }
-    b
 }
 
 /// Runs 1,500 calls of `step` with random requests in between; the fingerprint of all
@@ -147,7 +92,7 @@ fn fingerprint(
             }
         }
         for ev in e.events() {
-            kinds.insert(kind(&ev));
+            kinds.insert(event_kind(&ev));
             writeln!(log, "{ev:?}").expect("writes");
         }
     }
@@ -166,42 +111,6 @@ fn fingerprint(
         writeln!(log, "{:?}", s.stepped).expect("writes");
     }
     fnv(&log)
-}
-
-fn kind(e: &Event) -> &'static str {
-    match e {
-        Event::Reply {
-            reply: Reply::Accepted,
-            ..
-        } => "accepted",
-        Event::Reply {
-            reply: Reply::Refused(Refusal::NotEnabled),
-            ..
-        } => "refused (not enabled)",
-        Event::Reply {
-            reply: Reply::Refused(_),
-            ..
-        } => "refused",
-        Event::Reply {
-            reply: Reply::Done(Outcome::Ether),
-            ..
-        } => "ether",
-        Event::Reply {
-            reply: Reply::Done(Outcome::Exception(_)),
-            ..
-        } => "exception",
-        Event::Reply {
-            reply: Reply::Done(Outcome::Interrupted),
-            ..
-        } => "interrupted",
-        Event::Reply {
-            reply: Reply::Done(Outcome::Fault(_)),
-            ..
-        } => "fault reply",
-        Event::Fault(_) => "fault",
-        Event::Held { .. } => "held",
-        Event::Overrun { .. } => "overrun",
-    }
 }
 
 /// The fingerprint of each case, and the kinds of events the cases saw.
@@ -234,22 +143,6 @@ fn cases() -> (Vec<(String, u64)>, BTreeSet<&'static str>) {
         }
     }
     (out, kinds)
-}
-
-fn silence_injected_panics() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let default = std::panic::take_hook();
-        std::panic::set_hook(Box::new(move |info| {
-            let injected = info
-                .payload()
-                .downcast_ref::<&str>()
-                .is_some_and(|m| m.contains("injected"));
-            if !injected {
-                default(info);
-            }
-        }));
-    });
 }
 
 const EXPECTED: &[(&str, u64)] = &[
@@ -372,7 +265,8 @@ fn seeded_runs_give_the_fingerprints_of_the_engine_before_its_optimisations() {
         "accepted",
         "ether",
         "exception",
-        "fault",
+        "panic",
+        "bad transition",
         "fault reply",
         "held",
         "interrupted",

@@ -11,67 +11,10 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use bip_engine::*;
-use bip_model::System;
 use common::*;
 use proptest::prelude::*;
 
 use bip_model::Rng;
-
-fn leak(s: &str) -> &'static str {
-    Box::leak(s.to_string().into_boxed_str())
-}
-
-/// Binds every codel of `system` to a closure that draws its result from `rng`.
-fn random_codels(system: &System, rng: Arc<Mutex<Rng>>) -> EngineBuilder {
-    let mut b = Engine::builder(system.clone());
-    let Some(map) = &system.genom else { return b };
-    for m in &map.modules {
-        for s in &m.services {
-            for c in &s.codels {
-                let yields: Vec<&'static str> = c.yields.iter().map(|y| leak(&y.target)).collect();
-                let throws: Vec<&'static str> = c.throws.iter().map(|t| leak(t)).collect();
-                let ids: Vec<(&'static str, i64, i64)> =
-                    c.ids.iter().map(|f| (leak(&f.name), f.lo, f.hi)).collect();
-                let ports: Vec<&'static str> = c.writes.iter().map(|p| leak(p)).collect();
-                let rng = rng.clone();
-                b = b.codel((&m.name, &s.name, &c.state), move |ctx| {
-                    let mut r = rng.lock().unwrap_or_else(|e| e.into_inner());
-                    for &(name, lo, hi) in &ids {
-                        if r.below(2) == 0 {
-                            let span = (hi - lo + 1) as usize;
-                            // one write in ten leaves the range
-                            let v = if r.below(10) == 0 {
-                                hi + 1
-                            } else {
-                                lo + r.below(span) as i64
-                            };
-                            ctx.set(name, v);
-                        }
-                    }
-                    for &p in &ports {
-                        ctx.write_port(p, r.next_u64());
-                    }
-                    let roll = r.below(100);
-                    if roll < 3 {
-                        drop(r);
-                        panic!("injected fault");
-                    }
-                    if roll < 6 {
-                        return Next::Yield("no_such_state");
-                    }
-                    if roll < 9 {
-                        return Next::Throw("e_undeclared");
-                    }
-                    if roll < 20 && !throws.is_empty() {
-                        return Next::Throw(throws[r.below(throws.len())]);
-                    }
-                    Next::Yield(yields[r.below(yields.len())])
-                });
-            }
-        }
-    }
-    b
-}
 
 fn run_case(model: usize, seed: u64) -> Result<(), TestCaseError> {
     let system = match model {
@@ -82,7 +25,7 @@ fn run_case(model: usize, seed: u64) -> Result<(), TestCaseError> {
         _ => load_str(IDS_MODEL),
     };
     let rng = Arc::new(Mutex::new(Rng(seed)));
-    let mut engine = random_codels(&system, rng.clone())
+    let mut engine = random_codels(Engine::builder(system.clone()), &system, rng.clone(), None)
         .policy(Policy::Seeded(seed))
         .record(2000)
         .build()
@@ -141,40 +84,16 @@ fn random_runs_see_every_outcome() {
     for seed in 0..8 {
         let system = load_str(IDS_MODEL);
         let rng = Arc::new(Mutex::new(Rng(seed)));
-        let mut e = random_codels(&system, rng).build().expect("builds");
+        let mut e = random_codels(Engine::builder(system.clone()), &system, rng, None)
+            .build()
+            .expect("builds");
         e.request("m", "Init", ()).expect("queued");
         for _ in 0..40 {
             e.request("m", "S", ()).expect("queued");
             e.run_until(Until::Ticks(3)).expect("runs");
         }
         for ev in e.events() {
-            let k = match ev {
-                Event::Fault(f) => match f.kind {
-                    FaultKind::Panic(_) => "panic",
-                    FaultKind::BadTransition(_) => "bad transition",
-                    FaultKind::UndeclaredException(_) => "undeclared exception",
-                    FaultKind::IdsOutOfRange { .. } => "ids out of range",
-                    _ => "other fault",
-                },
-                Event::Reply {
-                    reply: Reply::Done(Outcome::Ether),
-                    ..
-                } => "ether",
-                Event::Reply {
-                    reply: Reply::Done(Outcome::Exception(_)),
-                    ..
-                } => "exception",
-                Event::Reply {
-                    reply: Reply::Done(Outcome::Interrupted),
-                    ..
-                } => "interrupted",
-                Event::Reply {
-                    reply: Reply::Refused(_),
-                    ..
-                } => "refused",
-                _ => continue,
-            };
-            kinds.insert(k);
+            kinds.insert(event_kind(&ev));
         }
     }
     for k in [
@@ -188,20 +107,4 @@ fn random_runs_see_every_outcome() {
     ] {
         assert!(kinds.contains(k), "no {k} in {kinds:?}");
     }
-}
-
-fn silence_injected_panics() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let default = std::panic::take_hook();
-        std::panic::set_hook(Box::new(move |info| {
-            let injected = info
-                .payload()
-                .downcast_ref::<&str>()
-                .is_some_and(|m| m.contains("injected"));
-            if !injected {
-                default(info);
-            }
-        }));
-    });
 }

@@ -19,10 +19,6 @@ fn spin(us: u64) {
     }
 }
 
-fn leak(s: &str) -> &'static str {
-    Box::leak(s.to_string().into_boxed_str())
-}
-
 #[test]
 fn task_threads_under_load_record_a_valid_trace() {
     let system = load("rover.ron");

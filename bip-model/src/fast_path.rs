@@ -1042,15 +1042,28 @@ mod tests {
         assert!(failures > 1_000 && values > 100_000, "{failures} {values}");
     }
 
+    /// Slots 0..3 with small ranges, and locals from base 3 (the slots' count).
+    const SMALL_SLOTS: [(i64, i64); 3] = [(-2, 2), (0, 1), (0, 2)];
+    const SMALL_LOCALS: [(i64, i64); 2] = [(0, 1), (-1, 1)];
+    const SMALL: Ranges<'static> = Ranges {
+        slots: &SMALL_SLOTS,
+        locals: &SMALL_LOCALS,
+    };
+
+    /// Every state of [`SMALL`]: the three slots, then the two locals.
+    fn small_states() -> impl Iterator<Item = [i64; 5]> {
+        (-2..=2).flat_map(|x| {
+            (0..=1).flat_map(move |y| {
+                (0..=2).flat_map(move |z| {
+                    (0..=1).flat_map(move |l0| (-1..=1).map(move |l1| [x, y, z, l0, l1]))
+                })
+            })
+        })
+    }
+
     #[test]
     fn tables_hold_what_the_tree_computes() {
-        // slots 0..3 with small ranges, locals from base 3 (the ranges' slot count)
-        let slots = [(-2, 2), (0, 1), (0, 2)];
-        let locals = [(0, 1), (-1, 1)];
-        let ranges = Ranges {
-            slots: &slots,
-            locals: &locals,
-        };
+        let ranges = SMALL;
         let mut rng = crate::Rng::new(11);
         let (mut tabulated, mut failures, mut values) = (0, 0, 0);
         for _ in 0..5_000 {
@@ -1061,21 +1074,12 @@ mod tests {
             };
             tabulated += 1;
             // every state in range: the table's entry, or none where the tree fails
-            for x in -2..=2 {
-                for y in 0..=1 {
-                    for z in 0..=2 {
-                        for l0 in 0..=1 {
-                            for l1 in -1..=1 {
-                                let s = [x, y, z, l0, l1];
-                                let tree = e.eval(&mut Env::new(&s, 3));
-                                assert_eq!(code.lookup(t, &s, 3), tree.ok(), "{e:?} in {s:?}");
-                                match tree {
-                                    Ok(_) => values += 1,
-                                    Err(_) => failures += 1,
-                                }
-                            }
-                        }
-                    }
+            for s in small_states() {
+                let tree = e.eval(&mut Env::new(&s, 3));
+                assert_eq!(code.lookup(t, &s, 3), tree.ok(), "{e:?} in {s:?}");
+                match tree {
+                    Ok(_) => values += 1,
+                    Err(_) => failures += 1,
                 }
             }
             // outside the ranges, the tree decides
@@ -1100,12 +1104,7 @@ mod tests {
 
     #[test]
     fn action_tables_hold_what_the_assignments_write() {
-        let slots = [(-2, 2), (0, 1), (0, 2)];
-        let locals = [(0, 1), (-1, 1)];
-        let ranges = Ranges {
-            slots: &slots,
-            locals: &locals,
-        };
+        let (slots, locals, ranges) = (SMALL_SLOTS, SMALL_LOCALS, SMALL);
         let mut rng = crate::Rng::new(13);
         let (mut tabulated, mut failures, mut values) = (0, 0, 0);
         for _ in 0..3_000 {
@@ -1125,42 +1124,33 @@ mod tests {
                 continue;
             }
             tabulated += 1;
-            for x in -2..=2 {
-                for y in 0..=1 {
-                    for z in 0..=2 {
-                        for l0 in 0..=1 {
-                            for l1 in -1..=1 {
-                                let start = [x, y, z, l0, l1];
-                                // the assignments in order, each seeing the ones before
-                                let mut s = start;
-                                let mut want = Some(Vec::new());
-                                for a in &action {
-                                    let (at, (lo, hi)) = match a.target {
-                                        Target::Slot(k) => (k as usize, slots[k as usize]),
-                                        Target::Local(k) => (3 + k as usize, locals[k as usize]),
-                                    };
-                                    match a.value.eval(&mut Env::new(&s, 3)) {
-                                        Ok(v) if lo <= v && v <= hi => {
-                                            s[at] = v;
-                                            if let Some(w) = &mut want {
-                                                w.push(v);
-                                            }
-                                        }
-                                        _ => {
-                                            want = None;
-                                            break;
-                                        }
-                                    }
-                                }
-                                let got = code.action_values(c, &start, 3).map(<[i64]>::to_vec);
-                                assert_eq!(got, want, "{action:?} from {start:?}");
-                                match want {
-                                    Some(_) => values += 1,
-                                    None => failures += 1,
-                                }
+            for start in small_states() {
+                // the assignments in order, each seeing the ones before
+                let mut s = start;
+                let mut want = Some(Vec::new());
+                for a in &action {
+                    let (at, (lo, hi)) = match a.target {
+                        Target::Slot(k) => (k as usize, slots[k as usize]),
+                        Target::Local(k) => (3 + k as usize, locals[k as usize]),
+                    };
+                    match a.value.eval(&mut Env::new(&s, 3)) {
+                        Ok(v) if lo <= v && v <= hi => {
+                            s[at] = v;
+                            if let Some(w) = &mut want {
+                                w.push(v);
                             }
                         }
+                        _ => {
+                            want = None;
+                            break;
+                        }
                     }
+                }
+                let got = code.action_values(c, &start, 3).map(<[i64]>::to_vec);
+                assert_eq!(got, want, "{action:?} from {start:?}");
+                match want {
+                    Some(_) => values += 1,
+                    None => failures += 1,
                 }
             }
         }

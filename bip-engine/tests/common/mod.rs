@@ -2,7 +2,10 @@
 
 #![allow(dead_code)]
 
-use bip_model::{PropertyKind, System, Trace};
+use std::sync::{Arc, Mutex};
+
+use bip_engine::{EngineBuilder, Event, FaultKind, Next, Outcome, Refusal, Reply, VirtualClock};
+use bip_model::{PropertyKind, Rng, System, Trace};
 
 pub fn load(name: &str) -> System {
     let p = format!("{}/../robots/{name}", env!("CARGO_MANIFEST_DIR"));
@@ -61,5 +64,135 @@ pub fn assert_invariants(system: &System, states: &[bip_model::State]) {
                 );
             }
         }
+    }
+}
+
+/// A `&'static str` for a codel's result (codels return static names).
+pub fn leak(s: &str) -> &'static str {
+    Box::leak(s.to_string().into_boxed_str())
+}
+
+/// Binds every codel of `system` to a closure that returns its first yield.
+pub fn first_yields(mut b: EngineBuilder, system: &System) -> EngineBuilder {
+    let Some(map) = &system.genom else { return b };
+    for m in &map.modules {
+        for s in &m.services {
+            for c in &s.codels {
+                let first = leak(&c.yields[0].target);
+                b = b.codel((&m.name, &s.name, &c.state), move |_| Next::Yield(first));
+            }
+        }
+    }
+    b
+}
+
+/// Binds every codel of `system` to a closure that draws its result from `rng`: a
+/// declared yield or exception, a bad transition, an undeclared exception, a panic; ids
+/// writes in and out of range, port writes. With `overruns`, one run in forty also moves
+/// that clock a second on (longer than any period: an overrun).
+pub fn random_codels(
+    mut b: EngineBuilder,
+    system: &System,
+    rng: Arc<Mutex<Rng>>,
+    overruns: Option<VirtualClock>,
+) -> EngineBuilder {
+    let Some(map) = &system.genom else { return b };
+    for m in &map.modules {
+        for s in &m.services {
+            for c in &s.codels {
+                let yields: Vec<&'static str> = c.yields.iter().map(|y| leak(&y.target)).collect();
+                let throws: Vec<&'static str> = c.throws.iter().map(|t| leak(t)).collect();
+                let ids: Vec<(&'static str, i64, i64)> =
+                    c.ids.iter().map(|f| (leak(&f.name), f.lo, f.hi)).collect();
+                let ports: Vec<&'static str> = c.writes.iter().map(|p| leak(p)).collect();
+                let rng = rng.clone();
+                let overruns = overruns.clone();
+                b = b.codel((&m.name, &s.name, &c.state), move |ctx| {
+                    let mut r = rng.lock().unwrap_or_else(|e| e.into_inner());
+                    for &(name, lo, hi) in &ids {
+                        if r.below(2) == 0 {
+                            let span = (hi - lo + 1) as usize;
+                            // one write in ten leaves the range
+                            let v = if r.below(10) == 0 {
+                                hi + 1
+                            } else {
+                                lo + r.below(span) as i64
+                            };
+                            ctx.set(name, v);
+                        }
+                    }
+                    for &p in &ports {
+                        ctx.write_port(p, r.next_u64());
+                    }
+                    if let Some(clock) = &overruns {
+                        if r.below(40) == 0 {
+                            clock.advance(1_000_000);
+                        }
+                    }
+                    let roll = r.below(100);
+                    if roll < 3 {
+                        drop(r);
+                        panic!("injected fault");
+                    }
+                    if roll < 6 {
+                        return Next::Yield("no_such_state");
+                    }
+                    if roll < 9 {
+                        return Next::Throw("e_undeclared");
+                    }
+                    if roll < 20 && !throws.is_empty() {
+                        return Next::Throw(throws[r.below(throws.len())]);
+                    }
+                    Next::Yield(yields[r.below(yields.len())])
+                });
+            }
+        }
+    }
+    b
+}
+
+/// Keeps the panics the tests inject (their message says "injected") out of the output;
+/// any other panic is reported as usual.
+pub fn silence_injected_panics() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let default = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            let injected = info
+                .payload()
+                .downcast_ref::<&str>()
+                .is_some_and(|m| m.contains("injected"))
+                || info
+                    .payload()
+                    .downcast_ref::<String>()
+                    .is_some_and(|m| m.contains("injected"));
+            if !injected {
+                default(info);
+            }
+        }));
+    });
+}
+
+/// What an event is, in a word or two (a fault by its kind).
+pub fn event_kind(e: &Event) -> &'static str {
+    match e {
+        Event::Reply { reply, .. } => match reply {
+            Reply::Accepted => "accepted",
+            Reply::Refused(Refusal::NotEnabled) => "refused (not enabled)",
+            Reply::Refused(_) => "refused",
+            Reply::Done(Outcome::Ether) => "ether",
+            Reply::Done(Outcome::Exception(_)) => "exception",
+            Reply::Done(Outcome::Interrupted) => "interrupted",
+            Reply::Done(Outcome::Fault(_)) => "fault reply",
+        },
+        Event::Fault(f) => match f.kind {
+            FaultKind::Panic(_) => "panic",
+            FaultKind::BadTransition(_) => "bad transition",
+            FaultKind::UndeclaredException(_) => "undeclared exception",
+            FaultKind::IdsOutOfRange { .. } => "ids out of range",
+            _ => "other fault",
+        },
+        Event::Held { .. } => "held",
+        Event::Overrun { .. } => "overrun",
     }
 }
