@@ -28,7 +28,7 @@ use alloc::sync::Arc;
 
 use crate::priority_masks::{bit, set_bit, PriorityMasks};
 use crate::state::State;
-use crate::step::{Choices, Label, Pick, Step, Steps};
+use crate::step::{Choices, Label, Pick, Read, Step, Steps};
 use crate::system::{RangeError, System};
 use crate::watches::{location_bit, Dep, Watches, ANYWHERE};
 
@@ -123,37 +123,33 @@ impl EnabledSet {
                     }),
                 }
             };
-            for p in &inter.ports {
-                let comp = &system.components[p.component as usize];
-                add(comp.slot, comp.slot, ANYWHERE, false);
-                // a transition's guard matters only where the transition starts (an
-                // atom's guards read only its own variables; anything else, anywhere)
-                for t in &system.atoms[comp.atom as usize].transitions {
-                    if let (Some(port), Some(g)) = (t.port, &t.guard) {
-                        if port == p.port {
-                            g.for_each_slot(comp.slot + 1, &mut |s| {
-                                let own = slot_comp[s as usize] == p.component;
-                                let at = if own { location_bit(t.from) } else { ANYWHERE };
-                                add(s, comp.slot, at, false)
-                            });
-                        }
-                    }
-                }
-            }
             // the connector's guard matters only where a required participant is ready:
             // watch the one ready in the fewest locations
-            if let Some(g) = &inter.guard {
-                let required = inter
-                    .ports
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| inter.trigger.is_none_or(|tr| tr as usize == *k));
-                let watched = required
-                    .map(|(_, p)| (ready_at(p), system.components[p.component as usize].slot))
-                    .min_by_key(|(m, _)| m.count_ones());
-                let (at, watch) = watched.unwrap_or((ANYWHERE, 0));
-                g.for_each_slot(0, &mut |s| add(s, watch, at, true));
-            }
+            let required = inter
+                .ports
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| inter.trigger.is_none_or(|tr| tr as usize == *k));
+            let watched = required
+                .map(|(_, p)| (ready_at(p), system.components[p.component as usize].slot))
+                .min_by_key(|(m, _)| m.count_ones());
+            let (connector_at, connector_watch) = watched.unwrap_or((ANYWHERE, 0));
+            system.interaction_reads(i, &mut |s, read| match read {
+                Read::Location { port } => {
+                    let slot = system.components[inter.ports[port].component as usize].slot;
+                    add(s, slot, ANYWHERE, false);
+                }
+                // a transition's guard matters only where the transition starts (an
+                // atom's guards read only its own variables; anything else, anywhere)
+                Read::Guard { port, from } => {
+                    let p = inter.ports[port];
+                    let own = slot_comp[s as usize] == p.component;
+                    let at = if own { location_bit(from) } else { ANYWHERE };
+                    let slot = system.components[p.component as usize].slot;
+                    add(s, slot, at, false);
+                }
+                Read::Connector => add(s, connector_watch, connector_at, true),
+            });
         }
         let watches = Watches::new(&per_slot, |slot| {
             (system.slot_ranges()[slot as usize].1 + 1).clamp(1, i64::from(u32::MAX)) as u32

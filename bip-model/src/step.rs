@@ -163,6 +163,18 @@ pub(crate) struct EnableIndex {
 /// A transition that stays where it is.
 const STAYS: u32 = u32::MAX;
 
+/// Why the steps of an interaction read a slot ([`System::interaction_reads`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Read {
+    /// The location of the participant at port `port` (the position in the interaction's
+    /// ports).
+    Location { port: usize },
+    /// A guard of that participant's transition on its port that starts at `from`.
+    Guard { port: usize, from: u32 },
+    /// The connector's guard.
+    Connector,
+}
+
 #[derive(Clone, Copy, Debug)]
 struct PortCell {
     component: u32,
@@ -444,24 +456,30 @@ impl System {
     }
 
     /// Every slot the steps of interaction `i` (before priorities) depend on, as
-    /// [`System::compute_interaction_picks`] reads them: its participants' locations, the
-    /// slots the guards of their transitions on its ports read, and those its connector's
-    /// guard reads (a slot may come more than once).
-    pub(crate) fn interaction_reads(&self, i: u32, f: &mut impl FnMut(u32)) {
+    /// [`System::compute_interaction_picks`] reads them, with why ([`Read`]): its
+    /// participants' locations, the slots the guards of their transitions on its ports
+    /// read, and those its connector's guard reads (a slot may come more than once). The
+    /// step tables are made over these slots, and `EnabledSet` re-evaluates the interaction
+    /// when one of them changes.
+    pub(crate) fn interaction_reads(&self, i: u32, f: &mut impl FnMut(u32, Read)) {
         let inter = &self.interactions[i as usize];
-        for p in &inter.ports {
+        for (k, p) in inter.ports.iter().enumerate() {
             let comp = &self.components[p.component as usize];
-            f(comp.slot);
+            f(comp.slot, Read::Location { port: k });
             for t in &self.atoms[comp.atom as usize].transitions {
                 if let (Some(port), Some(g)) = (t.port, &t.guard) {
                     if port == p.port {
-                        g.for_each_slot(comp.slot + 1, f);
+                        let read = Read::Guard {
+                            port: k,
+                            from: t.from,
+                        };
+                        g.for_each_slot(comp.slot + 1, &mut |s| f(s, read));
                     }
                 }
             }
         }
         if let Some(g) = &inter.guard {
-            g.for_each_slot(0, f);
+            g.for_each_slot(0, &mut |s| f(s, Read::Connector));
         }
     }
 

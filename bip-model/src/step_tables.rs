@@ -115,7 +115,7 @@ impl StepTables {
         let mut reads = Vec::new();
         for i in 0..system.interactions.len() as u32 {
             reads.clear();
-            system.interaction_reads(i, &mut |s| reads.push(s));
+            system.interaction_reads(i, &mut |s, _| reads.push(s));
             reads.sort_unstable();
             reads.dedup();
             let inputs_start = t.inputs.len();
