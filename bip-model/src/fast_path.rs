@@ -18,6 +18,7 @@ use crate::prelude::*;
 
 use crate::eval::{binary, EvalError, Expr};
 use crate::ops::BinOp;
+use crate::radix::{key, Digit, Digits};
 use crate::system::{Assign, Target};
 
 /// How a guard is evaluated.
@@ -297,25 +298,14 @@ const MAX_TABLE_VALUES: usize = 1 << 18;
 
 /// A function of a few slots over every combination of their values: an expression's value
 /// (`width` 1), or the values an action's assignments write (`width` of them). The entry of
-/// key `Σ digit × stride` is `values[start + key × width..][..width]` if `known[key]`;
-/// unknown where the expression fails or an assignment leaves its range.
+/// key `k` (the digits `table_digits[digits]`) is `values[start + k × width..][..width]` if
+/// `known[k]`; unknown where the expression fails or an assignment leaves its range.
 #[derive(Clone, Copy, Debug)]
 struct Table {
-    inputs: (u32, u32),
+    digits: (u32, u32),
     start: u32,
     known: u32,
     width: u32,
-}
-
-/// A slot a table reads: its value minus `lo` is a digit of radix `radix` and weight
-/// `stride`; relative to the component's variables if `local`.
-#[derive(Clone, Copy, Debug)]
-struct TableInput {
-    slot: u32,
-    local: bool,
-    lo: i64,
-    radix: u64,
-    stride: u64,
 }
 
 /// The flat forms of a system's guards and actions, in one table each.
@@ -325,7 +315,7 @@ pub(crate) struct FlatCode {
     assigns: Vec<FlatAssign>,
     ops: Vec<Op>,
     tables: Vec<Table>,
-    table_inputs: Vec<TableInput>,
+    table_digits: Vec<Digit>,
     table_values: Vec<i64>,
     table_known: Vec<bool>,
     /// While the code is made: the state tables are computed on ([`FlatCode::done`] frees it).
@@ -417,32 +407,12 @@ impl FlatCode {
         ranges: &Ranges<'_>,
         mut f: impl FnMut(&mut [i64], u32, &mut Vec<i64>) -> bool,
     ) -> Option<u32> {
-        read.sort_unstable();
-        read.dedup();
-        let mut inputs = Vec::with_capacity(read.len());
-        let mut fixed = Vec::new();
-        let mut size = 1u64;
-        for &(slot, local) in read.iter() {
-            let (lo, hi) = match local {
-                false => *ranges.slots.get(slot as usize)?,
-                true => *ranges.locals.get(slot as usize)?,
-            };
-            let radix = (hi.checked_sub(lo)? as u64).checked_add(1)?;
-            if radix == 1 {
-                fixed.push((slot, local, lo)); // one value: no digit
-                continue;
-            }
-            inputs.push(TableInput {
-                slot,
-                local,
-                lo,
-                radix,
-                stride: size,
-            });
-            size = size.saturating_mul(radix);
-        }
-        let values = size.saturating_mul(width as u64);
-        if size > MAX_TABLE
+        let d = Digits::new(read, |slot, local| match local {
+            false => ranges.slots.get(slot as usize).copied(),
+            true => ranges.locals.get(slot as usize).copied(),
+        })?;
+        let values = d.size.saturating_mul(width as u64);
+        if d.size > MAX_TABLE
             || (self.table_values.len() as u64).saturating_add(values) > MAX_TABLE_VALUES as u64
         {
             return None;
@@ -452,17 +422,11 @@ impl FlatCode {
         if scratch.len() < ranges.slots.len() + ranges.locals.len() {
             scratch.resize(ranges.slots.len() + ranges.locals.len(), 0);
         }
-        let at = |slot: u32, local: bool| (if local { base + slot } else { slot }) as usize;
         let (start, known) = (self.table_values.len(), self.table_known.len());
         let mut entry = Vec::with_capacity(width);
-        for key in 0..size {
+        for key in 0..d.size {
             // every slot the function reads is set
-            for &(slot, local, v) in &fixed {
-                scratch[at(slot, local)] = v;
-            }
-            for inp in &inputs {
-                scratch[at(inp.slot, inp.local)] = inp.lo + ((key / inp.stride) % inp.radix) as i64;
-            }
+            d.set(key, &mut scratch, base);
             entry.clear();
             let ok = f(&mut scratch, base, &mut entry) && entry.len() == width;
             entry.resize(width, 0);
@@ -470,10 +434,10 @@ impl FlatCode {
             self.table_known.push(ok);
         }
         self.scratch = scratch;
-        let inputs_start = self.table_inputs.len();
-        self.table_inputs.extend_from_slice(&inputs);
+        let digits_start = self.table_digits.len();
+        self.table_digits.extend_from_slice(&d.digits);
         self.tables.push(Table {
-            inputs: (inputs_start as u32, self.table_inputs.len() as u32),
+            digits: (digits_start as u32, self.table_digits.len() as u32),
             start: start as u32,
             known: known as u32,
             width: width as u32,
@@ -492,15 +456,8 @@ impl FlatCode {
     #[inline]
     fn entry(&self, t: u32, slots: &[i64], base: u32) -> Option<&[i64]> {
         let table = self.tables[t as usize];
-        let mut key = 0u64;
-        for inp in &self.table_inputs[table.inputs.0 as usize..table.inputs.1 as usize] {
-            let at = if inp.local { base + inp.slot } else { inp.slot };
-            let digit = slots[at as usize].wrapping_sub(inp.lo) as u64;
-            if digit >= inp.radix {
-                return None;
-            }
-            key += digit * inp.stride;
-        }
+        let digits = &self.table_digits[table.digits.0 as usize..table.digits.1 as usize];
+        let key = key(digits, slots, base)?;
         if !self.table_known[(table.known as u64 + key) as usize] {
             return None;
         }
@@ -1083,7 +1040,9 @@ mod tests {
                 }
             }
             // outside the ranges, the tree decides
-            if code.table_inputs.iter().any(|i| !i.local && i.slot == 0) {
+            if crate::radix::key(&code.table_digits, &[0, 0, 0, 0, 0], 3).is_some()
+                && crate::radix::key(&code.table_digits, &[3, 0, 0, 0, 0], 3).is_none()
+            {
                 assert_eq!(code.lookup(t, &[3, 0, 0, 0, 0], 3), None, "{e:?}");
             }
         }

@@ -48,6 +48,7 @@ mod load;
 pub mod ops;
 mod ordered_map;
 mod priority_masks;
+mod radix;
 mod rng;
 #[cfg(feature = "std")]
 pub mod source;

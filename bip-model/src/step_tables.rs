@@ -24,6 +24,7 @@ use crate::prelude::*;
 
 use alloc::sync::Arc;
 
+use crate::radix::{key, Digit, Digits};
 use crate::step::{Choices, Pick};
 use crate::system::System;
 
@@ -42,27 +43,18 @@ const NONE: u32 = u32::MAX;
 pub(crate) struct StepTables {
     /// Per interaction, its table (`entries` is [`NONE`] for none).
     of: Vec<Table>,
-    inputs: Vec<Input>,
+    digits: Vec<Digit>,
     entries: Vec<Entry>,
     /// Every entry's picks, shared with the [`crate::EnabledSet`]s of the system, which
     /// point into it instead of copying.
     picks: Arc<[Pick]>,
 }
 
+/// The key's digits in `digits`, the entries from `entries` on.
 #[derive(Clone, Copy, Debug)]
 struct Table {
-    inputs: (u32, u32),
+    digits: (u32, u32),
     entries: u32,
-}
-
-/// A slot the steps depend on: its value minus `lo` is a digit of radix `radix` and weight
-/// `stride` in the index.
-#[derive(Clone, Copy, Debug)]
-struct Input {
-    slot: u32,
-    lo: i64,
-    radix: u64,
-    stride: u64,
 }
 
 /// The steps of one combination: `width` picks per step in `picks[start..start + len]`,
@@ -102,7 +94,7 @@ impl StepTables {
     /// empty: its steps are computed by the relation).
     pub(crate) fn build(system: &System) -> StepTables {
         let none = Table {
-            inputs: (0, 0),
+            digits: (0, 0),
             entries: NONE,
         };
         let mut t = StepTables {
@@ -115,40 +107,19 @@ impl StepTables {
         let mut reads = Vec::new();
         for i in 0..system.interactions.len() as u32 {
             reads.clear();
-            system.interaction_reads(i, &mut |s, _| reads.push(s));
-            reads.sort_unstable();
-            reads.dedup();
-            let inputs_start = t.inputs.len();
-            let mut size = 1u64;
-            for &slot in &reads {
-                let (lo, hi) = system.slot_ranges[slot as usize];
-                // a slot of one value adds nothing to the index
-                let Some(radix) = hi.checked_sub(lo).and_then(|d| (d as u64).checked_add(1)) else {
-                    size = u64::MAX;
-                    break;
-                };
-                if radix == 1 {
-                    continue;
-                }
-                t.inputs.push(Input {
-                    slot,
-                    lo,
-                    radix,
-                    stride: size,
-                });
-                size = size.saturating_mul(radix);
-            }
-            if size > MAX_TABLE || t.entries.len() + size as usize > MAX_ENTRIES {
-                t.inputs.truncate(inputs_start);
+            system.interaction_reads(i, &mut |s, _| reads.push((s, false)));
+            let Some(d) = Digits::new(&mut reads, |s, _| {
+                system.slot_ranges.get(s as usize).copied()
+            }) else {
+                continue;
+            };
+            if d.size > MAX_TABLE || t.entries.len() + d.size as usize > MAX_ENTRIES {
                 continue;
             }
             let (entries_start, picks_start) = (t.entries.len(), picks.len());
-            let inputs = inputs_start..t.inputs.len();
-            for key in 0..size {
-                for inp in &t.inputs[inputs.clone()] {
-                    let digit = (key / inp.stride) % inp.radix;
-                    state.slots_mut()[inp.slot as usize] = inp.lo + digit as i64;
-                }
+            for key in 0..d.size {
+                // every slot the steps read is set; the others do not matter
+                d.set(key, state.slots_mut(), 0);
                 let start = picks.len();
                 let entry =
                     match system.compute_interaction_picks(&state, i, &mut scratch, &mut picks) {
@@ -157,6 +128,7 @@ impl StepTables {
                             len: (picks.len() - start) as u32,
                             width: width as u16,
                             ready,
+                            // (no interaction has so many participants)
                             known: u16::try_from(width).is_ok(),
                         },
                         Err(_) => {
@@ -166,18 +138,15 @@ impl StepTables {
                     };
                 t.entries.push(entry);
             }
-            // the slots written go back to their initial values for the next interaction
-            for inp in &t.inputs[inputs.clone()] {
-                state.slots_mut()[inp.slot as usize] = system.initial.slots()[inp.slot as usize];
-            }
             if picks.len() > MAX_PICKS {
                 t.entries.truncate(entries_start);
                 picks.truncate(picks_start);
-                t.inputs.truncate(inputs_start);
                 continue;
             }
+            let digits_start = t.digits.len() as u32;
+            t.digits.extend_from_slice(&d.digits);
             t.of[i as usize] = Table {
-                inputs: (inputs.start as u32, inputs.end as u32),
+                digits: (digits_start, t.digits.len() as u32),
                 entries: entries_start as u32,
             };
         }
@@ -193,15 +162,8 @@ impl StepTables {
         if table.entries == NONE {
             return None;
         }
-        let mut key = 0u64;
-        for inp in &self.inputs[table.inputs.0 as usize..table.inputs.1 as usize] {
-            let digit = slots[inp.slot as usize].wrapping_sub(inp.lo) as u64;
-            // a state outside the model's ranges is left to the relation
-            if digit >= inp.radix {
-                return None;
-            }
-            key += digit * inp.stride;
-        }
+        let digits = &self.digits[table.digits.0 as usize..table.digits.1 as usize];
+        let key = key(digits, slots, 0)?;
         let e = &self.entries[table.entries as usize + key as usize];
         e.known.then_some(e)
     }
@@ -210,13 +172,8 @@ impl StepTables {
     /// was ready.
     #[inline(always)]
     pub(crate) fn steps(&self, e: &Entry) -> (&[Pick], usize, bool) {
-        (self.picks_of(e.span()), e.width as usize, e.ready)
-    }
-
-    /// The picks of `span` (an entry's [`Entry::span`]).
-    #[inline(always)]
-    pub(crate) fn picks_of(&self, (start, len): (u32, u32)) -> &[Pick] {
-        &self.picks[start as usize..(start + len) as usize]
+        let picks = &self.picks[e.start as usize..(e.start + e.len) as usize];
+        (picks, e.width as usize, e.ready)
     }
 
     /// Every entry's picks, to share.
