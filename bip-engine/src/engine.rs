@@ -1327,9 +1327,6 @@ impl Engine {
         };
         if moves {
             self.track(cause);
-        } else if let Cause::Other | Cause::Codel { error: None } = cause {
-            // what most steps carry owns nothing: the drop glue need not be called
-            core::mem::forget(cause);
         }
         if let Some(r) = &mut self.recording {
             r.push(Step {
