@@ -59,6 +59,22 @@ pub(crate) struct CodelTable {
     /// the text at a `&'static str`'s address never changes (it is never freed), so the
     /// same address and length are the same yield without comparing the text.
     pub last_yield: Cell<Option<(usize, usize, usize)>>,
+    /// The run step last taken from a step table entry of its run interaction (see
+    /// [`RunStep`]).
+    pub run_step: Option<RunStep>,
+}
+
+/// A codel's run step found among the steps of a step table entry: when its run
+/// interaction's steps are that entry again ([`bip_model::EnabledSet::pooled_steps`]) and
+/// the codel yields the same, the step is the same (the pool never changes), and it was
+/// the only one that matched, so the policy had no choice to make.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RunStep {
+    /// Where the entry's steps start in the pool.
+    pub entry: u32,
+    pub yield_k: u32,
+    /// Where the step's picks start in the pool.
+    pub step: u32,
 }
 
 impl CodelTable {
@@ -259,6 +275,7 @@ impl Tables {
                         ids_field,
                         period_ticks,
                         last_yield: Cell::new(None),
+                        run_step: None,
                     });
                 }
                 t.services.push(ServiceTable {

@@ -21,7 +21,7 @@ use crate::prelude::*;
 
 use bip_model::{EnabledSet, Label, Pick, RangeError, State, Step, System, Trace, Verdict};
 
-use crate::bind::{InterKind, PortKind, Tables};
+use crate::bind::{InterKind, PortKind, RunStep, Tables};
 use crate::clock::Clock;
 use crate::codel::{CodelFn, Ctx, CtxFault, Next};
 use crate::error::{BuildError, EngineError, RequestError, StepAsError};
@@ -1240,6 +1240,21 @@ impl Engine {
     /// `forced`, the forced step if it is one); false if there is none.
     fn take_run_step(&mut self, ck: usize, yield_k: usize, forced: bool) -> bool {
         let c = &self.t.codels[ck];
+        // steps from a table entry, and no ids to match: the step may be the one found last
+        let pooled = if forced || !c.map.ids.is_empty() {
+            None
+        } else {
+            self.enabled.pooled_steps(c.map.run)
+        };
+        if let (Some((entry, width)), Some(m)) = (pooled, c.run_step) {
+            if m.entry == entry && m.yield_k as usize == yield_k {
+                let at = m.step as usize;
+                self.picks.clear();
+                self.picks
+                    .extend_from_slice(&self.enabled.pool()[at..at + width as usize]);
+                return true;
+            }
+        }
         let Some(activity) = self.t.services[c.service as usize].activity.as_ref() else {
             return false;
         };
@@ -1268,6 +1283,7 @@ impl Engine {
                 })
         };
         let run = c.map.run;
+        let mut remember = None;
         let step = if forced {
             self.enabled
                 .steps_of(run)
@@ -1277,22 +1293,34 @@ impl Engine {
             // per codel run) costs a few more instructions
             let mut n = 0;
             let mut first = None;
-            for s in self.enabled.steps_of(run) {
+            for (k, s) in self.enabled.steps_of(run).enumerate() {
                 if matches(&s) {
-                    first = first.or(Some(s));
+                    first = first.or(Some((k, s)));
                     n += 1;
                 }
             }
             match first {
                 None => None,
-                Some(first) => match self.chooser.choose(n) {
-                    0 => Some(first),
+                Some((k, first)) => match self.chooser.choose(n) {
+                    0 => {
+                        if let (1, Some((entry, width))) = (n, pooled) {
+                            remember = Some(RunStep {
+                                entry,
+                                yield_k: yield_k as u32,
+                                step: entry + k as u32 * width,
+                            });
+                        }
+                        Some(first)
+                    }
                     k => self.enabled.steps_of(run).filter(|s| matches(s)).nth(k),
                 },
             }
         };
         let found = step.is_some();
         set_picks(&mut self.picks, step);
+        if remember.is_some() {
+            self.t.codels[ck].run_step = remember;
+        }
         found
     }
 

@@ -491,6 +491,21 @@ impl EnabledSet {
         })
     }
 
+    /// Where the steps of interaction `i` are in [`EnabledSet::pool`] (the start, and
+    /// the number of picks per step), if it is enabled and they come from its step
+    /// table. The pool never changes, so two states in which `i`'s steps start at the same
+    /// place have the same steps: a caller may remember what it found among them.
+    #[inline]
+    pub fn pooled_steps(&self, i: u32) -> Option<(u32, u32)> {
+        let f = self.found[i as usize];
+        (f.in_pool && f.width > 0 && self.is_enabled(i)).then_some((f.start, f.width))
+    }
+
+    /// The picks of every step table entry (see [`EnabledSet::pooled_steps`]).
+    pub fn pool(&self) -> &[Pick] {
+        &self.pool
+    }
+
     /// The enabled internal transitions, by component then transition.
     pub fn internal_steps(&self) -> impl Iterator<Item = Step<'_>> + '_ {
         self.internal.iter().enumerate().flat_map(|(c, picks)| {
