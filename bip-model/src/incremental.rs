@@ -29,6 +29,7 @@ use alloc::sync::Arc;
 use crate::priority_masks::{bit, set_bit, PriorityMasks};
 use crate::state::State;
 use crate::step::{Choices, Label, Pick, Read, Step, Steps};
+use crate::step_tables::LastKey;
 use crate::system::{RangeError, System};
 use crate::watches::{location_bit, Dep, Watches, ANYWHERE};
 
@@ -77,6 +78,9 @@ pub struct EnabledSet {
     comp_stamp: Vec<u32>,
     epoch: u32,
     dirty: Vec<u32>,
+    /// The last step table key computed, valid while the state stays the same (reset by
+    /// each update and reset).
+    last_key: LastKey,
     /// False after an update failed: the set must be [`EnabledSet::reset`].
     valid: bool,
 }
@@ -182,6 +186,7 @@ impl EnabledSet {
             comp_stamp: vec![0; n_comp],
             epoch: 0,
             dirty: Vec::with_capacity(n_inter),
+            last_key: LastKey::NONE,
             valid: false,
         };
         set.reset(system, state)?;
@@ -191,6 +196,7 @@ impl EnabledSet {
     /// Re-evaluates everything for `state` (after an error, or to jump to another state).
     pub fn reset(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
         self.valid = false;
+        self.last_key = LastKey::NONE;
         self.pre.fill(0);
         self.when_suppressed.fill(0);
         for p in &mut self.picks {
@@ -278,6 +284,7 @@ impl EnabledSet {
             self.epoch = 1;
         }
         self.dirty.clear();
+        self.last_key = LastKey::NONE;
     }
 
     /// Re-evaluates the interactions [`EnabledSet::slot_changed`] marked.
@@ -389,7 +396,7 @@ impl EnabledSet {
         i: u32,
     ) -> Result<(), RangeError> {
         let tables = &system.enable_index.tables;
-        let found = match tables.lookup(i, state.slots()) {
+        let found = match tables.lookup_sharing(i, state.slots(), &mut self.last_key) {
             Some(e) => {
                 let (start, len) = e.span();
                 Found {

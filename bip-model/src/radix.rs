@@ -8,7 +8,7 @@ use crate::prelude::*;
 
 /// A slot a key is made of: its value minus `lo` is a digit of radix `radix` and weight
 /// `stride`; relative to the component's variables (the `base` of [`key`]) if `local`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Digit {
     slot: u32,
     local: bool,

@@ -57,6 +57,21 @@ struct Table {
     entries: u32,
 }
 
+/// The key last computed by [`StepTables::lookup_sharing`], and of which digits.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LastKey {
+    digits: (u32, u32),
+    key: Option<u64>,
+}
+
+impl LastKey {
+    /// No key: the next lookup computes its own.
+    pub(crate) const NONE: LastKey = LastKey {
+        digits: (u32::MAX, u32::MAX),
+        key: None,
+    };
+}
+
 /// The steps of one combination: `width` picks per step in `picks[start..start + len]`,
 /// and whether every required port had an enabled transition; `known` is false where the
 /// relation failed.
@@ -105,6 +120,7 @@ impl StepTables {
         let mut state = system.initial_state();
         let mut scratch = Choices::default();
         let mut reads = Vec::new();
+        let mut shared: Vec<(u32, u32)> = Vec::new();
         for i in 0..system.interactions.len() as u32 {
             reads.clear();
             system.interaction_reads(i, &mut |s, _| reads.push((s, false)));
@@ -143,10 +159,22 @@ impl StepTables {
                 picks.truncate(picks_start);
                 continue;
             }
-            let digits_start = t.digits.len() as u32;
-            t.digits.extend_from_slice(&d.digits);
+            // interactions that read the same slots (a codel's run and error path) share
+            // their digits, so that one key serves both ([`StepTables::lookup_sharing`])
+            let digits = match shared
+                .iter()
+                .find(|&&(a, b)| t.digits[a as usize..b as usize] == d.digits[..])
+            {
+                Some(&range) => range,
+                None => {
+                    let start = t.digits.len() as u32;
+                    t.digits.extend_from_slice(&d.digits);
+                    shared.push((start, t.digits.len() as u32));
+                    (start, t.digits.len() as u32)
+                }
+            };
             t.of[i as usize] = Table {
-                digits: (digits_start, t.digits.len() as u32),
+                digits,
                 entries: entries_start as u32,
             };
         }
@@ -164,6 +192,35 @@ impl StepTables {
         }
         let digits = &self.digits[table.digits.0 as usize..table.digits.1 as usize];
         let key = key(digits, slots, 0)?;
+        let e = &self.entries[table.entries as usize + key as usize];
+        e.known.then_some(e)
+    }
+
+    /// [`StepTables::lookup`] in a state that stays the same between calls that pass the
+    /// same `last` (reset to [`LastKey::NONE`] when the state changes): an interaction that
+    /// reads the same slots as the one looked up before it reuses its key.
+    #[inline(always)]
+    pub(crate) fn lookup_sharing(
+        &self,
+        i: u32,
+        slots: &[i64],
+        last: &mut LastKey,
+    ) -> Option<&Entry> {
+        let table = *self.of.get(i as usize)?;
+        if table.entries == NONE {
+            return None;
+        }
+        let key = if last.digits == table.digits {
+            last.key?
+        } else {
+            let (a, b) = table.digits;
+            let k = key(&self.digits[a as usize..b as usize], slots, 0);
+            *last = LastKey {
+                digits: table.digits,
+                key: k,
+            };
+            k?
+        };
         let e = &self.entries[table.entries as usize + key as usize];
         e.known.then_some(e)
     }
