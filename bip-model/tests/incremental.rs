@@ -201,14 +201,30 @@ fn robot_models_agree_along_random_walks() {
         let mut set = EnabledSet::new(&sys, &s).expect("evaluates");
         let mut buf = Steps::new();
         let mut next = s.clone();
+        let mut pooled = 0;
         for _ in 0..3000 {
             let want = full(&sys, &s, &mut buf).expect("evaluates");
             assert_eq!(incremental(&set), want, "{model}");
+            // where the set says an interaction's steps are in the pool, they are there
+            for i in 0..sys.interactions.len() as u32 {
+                let steps: Vec<_> = set.steps_of(i).map(|st| st.picks.to_vec()).collect();
+                match set.pooled_steps(i) {
+                    Some((start, width)) => {
+                        let at = start as usize;
+                        let len = steps.len() * width as usize;
+                        let pooled = set.pool()[at..at + len].chunks(width as usize);
+                        assert!(pooled.eq(steps.iter().map(|p| &p[..])), "{model}: {i}");
+                    }
+                    None => {}
+                }
+                pooled += usize::from(set.pooled_steps(i).is_some());
+            }
             let k = rng.below(want.len());
             sys.fire(&s, want[k].as_step(), &mut next).expect("fires");
             set.update(&sys, &s, &next).expect("evaluates");
             std::mem::swap(&mut s, &mut next);
         }
+        assert!(pooled > 1000, "{model}: {pooled} pooled steps looked at");
     }
 }
 
