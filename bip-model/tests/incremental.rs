@@ -208,14 +208,11 @@ fn robot_models_agree_along_random_walks() {
             // where the set says an interaction's steps are in the pool, they are there
             for i in 0..sys.interactions.len() as u32 {
                 let steps: Vec<_> = set.steps_of(i).map(|st| st.picks.to_vec()).collect();
-                match set.pooled_steps(i) {
-                    Some((start, width)) => {
-                        let at = start as usize;
-                        let len = steps.len() * width as usize;
-                        let pooled = set.pool()[at..at + len].chunks(width as usize);
-                        assert!(pooled.eq(steps.iter().map(|p| &p[..])), "{model}: {i}");
-                    }
-                    None => {}
+                if let Some((start, width)) = set.pooled_steps(i) {
+                    let at = start as usize;
+                    let len = steps.len() * width as usize;
+                    let in_pool = set.pool()[at..at + len].chunks(width as usize);
+                    assert!(in_pool.eq(steps.iter().map(|p| &p[..])), "{model}: {i}");
                 }
                 pooled += usize::from(set.pooled_steps(i).is_some());
             }
