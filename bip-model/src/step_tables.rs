@@ -120,7 +120,7 @@ impl StepTables {
         let mut state = system.initial_state();
         let mut scratch = Choices::default();
         let mut reads = Vec::new();
-        let mut shared: Vec<(u32, u32)> = Vec::new();
+        let mut last_digits: Option<(u32, u32)> = None;
         for i in 0..system.interactions.len() as u32 {
             reads.clear();
             system.interaction_reads(i, &mut |s, _| reads.push((s, false)));
@@ -159,20 +159,18 @@ impl StepTables {
                 picks.truncate(picks_start);
                 continue;
             }
-            // interactions that read the same slots (a codel's run and error path) share
-            // their digits, so that one key serves both ([`StepTables::lookup_sharing`])
-            let digits = match shared
-                .iter()
-                .find(|&&(a, b)| t.digits[a as usize..b as usize] == d.digits[..])
-            {
-                Some(&range) => range,
-                None => {
+            // an interaction that reads the same slots as the one tabulated before it (a
+            // codel's error path after its run) shares its digits, so that one key serves
+            // both ([`StepTables::lookup_sharing`])
+            let digits = match last_digits {
+                Some((a, b)) if t.digits[a as usize..b as usize] == d.digits[..] => (a, b),
+                _ => {
                     let start = t.digits.len() as u32;
                     t.digits.extend_from_slice(&d.digits);
-                    shared.push((start, t.digits.len() as u32));
                     (start, t.digits.len() as u32)
                 }
             };
+            last_digits = Some(digits);
             t.of[i as usize] = Table {
                 digits,
                 entries: entries_start as u32,
