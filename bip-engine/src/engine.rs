@@ -1249,9 +1249,11 @@ impl Engine {
         if let (Some((entry, width)), Some(m)) = (pooled, c.run_step) {
             if m.entry == entry && m.yield_k as usize == yield_k {
                 let at = m.step as usize;
-                self.picks.clear();
-                self.picks
-                    .extend_from_slice(&self.enabled.pool()[at..at + width as usize]);
+                let step = Step {
+                    label: Label::Interaction(c.map.run),
+                    picks: &self.enabled.pool()[at..at + width as usize],
+                };
+                set_picks(&mut self.picks, Some(step));
                 return true;
             }
         }

@@ -505,7 +505,8 @@ impl EnabledSet {
     #[inline]
     pub fn pooled_steps(&self, i: u32) -> Option<(u32, u32)> {
         let f = self.found[i as usize];
-        (f.in_pool && f.width > 0 && self.is_enabled(i)).then_some((f.start, f.width))
+        // enabled means it has steps (`pre` is set exactly when `width > 0`)
+        (f.in_pool && self.is_enabled(i)).then_some((f.start, f.width))
     }
 
     /// The picks of every step table entry (see [`EnabledSet::pooled_steps`]).
