@@ -19,7 +19,9 @@ use core::any::Any;
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use bip_model::{EnabledSet, Label, Pick, RangeError, State, Step, System, Trace, Verdict};
+use bip_model::{
+    EnabledSet, FirePlans, Label, Pick, RangeError, State, Step, System, Trace, Verdict,
+};
 
 use crate::bind::{InterKind, PortKind, RunStep, Tables};
 use crate::clock::Clock;
@@ -260,6 +262,8 @@ impl EngineBuilder {
             }),
             candidates: Vec::with_capacity(16),
             picks: Vec::with_capacity(16),
+            picked_at: None,
+            plans: system.fire_plans(),
             forced: Vec::with_capacity(16),
             recording: self.record.map(Recording::with_capacity),
             stats: Stats::default(),
@@ -339,8 +343,12 @@ pub struct Engine {
     defaults: DefaultCodels,
     default_rng: Rng,
     candidates: Vec<Candidate>,
-    /// Scratch: the picks of the step being committed.
+    /// Scratch: the picks of the step being committed, and where they are in the step
+    /// tables' pool if they were copied from there.
     picks: Vec<Pick>,
+    picked_at: Option<u32>,
+    /// The firings of the pooled steps, compiled.
+    plans: FirePlans,
     /// Scratch: the step [`Engine::step_as`] was asked to take.
     forced: Vec<Pick>,
     recording: Option<Recording>,
@@ -657,6 +665,7 @@ impl Engine {
         };
         self.picks.clear();
         self.picks.extend_from_slice(step.picks);
+        self.picked_at = None;
         match kind {
             InterKind::Codel { codel, .. } => self.run_codel(codel, true),
             InterKind::Request { service } => {
@@ -745,14 +754,14 @@ impl Engine {
                 .filter(|s| s.label == label)
                 .nth(k as usize),
         };
-        set_picks(&mut self.picks, step);
+        set_picks(&mut self.picks, &mut self.picked_at, &self.enabled, step);
     }
 
     /// Copies one of the enabled steps of interaction `i`, chosen by the policy, into the
     /// scratch picks (none if it has none).
     fn take_step_of(&mut self, i: u32) {
         let step = choose_step(&mut self.chooser, || self.enabled.steps_of(i));
-        set_picks(&mut self.picks, step);
+        set_picks(&mut self.picks, &mut self.picked_at, &self.enabled, step);
     }
 
     // ---------------------------------------------------------------------------------
@@ -1005,7 +1014,7 @@ impl Engine {
                 if same.is_none() {
                     return Err(StepAsError::Diverged);
                 }
-                set_picks(&mut self.picks, same);
+                set_picks(&mut self.picks, &mut self.picked_at, &self.enabled, same);
             } else {
                 self.take_step_of(fail);
             }
@@ -1253,7 +1262,12 @@ impl Engine {
                     label: Label::Interaction(c.map.run),
                     picks: &self.enabled.pool()[at..at + width as usize],
                 };
-                set_picks(&mut self.picks, Some(step));
+                set_picks(
+                    &mut self.picks,
+                    &mut self.picked_at,
+                    &self.enabled,
+                    Some(step),
+                );
                 return true;
             }
         }
@@ -1319,7 +1333,7 @@ impl Engine {
             }
         };
         let found = step.is_some();
-        set_picks(&mut self.picks, step);
+        set_picks(&mut self.picks, &mut self.picked_at, &self.enabled, step);
         if remember.is_some() {
             self.t.codels[ck].run_step = remember;
         }
@@ -1332,22 +1346,37 @@ impl Engine {
     /// Fires the step in the scratch picks, updates the enabled set, the replies and the
     /// recording, and moves to the new state.
     fn commit(&mut self, label: Label, cause: Cause) -> Result<(), EngineError> {
-        let step = Step {
-            label,
-            picks: &self.picks,
+        // a pooled step fires by its plan; any other as the relation says
+        let plan = match (label, self.picked_at) {
+            (Label::Interaction(i), Some(at)) => {
+                self.plans.plan_at(self.enabled.pool(), at, i, &self.picks)
+            }
+            _ => None,
         };
-        self.step_slots.clear();
-        let fired = self
-            .system
-            .fire_in_place(step, &mut self.next, &mut self.step_slots);
+        let fired = match plan {
+            Some(p) => self.system.fire_planned(&self.plans, p, &mut self.next),
+            None => {
+                self.step_slots.clear();
+                let step = Step {
+                    label,
+                    picks: &self.picks,
+                };
+                self.system
+                    .fire_in_place(step, &mut self.next, &mut self.step_slots)
+            }
+        };
         if let Err(e) = fired {
             self.next.copy_from(&self.state);
             self.stopped = Some(e.clone());
             return Err(EngineError::Range(e));
         }
-        let updated =
-            self.enabled
-                .update_written(&self.system, &self.state, &self.next, &self.step_slots);
+        let written: &[u32] = match plan {
+            Some(p) => self.plans.written(p),
+            None => &self.step_slots,
+        };
+        let updated = self
+            .enabled
+            .update_written(&self.system, &self.state, &self.next, written);
         let moves = match label {
             Label::Interaction(i) => {
                 self.t.moves_requests[i as usize]
@@ -1367,8 +1396,12 @@ impl Engine {
         if tracing::enabled!(target: "bip_engine", tracing::Level::DEBUG) {
             self.trace_step(label);
         }
+        let written: &[u32] = match plan {
+            Some(p) => self.plans.written(p),
+            None => &self.step_slots,
+        };
         let (state, next) = (self.state.slots_mut(), self.next.slots());
-        for &s in &self.step_slots {
+        for &s in written {
             state[s as usize] = next[s as usize];
         }
         self.stats.steps += 1;
@@ -1592,11 +1625,19 @@ fn collect_progress(
     }
 }
 
-/// Makes `step` the scratch picks (none if `None`).
-fn set_picks(picks: &mut Vec<Pick>, step: Option<Step<'_>>) {
+/// Makes `step` the scratch picks (none if `None`), and notes where they are in the step
+/// tables' pool.
+fn set_picks(
+    picks: &mut Vec<Pick>,
+    at: &mut Option<u32>,
+    enabled: &EnabledSet,
+    step: Option<Step<'_>>,
+) {
     picks.clear();
+    *at = None;
     if let Some(s) = step {
         picks.extend_from_slice(s.picks);
+        *at = enabled.pool_position(s.picks);
     }
 }
 

@@ -227,6 +227,14 @@ fn value_of(e: &Expr, code: &mut FlatCode, ranges: &Ranges<'_>) -> Value {
 }
 
 impl FlatAssign {
+    /// The value written, if it is a constant.
+    pub(crate) fn constant(&self) -> Option<i64> {
+        match self.value {
+            Value::Const(v) => Some(v),
+            _ => None,
+        }
+    }
+
     /// The slot written.
     #[inline]
     pub(crate) fn slot(&self, base: u32) -> u32 {
@@ -454,7 +462,7 @@ impl FlatCode {
     /// the assignments must compute it and report the error) or a slot is outside the
     /// range the table was made for.
     #[inline]
-    fn entry(&self, t: u32, slots: &[i64], base: u32) -> Option<&[i64]> {
+    pub(crate) fn entry(&self, t: u32, slots: &[i64], base: u32) -> Option<&[i64]> {
         let table = self.tables[t as usize];
         let digits = &self.table_digits[table.digits.0 as usize..table.digits.1 as usize];
         let key = key(digits, slots, base)?;
@@ -553,6 +561,11 @@ impl FlatCode {
         self.tests[start as usize..end as usize]
             .iter()
             .all(|t| t.holds(slots, base))
+    }
+
+    /// The table of the values an action writes, if it has one ([`FlatCode::entry`]).
+    pub(crate) fn action_table(&self, code: ActionCode) -> Option<u32> {
+        (code.table != NO_TABLE).then_some(code.table)
     }
 
     pub(crate) fn assigns(&self, code: ActionCode) -> &[FlatAssign] {

@@ -509,6 +509,16 @@ impl EnabledSet {
         (f.in_pool && self.is_enabled(i)).then_some((f.start, f.width))
     }
 
+    /// Where the picks of a step that [`EnabledSet::steps_of`] gave start in
+    /// [`EnabledSet::pool`], if they are in it (the step came from a step table).
+    #[inline]
+    pub fn pool_position(&self, picks: &[Pick]) -> Option<u32> {
+        let size = core::mem::size_of::<Pick>();
+        let base = self.pool.as_ptr() as usize;
+        let at = picks.as_ptr() as usize;
+        (at >= base && at < base + self.pool.len() * size).then(|| ((at - base) / size) as u32)
+    }
+
     /// The picks of every step table entry (see [`EnabledSet::pooled_steps`]).
     pub fn pool(&self) -> &[Pick] {
         &self.pool

@@ -41,6 +41,7 @@ pub mod eval;
 #[cfg(feature = "std")]
 pub mod expr;
 mod fast_path;
+mod fire_plan;
 pub mod genom;
 mod incremental;
 #[cfg(feature = "std")]
@@ -66,6 +67,7 @@ pub use compile::{compile, Ty};
 pub use deadlock::{Liveness, LivenessChecker};
 #[cfg(feature = "std")]
 pub use diag::{LoadError, ModelError};
+pub use fire_plan::{FirePlans, PlanId};
 #[cfg(feature = "std")]
 pub use genom::expand;
 pub use genom::GenomMap;

@@ -145,7 +145,7 @@ pub(crate) struct EnableIndex {
     internal: Vec<PortCell>,
     /// The flat forms of the guards and actions: per atom, from its components'
     /// `comp_code` on, one per transition; per interaction, its connector's.
-    flat: FlatCode,
+    pub(crate) flat: FlatCode,
     guards: Vec<GuardCode>,
     actions: Vec<ActionCode>,
     /// Per transition (indexed like `actions`), the location it moves to, or [`STAYS`].
@@ -728,45 +728,84 @@ impl System {
         to: &mut State,
         written: &mut W,
     ) -> Result<(), RangeError> {
+        self.fire_ops(step, |op| match op {
+            FireOp::Action { code, base, who } => self.run_who(code, base, who, to, written),
+            FireOp::Move { slot, to: dest } => {
+                to.slots_mut()[slot as usize] = i64::from(dest);
+                written.wrote(slot);
+                Ok(())
+            }
+        })
+    }
+
+    /// What firing `step` does, in order: the connector's action, each participant's
+    /// transition action in port order, then the participants' moves. [`System::fire`]
+    /// runs them as they come; [`crate::FirePlans`] compiles them once per step.
+    #[inline(always)]
+    pub(crate) fn fire_ops(
+        &self,
+        step: Step<'_>,
+        mut f: impl FnMut(FireOp) -> Result<(), RangeError>,
+    ) -> Result<(), RangeError> {
         let idx = &self.enable_index;
         if let Label::Interaction(i) = step.label {
             let code = idx.inter_actions[i as usize];
             if !code.is_empty() {
-                let inter = &self.interactions[i as usize];
-                self.run_action(code, || &inter.action, 0, to, written)
-                    .map_err(|e| self.name_error(e, &format!("action of {}", inter.name)))?;
+                let who = ActionOf::Interaction(i);
+                f(FireOp::Action { code, base: 0, who })?;
             }
         }
-        for p in step.picks {
+        for &p in step.picks {
             let (code_base, slot) = idx.comp_code[p.component as usize];
             let code = idx.actions[(code_base + p.transition) as usize];
-            if code.is_empty() {
-                continue;
-            }
-            let tree = || {
-                let atom = self.atom_of(p.component);
-                &atom.transitions[p.transition as usize].action[..]
-            };
-            self.run_action(code, tree, slot + 1, to, written)
-                .map_err(|e| {
-                    self.name_error(
-                        e,
-                        &format!(
-                            "action of {}",
-                            self.describe_transition(p.component, p.transition)
-                        ),
-                    )
+            if !code.is_empty() {
+                let who = ActionOf::Transition(p);
+                f(FireOp::Action {
+                    code,
+                    base: slot + 1,
+                    who,
                 })?;
+            }
         }
         for p in step.picks {
             let (code_base, slot) = idx.comp_code[p.component as usize];
             let dest = idx.moves[(code_base + p.transition) as usize];
             if dest != STAYS {
-                to.slots_mut()[slot as usize] = i64::from(dest);
-                written.wrote(slot);
+                f(FireOp::Move { slot, to: dest })?;
             }
         }
         Ok(())
+    }
+
+    /// Runs the action `code` of `who` (its variables from slot `base` on).
+    #[inline(always)]
+    pub(crate) fn run_who<W: Written>(
+        &self,
+        code: ActionCode,
+        base: u32,
+        who: ActionOf,
+        state: &mut State,
+        written: &mut W,
+    ) -> Result<(), RangeError> {
+        let tree = || match who {
+            ActionOf::Interaction(i) => &self.interactions[i as usize].action[..],
+            ActionOf::Transition(p) => {
+                &self.atom_of(p.component).transitions[p.transition as usize].action[..]
+            }
+        };
+        self.run_action(code, tree, base, state, written)
+            .map_err(|e| {
+                let context = match who {
+                    ActionOf::Interaction(i) => {
+                        format!("action of {}", self.interactions[i as usize].name)
+                    }
+                    ActionOf::Transition(p) => format!(
+                        "action of {}",
+                        self.describe_transition(p.component, p.transition)
+                    ),
+                };
+                self.name_error(e, &context)
+            })
     }
 
     /// Runs assignments left to right on `state`, each seeing the ones before it (in flat
@@ -853,6 +892,26 @@ impl System {
     }
 }
 
+/// One thing firing a step does ([`System::fire_ops`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum FireOp {
+    /// Run an action, whose variables start at slot `base`.
+    Action {
+        code: ActionCode,
+        base: u32,
+        who: ActionOf,
+    },
+    /// Move a participant: its location slot takes location `to`.
+    Move { slot: u32, to: u32 },
+}
+
+/// Whose action: a connector's, or a participant's transition's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ActionOf {
+    Interaction(u32),
+    Transition(Pick),
+}
+
 enum ActionError {
     Eval(EvalError),
     OutOfRange { slot: u32, value: i64 },
@@ -879,7 +938,7 @@ fn any_bit(bits: &[u64], range: core::ops::Range<u32>) -> bool {
 
 /// Where [`System::fire_with`] notes the slots it writes: nowhere (the verifier compares
 /// whole states) or in a list (the engine's incremental update).
-trait Written {
+pub(crate) trait Written {
     fn wrote(&mut self, slot: u32);
 }
 

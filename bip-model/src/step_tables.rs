@@ -24,7 +24,7 @@ use crate::prelude::*;
 
 use alloc::sync::Arc;
 
-use crate::radix::{key, Digit, Digits};
+use crate::radix::{key, keys, Digit, Digits};
 use crate::step::{Choices, Pick};
 use crate::system::System;
 
@@ -229,6 +229,28 @@ impl StepTables {
     pub(crate) fn steps(&self, e: &Entry) -> (&[Pick], usize, bool) {
         let picks = &self.picks[e.start as usize..(e.start + e.len) as usize];
         (picks, e.width as usize, e.ready)
+    }
+
+    /// Every tabulated step: its interaction, where its picks start in the pool, and how
+    /// many picks it has.
+    pub(crate) fn pooled_steps(&self) -> impl Iterator<Item = (u32, u32, u32)> + '_ {
+        self.of.iter().enumerate().flat_map(move |(i, t)| {
+            let (start, n) = if t.entries == NONE {
+                (0, 0)
+            } else {
+                let digits = &self.digits[t.digits.0 as usize..t.digits.1 as usize];
+                (t.entries as usize, keys(digits) as usize)
+            };
+            let entries = self.entries[start..start + n].iter();
+            entries
+                .filter(|e| e.known && e.width > 0)
+                .flat_map(move |e| {
+                    let w = u32::from(e.width);
+                    (e.start..e.start + e.len)
+                        .step_by(w as usize)
+                        .map(move |at| (i as u32, at, w))
+                })
+        })
     }
 
     /// Every entry's picks, to share.

@@ -3,9 +3,11 @@
 //! exactly the steps of `System::enabled_steps`, in the same order, and fails to evaluate
 //! exactly where the full relation does. Every other walk moves as the engine does: the
 //! step is fired in place (`System::fire_in_place`, checked against `System::fire`) and
-//! the set is told which slots it wrote (`EnabledSet::update_written`).
+//! the set is told which slots it wrote (`EnabledSet::update_written`). A step the set
+//! found in the step tables' pool is also fired by its plan (`System::fire_planned`),
+//! which must write the same state and list the same slots.
 
-use bip_model::{load_str, EnabledSet, OwnedStep, State, Steps, System};
+use bip_model::{load_str, EnabledSet, FirePlans, Label, OwnedStep, State, Steps, System};
 use proptest::prelude::*;
 
 mod support;
@@ -20,8 +22,45 @@ fn incremental(set: &EnabledSet) -> Vec<OwnedStep> {
     set.steps().map(|s| s.to_owned()).collect()
 }
 
-/// Random walks on one generated system; returns the number of states compared.
-fn check_system(seed: u64) -> Result<usize, TestCaseError> {
+/// Fires the `k`-th step of `set` by its plan, if it is a pooled step, and compares it
+/// with firing it in place (`fired`: the state and the slots written, `None` if it
+/// failed); true if it was compared.
+fn check_plan(
+    sys: &System,
+    plans: &FirePlans,
+    set: &EnabledSet,
+    s: &State,
+    k: usize,
+    fired: Option<(&State, &[u32])>,
+) -> Result<bool, TestCaseError> {
+    let Some(st) = set.steps().nth(k) else {
+        return Ok(false);
+    };
+    let (Label::Interaction(i), Some(at)) = (st.label, set.pool_position(st.picks)) else {
+        return Ok(false);
+    };
+    let Some(p) = plans.plan_at(set.pool(), at, i, st.picks) else {
+        return Err(TestCaseError::fail("a pooled step without a plan"));
+    };
+    // another step's position, or another interaction, is not this plan
+    prop_assert!(plans.plan_at(set.pool(), at, i + 1, st.picks).is_none());
+    let mut planned = s.clone();
+    let r = sys.fire_planned(plans, p, &mut planned);
+    prop_assert_eq!(
+        r.is_ok(),
+        fired.is_some(),
+        "the plan fails where firing does not"
+    );
+    if let Some((next, written)) = fired {
+        prop_assert_eq!(&planned, next);
+        prop_assert_eq!(plans.written(p), written);
+    }
+    Ok(true)
+}
+
+/// Random walks on one generated system; returns the number of states compared and of
+/// steps fired by their plans.
+fn check_system(seed: u64) -> Result<(usize, usize), TestCaseError> {
     let g = generate(seed);
     let text = g.to_ron();
     let mut sys = load_str("generated.ron", &text)
@@ -39,6 +78,8 @@ fn check_system(seed: u64) -> Result<usize, TestCaseError> {
     let mut buf = Steps::new();
     let mut copy = Steps::new();
     let mut compared = 0;
+    let mut planned = 0;
+    let plans = sys.fire_plans();
     for walk in 0..3 {
         let in_place = walk % 2 == 1;
         let mut s = sys.initial_state();
@@ -96,6 +137,8 @@ fn check_system(seed: u64) -> Result<usize, TestCaseError> {
                 written.clear();
                 let here_fired = sys.fire_in_place(step, &mut here, &mut written);
                 prop_assert_eq!(fired.is_ok(), here_fired.is_ok(), "in place\n{}", text);
+                let done = fired.is_ok().then_some((&next, &written[..]));
+                planned += usize::from(check_plan(&sys, &plans, &set, &s, k, done)?);
                 if fired.is_ok() {
                     prop_assert_eq!(&here, &next, "fired in place\n{}", text);
                     for (slot, (a, b)) in s.slots().iter().zip(next.slots()).enumerate() {
@@ -131,7 +174,7 @@ fn check_system(seed: u64) -> Result<usize, TestCaseError> {
             s = next;
         }
     }
-    Ok(compared)
+    Ok((compared, planned))
 }
 
 proptest! {
@@ -148,14 +191,18 @@ proptest! {
 #[test]
 fn walks_compare_many_states_with_priorities() {
     let mut compared = 0;
+    let mut planned = 0;
     let mut with_when = 0;
     for seed in 0..300u64 {
         let g = generate(seed);
         if g.prios.iter().any(|p| p.when.is_some()) {
             with_when += 1;
         }
-        compared += check_system(seed).expect("agrees");
+        let (c, p) = check_system(seed).expect("agrees");
+        compared += c;
+        planned += p;
     }
+    assert!(planned > 2_000, "only {planned} steps fired by their plans");
     assert!(
         with_when >= 50,
         "only {with_when} systems with guarded priorities"
@@ -202,6 +249,9 @@ fn robot_models_agree_along_random_walks() {
         let mut buf = Steps::new();
         let mut next = s.clone();
         let mut pooled = 0;
+        let mut planned = 0;
+        let plans = sys.fire_plans();
+        let mut written = Vec::new();
         for _ in 0..3000 {
             let want = full(&sys, &s, &mut buf).expect("evaluates");
             assert_eq!(incremental(&set), want, "{model}");
@@ -218,10 +268,20 @@ fn robot_models_agree_along_random_walks() {
             }
             let k = rng.below(want.len());
             sys.fire(&s, want[k].as_step(), &mut next).expect("fires");
+            let mut here = s.clone();
+            written.clear();
+            sys.fire_in_place(want[k].as_step(), &mut here, &mut written)
+                .expect("fires");
+            let p = check_plan(&sys, &plans, &set, &s, k, Some((&next, &written)));
+            planned += usize::from(p.expect("the plan fires the step"));
             set.update(&sys, &s, &next).expect("evaluates");
             std::mem::swap(&mut s, &mut next);
         }
         assert!(pooled > 1000, "{model}: {pooled} pooled steps looked at");
+        assert!(
+            planned > 1000,
+            "{model}: {planned} steps fired by their plans"
+        );
     }
 }
 

@@ -1,0 +1,232 @@
+//! The firings of the tabulated steps, compiled once.
+//!
+//! [`System::fire_in_place`] finds, for each pick of a step, its transition's action and
+//! move in the system's tables, and records every slot it writes as it goes. A runtime
+//! engine fires the same few steps over and over, and most of them come from the step
+//! tables' pool ([`crate::EnabledSet::pooled_steps`]): [`FirePlans`] lists, once per pooled
+//! step, what firing it does ([`System::fire_ops`], the same sequence `fire_in_place`
+//! runs), with the moves and the constant assignments folded into plain writes, and the
+//! slots it writes. [`System::fire_planned`] then runs the list. It is the same firing,
+//! looked up ahead of time: an action that reads the state still runs as an action, and
+//! an assignment whose constant is out of its variable's range is left to the action,
+//! which reports the error.
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use alloc::collections::BTreeMap;
+
+use crate::fast_path::ActionCode;
+use crate::state::State;
+use crate::step::{ActionOf, FireOp, Label, Pick, Step};
+use crate::system::{RangeError, System};
+
+/// No plan.
+const NONE: u32 = u32::MAX;
+
+/// A plan of [`FirePlans`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PlanId(u32);
+
+/// What firing each step of a system's step tables does (see the module documentation).
+#[derive(Clone, Debug, Default)]
+pub struct FirePlans {
+    /// Per position in the pool of picks: the plan of the step starting there.
+    at: Vec<u32>,
+    plans: Vec<Plan>,
+    ops: Vec<PlanOp>,
+    written: Vec<u32>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Plan {
+    interaction: u32,
+    /// Where its picks are in the pool (a step of the same picks elsewhere shares it).
+    picks: (u32, u32),
+    ops: (u32, u32),
+    written: (u32, u32),
+}
+
+#[derive(Clone, Copy, Debug)]
+enum PlanOp {
+    /// A move, or an assignment of a constant in range.
+    Set { slot: u32, value: i64 },
+    /// An action with a table of the values it writes: they go to
+    /// `written[slots.0..slots.1]` (the action runs where the table has no entry).
+    Table {
+        table: u32,
+        base: u32,
+        slots: (u32, u32),
+        code: ActionCode,
+        who: ActionOf,
+    },
+    Action {
+        code: ActionCode,
+        base: u32,
+        who: ActionOf,
+    },
+}
+
+impl FirePlans {
+    /// The plan of the step `picks` of interaction `i`, if it is the step that starts at
+    /// position `at` of the step tables' pool ([`crate::EnabledSet::pooled_steps`]).
+    #[inline]
+    pub fn plan_at(&self, pool: &[Pick], at: u32, i: u32, picks: &[Pick]) -> Option<PlanId> {
+        let p = *self.at.get(at as usize)?;
+        let plan = self.plans.get(p as usize)?;
+        let (a, b) = plan.picks;
+        (plan.interaction == i && pool.get(a as usize..b as usize) == Some(picks))
+            .then_some(PlanId(p))
+    }
+
+    /// Every slot the plan's step writes, in the order [`System::fire_in_place`] lists
+    /// them.
+    #[inline]
+    pub fn written(&self, p: PlanId) -> &[u32] {
+        let (a, b) = self.plans[p.0 as usize].written;
+        &self.written[a as usize..b as usize]
+    }
+
+    /// How many distinct steps have a plan.
+    pub fn len(&self) -> usize {
+        self.plans.len()
+    }
+
+    /// True if no step has a plan.
+    pub fn is_empty(&self) -> bool {
+        self.plans.is_empty()
+    }
+}
+
+impl System {
+    /// The plans of every step in the system's step tables.
+    pub fn fire_plans(&self) -> FirePlans {
+        let tables = &self.enable_index.tables;
+        let pool = tables.pool();
+        let mut out = FirePlans {
+            at: vec![NONE; pool.len()],
+            ..FirePlans::default()
+        };
+        // identical steps (of one interaction, in several entries) share a plan
+        let mut seen: BTreeMap<(u32, Vec<(u32, u32)>), u32> = BTreeMap::new();
+        for (i, at, width) in tables.pooled_steps() {
+            let picks = &pool[at as usize..(at + width) as usize];
+            let key = (
+                i,
+                picks.iter().map(|p| (p.component, p.transition)).collect(),
+            );
+            let p = match seen.get(&key) {
+                Some(&p) => p,
+                None => {
+                    let p = out.plans.len() as u32;
+                    self.add_plan(&mut out, i, (at, at + width), picks);
+                    seen.insert(key, p);
+                    p
+                }
+            };
+            out.at[at as usize] = p;
+        }
+        out
+    }
+
+    fn add_plan(&self, out: &mut FirePlans, i: u32, at: (u32, u32), picks: &[Pick]) {
+        let (ops0, written0) = (out.ops.len() as u32, out.written.len() as u32);
+        let flat = &self.enable_index.flat;
+        let step = Step {
+            label: Label::Interaction(i),
+            picks,
+        };
+        // (recording cannot fail)
+        let _ = self.fire_ops(step, |op| {
+            match op {
+                FireOp::Move { slot, to } => {
+                    out.ops.push(PlanOp::Set {
+                        slot,
+                        value: i64::from(to),
+                    });
+                    out.written.push(slot);
+                }
+                FireOp::Action { code, base, who } => {
+                    let assigns = flat.assigns(code);
+                    let constants: Option<Vec<(u32, i64)>> = assigns
+                        .iter()
+                        .map(|a| {
+                            let slot = a.slot(base);
+                            let (lo, hi) = self.slot_ranges[slot as usize];
+                            a.constant()
+                                .filter(|v| (lo..=hi).contains(v))
+                                .map(|v| (slot, v))
+                        })
+                        .collect();
+                    let slots0 = out.written.len() as u32;
+                    out.written.extend(assigns.iter().map(|a| a.slot(base)));
+                    let slots = (slots0, out.written.len() as u32);
+                    let op = match (constants, flat.action_table(code)) {
+                        (Some(c), _) => {
+                            let set = c
+                                .into_iter()
+                                .map(|(slot, value)| PlanOp::Set { slot, value });
+                            out.ops.extend(set);
+                            return Ok(());
+                        }
+                        (None, Some(table)) => PlanOp::Table {
+                            table,
+                            base,
+                            slots,
+                            code,
+                            who,
+                        },
+                        (None, None) => PlanOp::Action { code, base, who },
+                    };
+                    out.ops.push(op);
+                }
+            }
+            Ok(())
+        });
+        out.plans.push(Plan {
+            interaction: i,
+            picks: at,
+            ops: (ops0, out.ops.len() as u32),
+            written: (written0, out.written.len() as u32),
+        });
+    }
+
+    /// Fires the step of plan `p` on `state` in place, as [`System::fire_in_place`] would;
+    /// the slots it may write are [`FirePlans::written`]. On a range error, `state` holds
+    /// a partial result.
+    #[inline]
+    pub fn fire_planned(
+        &self,
+        plans: &FirePlans,
+        p: PlanId,
+        state: &mut State,
+    ) -> Result<(), RangeError> {
+        let (a, b) = plans.plans[p.0 as usize].ops;
+        let flat = &self.enable_index.flat;
+        for op in &plans.ops[a as usize..b as usize] {
+            match *op {
+                PlanOp::Set { slot, value } => state.slots_mut()[slot as usize] = value,
+                PlanOp::Table {
+                    table,
+                    base,
+                    slots: (s0, s1),
+                    code,
+                    who,
+                } => match flat.entry(table, state.slots(), base) {
+                    // the whole action's values, in range (as `run_action` takes them)
+                    Some(values) => {
+                        let slots = &plans.written[s0 as usize..s1 as usize];
+                        for (&slot, &v) in slots.iter().zip(values) {
+                            state.slots_mut()[slot as usize] = v;
+                        }
+                    }
+                    None => self.run_who(code, base, who, state, &mut ())?,
+                },
+                PlanOp::Action { code, base, who } => {
+                    self.run_who(code, base, who, state, &mut ())?
+                }
+            }
+        }
+        Ok(())
+    }
+}
