@@ -760,6 +760,16 @@ impl Engine {
     /// Copies one of the enabled steps of interaction `i`, chosen by the policy, into the
     /// scratch picks (none if it has none).
     fn take_step_of(&mut self, i: u32) {
+        // one step from the pool (a tick): nothing to walk; the chooser still sees the
+        // count, so seeded runs do not change
+        if let Some((at, width, 1)) = self.enabled.pooled_steps(i) {
+            self.chooser.choose(1);
+            let picks = &self.enabled.pool()[at as usize..(at + width) as usize];
+            self.picks.clear();
+            self.picks.extend_from_slice(picks);
+            self.picked_at = Some(at);
+            return;
+        }
         let step = choose_step(&mut self.chooser, || self.enabled.steps_of(i));
         set_picks(&mut self.picks, &mut self.picked_at, &self.enabled, step);
     }
@@ -1255,7 +1265,7 @@ impl Engine {
         } else {
             self.enabled.pooled_steps(c.map.run)
         };
-        if let (Some((entry, width)), Some(m)) = (pooled, c.run_step) {
+        if let (Some((entry, width, _)), Some(m)) = (pooled, c.run_step) {
             if m.entry == entry && m.yield_k as usize == yield_k {
                 let at = m.step as usize;
                 let step = Step {
@@ -1319,7 +1329,7 @@ impl Engine {
                 None => None,
                 Some((k, first)) => match self.chooser.choose(n) {
                     0 => {
-                        if let (1, Some((entry, width))) = (n, pooled) {
+                        if let (1, Some((entry, width, _))) = (n, pooled) {
                             remember = Some(RunStep {
                                 entry,
                                 yield_k: yield_k as u32,

@@ -498,15 +498,16 @@ impl EnabledSet {
         })
     }
 
-    /// Where the steps of interaction `i` are in [`EnabledSet::pool`] (the start, and
-    /// the number of picks per step), if it is enabled and they come from its step
-    /// table. The pool never changes, so two states in which `i`'s steps start at the same
-    /// place have the same steps: a caller may remember what it found among them.
+    /// Where the steps of interaction `i` are in [`EnabledSet::pool`] (the start, the
+    /// number of picks per step, and the number of steps), if it is enabled and they come
+    /// from its step table. The pool never changes, so two states in which `i`'s steps
+    /// start at the same place have the same steps: a caller may remember what it found
+    /// among them.
     #[inline]
-    pub fn pooled_steps(&self, i: u32) -> Option<(u32, u32)> {
+    pub fn pooled_steps(&self, i: u32) -> Option<(u32, u32, u32)> {
         let f = self.found[i as usize];
         // enabled means it has steps (`pre` is set exactly when `width > 0`)
-        (f.in_pool && self.is_enabled(i)).then_some((f.start, f.width))
+        (f.in_pool && self.is_enabled(i)).then(|| (f.start, f.width, f.len / f.width))
     }
 
     /// Where the picks of a step that [`EnabledSet::steps_of`] gave start in

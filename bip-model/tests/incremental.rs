@@ -258,7 +258,8 @@ fn robot_models_agree_along_random_walks() {
             // where the set says an interaction's steps are in the pool, they are there
             for i in 0..sys.interactions.len() as u32 {
                 let steps: Vec<_> = set.steps_of(i).map(|st| st.picks.to_vec()).collect();
-                if let Some((start, width)) = set.pooled_steps(i) {
+                if let Some((start, width, n)) = set.pooled_steps(i) {
+                    assert_eq!(n as usize, steps.len(), "{model}: {i}");
                     let at = start as usize;
                     let len = steps.len() * width as usize;
                     let in_pool = set.pool()[at..at + len].chunks(width as usize);
