@@ -343,12 +343,24 @@ impl EnabledSet {
     /// With every interaction that some rule names as higher up to date: evaluates the
     /// stale interactions that are no longer suppressed, and decides the `when` rules.
     fn settle(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
+        // a stale interaction is higher in no rule, so evaluating one changes no other's
+        // verdict: interactions with the same higher ones are decided once
+        let mut last: Option<((u32, u32), bool)> = None;
         for w in 0..self.stale.len() {
             let mut bits = self.stale[w];
             while bits != 0 {
                 let i = (w * 64) as u32 + bits.trailing_zeros();
                 bits &= bits - 1;
-                if !self.blocked(i) {
+                let span = self.masks.span(i);
+                let blocked = match last {
+                    Some((s, b)) if s == span => b,
+                    _ => {
+                        let b = self.masks.span_blocked(span, &self.pre);
+                        last = Some((span, b));
+                        b
+                    }
+                };
+                if !blocked {
                     set_bit(&mut self.stale, i, false);
                     self.eval_interaction(system, state, i)?;
                 }

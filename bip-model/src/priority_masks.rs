@@ -7,13 +7,17 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
+use alloc::collections::BTreeMap;
+
 use crate::system::PriorityRule;
 
 #[derive(Clone, Debug, Default)]
 pub(crate) struct PriorityMasks {
-    /// `highs[highs_start[i]..highs_start[i + 1]]`: the higher interactions of `i` under
-    /// rules without a `when`.
-    highs_start: Vec<u32>,
+    /// `highs[a..b]` with `(a, b) = highs_of[i]`: the higher interactions of `i` under
+    /// rules without a `when`. Interactions with the same higher ones share their span (a
+    /// GenoM layer's requests and tick: one span), so that a caller deciding many of
+    /// them may decide each span once ([`PriorityMasks::span`]).
+    highs_of: Vec<(u32, u32)>,
     highs: Vec<(u32, u64)>,
     /// Interactions under some rule with a `when`: their suppression depends on the state.
     pub(crate) under_when: Vec<u64>,
@@ -72,13 +76,24 @@ impl PriorityMasks {
                 }
             }
         }
-        let (highs_start, highs) = flatten(&per_low);
+        let mut highs = Vec::new();
+        let mut spans: BTreeMap<&[(u32, u64)], (u32, u32)> = BTreeMap::new();
+        let highs_of = per_low
+            .iter()
+            .map(|l| {
+                *spans.entry(&l[..]).or_insert_with(|| {
+                    let a = highs.len() as u32;
+                    highs.extend_from_slice(l);
+                    (a, highs.len() as u32)
+                })
+            })
+            .collect();
         let mut lazy = vec![0u64; words];
         for i in 0..n_inter as u32 {
             set_bit(&mut lazy, i, !bit(&is_high, i) && !bit(&under_when, i));
         }
         PriorityMasks {
-            highs_start,
+            highs_of,
             highs,
             under_when,
             lazy,
@@ -89,24 +104,21 @@ impl PriorityMasks {
     /// True if a higher interaction of `i` under a rule without `when` is in `enabled`.
     #[inline]
     pub(crate) fn blocked(&self, i: u32, enabled: &[u64]) -> bool {
-        let (s, e) = (
-            self.highs_start[i as usize] as usize,
-            self.highs_start[i as usize + 1] as usize,
-        );
-        self.highs[s..e]
+        self.span_blocked(self.span(i), enabled)
+    }
+
+    /// Where the higher interactions of `i` are listed: two interactions with the same
+    /// span have the same higher interactions.
+    #[inline]
+    pub(crate) fn span(&self, i: u32) -> (u32, u32) {
+        self.highs_of[i as usize]
+    }
+
+    /// [`PriorityMasks::blocked`] for the interactions of span `(a, b)`.
+    #[inline]
+    pub(crate) fn span_blocked(&self, (a, b): (u32, u32), enabled: &[u64]) -> bool {
+        self.highs[a as usize..b as usize]
             .iter()
             .any(|&(w, m)| enabled[w as usize] & m != 0)
     }
-}
-
-/// Lists of lists as one array and start offsets (one more than lists).
-pub(crate) fn flatten<T: Copy>(lists: &[Vec<T>]) -> (Vec<u32>, Vec<T>) {
-    let mut start = Vec::with_capacity(lists.len() + 1);
-    let mut flat = Vec::new();
-    for l in lists {
-        start.push(flat.len() as u32);
-        flat.extend_from_slice(l);
-    }
-    start.push(flat.len() as u32);
-    (start, flat)
 }
