@@ -20,7 +20,7 @@ use core::any::Any;
 use crate::prelude::*;
 
 use bip_model::{
-    EnabledSet, FirePlans, Label, Pick, RangeError, State, Step, System, Trace, Verdict,
+    EnabledSet, FirePlans, Label, Pick, PlanId, RangeError, State, Step, System, Trace, Verdict,
 };
 
 use crate::bind::{InterKind, PortKind, RunStep, Tables};
@@ -760,14 +760,20 @@ impl Engine {
     /// Copies one of the enabled steps of interaction `i`, chosen by the policy, into the
     /// scratch picks (none if it has none).
     fn take_step_of(&mut self, i: u32) {
-        // one step from the pool (a tick): nothing to walk; the chooser still sees the
-        // count, so seeded runs do not change
+        // one step from the pool (a tick): nothing to walk, and nothing to choose (a
+        // chooser asked to choose among one answers 0 and draws nothing, so seeded runs
+        // do not change)
         if let Some((at, width, 1)) = self.enabled.pooled_steps(i) {
-            self.chooser.choose(1);
-            let picks = &self.enabled.pool()[at as usize..(at + width) as usize];
-            self.picks.clear();
-            self.picks.extend_from_slice(picks);
-            self.picked_at = Some(at);
+            let step = Step {
+                label: Label::Interaction(i),
+                picks: &self.enabled.pool()[at as usize..(at + width) as usize],
+            };
+            set_picks(
+                &mut self.picks,
+                &mut self.picked_at,
+                &self.enabled,
+                Some(step),
+            );
             return;
         }
         let step = choose_step(&mut self.chooser, || self.enabled.steps_of(i));
@@ -1380,10 +1386,7 @@ impl Engine {
             self.stopped = Some(e.clone());
             return Err(EngineError::Range(e));
         }
-        let written: &[u32] = match plan {
-            Some(p) => self.plans.written(p),
-            None => &self.step_slots,
-        };
+        let written = written_by(&self.plans, plan, &self.step_slots);
         let updated = self
             .enabled
             .update_written(&self.system, &self.state, &self.next, written);
@@ -1406,10 +1409,7 @@ impl Engine {
         if tracing::enabled!(target: "bip_engine", tracing::Level::DEBUG) {
             self.trace_step(label);
         }
-        let written: &[u32] = match plan {
-            Some(p) => self.plans.written(p),
-            None => &self.step_slots,
-        };
+        let written = written_by(&self.plans, plan, &self.step_slots);
         let (state, next) = (self.state.slots_mut(), self.next.slots());
         for &s in written {
             state[s as usize] = next[s as usize];
@@ -1632,6 +1632,14 @@ fn collect_progress(
             }
             InterKind::Request { .. } | InterKind::Time | InterKind::Environment => {}
         }
+    }
+}
+
+/// The slots a committed step wrote: its plan's, or those `fire_in_place` listed.
+fn written_by<'a>(plans: &'a FirePlans, plan: Option<PlanId>, listed: &'a [u32]) -> &'a [u32] {
+    match plan {
+        Some(p) => plans.written(p),
+        None => listed,
     }
 }
 

@@ -31,7 +31,8 @@ pub struct PlanId(u32);
 /// What firing each step of a system's step tables does (see the module documentation).
 #[derive(Clone, Debug, Default)]
 pub struct FirePlans {
-    /// Per position in the pool of picks: the plan of the step starting there.
+    /// Per position in the pool of picks: the plan of the step starting there (one
+    /// `u32` per pick of the pool, 4 MiB at the pool's budget: a lookup without search).
     at: Vec<u32>,
     plans: Vec<Plan>,
     ops: Vec<PlanOp>,
@@ -136,8 +137,7 @@ impl System {
             label: Label::Interaction(i),
             picks,
         };
-        // (recording cannot fail)
-        let _ = self.fire_ops(step, |op| {
+        let recorded = self.fire_ops(step, |op| {
             match op {
                 FireOp::Move { slot, to } => {
                     out.ops.push(PlanOp::Set {
@@ -158,31 +158,33 @@ impl System {
                                 .map(|v| (slot, v))
                         })
                         .collect();
-                    let slots0 = out.written.len() as u32;
+                    let first = out.written.len() as u32;
                     out.written.extend(assigns.iter().map(|a| a.slot(base)));
-                    let slots = (slots0, out.written.len() as u32);
-                    let op = match (constants, flat.action_table(code)) {
-                        (Some(c), _) => {
-                            let set = c
-                                .into_iter()
-                                .map(|(slot, value)| PlanOp::Set { slot, value });
-                            out.ops.extend(set);
-                            return Ok(());
-                        }
-                        (None, Some(table)) => PlanOp::Table {
+                    let slots = (first, out.written.len() as u32);
+                    if let Some(c) = constants {
+                        // in order: a later assignment of the same slot wins, as it does
+                        // when the action runs
+                        let set = c
+                            .into_iter()
+                            .map(|(slot, value)| PlanOp::Set { slot, value });
+                        out.ops.extend(set);
+                    } else if let Some(table) = flat.action_table(code) {
+                        out.ops.push(PlanOp::Table {
                             table,
                             base,
                             slots,
                             code,
                             who,
-                        },
-                        (None, None) => PlanOp::Action { code, base, who },
-                    };
-                    out.ops.push(op);
+                        });
+                    } else {
+                        out.ops.push(PlanOp::Action { code, base, who });
+                    }
                 }
             }
             Ok(())
         });
+        // the closure records and never fails
+        debug_assert!(recorded.is_ok());
         out.plans.push(Plan {
             interaction: i,
             picks: at,
@@ -193,7 +195,8 @@ impl System {
 
     /// Fires the step of plan `p` on `state` in place, as [`System::fire_in_place`] would;
     /// the slots it may write are [`FirePlans::written`]. On a range error, `state` holds
-    /// a partial result.
+    /// a partial result. `plans` must be this system's ([`System::fire_plans`]) and `p`
+    /// one of its plans ([`FirePlans::plan_at`]).
     #[inline]
     pub fn fire_planned(
         &self,

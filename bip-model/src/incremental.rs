@@ -523,7 +523,8 @@ impl EnabledSet {
     }
 
     /// Where the picks of a step that [`EnabledSet::steps_of`] gave start in
-    /// [`EnabledSet::pool`], if they are in it (the step came from a step table).
+    /// [`EnabledSet::pool`], if they are in it (the step came from a step table); `None`
+    /// for picks anywhere else. It compares addresses only and reads nothing.
     #[inline]
     pub fn pool_position(&self, picks: &[Pick]) -> Option<u32> {
         let size = core::mem::size_of::<Pick>();

@@ -739,7 +739,8 @@ impl System {
     }
 
     /// What firing `step` does, in order: the connector's action, each participant's
-    /// transition action in port order, then the participants' moves. [`System::fire`]
+    /// transition action in pick order (which is port order), then the participants'
+    /// moves. [`System::fire`]
     /// runs them as they come; [`crate::FirePlans`] compiles them once per step.
     #[inline(always)]
     pub(crate) fn fire_ops(

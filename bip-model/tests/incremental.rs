@@ -7,7 +7,9 @@
 //! found in the step tables' pool is also fired by its plan (`System::fire_planned`),
 //! which must write the same state and list the same slots.
 
-use bip_model::{load_str, EnabledSet, FirePlans, Label, OwnedStep, State, Steps, System};
+use bip_model::{
+    load_str, EnabledSet, FirePlans, Label, OwnedStep, RangeError, State, Steps, System,
+};
 use proptest::prelude::*;
 
 mod support;
@@ -23,15 +25,15 @@ fn incremental(set: &EnabledSet) -> Vec<OwnedStep> {
 }
 
 /// Fires the `k`-th step of `set` by its plan, if it is a pooled step, and compares it
-/// with firing it in place (`fired`: the state and the slots written, `None` if it
-/// failed); true if it was compared.
+/// with firing it in place (`fired`: the state and the slots written, or the error);
+/// true if it was compared.
 fn check_plan(
     sys: &System,
     plans: &FirePlans,
     set: &EnabledSet,
     s: &State,
     k: usize,
-    fired: Option<(&State, &[u32])>,
+    fired: Result<(&State, &[u32]), &RangeError>,
 ) -> Result<bool, TestCaseError> {
     let Some(st) = set.steps().nth(k) else {
         return Ok(false);
@@ -42,18 +44,25 @@ fn check_plan(
     let Some(p) = plans.plan_at(set.pool(), at, i, st.picks) else {
         return Err(TestCaseError::fail("a pooled step without a plan"));
     };
-    // another step's position, or another interaction, is not this plan
+    // other picks at that position, or another interaction, are not this plan
+    let mut other = st.picks.to_vec();
+    other[0].transition += 1;
+    prop_assert!(plans.plan_at(set.pool(), at, i, &other).is_none());
     prop_assert!(plans.plan_at(set.pool(), at, i + 1, st.picks).is_none());
     let mut planned = s.clone();
     let r = sys.fire_planned(plans, p, &mut planned);
-    prop_assert_eq!(
-        r.is_ok(),
-        fired.is_some(),
-        "the plan fails where firing does not"
-    );
-    if let Some((next, written)) = fired {
-        prop_assert_eq!(&planned, next);
-        prop_assert_eq!(plans.written(p), written);
+    match (r, fired) {
+        (Ok(()), Ok((next, written))) => {
+            prop_assert_eq!(&planned, next);
+            prop_assert_eq!(plans.written(p), written);
+        }
+        (Err(e), Err(want)) => prop_assert_eq!(&e, want),
+        (r, f) => {
+            return Err(TestCaseError::fail(format!(
+                "the plan gives {r:?}, firing in place {:?}",
+                f.map(|_| ())
+            )))
+        }
     }
     Ok(true)
 }
@@ -137,7 +146,10 @@ fn check_system(seed: u64) -> Result<(usize, usize), TestCaseError> {
                 written.clear();
                 let here_fired = sys.fire_in_place(step, &mut here, &mut written);
                 prop_assert_eq!(fired.is_ok(), here_fired.is_ok(), "in place\n{}", text);
-                let done = fired.is_ok().then_some((&next, &written[..]));
+                let done = match &here_fired {
+                    Ok(()) => Ok((&next, &written[..])),
+                    Err(e) => Err(e),
+                };
                 planned += usize::from(check_plan(&sys, &plans, &set, &s, k, done)?);
                 if fired.is_ok() {
                     prop_assert_eq!(&here, &next, "fired in place\n{}", text);
@@ -273,7 +285,7 @@ fn robot_models_agree_along_random_walks() {
             written.clear();
             sys.fire_in_place(want[k].as_step(), &mut here, &mut written)
                 .expect("fires");
-            let p = check_plan(&sys, &plans, &set, &s, k, Some((&next, &written)));
+            let p = check_plan(&sys, &plans, &set, &s, k, Ok((&next, &written)));
             planned += usize::from(p.expect("the plan fires the step"));
             set.update(&sys, &s, &next).expect("evaluates");
             std::mem::swap(&mut s, &mut next);
@@ -344,5 +356,55 @@ fn variable_only_steps_reach_the_guards_that_read_them() {
             "after {take}"
         );
         assert_eq!(got.contains(&"watch".to_string()), watch, "after {take}");
+    }
+}
+
+/// A plan keeps the order of an action's assignments: a later assignment of the same
+/// variable wins, and an assignment reads the ones before it.
+#[test]
+fn plans_keep_the_order_of_an_actions_assignments() {
+    let sys = load_str(
+        "order.ron",
+        r#"System(name: "order",
+        atoms: { "A": Atom(locations: ["s", "t"], initial: "s", ports: ["go", "back"],
+            vars: [(name: "x", ty: Int(0, 3)), (name: "y", ty: Int(0, 3))],
+            transitions: [
+                (from: "s", port: "go", to: "t", action: "x = 1; x = 2; y = 3"),
+                (from: "t", port: "back", to: "s", action: "x = 0; y = x + 1; x = 3"),
+            ]) },
+        components: [(name: "a", atom: "A")],
+        connectors: [(name: "go", ports: ["a.go"]), (name: "back", ports: ["a.back"])],
+    )"#,
+    )
+    .expect("loads");
+    let plans = sys.fire_plans();
+    let mut s = sys.initial_state();
+    let mut set = EnabledSet::new(&sys, &s).expect("evaluates");
+    let slot = |name: &str| {
+        (0..sys.slot_count() as u32)
+            .find(|&k| sys.slot_name(k) == name)
+            .expect("a slot") as usize
+    };
+    let (x, y) = (slot("a.x"), slot("a.y"));
+    for (step, want_x, want_y) in [("go", 2, 3), ("back", 3, 1), ("go", 2, 3)] {
+        let st = set.steps().next().expect("one step");
+        assert_eq!(sys.label_name(st.label), step);
+        let Label::Interaction(i) = st.label else {
+            panic!("an interaction")
+        };
+        let at = set.pool_position(st.picks).expect("a pooled step");
+        let p = plans.plan_at(set.pool(), at, i, st.picks).expect("a plan");
+        let mut planned = s.clone();
+        sys.fire_planned(&plans, p, &mut planned).expect("fires");
+        let mut next = s.clone();
+        sys.fire(&s, st, &mut next).expect("fires");
+        assert_eq!(planned, next, "{step}");
+        assert_eq!(
+            (planned.slots()[x], planned.slots()[y]),
+            (want_x, want_y),
+            "{step}"
+        );
+        set.update(&sys, &s, &planned).expect("evaluates");
+        s = planned;
     }
 }
