@@ -289,6 +289,11 @@ impl ActionCode {
     pub(crate) fn is_empty(self) -> bool {
         self.start == self.end
     }
+
+    /// True if a table holds the values the action writes ([`FlatCode::action_values`]).
+    pub(crate) fn has_table(self) -> bool {
+        self.table != NO_TABLE
+    }
 }
 
 /// The ranges of the values an expression may read: the state's slots, and the variables
@@ -462,7 +467,7 @@ impl FlatCode {
     /// the assignments must compute it and report the error) or a slot is outside the
     /// range the table was made for.
     #[inline]
-    pub(crate) fn entry(&self, t: u32, slots: &[i64], base: u32) -> Option<&[i64]> {
+    fn entry(&self, t: u32, slots: &[i64], base: u32) -> Option<&[i64]> {
         let table = self.tables[t as usize];
         let digits = &self.table_digits[table.digits.0 as usize..table.digits.1 as usize];
         let key = key(digits, slots, base)?;
@@ -561,11 +566,6 @@ impl FlatCode {
         self.tests[start as usize..end as usize]
             .iter()
             .all(|t| t.holds(slots, base))
-    }
-
-    /// The table of the values an action writes, if it has one ([`FlatCode::entry`]).
-    pub(crate) fn action_table(&self, code: ActionCode) -> Option<u32> {
-        (code.table != NO_TABLE).then_some(code.table)
     }
 
     pub(crate) fn assigns(&self, code: ActionCode) -> &[FlatAssign] {

@@ -55,10 +55,9 @@ enum PlanOp {
     /// An action with a table of the values it writes: they go to
     /// `written[slots.0..slots.1]` (the action runs where the table has no entry).
     Table {
-        table: u32,
+        code: ActionCode,
         base: u32,
         slots: (u32, u32),
-        code: ActionCode,
         who: ActionOf,
     },
     Action {
@@ -168,12 +167,11 @@ impl System {
                             .into_iter()
                             .map(|(slot, value)| PlanOp::Set { slot, value });
                         out.ops.extend(set);
-                    } else if let Some(table) = flat.action_table(code) {
+                    } else if code.has_table() {
                         out.ops.push(PlanOp::Table {
-                            table,
+                            code,
                             base,
                             slots,
-                            code,
                             who,
                         });
                     } else {
@@ -210,12 +208,11 @@ impl System {
             match *op {
                 PlanOp::Set { slot, value } => state.slots_mut()[slot as usize] = value,
                 PlanOp::Table {
-                    table,
+                    code,
                     base,
                     slots: (s0, s1),
-                    code,
                     who,
-                } => match flat.entry(table, state.slots(), base) {
+                } => match flat.action_values(code, state.slots(), base) {
                     // the whole action's values, in range (as `run_action` takes them)
                     Some(values) => {
                         let slots = &plans.written[s0 as usize..s1 as usize];

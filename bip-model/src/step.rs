@@ -11,6 +11,7 @@ use crate::prelude::*;
 use crate::eval::{Env, EvalError};
 use crate::fast_path::{ActionCode, FlatCode, GuardCode, Ranges};
 use crate::state::State;
+use crate::step_tables::LastKey;
 use crate::system::{Assign, RangeError, RangeErrorKind, System};
 
 /// What a step is: an internal transition of one component, or an interaction.
@@ -297,8 +298,10 @@ impl System {
     pub fn enabled_steps(&self, state: &State, out: &mut Steps) -> Result<(), RangeError> {
         out.clear();
         self.push_internal_steps(state, out)?;
+        // one state: an interaction that reads what the one before read shares its key
+        let mut last = LastKey::NONE;
         for i in 0..self.interactions.len() as u32 {
-            self.push_interaction_steps(state, i, out)?;
+            self.push_steps_of(state, i, out, &mut last)?;
         }
         if !self.priorities.is_empty() {
             self.apply_priorities(state, out)?;
@@ -417,8 +420,33 @@ impl System {
         i: u32,
         out: &mut Steps,
     ) -> Result<(), RangeError> {
+        let mut fresh = LastKey::NONE;
+        self.push_steps_of(state, i, out, &mut fresh)
+    }
+
+    /// [`System::push_interaction_steps`] from the step tables where `i` has an entry (the
+    /// key shared with the interaction looked up before, `last`, in the same state).
+    #[inline]
+    fn push_steps_of(
+        &self,
+        state: &State,
+        i: u32,
+        out: &mut Steps,
+        last: &mut LastKey,
+    ) -> Result<(), RangeError> {
         let start = out.picks.len();
-        let (width, _) = self.interaction_picks(state, i, &mut out.choices, &mut out.picks)?;
+        let tables = &self.enable_index.tables;
+        let width = match tables.lookup_sharing(i, state.slots(), last) {
+            Some(e) => {
+                out.picks.extend_from_slice(tables.picks(e));
+                e.width()
+            }
+            None => {
+                let picks = &mut out.picks;
+                self.compute_interaction_picks(state, i, &mut out.choices, picks)?
+                    .0
+            }
+        };
         if width == 0 {
             return Ok(());
         }
@@ -430,29 +458,6 @@ impl System {
             });
         }
         Ok(())
-    }
-
-    /// Appends to `out` the picks of the steps of interaction `i` in `state` (before
-    /// priorities), one step after the other. Returns how many picks a step has (0: no
-    /// step; every step of an interaction in a state has the same participants, the
-    /// required ports and the broadcast receivers that can join), and whether every
-    /// required port has an enabled transition (if not, no value of what only the
-    /// connector's guard reads can give the interaction a step).
-    #[inline]
-    pub(crate) fn interaction_picks(
-        &self,
-        state: &State,
-        i: u32,
-        scratch: &mut Choices,
-        out: &mut Vec<Pick>,
-    ) -> Result<(usize, bool), RangeError> {
-        let tables = &self.enable_index.tables;
-        if let Some(e) = tables.lookup(i, state.slots()) {
-            let (picks, width, ready) = tables.steps(e);
-            out.extend_from_slice(picks);
-            return Ok((width, ready));
-        }
-        self.compute_interaction_picks(state, i, scratch, out)
     }
 
     /// Every slot the steps of interaction `i` (before priorities) depend on, as
@@ -483,7 +488,12 @@ impl System {
         }
     }
 
-    /// [`System::interaction_picks`] computed from the state, without the tables.
+    /// Appends to `out` the picks of the steps of interaction `i` in `state` (before
+    /// priorities), one step after the other, computed from the state without the tables.
+    /// Returns how many picks a step has (0: no step; every step of an interaction in a
+    /// state has the same participants, the required ports and the broadcast receivers
+    /// that can join), and whether every required port has an enabled transition (if not,
+    /// no value of what only the connector's guard reads can give the interaction a step).
     #[inline]
     pub(crate) fn compute_interaction_picks(
         &self,

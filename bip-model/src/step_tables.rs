@@ -10,9 +10,10 @@
 //! combination, when it is compiled, with the step relation itself
 //! ([`System::compute_interaction_picks`]), and keeps them in a table; finding an
 //! interaction's steps is then a mixed-radix index and a copy. The verifier, which
-//! evaluates every interaction in every state, and the engine's [`crate::EnabledSet`], which
-//! re-evaluates the interactions a step touched, both read the tables through
-//! [`System::interaction_picks`].
+//! evaluates every interaction in every state ([`System::enabled_steps`]), and the engine's
+//! [`crate::EnabledSet`], which re-evaluates the interactions a step touched, both read the
+//! tables with [`StepTables::lookup_sharing`] and fall back on
+//! [`System::compute_interaction_picks`].
 //!
 //! The table is the step relation, not a second description of it: an entry holds what the
 //! relation computed for those argument values, and a combination on which the relation
@@ -29,10 +30,13 @@ use crate::step::{Choices, Pick};
 use crate::system::System;
 
 /// The most combinations one table may have.
+#[cfg_attr(not(feature = "std"), allow(dead_code))]
 const MAX_TABLE: u64 = 4096;
 /// The most entries and picks the tables of one system may hold (about 3 MiB and 8 MiB):
 /// interactions beyond the budget are computed as before.
+#[cfg_attr(not(feature = "std"), allow(dead_code))]
 const MAX_ENTRIES: usize = 1 << 18;
+#[cfg_attr(not(feature = "std"), allow(dead_code))]
 const MAX_PICKS: usize = 1 << 20;
 
 /// No table.
@@ -107,6 +111,8 @@ impl Entry {
 impl StepTables {
     /// Tabulates the interactions of `system` that fit (the system's own tables must be
     /// empty: its steps are computed by the relation).
+    // systems are compiled with `std` (loading needs it); a no-std build receives them
+    #[cfg_attr(not(feature = "std"), allow(dead_code))]
     pub(crate) fn build(system: &System) -> StepTables {
         let none = Table {
             digits: (0, 0),
@@ -181,21 +187,8 @@ impl StepTables {
     }
 
     /// The tabulated steps of interaction `i` in a state, if it has a table and an entry
-    /// for the state's values.
-    #[inline(always)]
-    pub(crate) fn lookup(&self, i: u32, slots: &[i64]) -> Option<&Entry> {
-        let table = *self.of.get(i as usize)?;
-        if table.entries == NONE {
-            return None;
-        }
-        let digits = &self.digits[table.digits.0 as usize..table.digits.1 as usize];
-        let key = key(digits, slots, 0)?;
-        let e = &self.entries[table.entries as usize + key as usize];
-        e.known.then_some(e)
-    }
-
-    /// [`StepTables::lookup`] in a state that stays the same between calls that pass the
-    /// same `last` (reset to [`LastKey::NONE`] when the state changes): an interaction that
+    /// for the state's values. Between calls that pass the same `last` the state must stay
+    /// the same (`last` is reset to [`LastKey::NONE`] when it changes): an interaction that
     /// reads the same slots as the one looked up before it reuses its key.
     #[inline(always)]
     pub(crate) fn lookup_sharing(
@@ -223,12 +216,10 @@ impl StepTables {
         e.known.then_some(e)
     }
 
-    /// The picks of an entry, the number of picks per step, and whether every required port
-    /// was ready.
+    /// The picks of an entry's steps, one step after the other.
     #[inline(always)]
-    pub(crate) fn steps(&self, e: &Entry) -> (&[Pick], usize, bool) {
-        let picks = &self.picks[e.start as usize..(e.start + e.len) as usize];
-        (picks, e.width as usize, e.ready)
+    pub(crate) fn picks(&self, e: &Entry) -> &[Pick] {
+        &self.picks[e.start as usize..(e.start + e.len) as usize]
     }
 
     /// Every tabulated step: its interaction, where its picks start in the pool, and how
