@@ -331,7 +331,9 @@ pub(crate) struct FlatCode {
     table_digits: Vec<Digit>,
     table_values: Vec<i64>,
     table_known: Vec<bool>,
-    /// While the code is made: the state tables are computed on ([`FlatCode::done`] frees it).
+    /// While the code is made: the state tables are computed on, one for every table
+    /// (it has a slot per slot of the system, too many to allocate per table);
+    /// [`FlatCode::done`] frees it.
     scratch: Vec<i64>,
 }
 

@@ -71,11 +71,6 @@ impl Digits {
     }
 }
 
-/// How many keys digits make.
-pub(crate) fn keys(digits: &[Digit]) -> u64 {
-    digits.iter().map(|d| d.radix).product()
-}
-
 /// The key of the values in `slots`, or `None` if one is outside the range its digit was
 /// made for (such a state is left to whatever computes without the table).
 #[inline(always)]

@@ -25,7 +25,7 @@ use crate::prelude::*;
 
 use alloc::sync::Arc;
 
-use crate::radix::{key, keys, Digit, Digits};
+use crate::radix::{key, Digit, Digits};
 use crate::step::{Choices, Pick};
 use crate::system::System;
 
@@ -54,11 +54,12 @@ pub(crate) struct StepTables {
     picks: Arc<[Pick]>,
 }
 
-/// The key's digits in `digits`, the entries from `entries` on.
+/// The key's digits in `digits`, its `size` entries from `entries` on.
 #[derive(Clone, Copy, Debug)]
 struct Table {
     digits: (u32, u32),
     entries: u32,
+    size: u32,
 }
 
 /// The key last computed by [`StepTables::lookup_sharing`], and of which digits.
@@ -117,6 +118,7 @@ impl StepTables {
         let none = Table {
             digits: (0, 0),
             entries: NONE,
+            size: 0,
         };
         let mut t = StepTables {
             of: vec![none; system.interactions.len()],
@@ -180,6 +182,8 @@ impl StepTables {
             t.of[i as usize] = Table {
                 digits,
                 entries: entries_start as u32,
+                // at most MAX_TABLE
+                size: d.size as u32,
             };
         }
         t.picks = picks.into();
@@ -226,11 +230,9 @@ impl StepTables {
     /// many picks it has.
     pub(crate) fn pooled_steps(&self) -> impl Iterator<Item = (u32, u32, u32)> + '_ {
         self.of.iter().enumerate().flat_map(move |(i, t)| {
-            let (start, n) = if t.entries == NONE {
-                (0, 0)
-            } else {
-                let digits = &self.digits[t.digits.0 as usize..t.digits.1 as usize];
-                (t.entries as usize, keys(digits) as usize)
+            let (start, n) = match t.entries {
+                NONE => (0, 0),
+                e => (e as usize, t.size as usize),
             };
             let entries = self.entries[start..start + n].iter();
             entries
