@@ -202,13 +202,13 @@ fn main() {
         let mut e = running(&system, work);
         // the codels' own time, measured just before and just after the run (the machine's
         // speed drifts; one measurement apart from the run moves the overhead by percents)
-        let codels = steps * 3 / 4;
-        let before = work_alone(codels);
+        // (about three steps in four are codels; the "before" time is scaled to the count)
+        let guess = steps * 3 / 4;
+        let before = work_alone(guess);
         let (t, codels) = timed(&mut e, steps);
         let after = work_alone(codels);
-        let alone = (before.as_secs_f64() * codels as f64 / (steps * 3 / 4) as f64
-            + after.as_secs_f64())
-            / 2.0;
+        let alone =
+            (before.as_secs_f64() * codels as f64 / guess as f64 + after.as_secs_f64()) / 2.0;
         let alone = Duration::from_secs_f64(alone);
         work_us = alone.as_secs_f64() * 1e6 / codels as f64;
         let extra = t.as_secs_f64() - alone.as_secs_f64();

@@ -6,7 +6,6 @@
 use crate::prelude::*;
 
 use alloc::sync::Arc;
-use core::cell::Cell;
 
 use bip_model::genom::{CodelMap, Condition};
 use bip_model::{Pick, Role, System};
@@ -54,11 +53,11 @@ pub(crate) struct CodelTable {
     pub ids_field: Vec<usize>,
     /// Its task's period in ticks.
     pub period_ticks: u64,
-    /// The last yield it returned, by the address and length of its `&'static str`, and
-    /// its index in `map.yields`. A codel returns the same literals again and again, and
-    /// the text at a `&'static str`'s address never changes (it is never freed), so the
-    /// same address and length are the same yield without comparing the text.
-    pub last_yield: Cell<Option<(usize, usize, usize)>>,
+    /// The last yield it returned, and its index in `map.yields`. A codel returns the
+    /// same literals again and again, and the text at a `&'static str`'s address never
+    /// changes (it is never freed), so the same address and length are the same yield
+    /// without comparing the text.
+    pub last_yield: Option<(&'static str, usize)>,
     /// The run step last taken from a step table entry of its run interaction (see
     /// [`RunStep`]).
     pub run_step: Option<RunStep>,
@@ -79,15 +78,15 @@ pub(crate) struct RunStep {
 
 impl CodelTable {
     /// The index of yield `y` (as a codel returns it) among the codel's yields.
-    pub fn yield_index(&self, y: &'static str) -> Option<usize> {
-        let key = (y.as_ptr() as usize, y.len());
-        if let Some((at, len, k)) = self.last_yield.get() {
-            if (at, len) == key {
+    pub fn yield_index(&mut self, y: &'static str) -> Option<usize> {
+        if let Some((last, k)) = self.last_yield {
+            // the address and the length
+            if core::ptr::eq(last, y) {
                 return Some(k);
             }
         }
         let k = self.map.yields.iter().position(|x| x.target == y)?;
-        self.last_yield.set(Some((key.0, key.1, k)));
+        self.last_yield = Some((y, k));
         Some(k)
     }
 }
@@ -274,7 +273,7 @@ impl Tables {
                         },
                         ids_field,
                         period_ticks,
-                        last_yield: Cell::new(None),
+                        last_yield: None,
                         run_step: None,
                     });
                 }

@@ -1152,7 +1152,7 @@ impl Engine {
     }
 
     fn classify(&mut self, ck: usize, result: Result<Next, String>) -> Verdict2 {
-        let c = &self.t.codels[ck];
+        let c = &mut self.t.codels[ck];
         let fault = |kind| {
             Verdict2::Error(Outcome::Fault(Fault {
                 codel: CodelId(ck as u32),
@@ -1321,16 +1321,9 @@ impl Engine {
                 .steps_of(run)
                 .find(|s| s.picks == &self.forced[..] && matches(s))
         } else {
-            // `choose_step` written out: through its closure and a `filter`, this path (one
-            // per codel run) costs a few more instructions
-            let mut n = 0;
-            let mut first = None;
-            for (k, s) in self.enabled.steps_of(run).enumerate() {
-                if matches(&s) {
-                    first = first.or(Some((k, s)));
-                    n += 1;
-                }
-            }
+            // as `choose_step`, keeping where the first match is among all the steps
+            let all = self.enabled.steps_of(run).enumerate();
+            let (n, first) = count_first(all.filter(|(_, s)| matches(s)));
             match first {
                 None => None,
                 Some((k, first)) => match self.chooser.choose(n) {
@@ -1583,6 +1576,19 @@ impl Engine {
     }
 }
 
+/// How many items `items` yields, and the first: the choice whenever there is one, found
+/// in the same pass.
+#[inline(always)]
+fn count_first<T>(items: impl Iterator<Item = T>) -> (usize, Option<T>) {
+    let mut n = 0;
+    let mut first = None;
+    for x in items {
+        first = first.or(Some(x));
+        n += 1;
+    }
+    (n, first)
+}
+
 /// One of the steps `steps` yields, chosen by `chooser` among them all (`None` if there
 /// are none). One pass counts them and keeps the first, the choice whenever there is only
 /// one; the chooser sees the count either way, so seeded runs do not change.
@@ -1590,12 +1596,7 @@ fn choose_step<'a, I: Iterator<Item = Step<'a>>>(
     chooser: &mut Chooser,
     steps: impl Fn() -> I,
 ) -> Option<Step<'a>> {
-    let mut n = 0;
-    let mut first = None;
-    for s in steps() {
-        first = first.or(Some(s));
-        n += 1;
-    }
+    let (n, first) = count_first(steps());
     let first = first?;
     match chooser.choose(n) {
         0 => Some(first),

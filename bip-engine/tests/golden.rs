@@ -1,11 +1,16 @@
 //! The engine's runs do not change when its code is made faster: seeded runs on the
-//! example models (random codel results and requests, every policy, default codels, task
+//! example models (random codel results and requests, each policy, default codels, task
 //! threads, a codel that overruns, replay through `step_as`) each give one fingerprint of
 //! what the engine did (every `step` result, every event, the recorded trace, the final
 //! state), and the fingerprints are those of the engine before its optimisations.
 //!
-//! A change that makes a fingerprint differ changed the engine's behaviour: the steps
-//! committed, their order, the policy's choices, the replies, faults or held reports. If
+//! On most models the policy never has two steps to choose from (their runs under each
+//! policy share a fingerprint); the satellite and the pipeline make it choose, and
+//! `tests/scheduling.rs` checks the choices themselves.
+//!
+//! A change that makes a fingerprint differ changed the engine's behaviour (the steps
+//! committed, their order, the policy's choices, the replies, faults or held reports) or
+//! the `Debug` form of what is hashed (a new `Stats` counter, say). If
 //! that is intended (a change of the semantics or of the scheduling), print the new
 //! fingerprints with `BIP_GOLDEN_PRINT=1 cargo test -p bip-engine --test golden --
 //! --nocapture` and say why in the commit.

@@ -136,3 +136,54 @@ fn the_policy_chooses_among_the_steps_of_a_codels_yield() {
     assert!(seeded.contains(&0) && seeded.contains(&1), "{seeded:?}");
     assert_eq!(seeded, rolls(Policy::Seeded(3)));
 }
+
+/// The values `x` takes at each of four ticks of a clock whose port has two transitions
+/// (`x = 0`, `x = 1`), under `policy`.
+fn ticks(policy: Policy) -> Vec<i64> {
+    let system = load_str(
+        r#"System(
+            name: "coin",
+            tick_ms: 1,
+            atoms: {
+                "Coin": Atom(
+                    locations: ["l"],
+                    initial: "l",
+                    ports: ["tick"],
+                    vars: [(name: "x", ty: Int(0, 1))],
+                    transitions: [
+                        (from: "l", port: "tick", to: "l", action: "x = 0"),
+                        (from: "l", port: "tick", to: "l", action: "x = 1"),
+                    ],
+                ),
+            },
+            components: [(name: "coin", atom: "Coin")],
+            connectors: [(name: "tick", ports: ["coin.tick"], role: Time)],
+        )"#,
+    );
+    let coin = system.component_index("coin").expect("coin");
+    let x = system.atom_of(coin).var_index("x").expect("x");
+    let mut e = Engine::builder(system.clone())
+        .policy(policy)
+        .build()
+        .expect("builds");
+    let mut out = Vec::new();
+    while out.len() < 4 {
+        match e.step().expect("steps") {
+            Stepped::Tick => out.push(system.value(e.state(), coin, x)),
+            Stepped::Idle {
+                next_tick_us: Some(t),
+            } => e.wait_until(t),
+            other => panic!("{other:?}"),
+        }
+    }
+    out
+}
+
+/// A tick with several steps goes through the policy like any other choice (a tick with
+/// one step is copied without asking it).
+#[test]
+fn the_policy_chooses_among_the_steps_of_a_tick() {
+    assert_eq!(ticks(Policy::First), [0; 4]);
+    assert_eq!(ticks(Policy::RoundRobin), [1, 0, 1, 0]);
+    assert_eq!(ticks(Policy::Seeded(5)), ticks(Policy::Seeded(5)));
+}
