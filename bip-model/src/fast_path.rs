@@ -1037,7 +1037,7 @@ mod tests {
     fn tables_hold_what_the_tree_computes() {
         let ranges = SMALL;
         let mut rng = crate::Rng::new(11);
-        let (mut tabulated, mut failures, mut values) = (0, 0, 0);
+        let (mut tabulated, mut failures, mut values, mut outside) = (0, 0, 0, 0);
         for _ in 0..5_000 {
             let e = random_expr(&mut rng, 4);
             let mut code = FlatCode::default();
@@ -1059,9 +1059,14 @@ mod tests {
                 && crate::radix::key(&code.table_digits, &[3, 0, 0, 0, 0], 3).is_none()
             {
                 assert_eq!(code.lookup(t, &[3, 0, 0, 0, 0], 3), None, "{e:?}");
+                outside += 1;
             }
         }
         assert!(tabulated > 2_000 && failures > 1_000 && values > 100_000);
+        assert!(
+            outside > 500,
+            "only {outside} tables looked up outside their ranges"
+        );
         // an expression over more combinations than a table may hold is not tabulated
         let wide = [(0, 1000), (0, 1000)];
         let e = Expr::Binary(BinOp::Mul, b(Expr::Slot(0)), b(Expr::Slot(1)));
@@ -1080,7 +1085,7 @@ mod tests {
     fn action_tables_hold_what_the_assignments_write() {
         let (slots, locals, ranges) = (SMALL_SLOTS, SMALL_LOCALS, SMALL);
         let mut rng = crate::Rng::new(13);
-        let (mut tabulated, mut failures, mut values) = (0, 0, 0);
+        let (mut tabulated, mut failures, mut values, mut outside) = (0, 0, 0, 0);
         for _ in 0..3_000 {
             let n = 2 + rng.below(2);
             let action: Vec<Assign> = (0..n)
