@@ -8,8 +8,9 @@
 //! participant's transitions on its port reads, while the participant is where those
 //! transitions start; a slot the connector's guard reads, while a required participant
 //! is where it has transitions on its port and every required port had an enabled
-//! transition when the interaction was last evaluated), with the same function the full
-//! relation uses ([`System::push_interaction_steps`]); priorities are applied by looking
+//! transition when the interaction was last evaluated), as the full relation does: from
+//! the interaction's step table where it has one, else with
+//! [`System::compute_interaction_picks`]; priorities are applied by looking
 //! up, for a lower interaction, whether one of its higher interactions has steps (a sparse
 //! bit mask per lower interaction), or with [`System::is_suppressed`] itself for
 //! interactions under a rule with a `when`. It is not a second notion of "enabled": it
@@ -64,8 +65,8 @@ pub struct EnabledSet {
     pool: Arc<[Pick]>,
     /// Interactions with steps before priorities (one bit each).
     pre: Vec<u64>,
-    /// Lazy interactions not evaluated since they were suppressed: their `picks` and
-    /// `pre` bit are out of date (and do not matter while they stay suppressed).
+    /// Lazy interactions not evaluated since they were suppressed: their `found`,
+    /// `picks` and `pre` bit are out of date (and do not matter while they stay suppressed).
     stale: Vec<u64>,
     /// Per interaction under a `when` rule: suppressed in this state.
     when_suppressed: Vec<u64>,
@@ -344,7 +345,7 @@ impl EnabledSet {
     /// stale interactions that are no longer suppressed, and decides the `when` rules.
     fn settle(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
         // a stale interaction is higher in no rule, so evaluating one changes no other's
-        // verdict: interactions with the same higher ones are decided once
+        // verdict: consecutive interactions with the same higher ones are decided once
         let mut last: Option<((u32, u32), bool)> = None;
         for w in 0..self.stale.len() {
             let mut bits = self.stale[w];
