@@ -1085,7 +1085,7 @@ mod tests {
     fn action_tables_hold_what_the_assignments_write() {
         let (slots, locals, ranges) = (SMALL_SLOTS, SMALL_LOCALS, SMALL);
         let mut rng = crate::Rng::new(13);
-        let (mut tabulated, mut failures, mut values, mut outside) = (0, 0, 0, 0);
+        let (mut tabulated, mut failures, mut values) = (0, 0, 0);
         for _ in 0..3_000 {
             let n = 2 + rng.below(2);
             let action: Vec<Assign> = (0..n)
