@@ -24,6 +24,7 @@ use bip_model::{
 };
 
 use crate::bind::{InterKind, PortKind, RunStep, Tables};
+use crate::chosen::Chosen;
 use crate::clock::Clock;
 use crate::codel::{CodelFn, Ctx, CtxFault, Next};
 use crate::error::{BuildError, EngineError, RequestError, StepAsError};
@@ -261,8 +262,7 @@ impl EngineBuilder {
                 _ => 0,
             }),
             candidates: Vec::with_capacity(16),
-            picks: Vec::with_capacity(16),
-            picked_at: None,
+            chosen: Chosen::with_capacity(16),
             plans: system.fire_plans(),
             forced: Vec::with_capacity(16),
             recording: self.record.map(Recording::with_capacity),
@@ -343,10 +343,8 @@ pub struct Engine {
     defaults: DefaultCodels,
     default_rng: Rng,
     candidates: Vec<Candidate>,
-    /// Scratch: the picks of the step being committed, and where they are in the step
-    /// tables' pool if they were copied from there.
-    picks: Vec<Pick>,
-    picked_at: Option<u32>,
+    /// The step being committed.
+    chosen: Chosen,
     /// The firings of the pooled steps, compiled.
     plans: FirePlans,
     /// Scratch: the step [`Engine::step_as`] was asked to take.
@@ -663,9 +661,7 @@ impl Engine {
             Label::Interaction(i) => self.t.kind[i as usize],
             Label::Internal { .. } => InterKind::Progress,
         };
-        self.picks.clear();
-        self.picks.extend_from_slice(step.picks);
-        self.picked_at = None;
+        self.chosen.set_copied(step.picks);
         match kind {
             InterKind::Codel { codel, .. } => self.run_codel(codel, true),
             InterKind::Request { service } => {
@@ -744,7 +740,7 @@ impl Engine {
         }
     }
 
-    /// Copies the `k`-th enabled step with `label` into the scratch picks.
+    /// Chooses the `k`-th enabled step with `label`.
     fn copy_step(&mut self, label: Label, k: u32) {
         let step = match label {
             Label::Interaction(i) => self.enabled.steps_of(i).nth(k as usize),
@@ -754,30 +750,21 @@ impl Engine {
                 .filter(|s| s.label == label)
                 .nth(k as usize),
         };
-        set_picks(&mut self.picks, &mut self.picked_at, &self.enabled, step);
+        self.chosen.set(&self.enabled, step);
     }
 
-    /// Copies one of the enabled steps of interaction `i`, chosen by the policy, into the
-    /// scratch picks (none if it has none).
+    /// Chooses one of the enabled steps of interaction `i` by the policy (none if it has
+    /// none).
     fn take_step_of(&mut self, i: u32) {
         // one step from the pool (a tick): nothing to walk, and nothing to choose (a
         // chooser asked to choose among one answers 0 and draws nothing, so seeded runs
         // do not change)
         if let Some((at, width, 1)) = self.enabled.pooled_steps(i) {
-            let step = Step {
-                label: Label::Interaction(i),
-                picks: &self.enabled.pool()[at as usize..(at + width) as usize],
-            };
-            set_picks(
-                &mut self.picks,
-                &mut self.picked_at,
-                &self.enabled,
-                Some(step),
-            );
+            self.chosen.set_pooled(at, width);
             return;
         }
         let step = choose_step(&mut self.chooser, || self.enabled.steps_of(i));
-        set_picks(&mut self.picks, &mut self.picked_at, &self.enabled, step);
+        self.chosen.set(&self.enabled, step);
     }
 
     // ---------------------------------------------------------------------------------
@@ -831,7 +818,7 @@ impl Engine {
         })
     }
 
-    /// Commits the request step in the scratch picks and replies.
+    /// Commits the chosen request step and replies.
     fn accept_request(
         &mut self,
         ticket: Ticket,
@@ -1030,18 +1017,18 @@ impl Engine {
                 if same.is_none() {
                     return Err(StepAsError::Diverged);
                 }
-                set_picks(&mut self.picks, &mut self.picked_at, &self.enabled, same);
+                self.chosen.set(&self.enabled, same);
             } else {
                 self.take_step_of(fail);
             }
-            if self.picks.is_empty() {
+            if self.chosen.picks(&self.enabled).is_empty() {
                 // run and fail share their guard, so this cannot happen; report it
                 return Err(StepAsError::Engine(EngineError::Stopped(
                     self.internal_error(),
                 )));
             }
         }
-        if forced && self.picks != self.forced {
+        if forced && self.chosen.picks(&self.enabled) != &self.forced[..] {
             return Err(StepAsError::Diverged);
         }
         self.stats.codels += 1;
@@ -1260,7 +1247,7 @@ impl Engine {
             .any(|s| s.picks == &self.forced[..])
     }
 
-    /// Copies into the scratch picks a step of the codel's run interaction that takes
+    /// Chooses a step of the codel's run interaction that takes
     /// yield `yield_k` and writes the staged ids, chosen by the policy if several (with
     /// `forced`, the forced step if it is one); false if there is none.
     fn take_run_step(&mut self, ck: usize, yield_k: usize, forced: bool) -> bool {
@@ -1273,17 +1260,7 @@ impl Engine {
         };
         if let (Some((entry, width, _)), Some(m)) = (pooled, c.run_step) {
             if m.entry == entry && m.yield_k as usize == yield_k {
-                let at = m.step as usize;
-                let step = Step {
-                    label: Label::Interaction(c.map.run),
-                    picks: &self.enabled.pool()[at..at + width as usize],
-                };
-                set_picks(
-                    &mut self.picks,
-                    &mut self.picked_at,
-                    &self.enabled,
-                    Some(step),
-                );
+                self.chosen.set_pooled(m.step, width);
                 return true;
             }
         }
@@ -1342,7 +1319,7 @@ impl Engine {
             }
         };
         let found = step.is_some();
-        set_picks(&mut self.picks, &mut self.picked_at, &self.enabled, step);
+        self.chosen.set(&self.enabled, step);
         if remember.is_some() {
             self.t.codels[ck].run_step = remember;
         }
@@ -1352,14 +1329,12 @@ impl Engine {
     // ---------------------------------------------------------------------------------
     // Committing
 
-    /// Fires the step in the scratch picks, updates the enabled set, the replies and the
+    /// Fires the chosen step, updates the enabled set, the replies and the
     /// recording, and moves to the new state.
     fn commit(&mut self, label: Label, cause: Cause) -> Result<(), EngineError> {
         // a pooled step fires by its plan; any other as the relation says
-        let plan = match (label, self.picked_at) {
-            (Label::Interaction(i), Some(at)) => {
-                self.plans.plan_at(self.enabled.pool(), at, i, &self.picks)
-            }
+        let plan = match (label, self.chosen.pooled()) {
+            (Label::Interaction(i), Some((at, width))) => self.plans.plan_at(at, width, i),
             _ => None,
         };
         let fired = match plan {
@@ -1368,7 +1343,7 @@ impl Engine {
                 self.step_slots.clear();
                 let step = Step {
                     label,
-                    picks: &self.picks,
+                    picks: self.chosen.picks(&self.enabled),
                 };
                 self.system
                     .fire_in_place(step, &mut self.next, &mut self.step_slots)
@@ -1386,7 +1361,11 @@ impl Engine {
         let moves = match label {
             Label::Interaction(i) => {
                 self.t.moves_requests[i as usize]
-                    && self.picks.iter().any(|&p| self.t.moves_request(p))
+                    && self
+                        .chosen
+                        .picks(&self.enabled)
+                        .iter()
+                        .any(|&p| self.t.moves_request(p))
             }
             Label::Internal { .. } => false,
         };
@@ -1396,7 +1375,7 @@ impl Engine {
         if let Some(r) = &mut self.recording {
             r.push(Step {
                 label,
-                picks: &self.picks,
+                picks: self.chosen.picks(&self.enabled),
             });
         }
         if tracing::enabled!(target: "bip_engine", tracing::Level::DEBUG) {
@@ -1428,7 +1407,8 @@ impl Engine {
                 let yielded = if fail {
                     "fail"
                 } else {
-                    self.picks
+                    self.chosen
+                        .picks(&self.enabled)
                         .iter()
                         .find_map(|p| {
                             c.map.yield_of(p.transition).filter(|_| {
@@ -1461,8 +1441,8 @@ impl Engine {
             Cause::Codel { error, .. } => (None, None, None, error),
             Cause::Other => (None, None, None, None),
         };
-        for k in 0..self.picks.len() {
-            let p = self.picks[k];
+        for k in 0..self.chosen.picks(&self.enabled).len() {
+            let p = self.chosen.picks(&self.enabled)[k];
             // a tick, a codel that neither starts nor ends its activity, another component
             if !self.t.moves_request(p) {
                 continue;
@@ -1641,22 +1621,6 @@ fn written_by<'a>(plans: &'a FirePlans, plan: Option<PlanId>, listed: &'a [u32])
     match plan {
         Some(p) => plans.written(p),
         None => listed,
-    }
-}
-
-/// Makes `step` the scratch picks (none if `None`), and notes where they are in the step
-/// tables' pool.
-fn set_picks(
-    picks: &mut Vec<Pick>,
-    at: &mut Option<u32>,
-    enabled: &EnabledSet,
-    step: Option<Step<'_>>,
-) {
-    picks.clear();
-    *at = None;
-    if let Some(s) = step {
-        picks.extend_from_slice(s.picks);
-        *at = enabled.pool_position(s.picks);
     }
 }
 

@@ -54,6 +54,7 @@ mod prelude {
 }
 
 mod bind;
+mod chosen;
 mod clock;
 mod codel;
 mod engine;

@@ -68,15 +68,18 @@ enum PlanOp {
 }
 
 impl FirePlans {
-    /// The plan of the step `picks` of interaction `i`, if it is the step that starts at
-    /// position `at` of the step tables' pool ([`crate::EnabledSet::pooled_steps`]).
+    /// The plan of the step of interaction `i` whose picks are `pool[at..at + width]` in
+    /// the step tables' pool, as [`crate::EnabledSet::pooled_steps`] and
+    /// [`crate::EnabledSet::pool_position`] locate a step; `None` if no step of `i` with
+    /// `width` picks starts there. Nothing is compared but the place: each pick of the
+    /// pool belongs to one step table entry, so a step that starts at `at` with as many
+    /// picks as the plan's is the plan's step.
     #[inline]
-    pub fn plan_at(&self, pool: &[Pick], at: u32, i: u32, picks: &[Pick]) -> Option<PlanId> {
+    pub fn plan_at(&self, at: u32, width: u32, i: u32) -> Option<PlanId> {
         let p = *self.at.get(at as usize)?;
         let plan = self.plans.get(p as usize)?;
         let (a, b) = plan.picks;
-        (plan.interaction == i && pool.get(a as usize..b as usize) == Some(picks))
-            .then_some(PlanId(p))
+        (plan.interaction == i && b - a == width).then_some(PlanId(p))
     }
 
     /// Every slot the plan's step writes, in the order [`System::fire_in_place`] lists

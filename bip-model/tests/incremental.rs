@@ -41,14 +41,14 @@ fn check_plan(
     let (Label::Interaction(i), Some(at)) = (st.label, set.pool_position(st.picks)) else {
         return Ok(false);
     };
-    let Some(p) = plans.plan_at(set.pool(), at, i, st.picks) else {
+    let width = st.picks.len() as u32;
+    let Some(p) = plans.plan_at(at, width, i) else {
         return Err(TestCaseError::fail("a pooled step without a plan"));
     };
-    // other picks at that position, or another interaction, are not this plan
-    let mut other = st.picks.to_vec();
-    other[0].transition += 1;
-    prop_assert!(plans.plan_at(set.pool(), at, i, &other).is_none());
-    prop_assert!(plans.plan_at(set.pool(), at, i + 1, st.picks).is_none());
+    // another width at that position, or another interaction, is not this plan
+    prop_assert!(plans.plan_at(at, width + 1, i).is_none());
+    prop_assert!(plans.plan_at(at, width - 1, i).is_none());
+    prop_assert!(plans.plan_at(at, width, i + 1).is_none());
     let mut planned = s.clone();
     let r = sys.fire_planned(plans, p, &mut planned);
     match (r, fired) {
@@ -396,7 +396,7 @@ fn plans_keep_the_order_of_an_actions_assignments() {
             panic!("an interaction")
         };
         let at = set.pool_position(st.picks).expect("a pooled step");
-        let p = plans.plan_at(set.pool(), at, i, st.picks).expect("a plan");
+        let p = plans.plan_at(at, st.picks.len() as u32, i).expect("a plan");
         let mut planned = s.clone();
         sys.fire_planned(&plans, p, &mut planned).expect("fires");
         let mut next = s.clone();
