@@ -119,8 +119,24 @@ pub(crate) struct ActivityTable {
     pub pending: Option<Ticket>,
     pub current_args: Option<Box<dyn core::any::Any + Send>>,
     pub pending_args: Option<Box<dyn core::any::Any + Send>>,
-    /// The held codel last reported, and why.
+}
+
+/// An activity as a quiescent point looks at it ([`Rest`]), and the held codel last
+/// reported for it, with why.
+pub(crate) struct Watched {
+    pub service: u32,
+    pub rest: Rest,
     pub held: Option<(u32, Reasons)>,
+}
+
+/// The slots that tell whether an activity is at rest (its [`ActivityTable`]'s, kept
+/// together: a quiescent point asks every activity).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Rest {
+    paused_slot: u32,
+    loc_slot: u32,
+    req_slot: u32,
+    ether: u32,
 }
 
 pub(crate) struct Tables {
@@ -141,7 +157,7 @@ pub(crate) struct Tables {
     /// Per component, the service whose activity it is.
     pub activity_of: Vec<Option<u32>>,
     /// The services that have an activity, in order: the only ones that can hold a codel.
-    pub activities: Vec<u32>,
+    pub activities: Vec<Watched>,
     /// (module, port) per port store entry.
     pub ports: Vec<(String, String)>,
     /// The system has internal transitions: without any, the engine need not look for
@@ -223,8 +239,13 @@ impl Tables {
                 let mut activity = None;
                 if let Some(comp) = s.component {
                     t.activity_of[comp as usize] = Some(sid);
-                    t.activities.push(sid);
-                    activity = Some(activity_table(system, comp, t.codels.len() as u32, s)?);
+                    let a = activity_table(system, comp, t.codels.len() as u32, s)?;
+                    t.activities.push(Watched {
+                        service: sid,
+                        rest: a.rest(),
+                        held: None,
+                    });
+                    activity = Some(a);
                 }
                 for c in &s.codels {
                     let cid = t.codels.len() as u32;
@@ -359,8 +380,20 @@ impl Tables {
 }
 
 impl ActivityTable {
+    pub fn rest(&self) -> Rest {
+        Rest {
+            paused_slot: self.paused_slot,
+            loc_slot: self.loc_slot,
+            req_slot: self.req_slot,
+            ether: self.ether,
+        }
+    }
+}
+
+impl Rest {
     /// True if the activity has no work now (not requested and in `ether`), or waits for
     /// its task's period: then none of its codels is held, whatever the conditions.
+    #[inline]
     pub fn at_rest(&self, slots: &[i64]) -> bool {
         slots[self.paused_slot as usize] != 0
             || (slots[self.loc_slot as usize] == i64::from(self.ether)
@@ -423,6 +456,5 @@ fn activity_table(
         pending: None,
         current_args: None,
         pending_args: None,
-        held: None,
     })
 }

@@ -855,22 +855,21 @@ impl Engine {
     /// `Exclusive`, a codel held by `Requires`...), reported once per change.
     fn report_held(&mut self) -> Result<(), EngineError> {
         for k in 0..self.t.activities.len() {
-            let s = self.t.activities[k] as usize;
+            let w = &self.t.activities[k];
+            // most activities wait for their period at a quiescent point: nothing is held,
+            // and nothing was reported held before
+            if w.held.is_none() && w.rest.at_rest(self.state.slots()) {
+                continue;
+            }
+            let s = w.service as usize;
             let Some(a) = &self.t.services[s].activity else {
                 continue;
             };
-            // most activities wait for their period at a quiescent point: nothing is held,
-            // and nothing was reported held before
-            if a.held.is_none() && a.at_rest(self.state.slots()) {
-                continue;
-            }
             let held = self.held_codel(s)?;
             let loc = self.state.slots()[a.loc_slot as usize] as u32;
             let ticket = if loc == a.ether { a.pending } else { a.current };
-            if held != a.held {
-                if let Some(a) = &mut self.t.services[s].activity {
-                    a.held = held;
-                }
+            if held != self.t.activities[k].held {
+                self.t.activities[k].held = held;
                 if let Some((c, reasons)) = held {
                     let i = &self.t.codels[c as usize].info;
                     tracing::info!(target: "bip_engine", module = i.module.as_str(),
@@ -934,7 +933,7 @@ impl Engine {
             return Ok(None);
         };
         let slots = self.state.slots();
-        if a.at_rest(slots) {
+        if a.rest().at_rest(slots) {
             return Ok(None);
         }
         let loc = slots[a.loc_slot as usize] as u32;
