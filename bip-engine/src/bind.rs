@@ -357,6 +357,13 @@ impl Tables {
         self
     }
 
+    /// Whether a step of interaction `i` with `picks` moves a request along an activity's
+    /// life cycle (and must be tracked for replies).
+    #[inline]
+    pub fn step_moves_request(&self, i: u32, picks: &[Pick]) -> bool {
+        self.moves_requests[i as usize] && picks.iter().any(|&p| self.moves_request(p))
+    }
+
     /// Whether the pick moves a request along its activity's life cycle (see `moving`).
     pub fn moves_request(&self, p: Pick) -> bool {
         let (start, end) = (

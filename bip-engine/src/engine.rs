@@ -224,6 +224,14 @@ impl EngineBuilder {
             .max(1);
         let state = system.initial_state();
         let enabled = EnabledSet::new(&system, &state).map_err(BuildError::Range)?;
+        let plans = system.fire_plans();
+        let plan_moves = plans
+            .steps()
+            .map(|(i, at, width)| {
+                let pool = enabled.pool();
+                t.step_moves_request(i, &pool[at as usize..(at + width) as usize])
+            })
+            .collect();
         let ports = PortStore::new(core::mem::take(&mut t.ports));
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
         #[cfg(feature = "std")]
@@ -263,7 +271,8 @@ impl EngineBuilder {
             }),
             candidates: Vec::with_capacity(16),
             chosen: Chosen::with_capacity(16),
-            plans: system.fire_plans(),
+            plans,
+            plan_moves,
             forced: Vec::with_capacity(16),
             recording: self.record.map(Recording::with_capacity),
             stats: Stats::default(),
@@ -345,8 +354,10 @@ pub struct Engine {
     candidates: Vec<Candidate>,
     /// The step being committed.
     chosen: Chosen,
-    /// The firings of the pooled steps, compiled.
+    /// The firings of the pooled steps, compiled, and per plan whether its step moves a
+    /// request (`Tables::step_moves_request`).
     plans: FirePlans,
+    plan_moves: Vec<bool>,
     /// Scratch: the step [`Engine::step_as`] was asked to take.
     forced: Vec<Pick>,
     recording: Option<Recording>,
@@ -1357,16 +1368,12 @@ impl Engine {
         let updated = self
             .enabled
             .update_written(&self.system, &self.state, &self.next, written);
-        let moves = match label {
-            Label::Interaction(i) => {
-                self.t.moves_requests[i as usize]
-                    && self
-                        .chosen
-                        .picks(&self.enabled)
-                        .iter()
-                        .any(|&p| self.t.moves_request(p))
-            }
-            Label::Internal { .. } => false,
+        let moves = match (label, plan) {
+            (Label::Interaction(_), Some(p)) => self.plan_moves[p.index()],
+            (Label::Interaction(i), None) => self
+                .t
+                .step_moves_request(i, self.chosen.picks(&self.enabled)),
+            (Label::Internal { .. }, _) => false,
         };
         if moves {
             self.track(cause);

@@ -28,6 +28,15 @@ const NONE: u32 = u32::MAX;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PlanId(u32);
 
+impl PlanId {
+    /// Its position among the plans, as [`FirePlans::steps`] lists them: for a caller
+    /// keeping something per plan.
+    #[inline]
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
 /// What firing each step of a system's step tables does (see the module documentation).
 #[derive(Clone, Debug, Default)]
 pub struct FirePlans {
@@ -88,6 +97,15 @@ impl FirePlans {
     pub fn written(&self, p: PlanId) -> &[u32] {
         let (a, b) = self.plans[p.0 as usize].written;
         &self.written[a as usize..b as usize]
+    }
+
+    /// The step of every plan, in the order of [`PlanId::index`]: its interaction, and
+    /// where its picks are in the pool and how many (the first place, where identical
+    /// steps share the plan).
+    pub fn steps(&self) -> impl Iterator<Item = (u32, u32, u32)> + '_ {
+        self.plans
+            .iter()
+            .map(|p| (p.interaction, p.picks.0, p.picks.1 - p.picks.0))
     }
 
     /// How many distinct steps have a plan.
