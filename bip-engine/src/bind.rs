@@ -156,7 +156,8 @@ pub(crate) struct Tables {
     pub services: Vec<ServiceTable>,
     /// Per component, the service whose activity it is.
     pub activity_of: Vec<Option<u32>>,
-    /// The services that have an activity, in order: the only ones that can hold a codel.
+    /// The activities (of the services that have one), in service order: the only ones
+    /// that can hold a codel.
     pub activities: Vec<Watched>,
     /// (module, port) per port store entry.
     pub ports: Vec<(String, String)>,

@@ -580,7 +580,7 @@ impl Engine {
                     _ => EngineError::Stopped(self.internal_error()),
                 }),
                 Candidate::Step(label, k) => {
-                    self.copy_step(label, k);
+                    self.choose_kth(label, k);
                     self.commit(label, Cause::Other)?;
                     Ok(Stepped::Other)
                 }
@@ -752,7 +752,7 @@ impl Engine {
     }
 
     /// Chooses the `k`-th enabled step with `label`.
-    fn copy_step(&mut self, label: Label, k: u32) {
+    fn choose_kth(&mut self, label: Label, k: u32) {
         let step = match label {
             Label::Interaction(i) => self.enabled.steps_of(i).nth(k as usize),
             Label::Internal { .. } => self
@@ -1347,6 +1347,21 @@ impl Engine {
             (Label::Interaction(i), Some((at, width))) => self.plans.plan_at(at, width, i),
             _ => None,
         };
+        #[cfg(debug_assertions)]
+        if let (Some(p), Label::Interaction(i)) = (plan, label) {
+            // the place named the plan of the very step chosen, and what it says of it
+            let (pi, at, width) = self.plans.step(p);
+            let picks = self.chosen.picks(&self.enabled);
+            debug_assert_eq!(pi, i);
+            debug_assert_eq!(
+                &self.enabled.pool()[at as usize..(at + width) as usize],
+                picks
+            );
+            debug_assert_eq!(
+                self.plan_moves[p.index()],
+                self.t.step_moves_request(i, picks)
+            );
+        }
         let fired = match plan {
             Some(p) => self.system.fire_planned(&self.plans, p, &mut self.next),
             None => {

@@ -79,10 +79,12 @@ enum PlanOp {
 impl FirePlans {
     /// The plan of the step of interaction `i` whose picks are `pool[at..at + width]` in
     /// the step tables' pool, as [`crate::EnabledSet::pooled_steps`] and
-    /// [`crate::EnabledSet::pool_position`] locate a step; `None` if no step of `i` with
-    /// `width` picks starts there. Nothing is compared but the place: each pick of the
-    /// pool belongs to one step table entry, so a step that starts at `at` with as many
-    /// picks as the plan's is the plan's step.
+    /// [`crate::EnabledSet::pool_position`] locate a step of an [`crate::EnabledSet`] of
+    /// this plans' system (`at` from anywhere else names nothing or another step);
+    /// `None` if no step of `i` with `width` picks starts there. Nothing is compared but
+    /// the place: each pick of the pool belongs to one step table entry, and the plan of
+    /// a place is the plan of the step that starts there (the plan's own picks may be
+    /// elsewhere: identical steps share one).
     #[inline]
     pub fn plan_at(&self, at: u32, width: u32, i: u32) -> Option<PlanId> {
         let p = *self.at.get(at as usize)?;
@@ -99,13 +101,16 @@ impl FirePlans {
         &self.written[a as usize..b as usize]
     }
 
-    /// The step of every plan, in the order of [`PlanId::index`]: its interaction, and
-    /// where its picks are in the pool and how many (the first place, where identical
-    /// steps share the plan).
+    /// The step of plan `p`: its interaction, and where its picks are in the pool and
+    /// how many (the first place, where identical steps share the plan).
+    pub fn step(&self, p: PlanId) -> (u32, u32, u32) {
+        let plan = &self.plans[p.0 as usize];
+        (plan.interaction, plan.picks.0, plan.picks.1 - plan.picks.0)
+    }
+
+    /// [`FirePlans::step`] of every plan, in the order of [`PlanId::index`].
     pub fn steps(&self) -> impl Iterator<Item = (u32, u32, u32)> + '_ {
-        self.plans
-            .iter()
-            .map(|p| (p.interaction, p.picks.0, p.picks.1 - p.picks.0))
+        (0..self.plans.len() as u32).map(|p| self.step(PlanId(p)))
     }
 
     /// How many distinct steps have a plan.
@@ -249,5 +254,50 @@ impl System {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every step of the step tables' pool, found by its place, gets a plan of the same
+    /// interaction whose step has the same picks; no place inside a step names a plan.
+    #[test]
+    fn every_pooled_step_finds_the_plan_of_its_picks_by_its_place() {
+        for model in [
+            "rover.ron",
+            "satellite.ron",
+            "philosophers.ron",
+            "pipeline.ron",
+        ] {
+            let path = format!("{}/../robots/{model}", env!("CARGO_MANIFEST_DIR"));
+            let sys = match crate::load_file(std::path::Path::new(&path)) {
+                Ok(s) => s,
+                Err(e) => panic!("{}", e.summary()),
+            };
+            let plans = sys.fire_plans();
+            let tables = &sys.enable_index.tables;
+            let pool = tables.pool();
+            let mut steps = 0;
+            for (i, at, width) in tables.pooled_steps() {
+                let Some(p) = plans.plan_at(at, width, i) else {
+                    panic!("{model}: no plan for the step of interaction {i} at {at}")
+                };
+                let (pi, pat, pwidth) = plans.step(p);
+                assert_eq!((pi, pwidth), (i, width), "{model}");
+                assert_eq!(
+                    pool[pat as usize..(pat + pwidth) as usize],
+                    pool[at as usize..(at + width) as usize],
+                    "{model}"
+                );
+                assert!(plans.plan_at(at, width, i + 1).is_none(), "{model}");
+                for k in 1..width {
+                    assert!(plans.plan_at(at + k, width, i).is_none(), "{model}");
+                }
+                steps += 1;
+            }
+            assert!(steps > 10, "{model}: {steps} pooled steps");
+        }
     }
 }
