@@ -20,7 +20,8 @@ use core::any::Any;
 use crate::prelude::*;
 
 use bip_model::{
-    EnabledSet, FirePlans, Label, Pick, PlanId, RangeError, State, Step, System, Trace, Verdict,
+    EnabledSet, FirePlans, Label, Pick, PlanEffects, PlanId, RangeError, State, Step, System,
+    Trace, Verdict,
 };
 
 use crate::bind::{InterKind, PortKind, RunStep, Tables};
@@ -232,6 +233,7 @@ impl EngineBuilder {
                 t.step_moves_request(i, &pool[at as usize..(at + width) as usize])
             })
             .collect();
+        let effects = enabled.plan_effects(&system, &plans);
         let ports = PortStore::new(core::mem::take(&mut t.ports));
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
         #[cfg(feature = "std")]
@@ -273,6 +275,7 @@ impl EngineBuilder {
             chosen: Chosen::with_capacity(16),
             plans,
             plan_moves,
+            effects,
             forced: Vec::with_capacity(16),
             recording: self.record.map(Recording::with_capacity),
             stats: Stats::default(),
@@ -358,6 +361,8 @@ pub struct Engine {
     /// request (`Tables::step_moves_request`).
     plans: FirePlans,
     plan_moves: Vec<bool>,
+    /// What firing each plan does to the enabled set, known ahead of time.
+    effects: PlanEffects,
     /// Scratch: the step [`Engine::step_as`] was asked to take.
     forced: Vec<Pick>,
     recording: Option<Recording>,
@@ -1379,10 +1384,16 @@ impl Engine {
             self.stopped = Some(e.clone());
             return Err(EngineError::Range(e));
         }
-        let written = written_by(&self.plans, plan, &self.step_slots);
-        let updated = self
-            .enabled
-            .update_written(&self.system, &self.state, &self.next, written);
+        let updated = match plan {
+            Some(p) => {
+                self.enabled
+                    .update_planned(&self.system, &self.effects, p, &self.state, &self.next)
+            }
+            None => {
+                self.enabled
+                    .update_written(&self.system, &self.state, &self.next, &self.step_slots)
+            }
+        };
         let moves = match (label, plan) {
             (Label::Interaction(_), Some(p)) => self.plan_moves[p.index()],
             (Label::Interaction(i), None) => self

@@ -113,6 +113,11 @@ impl FirePlans {
         (0..self.plans.len() as u32).map(|p| self.step(PlanId(p)))
     }
 
+    /// Every plan, in the order of [`PlanId::index`].
+    pub fn ids(&self) -> impl Iterator<Item = PlanId> {
+        (0..self.plans.len() as u32).map(PlanId)
+    }
+
     /// How many distinct steps have a plan.
     pub fn len(&self) -> usize {
         self.plans.len()
@@ -215,6 +220,39 @@ impl System {
             ops: (ops0, out.ops.len() as u32),
             written: (written0, out.written.len() as u32),
         });
+    }
+
+    /// What slots hold after firing plan `p`'s step from a state in which it is enabled,
+    /// where that does not depend on the state: each written slot (and each participant's
+    /// location, written or not) with its value, or `None` if an action computes it from
+    /// the state (a step whose firing fails leads nowhere, so an action's constants are
+    /// known even where the rest of it reads the state). A participant that stays where it is was there before: at the start of
+    /// its transition.
+    pub(crate) fn plan_after(&self, plans: &FirePlans, p: PlanId) -> BTreeMap<u32, Option<i64>> {
+        let plan = &plans.plans[p.0 as usize];
+        let pool = self.enable_index.tables.pool();
+        let mut after = BTreeMap::new();
+        for pick in &pool[plan.picks.0 as usize..plan.picks.1 as usize] {
+            let to = self.atom_of(pick.component).transitions[pick.transition as usize].to;
+            let slot = self.components[pick.component as usize].slot;
+            after.insert(slot, Some(i64::from(to)));
+        }
+        // in firing order: a later write of a slot wins. An action writes its constants
+        // whenever it runs without failing (and a step whose action fails goes nowhere)
+        let flat = &self.enable_index.flat;
+        for op in &plans.ops[plan.ops.0 as usize..plan.ops.1 as usize] {
+            match *op {
+                PlanOp::Set { slot, value } => {
+                    after.insert(slot, Some(value));
+                }
+                PlanOp::Table { code, base, .. } | PlanOp::Action { code, base, .. } => {
+                    for a in flat.assigns(code) {
+                        after.insert(a.slot(base), a.constant());
+                    }
+                }
+            }
+        }
+        after
     }
 
     /// Fires the step of plan `p` on `state` in place, as [`System::fire_in_place`] would;

@@ -17,6 +17,13 @@
 //! yields exactly the steps of [`System::enabled_steps`], in the same order (a property
 //! test checks it on random systems), only computed from a cache.
 //!
+//! A step with a fire plan ([`crate::FirePlans`]) is known before it is taken: where its
+//! participants go and the constants it writes. [`EnabledSet::update_planned`] uses what
+//! [`EnabledSet::plan_effects`] worked out from that once per plan ([`PlanEffects`]): the
+//! steps of the interactions whose table key the plan fixes are stored without looking,
+//! and the interactions a written slot marks where the watched component takes part are
+//! listed per slot. The rest is read from the state as above.
+//!
 //! An interaction that is higher in no rule and that priorities suppress now cannot
 //! change anything the set answers, so it is not evaluated until it is no longer
 //! suppressed (it is "stale" meanwhile). In a GenoM layer that is the tick and the
@@ -27,12 +34,14 @@ use crate::prelude::*;
 
 use alloc::sync::Arc;
 
+use crate::fire_plan::{FirePlans, PlanId};
+use crate::plan_effects::{PlanEffects, SlotEffect};
 use crate::priority_masks::{bit, set_bit, PriorityMasks};
 use crate::state::State;
 use crate::step::{Choices, Label, Pick, Read, Step, Steps};
-use crate::step_tables::LastKey;
+use crate::step_tables::{Entry, LastKey};
 use crate::system::{RangeError, System};
-use crate::watches::{location_bit, Dep, Watches, ANYWHERE};
+use crate::watches::{location_bit, Dep, Mark, Watches, ANYWHERE};
 
 /// The enabled steps of one state of one system (after priorities), maintained
 /// incrementally with [`EnabledSet::update`].
@@ -276,6 +285,135 @@ impl EnabledSet {
         self.finish_update(system, after)
     }
 
+    /// [`EnabledSet::update`] after the step of plan `p` of `plans` was fired from
+    /// `before` ([`System::fire_planned`]), with `effects` made by
+    /// [`EnabledSet::plan_effects`] for those plans: what the plan makes known ahead of
+    /// time is not read from the state again. The step must be enabled in `before`, the
+    /// state the set describes.
+    pub fn update_planned(
+        &mut self,
+        system: &System,
+        effects: &PlanEffects,
+        p: PlanId,
+        before: &State,
+        after: &State,
+    ) -> Result<(), RangeError> {
+        self.begin_update();
+        let (a, b) = (before.slots(), after.slots());
+        let (s0, s1, f0, f1) = effects.plans[p.index()];
+        // what the step leads to in every case: stored now, and not marked again
+        for &(i, f) in &effects.found[f0 as usize..f1 as usize] {
+            self.store(i, f);
+            set_bit(&mut self.stale, i, false);
+            self.stamp[i as usize] = self.epoch;
+        }
+        for &SlotEffect {
+            slot,
+            marks,
+            dynamic,
+        } in &effects.slots[s0 as usize..s1 as usize]
+        {
+            if a[slot as usize] == b[slot as usize] {
+                continue;
+            }
+            if self.any_internal {
+                self.internal_changed(system, after, slot)?;
+            }
+            let (found, stamp, dirty, epoch) =
+                (&self.found, &mut self.stamp, &mut self.dirty, self.epoch);
+            let mut mark = |m: Mark| mark(found, stamp, dirty, epoch, m);
+            for &m in &effects.marks[marks.0 as usize..marks.1 as usize] {
+                mark(m);
+            }
+            for &k in &effects.dynamic[dynamic.0 as usize..dynamic.1 as usize] {
+                self.watches.for_watch(k, b, &mut mark);
+            }
+        }
+        self.finish_update(system, after)
+    }
+
+    /// What firing each of `plans` (the plans of this set's system) does to the set, for
+    /// [`EnabledSet::update_planned`] (see [`PlanEffects`]).
+    pub fn plan_effects(&self, system: &System, plans: &FirePlans) -> PlanEffects {
+        let tables = &system.enable_index.tables;
+        let mut out = PlanEffects::default();
+        let mut scratch = State::from_slots(vec![0; system.slot_count()]);
+        let mut written: Vec<u32> = Vec::new();
+        let mut reached: Vec<u32> = Vec::new();
+        for p in plans.ids() {
+            let after = system.plan_after(plans, p);
+            let known = |slot: u32| after.get(&slot).copied().flatten();
+            written.clear();
+            written.extend_from_slice(plans.written(p));
+            written.sort_unstable();
+            written.dedup();
+            // every interaction a change of a written slot may mark
+            reached.clear();
+            for &slot in &written {
+                for k in self.watches.watches_of(slot) {
+                    let marks = match known(self.watches.watched_slot(k)) {
+                        Some(location) => self.watches.marks_at(k, location),
+                        None => self.watches.all_marks(k),
+                    };
+                    reached.extend(marks.iter().map(|m| m.interaction));
+                }
+            }
+            reached.sort_unstable();
+            reached.dedup();
+            // an interaction whose key is made of known values finds the same entry in
+            // every state the step leads to (a value out of its range has no entry, and
+            // an entry where the relation fails is not known: both are left to the state)
+            let f0 = out.found.len() as u32;
+            for &i in &reached {
+                let Some(digits) = tables.key_digits(i) else {
+                    continue;
+                };
+                let mut all_known = true;
+                for d in digits {
+                    match known(d.slot()) {
+                        Some(v) => scratch.slots_mut()[d.slot() as usize] = v,
+                        None => all_known = false,
+                    }
+                }
+                if !all_known {
+                    continue;
+                }
+                let mut fresh = LastKey::NONE;
+                if let Some(e) = tables.lookup_sharing(i, scratch.slots(), &mut fresh) {
+                    out.found.push((i, Found::of(e)));
+                }
+            }
+            let is_known = |i: u32| out.found[f0 as usize..].iter().any(|&(j, _)| j == i);
+            // the marks left to make, where they depend on whether the slot changes
+            let s0 = out.slots.len() as u32;
+            for &slot in &written {
+                let (m0, d0) = (out.marks.len() as u32, out.dynamic.len() as u32);
+                for k in self.watches.watches_of(slot) {
+                    match known(self.watches.watched_slot(k)) {
+                        Some(location) => {
+                            let marks = self.watches.marks_at(k, location);
+                            let left = marks.iter().filter(|m| !is_known(m.interaction));
+                            out.marks.extend(left);
+                        }
+                        None => out.dynamic.push(k),
+                    }
+                }
+                let (m1, d1) = (out.marks.len() as u32, out.dynamic.len() as u32);
+                // a slot that marks nothing matters only for internal transitions
+                if m0 < m1 || d0 < d1 || self.any_internal {
+                    out.slots.push(SlotEffect {
+                        slot,
+                        marks: (m0, m1),
+                        dynamic: (d0, d1),
+                    });
+                }
+            }
+            out.plans
+                .push((s0, out.slots.len() as u32, f0, out.found.len() as u32));
+        }
+        out
+    }
+
     fn begin_update(&mut self) {
         self.valid = false;
         self.epoch = self.epoch.wrapping_add(1);
@@ -312,16 +450,8 @@ impl EnabledSet {
         }
         let (found, stamp, dirty, epoch) =
             (&self.found, &mut self.stamp, &mut self.dirty, self.epoch);
-        self.watches.for_each(s, after.slots(), |m| {
-            let i = m.interaction;
-            if m.connector_only && !found[i as usize].ready {
-                return;
-            }
-            if stamp[i as usize] != epoch {
-                stamp[i as usize] = epoch;
-                dirty.push(i);
-            }
-        });
+        self.watches
+            .for_each(s, after.slots(), |m| mark(found, stamp, dirty, epoch, m));
         Ok(())
     }
 
@@ -410,21 +540,17 @@ impl EnabledSet {
     ) -> Result<(), RangeError> {
         let tables = &system.enable_index.tables;
         let found = match tables.lookup_sharing(i, state.slots(), &mut self.last_key) {
-            Some(e) => {
-                let (start, len) = e.span();
-                Found {
-                    start,
-                    len,
-                    width: e.width() as u32,
-                    ready: e.ready(),
-                    in_pool: true,
-                }
-            }
+            Some(e) => Found::of(e),
             None => self.compute_interaction(system, state, i)?,
         };
+        self.store(i, found);
+        Ok(())
+    }
+
+    #[inline(always)]
+    fn store(&mut self, i: u32, found: Found) {
         set_bit(&mut self.pre, i, found.width > 0);
         self.found[i as usize] = found;
-        Ok(())
     }
 
     /// True if a higher interaction of a rule without `when` over `i` has steps.
@@ -575,12 +701,41 @@ impl EnabledSet {
 /// in `pool[start..start + len]` if `in_pool`; `ready` if its required ports all had an
 /// enabled transition (only then does what the connector's guard reads matter).
 #[derive(Clone, Copy, Debug, Default)]
-struct Found {
+pub(crate) struct Found {
     start: u32,
     len: u32,
     width: u32,
     ready: bool,
     in_pool: bool,
+}
+
+impl Found {
+    /// A step table entry's steps.
+    #[inline(always)]
+    pub(crate) fn of(e: &Entry) -> Found {
+        let (start, len) = e.span();
+        Found {
+            start,
+            len,
+            width: e.width() as u32,
+            ready: e.ready(),
+            in_pool: true,
+        }
+    }
+}
+
+/// Marks interaction `m` dirty unless it already is, or only its connector's guard reads
+/// the slot and its required ports were not all ready ([`Found::ready`]).
+#[inline(always)]
+fn mark(found: &[Found], stamp: &mut [u32], dirty: &mut Vec<u32>, epoch: u32, m: Mark) {
+    let i = m.interaction;
+    if m.connector_only && !found[i as usize].ready {
+        return;
+    }
+    if stamp[i as usize] != epoch {
+        stamp[i as usize] = epoch;
+        dirty.push(i);
+    }
 }
 
 /// The interactions with enabled steps (after priorities), in index order, optionally

@@ -48,6 +48,7 @@ mod incremental;
 mod load;
 pub mod ops;
 mod ordered_map;
+mod plan_effects;
 mod priority_masks;
 mod radix;
 mod rng;
@@ -78,6 +79,7 @@ pub use load::{
     ron_options,
 };
 pub use ordered_map::OrderedMap;
+pub use plan_effects::PlanEffects;
 pub use rng::Rng;
 pub use state::{State, StateLayout};
 pub use step::{Label, OwnedStep, Pick, Step, Steps};

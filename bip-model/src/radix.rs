@@ -17,6 +17,13 @@ pub(crate) struct Digit {
     stride: u64,
 }
 
+impl Digit {
+    /// The slot (relative to a `base` if local).
+    pub(crate) fn slot(&self) -> u32 {
+        self.slot
+    }
+}
+
 /// The digits of a key, the slots of one value (no digit: `(slot, local, value)`), and how
 /// many keys there are.
 #[derive(Clone, Debug)]

@@ -220,6 +220,14 @@ impl StepTables {
         e.known.then_some(e)
     }
 
+    /// The digits of interaction `i`'s table key (slots of the state, none local), if it
+    /// has a table. Slots of one value are no digit: the key does not read them.
+    pub(crate) fn key_digits(&self, i: u32) -> Option<&[Digit]> {
+        let table = self.of.get(i as usize)?;
+        let (a, b) = table.digits;
+        (table.entries != NONE).then(|| &self.digits[a as usize..b as usize])
+    }
+
     /// The picks of an entry's steps, one step after the other.
     #[inline(always)]
     pub(crate) fn picks(&self, e: &Entry) -> &[Pick] {

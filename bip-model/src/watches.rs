@@ -116,18 +116,46 @@ impl Watches {
     /// `slots` (an interaction may come once per watched slot).
     #[inline(always)]
     pub(crate) fn for_each(&self, s: u32, slots: &[i64], mut f: impl FnMut(Mark)) {
-        let (lo, hi) = (
-            self.start[s as usize] as usize,
-            self.start[s as usize + 1] as usize,
-        );
-        for w in &self.watches[lo..hi] {
-            // a location beyond the last list reads the last one, as its bit does
-            let l = (slots[w.slot as usize] as u64).min(u64::from(w.n - 1)) as u32;
-            let k = (w.lists + l) as usize;
-            let (a, b) = (self.lists[k] as usize, self.lists[k + 1] as usize);
-            for &m in &self.marks[a..b] {
-                f(m);
-            }
+        for k in self.watches_of(s) {
+            self.for_watch(k, slots, &mut f);
+        }
+    }
+
+    /// The watches of slot `s` (indices for [`Watches::watched_slot`],
+    /// [`Watches::marks_at`], [`Watches::for_watch`]).
+    #[inline(always)]
+    pub(crate) fn watches_of(&self, s: u32) -> core::ops::Range<u32> {
+        self.start[s as usize]..self.start[s as usize + 1]
+    }
+
+    /// The location slot watch `k` reads.
+    pub(crate) fn watched_slot(&self, k: u32) -> u32 {
+        self.watches[k as usize].slot
+    }
+
+    /// The marks of watch `k` while its location slot holds `location`.
+    #[inline(always)]
+    pub(crate) fn marks_at(&self, k: u32, location: i64) -> &[Mark] {
+        let w = &self.watches[k as usize];
+        // a location beyond the last list reads the last one, as its bit does
+        let l = (location as u64).min(u64::from(w.n - 1)) as u32;
+        let k = (w.lists + l) as usize;
+        &self.marks[self.lists[k] as usize..self.lists[k + 1] as usize]
+    }
+
+    /// The marks of watch `k` at every location (with repeats).
+    pub(crate) fn all_marks(&self, k: u32) -> &[Mark] {
+        let w = &self.watches[k as usize];
+        let (a, b) = (w.lists as usize, (w.lists + w.n) as usize);
+        &self.marks[self.lists[a] as usize..self.lists[b] as usize]
+    }
+
+    /// Calls `f` with the marks of watch `k` in state `slots`.
+    #[inline(always)]
+    pub(crate) fn for_watch(&self, k: u32, slots: &[i64], f: &mut impl FnMut(Mark)) {
+        let location = slots[self.watches[k as usize].slot as usize];
+        for &m in self.marks_at(k, location) {
+            f(m);
         }
     }
 }

@@ -5,10 +5,12 @@
 //! step is fired in place (`System::fire_in_place`, checked against `System::fire`) and
 //! the set is told which slots it wrote (`EnabledSet::update_written`). A step the set
 //! found in the step tables' pool is also fired by its plan (`System::fire_planned`),
-//! which must write the same state and list the same slots.
+//! which must write the same state and list the same slots; on every third walk the set
+//! is then updated by the plan's effects (`EnabledSet::update_planned`), as the engine
+//! does.
 
 use bip_model::{
-    load_str, EnabledSet, FirePlans, Label, OwnedStep, RangeError, State, Steps, System,
+    load_str, EnabledSet, FirePlans, Label, OwnedStep, PlanId, RangeError, State, Steps, System,
 };
 use proptest::prelude::*;
 
@@ -26,7 +28,7 @@ fn incremental(set: &EnabledSet) -> Vec<OwnedStep> {
 
 /// Fires the `k`-th step of `set` by its plan, if it is a pooled step, and compares it
 /// with firing it in place (`fired`: the state and the slots written, or the error);
-/// true if it was compared.
+/// its plan if it was compared.
 fn check_plan(
     sys: &System,
     plans: &FirePlans,
@@ -34,12 +36,12 @@ fn check_plan(
     s: &State,
     k: usize,
     fired: Result<(&State, &[u32]), &RangeError>,
-) -> Result<bool, TestCaseError> {
+) -> Result<Option<PlanId>, TestCaseError> {
     let Some(st) = set.steps().nth(k) else {
-        return Ok(false);
+        return Ok(None);
     };
     let (Label::Interaction(i), Some(at)) = (st.label, set.pool_position(st.picks)) else {
-        return Ok(false);
+        return Ok(None);
     };
     let width = st.picks.len() as u32;
     let Some(p) = plans.plan_at(at, width, i) else {
@@ -64,12 +66,12 @@ fn check_plan(
             )))
         }
     }
-    Ok(true)
+    Ok(Some(p))
 }
 
-/// Random walks on one generated system; returns the number of states compared and of
-/// steps fired by their plans.
-fn check_system(seed: u64) -> Result<(usize, usize), TestCaseError> {
+/// Random walks on one generated system; returns the number of states compared, of
+/// steps fired by their plans, and of updates by a plan's effects.
+fn check_system(seed: u64) -> Result<(usize, usize, usize), TestCaseError> {
     let g = generate(seed);
     let text = g.to_ron();
     let mut sys = load_str("generated.ron", &text)
@@ -88,9 +90,11 @@ fn check_system(seed: u64) -> Result<(usize, usize), TestCaseError> {
     let mut copy = Steps::new();
     let mut compared = 0;
     let mut planned = 0;
+    let mut by_effects = 0;
     let plans = sys.fire_plans();
     for walk in 0..3 {
         let in_place = walk % 2 == 1;
+        let by_plan = walk == 2;
         let mut s = sys.initial_state();
         let mut set = match EnabledSet::new(&sys, &s) {
             Ok(set) => set,
@@ -102,6 +106,7 @@ fn check_system(seed: u64) -> Result<(usize, usize), TestCaseError> {
                 break;
             }
         };
+        let effects = set.plan_effects(&sys, &plans);
         for _ in 0..40 {
             let expected = full(&plain, &s, &mut buf);
             let Ok(expected) = expected else {
@@ -139,6 +144,7 @@ fn check_system(seed: u64) -> Result<(usize, usize), TestCaseError> {
             let mut next = s.clone();
             let mut moved = false;
             let mut written = Vec::new();
+            let mut plan = None;
             for k in order {
                 let step = expected[k].as_step();
                 let fired = sys.fire(&s, step, &mut next);
@@ -150,7 +156,8 @@ fn check_system(seed: u64) -> Result<(usize, usize), TestCaseError> {
                     Ok(()) => Ok((&next, &written[..])),
                     Err(e) => Err(e),
                 };
-                planned += usize::from(check_plan(&sys, &plans, &set, &s, k, done)?);
+                plan = check_plan(&sys, &plans, &set, &s, k, done)?;
+                planned += usize::from(plan.is_some());
                 if fired.is_ok() {
                     prop_assert_eq!(&here, &next, "fired in place\n{}", text);
                     for (slot, (a, b)) in s.slots().iter().zip(next.slots()).enumerate() {
@@ -163,10 +170,13 @@ fn check_system(seed: u64) -> Result<(usize, usize), TestCaseError> {
             if !moved {
                 break;
             }
-            let updated = if in_place {
-                set.update_written(&sys, &s, &next, &written)
-            } else {
-                set.update(&sys, &s, &next)
+            let updated = match plan {
+                Some(p) if by_plan => {
+                    by_effects += 1;
+                    set.update_planned(&sys, &effects, p, &s, &next)
+                }
+                _ if in_place => set.update_written(&sys, &s, &next, &written),
+                _ => set.update(&sys, &s, &next),
             };
             let reference = full(&plain, &next, &mut buf);
             match (updated, reference) {
@@ -186,7 +196,7 @@ fn check_system(seed: u64) -> Result<(usize, usize), TestCaseError> {
             s = next;
         }
     }
-    Ok((compared, planned))
+    Ok((compared, planned, by_effects))
 }
 
 proptest! {
@@ -204,17 +214,23 @@ proptest! {
 fn walks_compare_many_states_with_priorities() {
     let mut compared = 0;
     let mut planned = 0;
+    let mut by_effects = 0;
     let mut with_when = 0;
     for seed in 0..300u64 {
         let g = generate(seed);
         if g.prios.iter().any(|p| p.when.is_some()) {
             with_when += 1;
         }
-        let (c, p) = check_system(seed).expect("agrees");
+        let (c, p, e) = check_system(seed).expect("agrees");
         compared += c;
         planned += p;
+        by_effects += e;
     }
     assert!(planned > 2_000, "only {planned} steps fired by their plans");
+    assert!(
+        by_effects > 500,
+        "only {by_effects} updates by a plan's effects"
+    );
     assert!(
         with_when >= 50,
         "only {with_when} systems with guarded priorities"
@@ -255,50 +271,106 @@ fn robot_models_agree_along_random_walks() {
     ] {
         let path = format!("{}/../robots/{model}", env!("CARGO_MANIFEST_DIR"));
         let sys = bip_model::load_file(std::path::Path::new(&path)).expect("loads");
-        // the relation computed from the state: a wrong step table would be on both sides
-        let mut plain = sys.clone();
-        plain.drop_step_tables(|_| true);
-        let mut rng = Rng(model.len() as u64);
-        let mut s = sys.initial_state();
-        let mut set = EnabledSet::new(&sys, &s).expect("evaluates");
-        let mut buf = Steps::new();
-        let mut next = s.clone();
-        let mut pooled = 0;
-        let mut planned = 0;
-        let plans = sys.fire_plans();
-        let mut written = Vec::new();
-        for _ in 0..3000 {
-            let want = full(&plain, &s, &mut buf).expect("evaluates");
-            assert_eq!(incremental(&set), want, "{model}");
-            // where the set says an interaction's steps are in the pool, they are there
-            for i in 0..sys.interactions.len() as u32 {
-                let steps: Vec<_> = set.steps_of(i).map(|st| st.picks.to_vec()).collect();
-                if let Some((start, width, n)) = set.pooled_steps(i) {
-                    assert_eq!(n as usize, steps.len(), "{model}: {i}");
-                    let at = start as usize;
-                    let len = steps.len() * width as usize;
-                    let in_pool = set.pool()[at..at + len].chunks(width as usize);
-                    assert!(in_pool.eq(steps.iter().map(|p| &p[..])), "{model}: {i}");
-                }
-                pooled += usize::from(set.pooled_steps(i).is_some());
-            }
-            let k = rng.below(want.len());
-            sys.fire(&s, want[k].as_step(), &mut next).expect("fires");
-            let mut here = s.clone();
-            written.clear();
-            sys.fire_in_place(want[k].as_step(), &mut here, &mut written)
-                .expect("fires");
-            let p = check_plan(&sys, &plans, &set, &s, k, Ok((&next, &written)));
-            planned += usize::from(p.expect("the plan fires the step"));
-            set.update(&sys, &s, &next).expect("evaluates");
-            std::mem::swap(&mut s, &mut next);
-        }
+        let (pooled, planned) = walk_agrees(model, &sys, 3000);
         assert!(pooled > 1000, "{model}: {pooled} pooled steps looked at");
         assert!(
             planned > 1000,
             "{model}: {planned} steps fired by their plans"
         );
     }
+}
+
+/// A random walk of `steps` steps on `sys`, the set against the relation at each state;
+/// a pooled step is fired by its plan, and two times in three the set is updated by the
+/// plan's effects. Returns how many pooled steps the set showed and how many steps were
+/// fired by their plans.
+fn walk_agrees(model: &str, sys: &System, steps: usize) -> (usize, usize) {
+    // the relation computed from the state: a wrong step table would be on both sides
+    let mut plain = sys.clone();
+    plain.drop_step_tables(|_| true);
+    let mut rng = Rng(model.len() as u64);
+    let mut s = sys.initial_state();
+    let mut set = EnabledSet::new(sys, &s).expect("evaluates");
+    let mut buf = Steps::new();
+    let mut next = s.clone();
+    let mut pooled = 0;
+    let mut planned = 0;
+    let plans = sys.fire_plans();
+    let effects = set.plan_effects(sys, &plans);
+    let mut written = Vec::new();
+    for n in 0..steps {
+        let want = full(&plain, &s, &mut buf).expect("evaluates");
+        assert_eq!(incremental(&set), want, "{model}");
+        // where the set says an interaction's steps are in the pool, they are there
+        for i in 0..sys.interactions.len() as u32 {
+            let steps: Vec<_> = set.steps_of(i).map(|st| st.picks.to_vec()).collect();
+            if let Some((start, width, n)) = set.pooled_steps(i) {
+                assert_eq!(n as usize, steps.len(), "{model}: {i}");
+                let at = start as usize;
+                let len = steps.len() * width as usize;
+                let in_pool = set.pool()[at..at + len].chunks(width as usize);
+                assert!(in_pool.eq(steps.iter().map(|p| &p[..])), "{model}: {i}");
+            }
+            pooled += usize::from(set.pooled_steps(i).is_some());
+        }
+        if want.is_empty() {
+            break;
+        }
+        let k = rng.below(want.len());
+        sys.fire(&s, want[k].as_step(), &mut next).expect("fires");
+        let mut here = s.clone();
+        written.clear();
+        sys.fire_in_place(want[k].as_step(), &mut here, &mut written)
+            .expect("fires");
+        let p = check_plan(sys, &plans, &set, &s, k, Ok((&next, &written)));
+        let p = p.expect("the plan fires the step");
+        planned += usize::from(p.is_some());
+        // as the engine updates after a pooled step, and as anything else may
+        match p {
+            Some(p) if n % 3 != 0 => set.update_planned(sys, &effects, p, &s, &next),
+            _ => set.update(sys, &s, &next),
+        }
+        .expect("evaluates");
+        std::mem::swap(&mut s, &mut next);
+    }
+    (pooled, planned)
+}
+
+/// A plan's effects know what an interaction finds after the step only from the values
+/// the step leaves for certain: the last write of a slot counts (here a connector's
+/// constant that the transition's action then overwrites from the state), and so does a
+/// constant among an action's computed assignments.
+#[test]
+fn plan_effects_know_only_the_last_write_of_a_slot() {
+    let sys = load_str(
+        "writes.ron",
+        r#"System(name: "writes",
+        atoms: { "A": Atom(locations: ["s"], initial: "s",
+            ports: ["set", "mix", "clear", "read", "read_x"],
+            vars: [(name: "x", ty: Int(0, 1)), (name: "y", ty: Int(0, 1))],
+            transitions: [
+                (from: "s", port: "set", to: "s", action: "x = 1 - x"),
+                (from: "s", port: "mix", to: "s", action: "y = x; x = 1"),
+                (from: "s", port: "clear", to: "s", action: "x = 0; y = 0"),
+                (from: "s", port: "read", to: "s", guard: "x == 1 && y == 0"),
+                (from: "s", port: "read_x", to: "s", guard: "x == 1"),
+            ]) },
+        components: [(name: "a", atom: "A")],
+        connectors: [
+            (name: "set", ports: ["a.set"], action: "a.x = 1"),
+            (name: "mix", ports: ["a.mix"]),
+            (name: "clear", ports: ["a.clear"]),
+            (name: "read", ports: ["a.read"]),
+            (name: "read_x", ports: ["a.read_x"]),
+        ])"#,
+    )
+    .expect("loads");
+    let set = EnabledSet::new(&sys, &sys.initial_state()).expect("evaluates");
+    let effects = set.plan_effects(&sys, &sys.fire_plans());
+    // `read` and `read_x` after `clear`, `read_x` after `mix`
+    assert_eq!(effects.known_evaluations(), 3);
+    let (_, planned) = walk_agrees("writes", &sys, 300);
+    assert!(planned > 250, "{planned} steps fired by their plans");
 }
 
 /// Dependencies are per slot: a step that changes only a variable (no location moves)
