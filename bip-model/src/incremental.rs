@@ -473,7 +473,21 @@ impl EnabledSet {
 
     /// With every interaction that some rule names as higher up to date: evaluates the
     /// stale interactions that are no longer suppressed, and decides the `when` rules.
+    #[inline(always)]
     fn settle(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
+        // most updates leave nothing stale (a codel is due, or none is): a word test
+        if self.stale.iter().any(|&w| w != 0) {
+            self.settle_stale(system, state)?;
+        }
+        if self.masks.any_when {
+            self.decide_whens(system, state)?;
+        }
+        Ok(())
+    }
+
+    /// Evaluates the stale interactions that are no longer suppressed.
+    #[inline(never)]
+    fn settle_stale(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
         // a stale interaction is higher in no rule, so evaluating one changes no other's
         // verdict: consecutive interactions with the same higher ones are decided once
         let mut last: Option<((u32, u32), bool)> = None;
@@ -497,7 +511,7 @@ impl EnabledSet {
                 }
             }
         }
-        self.decide_whens(system, state)
+        Ok(())
     }
 
     /// True unless the last update or reset failed.
@@ -560,10 +574,8 @@ impl EnabledSet {
     }
 
     /// Decides suppression of the enabled interactions under a rule with a `when`.
+    #[inline(never)]
     fn decide_whens(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
-        if !self.masks.any_when {
-            return Ok(());
-        }
         for w in 0..self.pre.len() {
             let mut bits = self.pre[w] & self.masks.under_when[w];
             while bits != 0 {
