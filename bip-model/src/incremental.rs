@@ -303,6 +303,18 @@ impl EnabledSet {
         let (s0, s1, f0, f1) = effects.plans[p.index()];
         // what the step leads to in every case: stored now, and not marked again
         for &(i, f) in &effects.found[f0 as usize..f1 as usize] {
+            #[cfg(debug_assertions)]
+            {
+                // the entry the state's key finds is the one the plan fixed
+                let tables = &system.enable_index.tables;
+                let mut fresh = LastKey::NONE;
+                let e = tables.lookup_sharing(i, b, &mut fresh).map(Found::of);
+                debug_assert_eq!(
+                    e.map(|e| (e.start, e.len, e.width, e.ready)),
+                    Some((f.start, f.len, f.width, f.ready)),
+                    "interaction {i}"
+                );
+            }
             self.store(i, f);
             set_bit(&mut self.stale, i, false);
             self.stamp[i as usize] = self.epoch;
