@@ -20,8 +20,8 @@ use core::any::Any;
 use crate::prelude::*;
 
 use bip_model::{
-    EnabledSet, FirePlans, Label, Pick, PlanEffects, PlanId, RangeError, State, Step, System,
-    Trace, Verdict,
+    CacheStats, EnabledSet, FirePlans, Label, Pick, PlanEffects, PlanId, RangeError, State,
+    StateCache, Step, System, Trace, Verdict,
 };
 
 use crate::bind::{InterKind, PortKind, RunStep, Tables};
@@ -108,6 +108,10 @@ pub struct Stats {
     pub events_dropped: u64,
 }
 
+/// How many states [`EngineBuilder::state_cache`] remembers by default: a few MiB for a
+/// model the size of robots/rover.ron (docs/engine.md, "The state cache").
+pub const DEFAULT_STATE_CACHE: usize = 1024;
+
 /// Builds an [`Engine`]: bind codels, choose a clock, a policy, recording.
 pub struct EngineBuilder {
     system: System,
@@ -120,6 +124,7 @@ pub struct EngineBuilder {
     event_capacity: usize,
     on_event: Option<EventFn>,
     threads: bool,
+    state_cache: usize,
 }
 
 impl EngineBuilder {
@@ -183,6 +188,15 @@ impl EngineBuilder {
         self
     }
 
+    /// Remembers up to `states` states of the model, with their enabled steps and the
+    /// steps between them, so that a step taken before from the same state is looked up
+    /// rather than computed (default [`DEFAULT_STATE_CACHE`]; 0: none). See
+    /// docs/engine.md, "The state cache", and [`Engine::cache_stats`].
+    pub fn state_cache(mut self, states: usize) -> Self {
+        self.state_cache = states;
+        self
+    }
+
     pub fn build(self) -> Result<Engine, BuildError> {
         let system = self.system;
         let mut t = Tables::new(&system)?;
@@ -234,6 +248,8 @@ impl EngineBuilder {
             })
             .collect();
         let effects = enabled.plan_effects(&system, &plans);
+        let mut cache = StateCache::new(&system, self.state_cache);
+        cache.arrive(&enabled, &state);
         let ports = PortStore::new(core::mem::take(&mut t.ports));
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
         #[cfg(feature = "std")]
@@ -276,6 +292,7 @@ impl EngineBuilder {
             plans,
             plan_moves,
             effects,
+            cache,
             forced: Vec::with_capacity(16),
             recording: self.record.map(Recording::with_capacity),
             stats: Stats::default(),
@@ -363,6 +380,8 @@ pub struct Engine {
     plan_moves: Vec<bool>,
     /// What firing each plan does to the enabled set, known ahead of time.
     effects: PlanEffects,
+    /// The states met so far, their enabled steps and the plans between them.
+    cache: StateCache,
     /// Scratch: the step [`Engine::step_as`] was asked to take.
     forced: Vec<Pick>,
     recording: Option<Recording>,
@@ -394,6 +413,7 @@ impl Engine {
             event_capacity: 1024,
             on_event: None,
             threads: false,
+            state_cache: DEFAULT_STATE_CACHE,
         }
     }
 
@@ -408,6 +428,12 @@ impl Engine {
 
     pub fn stats(&self) -> Stats {
         self.stats
+    }
+
+    /// What the state cache holds and how often it knew the step
+    /// ([`EngineBuilder::state_cache`]).
+    pub fn cache_stats(&self) -> CacheStats {
+        self.cache.stats()
     }
 
     /// The clock's time (microseconds since the engine started).
@@ -1367,32 +1393,20 @@ impl Engine {
                 self.t.step_moves_request(i, picks)
             );
         }
-        let fired = match plan {
-            Some(p) => self.system.fire_planned(&self.plans, p, &mut self.next),
+        // a step taken before from this state is looked up; any other is computed
+        let known = match plan {
+            Some(p) => self
+                .cache
+                .take_known(&self.plans, p, &mut self.enabled, &mut self.next),
             None => {
-                self.step_slots.clear();
-                let step = Step {
-                    label,
-                    picks: self.chosen.picks(&self.enabled),
-                };
-                self.system
-                    .fire_in_place(step, &mut self.next, &mut self.step_slots)
+                self.cache.leave(&self.enabled);
+                false
             }
         };
-        if let Err(e) = fired {
-            self.next.copy_from(&self.state);
-            self.stopped = Some(e.clone());
-            return Err(EngineError::Range(e));
-        }
-        let updated = match plan {
-            Some(p) => {
-                self.enabled
-                    .update_planned(&self.system, &self.effects, p, &self.state, &self.next)
-            }
-            None => {
-                self.enabled
-                    .update_written(&self.system, &self.state, &self.next, &self.step_slots)
-            }
+        let updated = if known {
+            Ok(())
+        } else {
+            self.fire_and_update(label, plan)?
         };
         let moves = match (label, plan) {
             (Label::Interaction(_), Some(p)) => self.plan_moves[p.index()],
@@ -1425,6 +1439,47 @@ impl Engine {
             return Err(EngineError::Range(e));
         }
         Ok(())
+    }
+
+    /// Fires the chosen step into `next` and brings the enabled set there (what the
+    /// state cache did not know); a range error of the firing stops the engine at once,
+    /// one of the update is returned.
+    fn fire_and_update(
+        &mut self,
+        label: Label,
+        plan: Option<PlanId>,
+    ) -> Result<Result<(), RangeError>, EngineError> {
+        let fired = match plan {
+            Some(p) => self.system.fire_planned(&self.plans, p, &mut self.next),
+            None => {
+                self.step_slots.clear();
+                let step = Step {
+                    label,
+                    picks: self.chosen.picks(&self.enabled),
+                };
+                self.system
+                    .fire_in_place(step, &mut self.next, &mut self.step_slots)
+            }
+        };
+        if let Err(e) = fired {
+            self.next.copy_from(&self.state);
+            self.stopped = Some(e.clone());
+            return Err(EngineError::Range(e));
+        }
+        let updated = match plan {
+            Some(p) => {
+                self.enabled
+                    .update_planned(&self.system, &self.effects, p, &self.state, &self.next)
+            }
+            None => {
+                self.enabled
+                    .update_written(&self.system, &self.state, &self.next, &self.step_slots)
+            }
+        };
+        if updated.is_ok() {
+            self.cache.arrive(&self.enabled, &self.next);
+        }
+        Ok(updated)
     }
 
     fn trace_step(&self, label: Label) {

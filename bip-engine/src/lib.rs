@@ -69,13 +69,16 @@ pub mod replay;
 #[cfg(feature = "std")]
 mod threads;
 
+pub use bip_model::CacheStats;
 pub use clock::Clock;
 #[cfg(feature = "std")]
 pub use clock::RealClock;
 #[cfg(target_has_atomic = "64")]
 pub use clock::VirtualClock;
 pub use codel::{CodelFn, Ctx, Next};
-pub use engine::{Args, DefaultCodels, Engine, EngineBuilder, EventFn, Stats, Stepped, Until};
+pub use engine::{
+    Args, DefaultCodels, Engine, EngineBuilder, EventFn, Stats, Stepped, Until, DEFAULT_STATE_CACHE,
+};
 pub use error::{BuildError, EngineError, RequestError, StepAsError};
 pub use event::{
     CodelId, Event, Fault, FaultKind, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket,

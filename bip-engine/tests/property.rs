@@ -16,7 +16,19 @@ use proptest::prelude::*;
 
 use bip_model::Rng;
 
-fn run_case(model: usize, seed: u64) -> Result<(), TestCaseError> {
+/// What one random run left.
+struct Run {
+    system: bip_model::System,
+    trace: bip_model::Trace,
+    /// Every event, as text.
+    events: Vec<String>,
+    state: bip_model::State,
+    cache: CacheStats,
+}
+
+/// A random run of 600 steps on example model `model`: random requests, random codel
+/// results, the engine's state cache holding up to `cache` states.
+fn run(model: usize, seed: u64, cache: usize) -> Result<Run, TestCaseError> {
     let system = match model {
         0 => load("rover.ron"),
         1 => load("rover-deadlock.ron"),
@@ -28,10 +40,12 @@ fn run_case(model: usize, seed: u64) -> Result<(), TestCaseError> {
     let mut engine = random_codels(Engine::builder(system.clone()), &system, rng.clone(), None)
         .policy(Policy::Seeded(seed))
         .record(2000)
+        .state_cache(cache)
         .build()
         .map_err(|e| TestCaseError::fail(e.to_string()))?;
     let services: Vec<(&str, &str)> = system.requestable().collect();
     let mut done: HashMap<Ticket, usize> = HashMap::new();
+    let mut events = Vec::new();
     while engine.stats().steps < 600 {
         let (request, chunk) = {
             let mut r = rng.lock().unwrap_or_else(|e| e.into_inner());
@@ -56,12 +70,28 @@ fn run_case(model: usize, seed: u64) -> Result<(), TestCaseError> {
             {
                 *done.entry(ticket).or_default() += 1;
             }
+            events.push(format!("{ev:?}"));
         }
     }
     prop_assert!(done.values().all(|&n| n == 1), "a request ended twice");
-    let trace = engine.record();
+    Ok(Run {
+        trace: engine.record(),
+        state: engine.state().clone(),
+        cache: engine.cache_stats(),
+        system,
+        events,
+    })
+}
+
+fn run_case(model: usize, seed: u64) -> Result<(), TestCaseError> {
+    let Run {
+        system,
+        trace,
+        state,
+        ..
+    } = run(model, seed, DEFAULT_STATE_CACHE)?;
     let states = states_of(&system, &trace);
-    prop_assert_eq!(states.last(), Some(engine.state()));
+    prop_assert_eq!(states.last(), Some(&state));
     assert_invariants(&system, &states);
     Ok(())
 }
@@ -73,6 +103,39 @@ proptest! {
     fn recorded_traces_are_model_paths_that_keep_the_invariants(model in 0..5usize, seed in any::<u64>()) {
         silence_injected_panics();
         run_case(model, seed)?;
+    }
+
+    /// The state cache changes nothing the engine does: the same run with no cache, with
+    /// one too small for it and with the default records the same trace and the same
+    /// events.
+    #[test]
+    fn the_state_cache_changes_nothing(model in 0..5usize, seed in any::<u64>()) {
+        silence_injected_panics();
+        let plain = run(model, seed, 0)?;
+        prop_assert_eq!(plain.cache.hits, 0);
+        for cache in [3, DEFAULT_STATE_CACHE] {
+            let cached = run(model, seed, cache)?;
+            prop_assert!(cached.cache.states <= cache);
+            prop_assert_eq!(&cached.trace, &plain.trace);
+            prop_assert_eq!(&cached.events, &plain.events);
+            prop_assert_eq!(&cached.state, &plain.state);
+        }
+    }
+}
+
+/// The random runs come back to states they saw, or the comparison above proves little.
+#[test]
+fn random_runs_take_steps_from_the_cache() {
+    silence_injected_panics();
+    for model in 0..5 {
+        let mut hits = 0;
+        for seed in 0..5 {
+            hits += run(model, seed, DEFAULT_STATE_CACHE)
+                .expect("runs")
+                .cache
+                .hits;
+        }
+        assert!(hits > 300, "model {model}: {hits} hits in five runs");
     }
 }
 

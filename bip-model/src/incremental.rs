@@ -531,6 +531,34 @@ impl EnabledSet {
         self.valid
     }
 
+    /// True if everything the set knows of its state is in its [`Evaluation`]: no
+    /// internal transitions, and every interaction with steps has them in the pool (the
+    /// picks computed for the others are not part of an evaluation).
+    pub(crate) fn fits_evaluation(&self) -> bool {
+        self.valid && !self.any_internal && self.found.iter().all(|f| f.in_pool || f.width == 0)
+    }
+
+    /// Exchanges what the set knows of its state with `e`, an evaluation of the same
+    /// system that [`EnabledSet::save_evaluation`] filled (the set then describes the
+    /// state `e` was saved from, if [`EnabledSet::fits_evaluation`] held then).
+    #[inline]
+    pub(crate) fn exchange_evaluation(&mut self, e: &mut Evaluation) {
+        core::mem::swap(&mut self.found, &mut e.found);
+        core::mem::swap(&mut self.pre, &mut e.pre);
+        core::mem::swap(&mut self.stale, &mut e.stale);
+        core::mem::swap(&mut self.when_suppressed, &mut e.when_suppressed);
+        // the key found last is of the state before
+        self.last_key = LastKey::NONE;
+    }
+
+    /// Copies what the set knows of its state into `e` (reusing its buffers).
+    pub(crate) fn save_evaluation(&self, e: &mut Evaluation) {
+        e.found.clone_from(&self.found);
+        e.pre.clone_from(&self.pre);
+        e.stale.clone_from(&self.stale);
+        e.when_suppressed.clone_from(&self.when_suppressed);
+    }
+
     fn eval_internal(&mut self, system: &System, state: &State, c: u32) -> Result<(), RangeError> {
         let out = &mut self.internal[c as usize];
         out.clear();
@@ -718,6 +746,26 @@ impl EnabledSet {
     /// True if no step is enabled.
     pub fn is_empty(&self) -> bool {
         self.internal.iter().all(Vec::is_empty) && self.interactions().next().is_none()
+    }
+}
+
+/// What an [`EnabledSet`] knows of the state it describes, apart from its tables: per
+/// interaction what its last evaluation found, and the bits of those with steps, of the
+/// stale ones and of those a `when` rule suppresses. [`crate::StateCache`] keeps one per
+/// state it knows.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Evaluation {
+    found: Vec<Found>,
+    pre: Vec<u64>,
+    stale: Vec<u64>,
+    when_suppressed: Vec<u64>,
+}
+
+impl Evaluation {
+    /// The bytes its buffers hold.
+    pub(crate) fn bytes(&self) -> usize {
+        self.found.capacity() * core::mem::size_of::<Found>()
+            + (self.pre.capacity() + self.stale.capacity() + self.when_suppressed.capacity()) * 8
     }
 }
 

@@ -55,6 +55,7 @@ mod rng;
 #[cfg(feature = "std")]
 pub mod source;
 mod state;
+mod state_cache;
 mod step;
 mod step_tables;
 #[cfg(feature = "std")]
@@ -82,6 +83,7 @@ pub use ordered_map::OrderedMap;
 pub use plan_effects::PlanEffects;
 pub use rng::Rng;
 pub use state::{State, StateLayout};
+pub use state_cache::{CacheStats, StateCache};
 pub use step::{Label, OwnedStep, Pick, Step, Steps};
 pub use system::{
     Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule, Property,

@@ -1,0 +1,207 @@
+//! The states a run went through, what was enabled in each, and which plan led where.
+//!
+//! A robot's functional layer runs in cycles: each task's codels run, the tick comes, they
+//! run again. An engine keeps passing through the same few states, and a fire plan fired
+//! from a state always leads to the same state, with the same enabled steps: both are
+//! functions of the state ([`crate::System::fire_planned`], [`EnabledSet`]). A
+//! [`StateCache`] remembers, for up to a given number of states, each state's slots and
+//! what its [`EnabledSet`] knew of it (an [`Evaluation`]), and per state where each plan
+//! fired from it led. The next time that plan is fired from that state, the step is
+//! looked up instead of fired and re-evaluated. It is built as the run goes and bounded,
+//! like the lazy DFA of the `regex` crate: once it is full it learns no more states, and
+//! steps it does not know are computed as without it.
+//!
+//! An evaluation moves, it is not copied: the current state's evaluation is in the set,
+//! and the cache's entry for that state holds a spare one. A known step exchanges the
+//! set's evaluation with the spare (the entry has its own again) and then with the next
+//! state's (which becomes the spare): no copy and no allocation. Before a step the cache
+//! does not know, the set's evaluation is copied into its entry, and the set is updated
+//! as usual; the state it reaches is then looked up by its slots, or remembered.
+//!
+//! Only an [`EnabledSet`] whose whole knowledge is its evaluation is remembered
+//! ([`EnabledSet::fits_evaluation`]): none of a system with internal transitions, none
+//! with steps computed outside the step tables.
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use core::hash::BuildHasher;
+
+use hashbrown::{DefaultHashBuilder, HashTable};
+
+use crate::fire_plan::{FirePlans, PlanId};
+use crate::incremental::{EnabledSet, Evaluation};
+use crate::state::State;
+use crate::system::System;
+
+/// The states a run went through and the plans between them (see the module
+/// documentation). Use one cache with one [`EnabledSet`], as
+/// [`StateCache::take_known`], [`StateCache::leave`] and [`StateCache::arrive`] say.
+#[derive(Clone, Debug)]
+pub struct StateCache {
+    capacity: usize,
+    /// Slots per state.
+    width: usize,
+    /// State `k`'s slots are `slots[k * width..(k + 1) * width]`.
+    slots: Vec<i64>,
+    /// State `k`'s evaluation, or the spare while the set describes state `k`.
+    evaluations: Vec<Evaluation>,
+    /// Per state, the plans fired from it and the state each led to.
+    edges: Vec<Vec<(PlanId, u32)>>,
+    /// The states by their slots.
+    index: HashTable<u32>,
+    hasher: DefaultHashBuilder,
+    /// The state the set describes, if the cache knows it.
+    current: Option<u32>,
+    /// The state and plan of a step [`StateCache::take_known`] did not know, until
+    /// [`StateCache::arrive`] links it to where it led.
+    leaving: Option<(u32, PlanId)>,
+    stats: CacheStats,
+}
+
+/// What a [`StateCache`] holds and how often it knew the step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CacheStats {
+    /// The states it knows.
+    pub states: usize,
+    /// The plans it knows, over all states.
+    pub edges: usize,
+    /// Steps it took from memory.
+    pub hits: u64,
+    /// Steps it did not know (computed).
+    pub misses: u64,
+}
+
+impl StateCache {
+    /// A cache of `system`'s states that remembers at most `capacity` of them (0: none; it
+    /// then only counts the steps as misses).
+    pub fn new(system: &System, capacity: usize) -> StateCache {
+        StateCache {
+            capacity,
+            width: system.slot_count(),
+            slots: Vec::new(),
+            evaluations: Vec::new(),
+            edges: Vec::new(),
+            index: HashTable::new(),
+            hasher: DefaultHashBuilder::default(),
+            current: None,
+            leaving: None,
+            stats: CacheStats::default(),
+        }
+    }
+
+    /// The most states it remembers.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// What it holds, and its hits and misses so far.
+    pub fn stats(&self) -> CacheStats {
+        self.stats
+    }
+
+    /// The bytes it holds (its buffers' capacities).
+    pub fn bytes(&self) -> usize {
+        let edges: usize = self.edges.iter().map(|e| e.capacity() * 8 + 24).sum();
+        let evaluations: usize = self.evaluations.iter().map(Evaluation::bytes).sum();
+        self.slots.capacity() * 8 + evaluations + edges + self.index.capacity() * 5
+    }
+
+    /// If firing plan `p` (of `plans`, the plans of the set's system) from the state `set`
+    /// describes is known: writes what the plan writes into `next` (the set's state on
+    /// entry) as [`crate::System::fire_planned`] would, moves `set` to the state it leads
+    /// to, and returns true. Otherwise returns false and the caller fires the plan and
+    /// updates the set itself, then calls [`StateCache::arrive`].
+    #[inline]
+    pub fn take_known(
+        &mut self,
+        plans: &FirePlans,
+        p: PlanId,
+        set: &mut EnabledSet,
+        next: &mut State,
+    ) -> bool {
+        let Some(c) = self.current else {
+            self.stats.misses += 1;
+            self.leaving = None;
+            return false;
+        };
+        let c = c as usize;
+        let to = self.edges[c]
+            .iter()
+            .find(|&&(q, _)| q == p)
+            .map(|&(_, n)| n);
+        let Some(n) = to else {
+            // keep the state's evaluation: the set is about to be updated in place
+            set.save_evaluation(&mut self.evaluations[c]);
+            self.current = None;
+            self.leaving = Some((c as u32, p));
+            self.stats.misses += 1;
+            return false;
+        };
+        let n = n as usize;
+        let after = &self.slots[n * self.width..(n + 1) * self.width];
+        let out = next.slots_mut();
+        for &s in plans.written(p) {
+            out[s as usize] = after[s as usize];
+        }
+        // the set gives state c's evaluation back for the spare, then takes state n's
+        set.exchange_evaluation(&mut self.evaluations[c]);
+        set.exchange_evaluation(&mut self.evaluations[n]);
+        self.current = Some(n as u32);
+        self.stats.hits += 1;
+        true
+    }
+
+    /// Before `set` changes other than by [`StateCache::take_known`] (a step without a
+    /// plan, a reset): the state it describes keeps its evaluation, and the cache no
+    /// longer knows where the set is.
+    pub fn leave(&mut self, set: &EnabledSet) {
+        self.leaving = None;
+        if let Some(c) = self.current.take() {
+            set.save_evaluation(&mut self.evaluations[c as usize]);
+        }
+    }
+
+    /// `set` now describes `state` (after a step [`StateCache::take_known`] did not know,
+    /// or after [`StateCache::leave`], or at the start): the cache finds the state among
+    /// those it knows, or remembers it if there is room; and links the step that led
+    /// here, if `take_known` saw it.
+    pub fn arrive(&mut self, set: &EnabledSet, state: &State) {
+        let leaving = self.leaving.take();
+        debug_assert!(self.current.is_none(), "leave the state first");
+        let slots = state.slots();
+        if self.capacity == 0 || slots.len() != self.width {
+            return;
+        }
+        let (width, known) = (self.width, &self.slots);
+        let hash = self.hasher.hash_one(slots);
+        let found = self
+            .index
+            .find(hash, |&k| {
+                &known[k as usize * width..(k as usize + 1) * width] == slots
+            })
+            .copied();
+        let n = match found {
+            // its entry's evaluation is the spare from now on: the set has the same
+            Some(n) => n,
+            None if self.stats.states < self.capacity && set.fits_evaluation() => {
+                let n = self.stats.states as u32;
+                self.slots.extend_from_slice(slots);
+                self.evaluations.push(Evaluation::default());
+                self.edges.push(Vec::new());
+                let (known, hasher) = (&self.slots, &self.hasher);
+                self.index.insert_unique(hash, n, |&k| {
+                    hasher.hash_one(&known[k as usize * width..(k as usize + 1) * width])
+                });
+                self.stats.states += 1;
+                n
+            }
+            None => return,
+        };
+        self.current = Some(n);
+        if let Some((c, p)) = leaving {
+            self.edges[c as usize].push((p, n));
+            self.stats.edges += 1;
+        }
+    }
+}

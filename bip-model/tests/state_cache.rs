@@ -1,0 +1,184 @@
+//! The state cache against the step relation: along random walks that come back to the
+//! initial state now and then (so that states recur), an `EnabledSet` moved by a
+//! `StateCache` (a known step looked up, any other fired and updated) yields exactly the
+//! steps of `System::enabled_steps` in every state, and a known step writes exactly the
+//! state `System::fire` gives. On random systems (the generator of `reference.rs`) and on
+//! the robot models, with caches too small to hold the walk, large ones, and none.
+
+use bip_model::{
+    load_str, EnabledSet, FirePlans, Label, OwnedStep, PlanId, State, StateCache, Steps, System,
+};
+
+mod support;
+use support::random_system::*;
+
+fn full(sys: &System, s: &State, buf: &mut Steps) -> Option<Vec<OwnedStep>> {
+    sys.enabled_steps(s, buf).ok()?;
+    Some(buf.iter().map(|st| st.to_owned()).collect())
+}
+
+/// The plan of the `k`-th step of `set`, if it came from the pool.
+fn plan_of(plans: &FirePlans, set: &EnabledSet, k: usize) -> Option<PlanId> {
+    let st = set.steps().nth(k)?;
+    let (Label::Interaction(i), Some(at)) = (st.label, set.pool_position(st.picks)) else {
+        return None;
+    };
+    plans.plan_at(at, st.picks.len() as u32, i)
+}
+
+/// What a walk saw.
+#[derive(Default)]
+struct Seen {
+    compared: usize,
+    hits: u64,
+    stats: bip_model::CacheStats,
+}
+
+/// `walks` random walks of up to `steps` steps from the initial state of `sys`, with one
+/// cache of `capacity` states for them all. Panics where the set and the relation differ.
+fn walk(name: &str, sys: &System, capacity: usize, walks: usize, steps: usize, seed: u64) -> Seen {
+    // the relation computed from the state: a wrong step table would be on both sides
+    let mut plain = sys.clone();
+    plain.drop_step_tables(|_| true);
+    let plans = sys.fire_plans();
+    let init = sys.initial_state();
+    let Ok(mut set) = EnabledSet::new(sys, &init) else {
+        return Seen::default();
+    };
+    let effects = set.plan_effects(sys, &plans);
+    let mut cache = StateCache::new(sys, capacity);
+    cache.arrive(&set, &init);
+    let mut rng = Rng(seed);
+    let mut buf = Steps::new();
+    let mut seen = Seen::default();
+    let mut written = Vec::new();
+    for w in 0..walks {
+        let mut s = init.clone();
+        if w > 0 {
+            // back to the start: as after any change the cache did not make
+            cache.leave(&set);
+            set.reset(sys, &s).expect("the initial state evaluates");
+            cache.arrive(&set, &s);
+        }
+        for _ in 0..steps {
+            let want = full(&plain, &s, &mut buf).expect("a state the set evaluated");
+            let got: Vec<OwnedStep> = set.steps().map(|st| st.to_owned()).collect();
+            assert_eq!(got, want, "{name}: steps differ in {:?}", s.slots());
+            seen.compared += 1;
+            if want.is_empty() {
+                break;
+            }
+            // a few choices only, so that the walk comes back to states it saw
+            let k = rng.below(want.len().min(3));
+            let mut reference = s.clone();
+            if sys.fire(&s, want[k].as_step(), &mut reference).is_err()
+                || full(&plain, &reference, &mut buf).is_none()
+            {
+                break;
+            }
+            let mut next = s.clone();
+            let known = match plan_of(&plans, &set, k) {
+                Some(p) => {
+                    if cache.take_known(&plans, p, &mut set, &mut next) {
+                        seen.hits += 1;
+                        true
+                    } else {
+                        sys.fire_planned(&plans, p, &mut next).expect("fires");
+                        set.update_planned(sys, &effects, p, &s, &next)
+                            .expect("evaluates");
+                        false
+                    }
+                }
+                None => {
+                    cache.leave(&set);
+                    written.clear();
+                    sys.fire_in_place(want[k].as_step(), &mut next, &mut written)
+                        .expect("fires");
+                    set.update_written(sys, &s, &next, &written)
+                        .expect("evaluates");
+                    false
+                }
+            };
+            if !known {
+                cache.arrive(&set, &next);
+            }
+            assert_eq!(next, reference, "{name}: the step led elsewhere");
+            s = next;
+        }
+    }
+    let stats = cache.stats();
+    assert!(stats.states <= capacity, "{name}: {stats:?}");
+    assert_eq!(stats.hits, seen.hits, "{name}");
+    seen.stats = stats;
+    seen
+}
+
+#[test]
+fn random_systems_agree_with_and_without_room() {
+    let mut compared = 0;
+    let mut hits = 0;
+    for seed in 0..400u64 {
+        let g = generate(seed);
+        let text = g.to_ron();
+        let Ok(mut sys) = load_str("generated.ron", &text) else {
+            panic!("does not load\n{text}")
+        };
+        // steps from the step tables (which the cache remembers), some, or none
+        match seed % 3 {
+            0 => {}
+            1 => sys.drop_step_tables(|i| i % 2 == 0),
+            _ => sys.drop_step_tables(|_| true),
+        }
+        let capacity = [0, 2, 1000][(seed / 3 % 3) as usize];
+        let seen = walk(&format!("seed {seed}"), &sys, capacity, 8, 20, seed);
+        compared += seen.compared;
+        hits += seen.hits;
+    }
+    assert!(compared > 10_000, "only {compared} states compared");
+    assert!(hits > 500, "only {hits} steps taken from the cache");
+}
+
+#[test]
+fn robot_models_agree_with_and_without_room() {
+    for model in [
+        "rover.ron",
+        "satellite.ron",
+        "philosophers-atomic.ron",
+        "pipeline.ron",
+    ] {
+        let path = format!("{}/../robots/{model}", env!("CARGO_MANIFEST_DIR"));
+        let sys = bip_model::load_file(std::path::Path::new(&path)).expect("loads");
+        for capacity in [16, 100_000] {
+            let seen = walk(model, &sys, capacity, 20, 200, capacity as u64);
+            assert!(seen.compared > 2_000, "{model}: {}", seen.compared);
+            assert!(seen.hits > 500, "{model}, {capacity}: {} hits", seen.hits);
+        }
+    }
+}
+
+/// A cache that is full learns nothing more, and its stats say what it holds.
+#[test]
+fn a_full_cache_stays_full() {
+    let path = format!("{}/../robots/rover.ron", env!("CARGO_MANIFEST_DIR"));
+    let sys = bip_model::load_file(std::path::Path::new(&path)).expect("loads");
+    let seen = walk("rover", &sys, 5, 10, 300, 9);
+    assert_eq!(seen.stats.states, 5, "{:?}", seen.stats);
+    assert!(
+        seen.stats.misses > 1000 && seen.hits > 0,
+        "{:?}",
+        seen.stats
+    );
+    let mut cache = StateCache::new(&sys, 5);
+    let s = sys.initial_state();
+    let set = EnabledSet::new(&sys, &s).expect("evaluates");
+    cache.arrive(&set, &s);
+    assert_eq!(cache.stats().states, 1);
+    assert!(cache.bytes() > 0);
+    // the same state again: found, not added
+    cache.leave(&set);
+    cache.arrive(&set, &s);
+    assert_eq!(cache.stats().states, 1);
+    let mut none = StateCache::new(&sys, 0);
+    none.arrive(&set, &s);
+    assert_eq!(none.stats().states, 0);
+}
