@@ -32,6 +32,7 @@ use crate::error::{BuildError, EngineError, RequestError, StepAsError};
 use crate::event::{
     CodelId, Event, Fault, FaultKind, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket,
 };
+use crate::per_state::PerState;
 use crate::policy::{Chooser, Policy, Rng};
 use crate::ports::PortStore;
 use crate::record::Recording;
@@ -252,6 +253,7 @@ impl EngineBuilder {
         cache.arrive(&enabled, &state);
         let ports = PortStore::new(core::mem::take(&mut t.ports));
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
+        let activities = t.activities.len();
         #[cfg(feature = "std")]
         let workers = if self.threads {
             Some(crate::threads::Workers::spawn(&t, &mut out))
@@ -293,6 +295,9 @@ impl EngineBuilder {
             plan_moves,
             effects,
             cache,
+            known_candidates: PerState::new(),
+            known_held: PerState::new(),
+            held_now: Vec::with_capacity(activities),
             forced: Vec::with_capacity(16),
             recording: self.record.map(Recording::with_capacity),
             stats: Stats::default(),
@@ -382,6 +387,11 @@ pub struct Engine {
     effects: PlanEffects,
     /// The states met so far, their enabled steps and the plans between them.
     cache: StateCache,
+    /// The progress candidates of the states in the cache.
+    known_candidates: PerState<Candidate>,
+    /// The codel each activity has held, per state in the cache, and in this one.
+    known_held: PerState<Option<(u32, Reasons)>>,
+    held_now: Vec<Option<(u32, Reasons)>>,
     /// Scratch: the step [`Engine::step_as`] was asked to take.
     forced: Vec<Pick>,
     recording: Option<Recording>,
@@ -757,6 +767,12 @@ impl Engine {
 
     fn collect_candidates(&mut self) {
         self.candidates.clear();
+        // a state met before: its candidates are known
+        let here = self.cache.current();
+        if let Some(known) = here.and_then(|s| self.known_candidates.get(s)) {
+            self.candidates.extend_from_slice(known);
+            return;
+        }
         if self.codel_stamp.len() != self.t.codels.len() {
             self.codel_stamp = vec![u64::MAX; self.t.codels.len()];
         }
@@ -767,6 +783,10 @@ impl Engine {
             self.stats.steps,
             &mut self.candidates,
         );
+        if let Some(s) = here {
+            // (a state with internal transitions is not in the cache)
+            self.known_candidates.set(s, &self.candidates);
+        }
         if !self.t.has_internal {
             return;
         }
@@ -896,33 +916,49 @@ impl Engine {
     /// At a quiescent point: activities with work that cannot run (a start held by
     /// `Exclusive`, a codel held by `Requires`...), reported once per change.
     fn report_held(&mut self) -> Result<(), EngineError> {
+        // what is held is a function of the state: known for a state met before
+        let here = self.cache.current();
+        self.held_now.clear();
+        match here.and_then(|s| self.known_held.get(s)) {
+            Some(known) => self.held_now.extend_from_slice(known),
+            None => {
+                for k in 0..self.t.activities.len() {
+                    let w = &self.t.activities[k];
+                    // most activities wait for their period at a quiescent point
+                    let held = if w.rest.at_rest(self.state.slots()) {
+                        None
+                    } else {
+                        self.held_codel(w.service as usize)?
+                    };
+                    self.held_now.push(held);
+                }
+                if let Some(s) = here {
+                    self.known_held.set(s, &self.held_now);
+                }
+            }
+        }
         for k in 0..self.t.activities.len() {
-            let w = &self.t.activities[k];
-            // most activities wait for their period at a quiescent point: nothing is held,
-            // and nothing was reported held before
-            if w.held.is_none() && w.rest.at_rest(self.state.slots()) {
+            let held = self.held_now[k];
+            if held == self.t.activities[k].held {
                 continue;
             }
-            let s = w.service as usize;
+            let s = self.t.activities[k].service as usize;
             let Some(a) = &self.t.services[s].activity else {
                 continue;
             };
-            let held = self.held_codel(s)?;
             let loc = self.state.slots()[a.loc_slot as usize] as u32;
             let ticket = if loc == a.ether { a.pending } else { a.current };
-            if held != self.t.activities[k].held {
-                self.t.activities[k].held = held;
-                if let Some((c, reasons)) = held {
-                    let i = &self.t.codels[c as usize].info;
-                    tracing::info!(target: "bip_engine", module = i.module.as_str(),
-                        service = i.service.as_str(), codel = i.state.as_str(), reasons = reasons.0,
-                        "codel held");
-                    self.emit(Event::Held {
-                        codel: CodelId(c),
-                        ticket,
-                        reasons,
-                    });
-                }
+            self.t.activities[k].held = held;
+            if let Some((c, reasons)) = held {
+                let i = &self.t.codels[c as usize].info;
+                tracing::info!(target: "bip_engine", module = i.module.as_str(),
+                    service = i.service.as_str(), codel = i.state.as_str(), reasons = reasons.0,
+                    "codel held");
+                self.emit(Event::Held {
+                    codel: CodelId(c),
+                    ticket,
+                    reasons,
+                });
             }
         }
         Ok(())

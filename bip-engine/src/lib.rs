@@ -62,6 +62,7 @@ mod error;
 mod event;
 #[cfg(feature = "std")]
 mod handle;
+mod per_state;
 mod policy;
 mod ports;
 mod record;

@@ -90,6 +90,14 @@ impl StateCache {
         }
     }
 
+    /// The index of the state the set describes, if the cache knows it (indices count
+    /// from 0 in the order the states were met, and a known state is never forgotten: a
+    /// caller may keep what it works out from a state by its index).
+    #[inline]
+    pub fn current(&self) -> Option<usize> {
+        self.current.map(|c| c as usize)
+    }
+
     /// The most states it remembers.
     pub fn capacity(&self) -> usize {
         self.capacity
