@@ -1431,9 +1431,7 @@ impl Engine {
         }
         // a step taken before from this state is looked up; any other is computed
         let known = match plan {
-            Some(p) => self
-                .cache
-                .take_known(&self.plans, p, &mut self.enabled, &mut self.next),
+            Some(p) => self.cache.take_known(p, &mut self.enabled, &mut self.next),
             None => {
                 self.cache.leave(&self.enabled);
                 false
@@ -1463,7 +1461,13 @@ impl Engine {
         if tracing::enabled!(target: "bip_engine", tracing::Level::DEBUG) {
             self.trace_step(label);
         }
-        let written = written_by(&self.plans, plan, &self.step_slots);
+        // the slots the step changed: the cache knows them, else the plan's or those
+        // `fire_in_place` listed
+        let written = match plan {
+            _ if known => self.cache.last_changed(),
+            Some(p) => self.plans.written(p),
+            None => &self.step_slots,
+        };
         let (state, next) = (self.state.slots_mut(), self.next.slots());
         for &s in written {
             state[s as usize] = next[s as usize];
@@ -1736,14 +1740,6 @@ fn collect_progress(
             }
             InterKind::Request { .. } | InterKind::Time | InterKind::Environment => {}
         }
-    }
-}
-
-/// The slots a committed step wrote: its plan's, or those `fire_in_place` listed.
-fn written_by<'a>(plans: &'a FirePlans, plan: Option<PlanId>, listed: &'a [u32]) -> &'a [u32] {
-    match plan {
-        Some(p) => plans.written(p),
-        None => listed,
     }
 }
 

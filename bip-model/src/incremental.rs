@@ -69,16 +69,16 @@ pub struct EnabledSet {
     // ---- the state's enabled steps ----
     /// Per interaction, what its last evaluation found (see [`Found`]); its picks are in
     /// `pool` (the system's step tables) or in `picks` (computed).
-    found: Vec<Found>,
+    found: Box<[Found]>,
     picks: Vec<Vec<Pick>>,
     pool: Arc<[Pick]>,
     /// Interactions with steps before priorities (one bit each).
-    pre: Vec<u64>,
+    pre: Box<[u64]>,
     /// Lazy interactions not evaluated since they were suppressed: their `found`,
     /// `picks` and `pre` bit are out of date (and do not matter while they stay suppressed).
-    stale: Vec<u64>,
+    stale: Box<[u64]>,
     /// Per interaction under a `when` rule: suppressed in this state.
-    when_suppressed: Vec<u64>,
+    when_suppressed: Box<[u64]>,
     /// Per component, its enabled internal transitions.
     internal: Vec<Vec<Pick>>,
 
@@ -186,10 +186,10 @@ impl EnabledSet {
             masks: system.priority_masks.clone(),
             picks: vec![Vec::new(); n_inter],
             pool: system.enable_index.tables.pool(),
-            found: vec![Found::default(); n_inter],
-            pre: vec![0; words],
-            stale: vec![0; words],
-            when_suppressed: vec![0; words],
+            found: vec![Found::default(); n_inter].into_boxed_slice(),
+            pre: vec![0; words].into_boxed_slice(),
+            stale: vec![0; words].into_boxed_slice(),
+            when_suppressed: vec![0; words].into_boxed_slice(),
             internal: vec![Vec::new(); n_comp],
             scratch: Choices::default(),
             stamp: vec![0; n_inter],
@@ -217,7 +217,7 @@ impl EnabledSet {
             self.eval_internal(system, state, c)?;
         }
         // the lazy ones are left for `settle`, once the others are known
-        self.stale.clone_from(&self.masks.lazy);
+        self.stale.copy_from_slice(&self.masks.lazy);
         for i in 0..system.interactions.len() as u32 {
             if !bit(&self.masks.lazy, i) {
                 self.eval_interaction(system, state, i)?;
@@ -553,10 +553,17 @@ impl EnabledSet {
 
     /// Copies what the set knows of its state into `e` (reusing its buffers).
     pub(crate) fn save_evaluation(&self, e: &mut Evaluation) {
-        e.found.clone_from(&self.found);
-        e.pre.clone_from(&self.pre);
-        e.stale.clone_from(&self.stale);
-        e.when_suppressed.clone_from(&self.when_suppressed);
+        fn copy<T: Copy>(to: &mut Box<[T]>, from: &[T]) {
+            if to.len() == from.len() {
+                to.copy_from_slice(from);
+            } else {
+                *to = from.into();
+            }
+        }
+        copy(&mut e.found, &self.found);
+        copy(&mut e.pre, &self.pre);
+        copy(&mut e.stale, &self.stale);
+        copy(&mut e.when_suppressed, &self.when_suppressed);
     }
 
     fn eval_internal(&mut self, system: &System, state: &State, c: u32) -> Result<(), RangeError> {
@@ -755,17 +762,17 @@ impl EnabledSet {
 /// state it knows.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Evaluation {
-    found: Vec<Found>,
-    pre: Vec<u64>,
-    stale: Vec<u64>,
-    when_suppressed: Vec<u64>,
+    found: Box<[Found]>,
+    pre: Box<[u64]>,
+    stale: Box<[u64]>,
+    when_suppressed: Box<[u64]>,
 }
 
 impl Evaluation {
     /// The bytes its buffers hold.
     pub(crate) fn bytes(&self) -> usize {
-        self.found.capacity() * core::mem::size_of::<Found>()
-            + (self.pre.capacity() + self.stale.capacity() + self.when_suppressed.capacity()) * 8
+        self.found.len() * core::mem::size_of::<Found>()
+            + (self.pre.len() + self.stale.len() + self.when_suppressed.len()) * 8
     }
 }
 

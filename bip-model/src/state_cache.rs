@@ -29,7 +29,7 @@ use core::hash::BuildHasher;
 
 use hashbrown::{DefaultHashBuilder, HashTable};
 
-use crate::fire_plan::{FirePlans, PlanId};
+use crate::fire_plan::PlanId;
 use crate::incremental::{EnabledSet, Evaluation};
 use crate::state::State;
 use crate::system::System;
@@ -46,8 +46,12 @@ pub struct StateCache {
     slots: Vec<i64>,
     /// State `k`'s evaluation, or the spare while the set describes state `k`.
     evaluations: Vec<Evaluation>,
-    /// Per state, the plans fired from it and the state each led to.
-    edges: Vec<Vec<(PlanId, u32)>>,
+    /// Per state, the plans fired from it: the state each led to, and where the slots
+    /// that step changed are listed in `changed`.
+    edges: Vec<Vec<Edge>>,
+    changed: Vec<u32>,
+    /// Where the slots the last known step changed are in `changed`.
+    last_changed: (u32, u32),
     /// The states by their slots.
     index: HashTable<u32>,
     hasher: DefaultHashBuilder,
@@ -57,6 +61,13 @@ pub struct StateCache {
     /// [`StateCache::arrive`] links it to where it led.
     leaving: Option<(u32, PlanId)>,
     stats: CacheStats,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Edge {
+    plan: PlanId,
+    to: u32,
+    changed: (u32, u32),
 }
 
 /// What a [`StateCache`] holds and how often it knew the step.
@@ -82,6 +93,8 @@ impl StateCache {
             slots: Vec::new(),
             evaluations: Vec::new(),
             edges: Vec::new(),
+            changed: Vec::new(),
+            last_changed: (0, 0),
             index: HashTable::new(),
             hasher: DefaultHashBuilder::default(),
             current: None,
@@ -110,35 +123,27 @@ impl StateCache {
 
     /// The bytes it holds (its buffers' capacities).
     pub fn bytes(&self) -> usize {
-        let edges: usize = self.edges.iter().map(|e| e.capacity() * 8 + 24).sum();
+        let edge = core::mem::size_of::<Edge>();
+        let edges: usize = self.edges.iter().map(|e| e.capacity() * edge + 24).sum();
         let evaluations: usize = self.evaluations.iter().map(Evaluation::bytes).sum();
-        self.slots.capacity() * 8 + evaluations + edges + self.index.capacity() * 5
+        let lists = (self.slots.capacity() + self.changed.capacity()) * 8;
+        lists + evaluations + edges + self.index.capacity() * 5
     }
 
-    /// If firing plan `p` (of `plans`, the plans of the set's system) from the state `set`
-    /// describes is known: writes what the plan writes into `next` (the set's state on
-    /// entry) as [`crate::System::fire_planned`] would, moves `set` to the state it leads
-    /// to, and returns true. Otherwise returns false and the caller fires the plan and
-    /// updates the set itself, then calls [`StateCache::arrive`].
+    /// If firing plan `p` from the state `set` describes is known: moves `next` (the
+    /// set's state on entry) and `set` to the state it leads to, and returns true
+    /// ([`StateCache::last_changed`] lists the slots that changed). Otherwise returns
+    /// false, and the caller fires the plan and updates the set itself, then calls
+    /// [`StateCache::arrive`].
     #[inline]
-    pub fn take_known(
-        &mut self,
-        plans: &FirePlans,
-        p: PlanId,
-        set: &mut EnabledSet,
-        next: &mut State,
-    ) -> bool {
+    pub fn take_known(&mut self, p: PlanId, set: &mut EnabledSet, next: &mut State) -> bool {
         let Some(c) = self.current else {
             self.stats.misses += 1;
             self.leaving = None;
             return false;
         };
         let c = c as usize;
-        let to = self.edges[c]
-            .iter()
-            .find(|&&(q, _)| q == p)
-            .map(|&(_, n)| n);
-        let Some(n) = to else {
+        let Some(&edge) = self.edges[c].iter().find(|e| e.plan == p) else {
             // keep the state's evaluation: the set is about to be updated in place
             set.save_evaluation(&mut self.evaluations[c]);
             self.current = None;
@@ -146,10 +151,12 @@ impl StateCache {
             self.stats.misses += 1;
             return false;
         };
-        let n = n as usize;
+        let n = edge.to as usize;
         let after = &self.slots[n * self.width..(n + 1) * self.width];
+        self.last_changed = edge.changed;
+        let changed = &self.changed[edge.changed.0 as usize..edge.changed.1 as usize];
         let out = next.slots_mut();
-        for &s in plans.written(p) {
+        for &s in changed {
             out[s as usize] = after[s as usize];
         }
         // the set gives state c's evaluation back for the spare, then takes state n's
@@ -158,6 +165,13 @@ impl StateCache {
         self.current = Some(n as u32);
         self.stats.hits += 1;
         true
+    }
+
+    /// The slots the last step [`StateCache::take_known`] took changed (those
+    /// [`crate::System::fire_planned`] would write, less those it leaves as they were).
+    #[inline]
+    pub fn last_changed(&self) -> &[u32] {
+        &self.changed[self.last_changed.0 as usize..self.last_changed.1 as usize]
     }
 
     /// Before `set` changes other than by [`StateCache::take_known`] (a step without a
@@ -207,8 +221,20 @@ impl StateCache {
             None => return,
         };
         self.current = Some(n);
-        if let Some((c, p)) = leaving {
-            self.edges[c as usize].push((p, n));
+        if let Some((c, plan)) = leaving {
+            let (c, w) = (c as usize, self.width);
+            let a = self.changed.len() as u32;
+            for s in 0..w {
+                if self.slots[c * w + s] != self.slots[n as usize * w + s] {
+                    self.changed.push(s as u32);
+                }
+            }
+            let changed = (a, self.changed.len() as u32);
+            self.edges[c].push(Edge {
+                plan,
+                to: n,
+                changed,
+            });
             self.stats.edges += 1;
         }
     }

@@ -79,7 +79,7 @@ fn walk(name: &str, sys: &System, capacity: usize, walks: usize, steps: usize, s
             let mut next = s.clone();
             let known = match plan_of(&plans, &set, k) {
                 Some(p) => {
-                    if cache.take_known(&plans, p, &mut set, &mut next) {
+                    if cache.take_known(p, &mut set, &mut next) {
                         seen.hits += 1;
                         true
                     } else {
