@@ -6,6 +6,9 @@
 //!    yield at once, so the time is the engine's own (gating, choice, commit, ticks).
 //! 2. The engine's overhead on a codel that computes for about 2 µs: the time of the run
 //!    against the time the same computations take alone, called as many times.
+//! 3. Without the state cache, and on a run that keeps meeting new states (random codel
+//!    results, the requests again and again): what the cache spares, and what it costs
+//!    when it seldom knows the step.
 //!
 //! The engine runs on a virtual clock, so ticks come as soon as nothing else is left to
 //! do: the run measures the engine, not the rover's 100 ms period.
@@ -19,7 +22,9 @@ use std::hint::black_box;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
-use bip_engine::{Engine, EngineBuilder, Next, Until};
+use bip_engine::{
+    CacheStats, DefaultCodels, Engine, EngineBuilder, Next, Until, DEFAULT_STATE_CACHE,
+};
 use bip_model::System;
 
 const WARM_UP: u64 = 20_000;
@@ -52,18 +57,23 @@ fn bind_all(system: &System, body: fn()) -> EngineBuilder {
     b
 }
 
+const REQUESTS: [(&str, &str); 6] = [
+    ("rflex", "Init"),
+    ("rflex", "TrackSpeed"),
+    ("sick", "Scan"),
+    ("pom", "Track"),
+    ("aspect", "Build"),
+    ("heating", "Heat"),
+];
+
 /// The engine on the rover with six activities running (the battery's Guard holds the
-/// motion now and then), warmed up.
-fn running(system: &System, body: fn()) -> Engine {
-    let mut e = bind_all(system, body).build().expect("builds");
-    for (m, s) in [
-        ("rflex", "Init"),
-        ("rflex", "TrackSpeed"),
-        ("sick", "Scan"),
-        ("pom", "Track"),
-        ("aspect", "Build"),
-        ("heating", "Heat"),
-    ] {
+/// motion now and then), warmed up; the state cache holds up to `cache` states.
+fn running(system: &System, body: fn(), cache: usize) -> Engine {
+    let mut e = bind_all(system, body)
+        .state_cache(cache)
+        .build()
+        .expect("builds");
+    for (m, s) in REQUESTS {
         e.request(m, s, ()).expect("queued");
     }
     e.run_until(Until::Steps(WARM_UP)).expect("runs");
@@ -87,6 +97,32 @@ fn timed(e: &mut Engine, steps: u64) -> (Duration, u64) {
 }
 
 fn empty() {}
+
+fn hit_share(c: CacheStats) -> f64 {
+    c.hits as f64 * 100.0 / (c.hits + c.misses).max(1) as f64
+}
+
+/// Steps per second on the rover with random codel results (yields, exceptions, ids)
+/// and the six requests again every 64 steps, and the cache's stats at the end.
+fn varied(system: &System, cache: usize, steps: u64) -> (f64, CacheStats) {
+    let mut e = Engine::builder(system.clone())
+        .default_codels(DefaultCodels::Random(7))
+        .event_capacity(1024)
+        .state_cache(cache)
+        .build()
+        .expect("builds");
+    let t = Instant::now();
+    let mut done = 0;
+    while done < steps {
+        for (m, s) in REQUESTS {
+            e.request(m, s, ()).expect("queued");
+        }
+        e.run_until(Until::Steps(64)).expect("runs");
+        black_box(e.events().count());
+        done += 64;
+    }
+    (done as f64 / t.elapsed().as_secs_f64(), e.cache_stats())
+}
 
 /// Iterations of `work`'s loop: calibrated so that a call takes about 2 µs.
 static ITERATIONS: AtomicU32 = AtomicU32::new(1000);
@@ -169,11 +205,14 @@ fn main() {
     let steps = o.steps;
     let mut rates = Vec::new();
     let mut codel_share = 0.0;
+    let mut cache = CacheStats::default();
+    let mut bytes = 0;
     for _ in 0..o.runs {
-        let mut e = running(&system, empty);
+        let mut e = running(&system, empty, DEFAULT_STATE_CACHE);
         let (t, codels) = timed(&mut e, steps);
         rates.push(steps as f64 / t.as_secs_f64());
         codel_share = codels as f64 / steps as f64;
+        (cache, bytes) = (e.cache_stats(), e.cache_bytes());
     }
     let rate = median(rates);
     println!(
@@ -188,8 +227,47 @@ fn main() {
         "  the engine's own time per codel run: {engine_ns:.0} ns ({:.1}% of a 2 µs codel)",
         engine_ns / 20.0
     );
+    println!(
+        "  state cache: {} states, {} steps known, {:.2}% of the steps taken from it, {} KiB",
+        cache.states,
+        cache.edges,
+        hit_share(cache),
+        bytes / 1024
+    );
     if o.empty_only {
         return;
+    }
+
+    // 3. without the cache; and a run that keeps meeting new states
+    let mut rates = Vec::new();
+    for _ in 0..o.runs {
+        let mut e = running(&system, empty, 0);
+        let (t, _) = timed(&mut e, steps);
+        rates.push(steps as f64 / t.as_secs_f64());
+    }
+    let rate = median(rates);
+    println!(
+        "empty codels, no state cache: {:.2} M gated steps/s ({:.0} ns per step)",
+        rate / 1e6,
+        1e9 / rate
+    );
+    // (a cache of 16 states is soon full and seldom knows the step: what misses cost)
+    for cache in [0, 16, DEFAULT_STATE_CACHE] {
+        let mut rates = Vec::new();
+        let mut stats = CacheStats::default();
+        for _ in 0..o.runs {
+            let (rate, s) = varied(&system, cache, steps / 4);
+            rates.push(rate);
+            stats = s;
+        }
+        let rate = median(rates);
+        println!(
+            "random codel results, requests every 64 steps, state cache of {cache}: {:.2} M gated steps/s ({:.0} ns per step; {} states, {:.1}% of the steps taken from the cache)",
+            rate / 1e6,
+            1e9 / rate,
+            stats.states,
+            hit_share(stats)
+        );
     }
 
     // 2. codels of about 2 µs
@@ -199,7 +277,7 @@ fn main() {
     let mut per_codel = Vec::new();
     let mut work_us = 0.0;
     for _ in 0..o.runs {
-        let mut e = running(&system, work);
+        let mut e = running(&system, work, DEFAULT_STATE_CACHE);
         // the codels' own time, measured just before and just after the run (the machine's
         // speed drifts; one measurement apart from the run moves the overhead by percents)
         // (about three steps in four are codels; the "before" time is scaled to the count)

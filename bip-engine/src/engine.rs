@@ -250,7 +250,7 @@ impl EngineBuilder {
             .collect();
         let effects = enabled.plan_effects(&system, &plans);
         let mut cache = StateCache::new(&system, self.state_cache);
-        cache.arrive(&enabled, &state);
+        cache.enter(&enabled, &state);
         let ports = PortStore::new(core::mem::take(&mut t.ports));
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
         let activities = t.activities.len();
@@ -444,6 +444,11 @@ impl Engine {
     /// ([`EngineBuilder::state_cache`]).
     pub fn cache_stats(&self) -> CacheStats {
         self.cache.stats()
+    }
+
+    /// The bytes the state cache and what the engine keeps per cached state hold.
+    pub fn cache_bytes(&self) -> usize {
+        self.cache.bytes() + self.known_candidates.bytes() + self.known_held.bytes()
     }
 
     /// The clock's time (microseconds since the engine started).
@@ -1517,7 +1522,12 @@ impl Engine {
             }
         };
         if updated.is_ok() {
-            self.cache.arrive(&self.enabled, &self.next);
+            let written = match plan {
+                Some(p) => self.plans.written(p),
+                None => &self.step_slots,
+            };
+            let (enabled, state, next) = (&self.enabled, &self.state, &self.next);
+            self.cache.arrive(enabled, state, next, written);
         }
         Ok(updated)
     }

@@ -36,6 +36,11 @@ impl<T: Copy> PerState<T> {
         }
     }
 
+    /// The bytes it holds.
+    pub fn bytes(&self) -> usize {
+        self.spans.capacity() * 8 + self.items.capacity() * core::mem::size_of::<T>()
+    }
+
     /// Keeps `list` for state `s` (once: a state's list never changes).
     pub fn set(&mut self, s: usize, list: &[T]) {
         if self.spans.len() <= s {

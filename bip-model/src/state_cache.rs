@@ -25,9 +25,7 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use core::hash::BuildHasher;
-
-use hashbrown::{DefaultHashBuilder, HashTable};
+use hashbrown::HashTable;
 
 use crate::fire_plan::PlanId;
 use crate::incremental::{EnabledSet, Evaluation};
@@ -54,7 +52,12 @@ pub struct StateCache {
     last_changed: (u32, u32),
     /// The states by their slots.
     index: HashTable<u32>,
-    hasher: DefaultHashBuilder,
+    /// Per state, its hash; and the hash of the state the set describes.
+    hashes: Vec<u64>,
+    hash: u64,
+    /// Per slot, the last `epoch` it was counted in.
+    seen: Vec<u32>,
+    epoch: u32,
     /// The state the set describes, if the cache knows it.
     current: Option<u32>,
     /// The state and plan of a step [`StateCache::take_known`] did not know, until
@@ -96,7 +99,10 @@ impl StateCache {
             changed: Vec::new(),
             last_changed: (0, 0),
             index: HashTable::new(),
-            hasher: DefaultHashBuilder::default(),
+            hashes: Vec::new(),
+            hash: 0,
+            seen: vec![0; system.slot_count()],
+            epoch: 0,
             current: None,
             leaving: None,
             stats: CacheStats::default(),
@@ -126,7 +132,7 @@ impl StateCache {
         let edge = core::mem::size_of::<Edge>();
         let edges: usize = self.edges.iter().map(|e| e.capacity() * edge + 24).sum();
         let evaluations: usize = self.evaluations.iter().map(Evaluation::bytes).sum();
-        let lists = (self.slots.capacity() + self.changed.capacity()) * 8;
+        let lists = (self.slots.capacity() + self.hashes.capacity() + self.changed.capacity()) * 8;
         lists + evaluations + edges + self.index.capacity() * 5
     }
 
@@ -163,6 +169,7 @@ impl StateCache {
         set.exchange_evaluation(&mut self.evaluations[c]);
         set.exchange_evaluation(&mut self.evaluations[n]);
         self.current = Some(n as u32);
+        self.hash = self.hashes[n];
         self.stats.hits += 1;
         true
     }
@@ -184,19 +191,59 @@ impl StateCache {
         }
     }
 
-    /// `set` now describes `state` (after a step [`StateCache::take_known`] did not know,
-    /// or after [`StateCache::leave`], or at the start): the cache finds the state among
-    /// those it knows, or remembers it if there is room; and links the step that led
-    /// here, if `take_known` saw it.
-    pub fn arrive(&mut self, set: &EnabledSet, state: &State) {
+    /// `set` describes `state`, and the cache knew nothing of where the set was (at the
+    /// start, after [`StateCache::leave`] and a reset): the cache finds the state among
+    /// those it knows, or remembers it if there is room.
+    pub fn enter(&mut self, set: &EnabledSet, state: &State) {
+        self.leaving = None;
+        let slots = state.slots();
+        self.hash = state_hash(slots);
+        self.settle(set, slots);
+    }
+
+    /// `set` now describes `after`, which a step from `before` (the state it described)
+    /// led to, writing no slot but those in `written` (after a step
+    /// [`StateCache::take_known`] did not know, or one after [`StateCache::leave`]): the
+    /// cache finds the state among those it knows, or remembers it if there is room; and
+    /// links the step that led here, if `take_known` saw it.
+    pub fn arrive(&mut self, set: &EnabledSet, before: &State, after: &State, written: &[u32]) {
+        if self.capacity == 0 {
+            return;
+        }
+        let (a, b) = (before.slots(), after.slots());
+        // a slot may be listed twice (a plan's actions write it twice): count it once
+        self.epoch = self.epoch.wrapping_add(1);
+        if self.epoch == 0 {
+            self.seen.fill(0);
+            self.epoch = 1;
+        }
+        for &s in written {
+            let s = s as usize;
+            let (x, y) = (a[s], b[s]);
+            if x != y && self.seen[s] != self.epoch {
+                self.seen[s] = self.epoch;
+                self.hash = self
+                    .hash
+                    .wrapping_sub(slot_hash(s, x))
+                    .wrapping_add(slot_hash(s, y));
+            }
+        }
+        debug_assert_eq!(
+            self.hash,
+            state_hash(b),
+            "`written` lists every slot written"
+        );
+        self.settle(set, b);
+    }
+
+    /// The set describes `slots`, whose hash is `self.hash`: find or remember the state.
+    fn settle(&mut self, set: &EnabledSet, slots: &[i64]) {
         let leaving = self.leaving.take();
         debug_assert!(self.current.is_none(), "leave the state first");
-        let slots = state.slots();
         if self.capacity == 0 || slots.len() != self.width {
             return;
         }
-        let (width, known) = (self.width, &self.slots);
-        let hash = self.hasher.hash_one(slots);
+        let (width, known, hash) = (self.width, &self.slots, self.hash);
         let found = self
             .index
             .find(hash, |&k| {
@@ -209,12 +256,11 @@ impl StateCache {
             None if self.stats.states < self.capacity && set.fits_evaluation() => {
                 let n = self.stats.states as u32;
                 self.slots.extend_from_slice(slots);
+                self.hashes.push(hash);
                 self.evaluations.push(Evaluation::default());
                 self.edges.push(Vec::new());
-                let (known, hasher) = (&self.slots, &self.hasher);
-                self.index.insert_unique(hash, n, |&k| {
-                    hasher.hash_one(&known[k as usize * width..(k as usize + 1) * width])
-                });
+                let hashes = &self.hashes;
+                self.index.insert_unique(hash, n, |&k| hashes[k as usize]);
                 self.stats.states += 1;
                 n
             }
@@ -238,4 +284,22 @@ impl StateCache {
             self.stats.edges += 1;
         }
     }
+}
+
+fn state_hash(slots: &[i64]) -> u64 {
+    let parts = slots.iter().enumerate().map(|(s, &v)| slot_hash(s, v));
+    parts.fold(0, u64::wrapping_add)
+}
+
+/// A slot's part of a state's hash: the hash is the sum over the slots, so that a step
+/// updates it from the slots it changed (as Zobrist hashing does). The mix is
+/// splitmix64's finaliser.
+#[inline]
+fn slot_hash(slot: usize, value: i64) -> u64 {
+    let mut z = (slot as u64)
+        .wrapping_mul(0x9e37_79b9_7f4a_7c15)
+        .wrapping_add(value as u64);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
 }

@@ -47,7 +47,7 @@ fn walk(name: &str, sys: &System, capacity: usize, walks: usize, steps: usize, s
     };
     let effects = set.plan_effects(sys, &plans);
     let mut cache = StateCache::new(sys, capacity);
-    cache.arrive(&set, &init);
+    cache.enter(&set, &init);
     let mut rng = Rng(seed);
     let mut buf = Steps::new();
     let mut seen = Seen::default();
@@ -58,7 +58,7 @@ fn walk(name: &str, sys: &System, capacity: usize, walks: usize, steps: usize, s
             // back to the start: as after any change the cache did not make
             cache.leave(&set);
             set.reset(sys, &s).expect("the initial state evaluates");
-            cache.arrive(&set, &s);
+            cache.enter(&set, &s);
         }
         for _ in 0..steps {
             let want = full(&plain, &s, &mut buf).expect("a state the set evaluated");
@@ -77,16 +77,15 @@ fn walk(name: &str, sys: &System, capacity: usize, walks: usize, steps: usize, s
                 break;
             }
             let mut next = s.clone();
-            let known = match plan_of(&plans, &set, k) {
+            match plan_of(&plans, &set, k) {
                 Some(p) => {
                     if cache.take_known(p, &mut set, &mut next) {
                         seen.hits += 1;
-                        true
                     } else {
                         sys.fire_planned(&plans, p, &mut next).expect("fires");
                         set.update_planned(sys, &effects, p, &s, &next)
                             .expect("evaluates");
-                        false
+                        cache.arrive(&set, &s, &next, plans.written(p));
                     }
                 }
                 None => {
@@ -96,11 +95,8 @@ fn walk(name: &str, sys: &System, capacity: usize, walks: usize, steps: usize, s
                         .expect("fires");
                     set.update_written(sys, &s, &next, &written)
                         .expect("evaluates");
-                    false
+                    cache.arrive(&set, &s, &next, &written);
                 }
-            };
-            if !known {
-                cache.arrive(&set, &next);
             }
             assert_eq!(next, reference, "{name}: the step led elsewhere");
             s = next;
@@ -171,14 +167,14 @@ fn a_full_cache_stays_full() {
     let mut cache = StateCache::new(&sys, 5);
     let s = sys.initial_state();
     let set = EnabledSet::new(&sys, &s).expect("evaluates");
-    cache.arrive(&set, &s);
+    cache.enter(&set, &s);
     assert_eq!(cache.stats().states, 1);
     assert!(cache.bytes() > 0);
     // the same state again: found, not added
     cache.leave(&set);
-    cache.arrive(&set, &s);
+    cache.enter(&set, &s);
     assert_eq!(cache.stats().states, 1);
     let mut none = StateCache::new(&sys, 0);
-    none.arrive(&set, &s);
+    none.enter(&set, &s);
     assert_eq!(none.stats().states, 0);
 }
