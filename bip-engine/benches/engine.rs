@@ -104,7 +104,7 @@ fn hit_share(c: CacheStats) -> f64 {
 
 /// Steps per second on the rover with random codel results (yields, exceptions, ids)
 /// and the six requests again every 64 steps, and the cache's stats at the end.
-fn varied(system: &System, cache: usize, steps: u64) -> (f64, CacheStats) {
+fn varied(system: &System, cache: usize, steps: u64) -> (f64, CacheStats, usize) {
     let mut e = Engine::builder(system.clone())
         .default_codels(DefaultCodels::Random(7))
         .event_capacity(1024)
@@ -121,7 +121,8 @@ fn varied(system: &System, cache: usize, steps: u64) -> (f64, CacheStats) {
         black_box(e.events().count());
         done += 64;
     }
-    (done as f64 / t.elapsed().as_secs_f64(), e.cache_stats())
+    let rate = done as f64 / t.elapsed().as_secs_f64();
+    (rate, e.cache_stats(), e.cache_bytes())
 }
 
 /// Iterations of `work`'s loop: calibrated so that a call takes about 2 µs.
@@ -254,18 +255,19 @@ fn main() {
     // (a cache of 16 states is soon full and seldom knows the step: what misses cost)
     for cache in [0, 16, DEFAULT_STATE_CACHE] {
         let mut rates = Vec::new();
-        let mut stats = CacheStats::default();
+        let (mut stats, mut bytes) = (CacheStats::default(), 0);
         for _ in 0..o.runs {
-            let (rate, s) = varied(&system, cache, steps / 4);
+            let (rate, s, b) = varied(&system, cache, steps / 4);
             rates.push(rate);
-            stats = s;
+            (stats, bytes) = (s, b);
         }
         let rate = median(rates);
         println!(
-            "random codel results, requests every 64 steps, state cache of {cache}: {:.2} M gated steps/s ({:.0} ns per step; {} states, {:.1}% of the steps taken from the cache)",
+            "random codel results, requests every 64 steps, state cache of {cache}: {:.2} M gated steps/s ({:.0} ns per step; {} states, {} KiB, {:.1}% of the steps taken from the cache)",
             rate / 1e6,
             1e9 / rate,
             stats.states,
+            bytes / 1024,
             hit_share(stats)
         );
     }

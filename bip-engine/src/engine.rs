@@ -109,8 +109,8 @@ pub struct Stats {
     pub events_dropped: u64,
 }
 
-/// How many states [`EngineBuilder::state_cache`] remembers by default: a few MiB for a
-/// model the size of robots/rover.ron (docs/engine.md, "The state cache").
+/// How many states [`EngineBuilder::state_cache`] remembers by default: at most about
+/// 1.6 MiB for a model the size of robots/rover.ron (docs/engine.md, "The state cache").
 pub const DEFAULT_STATE_CACHE: usize = 1024;
 
 /// Builds an [`Engine`]: bind codels, choose a clock, a policy, recording.
