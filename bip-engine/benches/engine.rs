@@ -162,11 +162,13 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// The command line: `--steps N` (timed steps with empty codels, default 2,000,000),
-/// `--runs N` (default 5), `--empty-only` (skip the 2 µs codels).
+/// `--runs N` (default 5), `--empty-only` (skip the 2 µs codels and part 3), `--cache N`
+/// (the state cache of parts 1 and 2, default `DEFAULT_STATE_CACHE`).
 struct Options {
     steps: u64,
     runs: usize,
     empty_only: bool,
+    cache: usize,
 }
 
 fn options() -> Options {
@@ -174,6 +176,7 @@ fn options() -> Options {
         steps: 2_000_000,
         runs: 5,
         empty_only: false,
+        cache: DEFAULT_STATE_CACHE,
     };
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
@@ -187,6 +190,12 @@ fn options() -> Options {
             "--steps" => o.steps = number("--steps"),
             "--runs" => o.runs = number("--runs") as usize,
             "--empty-only" => o.empty_only = true,
+            "--cache" => {
+                o.cache = match args.next().map(|v| v.parse()) {
+                    Some(Ok(n)) => n,
+                    _ => panic!("--cache needs a number of states"),
+                }
+            }
             // cargo bench passes `--bench`
             _ => {}
         }
@@ -209,7 +218,7 @@ fn main() {
     let mut cache = CacheStats::default();
     let mut bytes = 0;
     for _ in 0..o.runs {
-        let mut e = running(&system, empty, DEFAULT_STATE_CACHE);
+        let mut e = running(&system, empty, o.cache);
         let (t, codels) = timed(&mut e, steps);
         rates.push(steps as f64 / t.as_secs_f64());
         codel_share = codels as f64 / steps as f64;
@@ -279,7 +288,7 @@ fn main() {
     let mut per_codel = Vec::new();
     let mut work_us = 0.0;
     for _ in 0..o.runs {
-        let mut e = running(&system, work, DEFAULT_STATE_CACHE);
+        let mut e = running(&system, work, o.cache);
         // the codels' own time, measured just before and just after the run (the machine's
         // speed drifts; one measurement apart from the run moves the overhead by percents)
         // (about three steps in four are codels; the "before" time is scaled to the count)

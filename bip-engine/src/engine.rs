@@ -921,15 +921,29 @@ impl Engine {
     /// At a quiescent point: activities with work that cannot run (a start held by
     /// `Exclusive`, a codel held by `Requires`...), reported once per change.
     fn report_held(&mut self) -> Result<(), EngineError> {
-        // what is held is a function of the state: known for a state met before
-        let here = self.cache.current();
+        let n = self.t.activities.len();
+        let Some(here) = self.cache.current() else {
+            for k in 0..n {
+                let w = &self.t.activities[k];
+                // most activities wait for their period at a quiescent point: nothing is
+                // held, and nothing was reported held before
+                if w.held.is_none() && w.rest.at_rest(self.state.slots()) {
+                    continue;
+                }
+                let held = self.held_codel(w.service as usize)?;
+                if held != self.t.activities[k].held {
+                    self.note_held(k, held);
+                }
+            }
+            return Ok(());
+        };
+        // what is held is a function of the state: worked out once per cached state
         self.held_now.clear();
-        match here.and_then(|s| self.known_held.get(s)) {
+        match self.known_held.get(here) {
             Some(known) => self.held_now.extend_from_slice(known),
             None => {
-                for k in 0..self.t.activities.len() {
+                for k in 0..n {
                     let w = &self.t.activities[k];
-                    // most activities wait for their period at a quiescent point
                     let held = if w.rest.at_rest(self.state.slots()) {
                         None
                     } else {
@@ -937,36 +951,38 @@ impl Engine {
                     };
                     self.held_now.push(held);
                 }
-                if let Some(s) = here {
-                    self.known_held.set(s, &self.held_now);
-                }
+                self.known_held.set(here, &self.held_now);
             }
         }
-        for k in 0..self.t.activities.len() {
+        for k in 0..n {
             let held = self.held_now[k];
-            if held == self.t.activities[k].held {
-                continue;
-            }
-            let s = self.t.activities[k].service as usize;
-            let Some(a) = &self.t.services[s].activity else {
-                continue;
-            };
-            let loc = self.state.slots()[a.loc_slot as usize] as u32;
-            let ticket = if loc == a.ether { a.pending } else { a.current };
-            self.t.activities[k].held = held;
-            if let Some((c, reasons)) = held {
-                let i = &self.t.codels[c as usize].info;
-                tracing::info!(target: "bip_engine", module = i.module.as_str(),
-                    service = i.service.as_str(), codel = i.state.as_str(), reasons = reasons.0,
-                    "codel held");
-                self.emit(Event::Held {
-                    codel: CodelId(c),
-                    ticket,
-                    reasons,
-                });
+            if held != self.t.activities[k].held {
+                self.note_held(k, held);
             }
         }
         Ok(())
+    }
+
+    /// Activity `k` holds `held` now, which is news: reported.
+    #[inline(never)]
+    fn note_held(&mut self, k: usize, held: Option<(u32, Reasons)>) {
+        self.t.activities[k].held = held;
+        let Some((c, reasons)) = held else { return };
+        let s = self.t.activities[k].service as usize;
+        let Some(a) = &self.t.services[s].activity else {
+            return;
+        };
+        let loc = self.state.slots()[a.loc_slot as usize] as u32;
+        let ticket = if loc == a.ether { a.pending } else { a.current };
+        let i = &self.t.codels[c as usize].info;
+        tracing::info!(target: "bip_engine", module = i.module.as_str(),
+            service = i.service.as_str(), codel = i.state.as_str(), reasons = reasons.0,
+            "codel held");
+        self.emit(Event::Held {
+            codel: CodelId(c),
+            ticket,
+            reasons,
+        });
     }
 
     /// The codels held now: activities with work to do (requested, or running and not

@@ -206,11 +206,14 @@ impl StateCache {
     /// [`StateCache::take_known`] did not know, or one after [`StateCache::leave`]): the
     /// cache finds the state among those it knows, or remembers it if there is room; and
     /// links the step that led here, if `take_known` saw it.
+    #[inline]
     pub fn arrive(&mut self, set: &EnabledSet, before: &State, after: &State, written: &[u32]) {
-        if self.capacity == 0 {
-            return;
+        if self.capacity != 0 {
+            self.arrive_at(set, before.slots(), after.slots(), written);
         }
-        let (a, b) = (before.slots(), after.slots());
+    }
+
+    fn arrive_at(&mut self, set: &EnabledSet, a: &[i64], b: &[i64], written: &[u32]) {
         // a slot may be listed twice (a plan's actions write it twice): count it once
         self.epoch = self.epoch.wrapping_add(1);
         if self.epoch == 0 {
