@@ -163,12 +163,14 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// The command line: `--steps N` (timed steps with empty codels, default 2,000,000),
 /// `--runs N` (default 5), `--empty-only` (skip the 2 µs codels and part 3), `--cache N`
-/// (the state cache of parts 1 and 2, default `DEFAULT_STATE_CACHE`).
+/// (the state cache of parts 1 and 2, default `DEFAULT_STATE_CACHE`), `--varied-only N`
+/// (only part 3's run with random codel results, `--steps` steps, a cache of N states).
 struct Options {
     steps: u64,
     runs: usize,
     empty_only: bool,
     cache: usize,
+    varied: Option<usize>,
 }
 
 fn options() -> Options {
@@ -177,6 +179,7 @@ fn options() -> Options {
         runs: 5,
         empty_only: false,
         cache: DEFAULT_STATE_CACHE,
+        varied: None,
     };
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
@@ -190,6 +193,12 @@ fn options() -> Options {
             "--steps" => o.steps = number("--steps"),
             "--runs" => o.runs = number("--runs") as usize,
             "--empty-only" => o.empty_only = true,
+            "--varied-only" => {
+                o.varied = match args.next().map(|v| v.parse()) {
+                    Some(Ok(n)) => Some(n),
+                    _ => panic!("--varied-only needs a number of states"),
+                }
+            }
             "--cache" => {
                 o.cache = match args.next().map(|v| v.parse()) {
                     Some(Ok(n)) => n,
@@ -206,6 +215,11 @@ fn options() -> Options {
 fn main() {
     let o = options();
     let system = rover();
+    if let Some(cache) = o.varied {
+        let (rate, stats, _) = varied(&system, cache, o.steps);
+        println!("{:.0} ns per step, {stats:?}", 1e9 / rate);
+        return;
+    }
     println!(
         "rover.ron, one thread, virtual clock; median of {} runs",
         o.runs

@@ -55,6 +55,15 @@ pub struct StateCache {
     /// Per state, its hash; and the hash of the state the set describes.
     hashes: Vec<u64>,
     hash: u64,
+    /// True while `hash` is not the set's state's (after a rest).
+    hash_stale: bool,
+    /// Steps looked for, and found, since the last check (see
+    /// [`StateCache::rest_policy`]); steps left to rest.
+    window_steps: u32,
+    window_hits: u32,
+    resting: u32,
+    window: u32,
+    rest: u32,
     /// Per slot, the last `epoch` it was counted in.
     seen: Vec<u32>,
     epoch: u32,
@@ -82,8 +91,10 @@ pub struct CacheStats {
     pub edges: usize,
     /// Steps it took from memory.
     pub hits: u64,
-    /// Steps it did not know (computed).
+    /// Steps it did not know (computed), resting or not.
     pub misses: u64,
+    /// How often it gave up for a while ([`StateCache::rest_policy`]).
+    pub rests: u64,
 }
 
 impl StateCache {
@@ -101,6 +112,12 @@ impl StateCache {
             index: HashTable::new(),
             hashes: Vec::new(),
             hash: 0,
+            hash_stale: false,
+            window_steps: 0,
+            window_hits: 0,
+            resting: 0,
+            window: 4096,
+            rest: 1 << 16,
             seen: vec![0; system.slot_count()],
             epoch: 0,
             current: None,
@@ -143,6 +160,14 @@ impl StateCache {
     /// [`StateCache::arrive`].
     #[inline]
     pub fn take_known(&mut self, p: PlanId, set: &mut EnabledSet, next: &mut State) -> bool {
+        if self.resting > 0 {
+            self.resting -= 1;
+            self.stats.misses += 1;
+            // (`enter` may have found the state meanwhile)
+            self.leave(set);
+            return false;
+        }
+        self.window_steps = self.window_steps.wrapping_add(1);
         let Some(c) = self.current else {
             self.stats.misses += 1;
             self.leaving = None;
@@ -171,6 +196,7 @@ impl StateCache {
         self.current = Some(n as u32);
         self.hash = self.hashes[n];
         self.stats.hits += 1;
+        self.window_hits = self.window_hits.wrapping_add(1);
         true
     }
 
@@ -198,6 +224,7 @@ impl StateCache {
         self.leaving = None;
         let slots = state.slots();
         self.hash = state_hash(slots);
+        self.hash_stale = false;
         self.settle(set, slots);
     }
 
@@ -214,6 +241,18 @@ impl StateCache {
     }
 
     fn arrive_at(&mut self, set: &EnabledSet, a: &[i64], b: &[i64], written: &[u32]) {
+        if self.resting > 0 {
+            // the hash is not kept up to date meanwhile
+            self.leaving = None;
+            self.hash_stale = true;
+            return;
+        }
+        if self.hash_stale {
+            self.hash_stale = false;
+            self.hash = state_hash(b);
+            self.settle(set, b);
+            return;
+        }
         // a slot may be listed twice (a plan's actions write it twice): count it once
         self.epoch = self.epoch.wrapping_add(1);
         if self.epoch == 0 {
@@ -265,9 +304,14 @@ impl StateCache {
                 let hashes = &self.hashes;
                 self.index.insert_unique(hash, n, |&k| hashes[k as usize]);
                 self.stats.states += 1;
+                // still learning: the count of what it knows starts again
+                (self.window_steps, self.window_hits) = (0, 0);
                 n
             }
-            None => return,
+            None => {
+                self.consider_rest();
+                return;
+            }
         };
         self.current = Some(n);
         if let Some((c, plan)) = leaving {
@@ -292,6 +336,32 @@ impl StateCache {
 fn state_hash(slots: &[i64]) -> u64 {
     let parts = slots.iter().enumerate().map(|(s, &v)| slot_hash(s, v));
     parts.fold(0, u64::wrapping_add)
+}
+
+impl StateCache {
+    /// After a step to a state it does not know and cannot learn: if it knew fewer than
+    /// one step in four over the last window of steps, it rests.
+    fn consider_rest(&mut self) {
+        if self.window_steps < self.window {
+            return;
+        }
+        if u64::from(self.window_hits) * 4 < u64::from(self.window_steps) && self.rest > 0 {
+            self.resting = self.rest;
+            self.hash_stale = true;
+            self.stats.rests += 1;
+        }
+        (self.window_steps, self.window_hits) = (0, 0);
+    }
+
+    /// How it gives up when it seldom knows the step (a run that keeps meeting new
+    /// states once it is full): every `window` steps after it stopped learning, if it
+    /// knew fewer than one in four, it neither looks steps up nor finds states (both cost
+    /// a little on every step it does not know) for the next `rest` steps (0: never
+    /// rests), then tries again. Default: windows of 4,096 steps, rests of 65,536.
+    pub fn rest_policy(&mut self, window: u32, rest: u32) {
+        self.window = window.max(1);
+        self.rest = rest;
+    }
 }
 
 /// A slot's part of a state's hash: the hash is the sum over the slots, so that a step

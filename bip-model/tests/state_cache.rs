@@ -37,6 +37,18 @@ struct Seen {
 /// `walks` random walks of up to `steps` steps from the initial state of `sys`, with one
 /// cache of `capacity` states for them all. Panics where the set and the relation differ.
 fn walk(name: &str, sys: &System, capacity: usize, walks: usize, steps: usize, seed: u64) -> Seen {
+    walk_resting(name, sys, capacity, (4096, 1 << 16), (walks, steps), seed)
+}
+
+/// [`walk`] with the cache's `rest_policy`.
+fn walk_resting(
+    name: &str,
+    sys: &System,
+    capacity: usize,
+    (window, rest): (u32, u32),
+    (walks, steps): (usize, usize),
+    seed: u64,
+) -> Seen {
     // the relation computed from the state: a wrong step table would be on both sides
     let mut plain = sys.clone();
     plain.drop_step_tables(|_| true);
@@ -47,6 +59,7 @@ fn walk(name: &str, sys: &System, capacity: usize, walks: usize, steps: usize, s
     };
     let effects = set.plan_effects(sys, &plans);
     let mut cache = StateCache::new(sys, capacity);
+    cache.rest_policy(window, rest);
     cache.enter(&set, &init);
     let mut rng = Rng(seed);
     let mut buf = Steps::new();
@@ -150,6 +163,22 @@ fn robot_models_agree_with_and_without_room() {
             assert!(seen.hits > 500, "{model}, {capacity}: {} hits", seen.hits);
         }
     }
+}
+
+/// A full cache that seldom knows the step rests now and then, and knows the steps again
+/// after a rest.
+#[test]
+fn a_full_cache_that_seldom_knows_rests() {
+    let path = format!("{}/../robots/rover.ron", env!("CARGO_MANIFEST_DIR"));
+    let sys = bip_model::load_file(std::path::Path::new(&path)).expect("loads");
+    let seen = walk_resting("rover", &sys, 2, (64, 200), (20, 300), 9);
+    let s = seen.stats;
+    assert!(s.rests >= 5, "{s:?}");
+    assert!(s.hits > 0 && s.misses > 3000, "{s:?}");
+    // never resting: more hits on the same walk
+    let eager = walk_resting("rover", &sys, 2, (64, 0), (20, 300), 9).stats;
+    assert_eq!(eager.rests, 0);
+    assert!(eager.hits > s.hits, "{eager:?} against {s:?}");
 }
 
 /// A cache that is full learns nothing more, and its stats say what it holds.
