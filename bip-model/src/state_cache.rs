@@ -18,9 +18,14 @@
 //! does not know, the set's evaluation is copied into its entry, and the set is updated
 //! as usual; the state it reaches is then looked up by its slots, or remembered.
 //!
-//! Only an [`EnabledSet`] whose whole knowledge is its evaluation is remembered
-//! ([`EnabledSet::fits_evaluation`]): none of a system with internal transitions, none
-//! with steps computed outside the step tables.
+//! Only an [`EnabledSet`] whose whole knowledge is its evaluation is remembered or
+//! entered ([`EnabledSet::fits_evaluation`]): none of a system with internal transitions,
+//! none with steps computed outside the step tables (they live outside the evaluation).
+//!
+//! Exact means: the same steps, enabled interactions and states as without the cache.
+//! Which lazy interactions the set left unevaluated ("stale", suppressed by a priority)
+//! depends on the path to a state, so [`EnabledSet::has_steps_before_priorities`] may
+//! answer `None` where the set without the cache answers, or the other way round.
 
 #[allow(unused_imports)]
 use crate::prelude::*;
@@ -157,7 +162,8 @@ impl StateCache {
     /// set's state on entry) and `set` to the state it leads to, and returns true
     /// ([`StateCache::last_changed`] lists the slots that changed). Otherwise returns
     /// false, and the caller fires the plan and updates the set itself, then calls
-    /// [`StateCache::arrive`].
+    /// [`StateCache::arrive`] (or, if firing or updating failed, [`StateCache::leave`]
+    /// before anything else: `arrive` would link the plan to the wrong state).
     #[inline]
     pub fn take_known(&mut self, p: PlanId, set: &mut EnabledSet, next: &mut State) -> bool {
         if self.resting > 0 {
@@ -293,8 +299,11 @@ impl StateCache {
             })
             .copied();
         let n = match found {
-            // its entry's evaluation is the spare from now on: the set has the same
-            Some(n) => n,
+            // its entry's evaluation is the spare from now on: the set has the same, if
+            // the set's evaluation holds all it knows (a set that computed steps outside
+            // the tables, and kept them while blocked, is not entered: found by review)
+            Some(n) if set.fits_evaluation() => n,
+            Some(_) => return,
             None if self.stats.states < self.capacity && set.fits_evaluation() => {
                 let n = self.stats.states as u32;
                 self.slots.extend_from_slice(slots);

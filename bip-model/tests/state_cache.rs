@@ -207,3 +207,84 @@ fn a_full_cache_stays_full() {
     none.enter(&set, &s);
     assert_eq!(none.stats().states, 0);
 }
+
+/// A known state is not entered while the set holds steps it computed outside the step
+/// tables (they are not part of an evaluation): here `j`, which has no table, is
+/// evaluated while enabled, then blocked by `h` without a slot it reads changing, so it
+/// keeps computed steps; had the cache entered state [0, 0, 0] with them and later given
+/// that evaluation back, `j` would show the steps computed last, in another state, once
+/// `h` is off. (Found by review.)
+#[test]
+fn a_known_state_is_entered_only_with_an_evaluation_that_holds_all_the_set_knows() {
+    let mut sys = load_str(
+        "blocked.ron",
+        r#"System(name: "blocked",
+    atoms: {
+        "L": Atom(
+            locations: ["s"], initial: "s", ports: ["p", "s0", "s1", "s2"],
+            vars: [(name: "x", ty: Int(0, 2), init: 2)],
+            transitions: [
+                (from: "s", port: "p", to: "s", guard: "x == 0"),
+                (from: "s", port: "p", to: "s", guard: "x == 1"),
+                (from: "s", port: "s0", to: "s", action: "x = 0"),
+                (from: "s", port: "s1", to: "s", action: "x = 1"),
+                (from: "s", port: "s2", to: "s", action: "x = 2"),
+            ],
+        ),
+        "H": Atom(
+            locations: ["off", "on"], initial: "off", ports: ["a", "b", "c"],
+            transitions: [
+                (from: "off", port: "a", to: "on"),
+                (from: "on", port: "b", to: "off"),
+                (from: "on", port: "c", to: "on"),
+            ],
+        ),
+    },
+    components: [(name: "l", atom: "L"), (name: "hh", atom: "H")],
+    connectors: [
+        (name: "j", ports: ["l.p"]),
+        (name: "set0", ports: ["l.s0"]),
+        (name: "set1", ports: ["l.s1"]),
+        (name: "set2", ports: ["l.s2"]),
+        (name: "hon", ports: ["hh.a"]),
+        (name: "hoff", ports: ["hh.b"]),
+        (name: "h", ports: ["hh.c"]),
+    ],
+    priorities: [(low: "j", high: "h")],
+)"#,
+    )
+    .expect("loads");
+    let j = sys.interactions.iter().position(|i| i.name == "j");
+    let j = j.expect("j") as u32;
+    sys.drop_step_tables(|i| i == j);
+    let index = |name: &str| sys.interactions.iter().position(|i| i.name == name);
+    let plans = sys.fire_plans();
+    let mut s = sys.initial_state();
+    let mut set = EnabledSet::new(&sys, &s).expect("evaluates");
+    let effects = set.plan_effects(&sys, &plans);
+    let mut cache = StateCache::new(&sys, 100);
+    cache.enter(&set, &s);
+    let mut buf = Steps::new();
+    let path = [
+        "hon", "set0", "hoff", "hon", "set1", "hoff", "hon", "set2", "set0", "hoff",
+    ];
+    for name in path {
+        let want = full(&sys, &s, &mut buf).expect("evaluates");
+        let got: Vec<OwnedStep> = set.steps().map(|st| st.to_owned()).collect();
+        assert_eq!(got, want, "before {name}, in {:?}", s.slots());
+        let i = index(name).expect(name) as u32;
+        let k = set.steps().position(|st| st.label == Label::Interaction(i));
+        let p = plan_of(&plans, &set, k.expect(name)).expect("a plan");
+        let mut next = s.clone();
+        if !cache.take_known(p, &mut set, &mut next) {
+            sys.fire_planned(&plans, p, &mut next).expect("fires");
+            set.update_planned(&sys, &effects, p, &s, &next)
+                .expect("evaluates");
+            cache.arrive(&set, &s, &next, plans.written(p));
+        }
+        s = next;
+    }
+    let want = full(&sys, &s, &mut buf).expect("evaluates");
+    let got: Vec<OwnedStep> = set.steps().map(|st| st.to_owned()).collect();
+    assert_eq!(got, want, "at the end, in {:?}", s.slots());
+}
