@@ -94,7 +94,7 @@ fn run_case(model: usize, seed: u64) -> Result<(), TestCaseError> {
         trace,
         state,
         ..
-    } = run(model, seed, DEFAULT_STATE_CACHE, seed % 4 == 0)?;
+    } = run(model, seed, DEFAULT_STATE_CACHE, seed.is_multiple_of(4))?;
     let states = states_of(&system, &trace);
     prop_assert_eq!(states.last(), Some(&state));
     assert_invariants(&system, &states);
@@ -137,7 +137,7 @@ fn random_runs_take_steps_from_the_cache() {
     for model in 0..5 {
         let mut hits = 0;
         for seed in 0..5 {
-            hits += run(model, seed, DEFAULT_STATE_CACHE, seed % 2 == 0)
+            hits += run(model, seed, DEFAULT_STATE_CACHE, seed.is_multiple_of(2))
                 .expect("runs")
                 .cache
                 .hits;
