@@ -102,7 +102,7 @@ fn hit_share(c: CacheStats) -> f64 {
     c.hits as f64 * 100.0 / (c.hits + c.misses).max(1) as f64
 }
 
-/// Steps per second on the rover with random codel results (yields, exceptions, ids)
+/// Steps per second on the rover with random codel results (yields, exceptions)
 /// and the six requests again every 64 steps, and the cache's stats at the end.
 fn varied(system: &System, cache: usize, steps: u64) -> (f64, CacheStats, usize) {
     let mut e = Engine::builder(system.clone())
@@ -183,28 +183,19 @@ fn options() -> Options {
     };
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
-        let mut number = |what: &str| -> u64 {
+        // the number after `what`, at least `least`
+        let mut number = |what: &str, least: u64| -> u64 {
             match args.next().map(|v| v.parse()) {
-                Some(Ok(n)) if n > 0 => n,
-                _ => panic!("{what} needs a positive number"),
+                Some(Ok(n)) if n >= least => n,
+                _ => panic!("{what} needs a number of at least {least}"),
             }
         };
         match a.as_str() {
-            "--steps" => o.steps = number("--steps"),
-            "--runs" => o.runs = number("--runs") as usize,
+            "--steps" => o.steps = number("--steps", 1),
+            "--runs" => o.runs = number("--runs", 1) as usize,
             "--empty-only" => o.empty_only = true,
-            "--varied-only" => {
-                o.varied = match args.next().map(|v| v.parse()) {
-                    Some(Ok(n)) => Some(n),
-                    _ => panic!("--varied-only needs a number of states"),
-                }
-            }
-            "--cache" => {
-                o.cache = match args.next().map(|v| v.parse()) {
-                    Some(Ok(n)) => n,
-                    _ => panic!("--cache needs a number of states"),
-                }
-            }
+            "--varied-only" => o.varied = Some(number("--varied-only", 0) as usize),
+            "--cache" => o.cache = number("--cache", 0) as usize,
             // cargo bench passes `--bench`
             _ => {}
         }

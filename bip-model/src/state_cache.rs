@@ -77,6 +77,7 @@ pub struct StateCache {
     /// The state and plan of a step [`StateCache::take_known`] did not know, until
     /// [`StateCache::arrive`] links it to where it led.
     leaving: Option<(u32, PlanId)>,
+    /// The hits, misses and rests (`stats` counts the states and edges).
     stats: CacheStats,
 }
 
@@ -146,7 +147,11 @@ impl StateCache {
 
     /// What it holds, and its hits and misses so far.
     pub fn stats(&self) -> CacheStats {
-        self.stats
+        CacheStats {
+            states: self.hashes.len(),
+            edges: self.edges.iter().map(Vec::len).sum(),
+            ..self.stats
+        }
     }
 
     /// The bytes it holds (its buffers' capacities).
@@ -304,15 +309,14 @@ impl StateCache {
             // the tables, and kept them while blocked, is not entered: found by review)
             Some(n) if set.fits_evaluation() => n,
             Some(_) => return,
-            None if self.stats.states < self.capacity && set.fits_evaluation() => {
-                let n = self.stats.states as u32;
+            None if self.hashes.len() < self.capacity && set.fits_evaluation() => {
+                let n = self.hashes.len() as u32;
                 self.slots.extend_from_slice(slots);
                 self.hashes.push(hash);
                 self.evaluations.push(Evaluation::default());
                 self.edges.push(Vec::new());
                 let hashes = &self.hashes;
                 self.index.insert_unique(hash, n, |&k| hashes[k as usize]);
-                self.stats.states += 1;
                 // still learning: the count of what it knows starts again
                 (self.window_steps, self.window_hits) = (0, 0);
                 n
@@ -337,17 +341,9 @@ impl StateCache {
                 to: n,
                 changed,
             });
-            self.stats.edges += 1;
         }
     }
-}
 
-fn state_hash(slots: &[i64]) -> u64 {
-    let parts = slots.iter().enumerate().map(|(s, &v)| slot_hash(s, v));
-    parts.fold(0, u64::wrapping_add)
-}
-
-impl StateCache {
     /// After a step to a state it does not know and cannot learn: if it knew fewer than
     /// one step in four over the last window of steps, it rests.
     fn consider_rest(&mut self) {
@@ -371,6 +367,12 @@ impl StateCache {
         self.window = window.max(1);
         self.rest = rest;
     }
+}
+
+/// A state's hash: the sum of its slots' parts.
+fn state_hash(slots: &[i64]) -> u64 {
+    let parts = slots.iter().enumerate().map(|(s, &v)| slot_hash(s, v));
+    parts.fold(0, u64::wrapping_add)
 }
 
 /// A slot's part of a state's hash: the hash is the sum over the slots, so that a step
