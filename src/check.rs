@@ -7,7 +7,7 @@ use crate::{exit, report};
 pub fn run(files: &[PathBuf]) -> u8 {
     let mut code = exit::OK;
     for path in files {
-        match bip_model::load_file(path) {
+        match bip_lang::load_file(path) {
             Ok(system) => print_summary(path, &system),
             Err(e) => {
                 report::load_error(&e);

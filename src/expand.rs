@@ -6,7 +6,7 @@ use std::path::Path;
 use crate::{exit, report};
 
 pub fn run(file: &Path) -> u8 {
-    let def = match bip_model::expand_file(file) {
+    let def = match bip_lang::expand_file(file) {
         Ok(def) => def,
         Err(e) => {
             report::load_error(&e);

@@ -15,7 +15,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let system = match bip_model::load_file(&args.file) {
+    let system = match bip_lang::load_file(&args.file) {
         Ok(s) => s,
         Err(e) => {
             report::load_error(&e);

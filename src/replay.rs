@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 use bip_engine::replay::{replay, End};
 use bip_engine::Stepped;
-use bip_model::{Trace, TraceValue};
+use bip_model::TraceValue;
 
 use crate::{exit, report};
 
@@ -23,7 +23,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let system = match bip_model::load_file(&args.file) {
+    let system = match bip_lang::load_file(&args.file) {
         Ok(s) => s,
         Err(e) => {
             report::load_error(&e);
@@ -37,7 +37,7 @@ pub fn run(args: &Args) -> u8 {
             return exit::ERROR;
         }
     };
-    let trace = match Trace::from_ron(&text) {
+    let trace = match bip_lang::trace_file::from_ron(&text) {
         Ok(t) => t,
         Err(e) => {
             eprintln!("error: {}: not a trace: {e}", args.trace.display());

@@ -2,7 +2,7 @@
 
 use std::io::IsTerminal;
 
-use bip_model::LoadError;
+use bip_lang::LoadError;
 use miette::{GraphicalReportHandler, GraphicalTheme};
 
 /// Prints a load error to stderr: file, line, column and a caret under the offending text.

@@ -35,7 +35,7 @@ enum Stop {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let system = match bip_model::load_file(&args.file) {
+    let system = match bip_lang::load_file(&args.file) {
         Ok(s) => s,
         Err(e) => {
             report::load_error(&e);
@@ -169,7 +169,7 @@ pub fn run(args: &Args) -> u8 {
         print!("{}", trace.display(Some(&system)));
     }
     if let Some(out) = &args.trace {
-        if let Err(e) = std::fs::write(out, trace.to_ron()) {
+        if let Err(e) = std::fs::write(out, bip_lang::trace_file::to_ron(&trace)) {
             eprintln!("error: cannot write {}: {e}", out.display());
             return exit::ERROR;
         }

@@ -95,7 +95,7 @@ fn parse_seconds(s: &str) -> Result<Duration, String> {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let system = match bip_model::load_file(&args.file) {
+    let system = match bip_lang::load_file(&args.file) {
         Ok(s) => s,
         Err(e) => {
             report::load_error(&e);
@@ -212,7 +212,7 @@ fn save_traces(dir: &Path, report: &Report) -> Result<Vec<(String, PathBuf)>, St
             continue;
         };
         let path = dir.join(format!("{}.trace.ron", file_name(&p.name)));
-        std::fs::write(&path, trace.to_ron() + "\n")
+        std::fs::write(&path, bip_lang::trace_file::to_ron(&trace) + "\n")
             .map_err(|e| format!("cannot write the trace {}: {e}", path.display()))?;
         out.push((p.name.clone(), path));
     }

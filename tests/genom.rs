@@ -223,9 +223,9 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
         ),
         "{stdout}"
     );
-    let system = bip_model::load_file("robots/rover-deadlock.ron").expect("loads");
+    let system = bip_lang::load_file("robots/rover-deadlock.ron").expect("loads");
     let text = std::fs::read_to_string(dir.path().join("DeadlockFree.trace.ron")).expect("a trace");
-    let trace = bip_model::Trace::from_ron(&text).expect("reads");
+    let trace = bip_lang::trace_file::from_ron(&text).expect("reads");
     assert_eq!(trace.verdict, bip_model::Verdict::Deadlock);
     assert!(trace.steps.len() <= 5, "a short trace: {text}");
     // replayed with the one step relation, it ends in a state that the one deadlock

@@ -125,9 +125,9 @@ fn traces_are_saved_and_replay() {
         traces.to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(1));
-    let system = bip_model::load_file(robot("philosophers.ron")).unwrap();
+    let system = bip_lang::load_file(robot("philosophers.ron")).unwrap();
     let text = std::fs::read_to_string(traces.join("DeadlockFree.trace.ron")).unwrap();
-    let trace = bip_model::Trace::from_ron(&text).unwrap();
+    let trace = bip_lang::trace_file::from_ron(&text).unwrap();
     assert_eq!(trace.verdict, bip_model::Verdict::Deadlock);
     assert_eq!(trace.replay(&system).unwrap().len(), 5);
     assert!(traces.join("someone_eats.trace.ron").exists());

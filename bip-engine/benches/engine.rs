@@ -31,7 +31,7 @@ const WARM_UP: u64 = 20_000;
 
 fn rover() -> System {
     let p = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/rover.ron");
-    match bip_model::load_file(std::path::Path::new(p)) {
+    match bip_lang::load_file(std::path::Path::new(p)) {
         Ok(s) => s,
         Err(e) => panic!("{}", e.summary()),
     }

@@ -121,7 +121,7 @@ pub fn run(
     real_time: bool,
     say: &mut dyn FnMut(String),
 ) -> Result<Report, Box<dyn Error>> {
-    let system = bip_model::load_file(model).map_err(|e| e.summary())?;
+    let system = bip_lang::load_file(model).map_err(|e| e.summary())?;
     let world = Arc::new(Mutex::new(World {
         x: 0.0,
         rock_x: 2.0,

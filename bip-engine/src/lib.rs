@@ -4,7 +4,7 @@
 //! ```no_run
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! use bip_engine::{Engine, Next, RealClock, Until};
-//! let system = bip_model::load_file("robots/rover.ron")?;
+//! let system = bip_lang::load_file("robots/rover.ron")?;
 //! let mut engine = Engine::builder(system)
 //!     .codel(("rflex", "TrackSpeed", "track"), |ctx| {
 //!         // drive the wheels...

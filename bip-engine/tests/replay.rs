@@ -6,7 +6,7 @@ mod common;
 
 use bip_engine::replay::{replay, End};
 use bip_engine::*;
-use bip_model::{Trace, Verdict};
+use bip_model::Verdict;
 use common::*;
 
 #[test]
@@ -18,7 +18,7 @@ fn rover_deadlocks_counterexample_reaches_the_deadlock_through_the_engine() {
         verdict: Deadlock,
         steps: [(step: "ndd_GoTo_request", state: {"ndd_GoTo.req": true, "ndd_GoTo.paused": true})],
     )"#;
-    let trace = Trace::from_ron(text).expect("reads");
+    let trace = bip_lang::trace_file::from_ron(text).expect("reads");
     let r = replay(load("rover-deadlock.ron"), &trace).expect("builds");
     assert!(r.refused.is_none());
     assert_eq!(r.steps.len(), 1);
@@ -94,7 +94,7 @@ fn a_step_the_model_does_not_allow_is_refused_with_the_reason() {
             (step: "ndd_GoTo_start", state: {"ndd_GoTo": "move"}),
         ],
     )"#;
-    let trace = Trace::from_ron(text).expect("reads");
+    let trace = bip_lang::trace_file::from_ron(text).expect("reads");
     let r = replay(load("rover-deadlock.ron"), &trace).expect("builds");
     let refused = r.refused.expect("refused");
     assert_eq!((refused.step, refused.name.as_str()), (3, "ndd_GoTo_start"));

@@ -229,7 +229,7 @@ impl Expr {
     }
 
     /// True if the value does not depend on the state or on quantified variables.
-    pub(crate) fn reads_nothing(&self) -> bool {
+    pub fn reads_nothing(&self) -> bool {
         match self {
             Expr::Const(_) => true,
             Expr::Slot(_) | Expr::Local(_) | Expr::At(..) | Expr::Indexed(_) | Expr::Bound(_) => {

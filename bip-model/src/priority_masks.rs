@@ -42,7 +42,6 @@ pub(crate) fn set_bit(bits: &mut [u64], i: u32, on: bool) {
 
 impl PriorityMasks {
     // systems are compiled with `std` (loading needs it); a no-std build receives them
-    #[cfg_attr(not(feature = "std"), allow(dead_code))]
     pub(crate) fn new(
         priorities: &[PriorityRule],
         rules_by_low: &[Vec<u32>],

@@ -192,7 +192,6 @@ struct PortCell {
 }
 
 impl EnableIndex {
-    #[cfg_attr(not(feature = "std"), allow(dead_code))]
     pub(crate) fn new(
         atoms: &[crate::system::Atom],
         components: &[crate::system::Component],
@@ -968,6 +967,7 @@ impl Written for Vec<u32> {
 #[cfg(test)]
 mod tests {
     use super::any_bit;
+    use crate::prelude::*;
 
     #[test]
     fn any_bit_scans_ranges_across_words() {

@@ -30,13 +30,10 @@ use crate::step::{Choices, Pick};
 use crate::system::System;
 
 /// The most combinations one table may have.
-#[cfg_attr(not(feature = "std"), allow(dead_code))]
 const MAX_TABLE: u64 = 4096;
 /// The most entries and picks the tables of one system may hold (about 3 MiB and 8 MiB):
 /// interactions beyond the budget are computed as before.
-#[cfg_attr(not(feature = "std"), allow(dead_code))]
 const MAX_ENTRIES: usize = 1 << 18;
-#[cfg_attr(not(feature = "std"), allow(dead_code))]
 const MAX_PICKS: usize = 1 << 20;
 
 /// No table.
@@ -113,7 +110,6 @@ impl StepTables {
     /// Tabulates the interactions of `system` that fit (the system's own tables must be
     /// empty: its steps are computed by the relation).
     // systems are compiled with `std` (loading needs it); a no-std build receives them
-    #[cfg_attr(not(feature = "std"), allow(dead_code))]
     pub(crate) fn build(system: &System) -> StepTables {
         let none = Table {
             digits: (0, 0),

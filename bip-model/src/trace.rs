@@ -143,28 +143,6 @@ impl Trace {
         }
     }
 
-    /// The trace as pretty RON, in MODEL.md's layout: `Trace(` then steps written
-    /// `(step: "...", state: {...})`.
-    #[cfg(feature = "std")]
-    pub fn to_ron(&self) -> String {
-        // ron names either every struct or none; MODEL.md names only the outer one
-        let config = ron::ser::PrettyConfig::new()
-            .struct_names(false)
-            .depth_limit(2);
-        match crate::load::ron_options().to_string_pretty(self, config) {
-            Ok(body) => format!("Trace{body}\n"),
-            Err(e) => format!("// could not write the trace: {e}\n"),
-        }
-    }
-
-    /// Reads a trace written in RON.
-    #[cfg(feature = "std")]
-    pub fn from_ron(text: &str) -> Result<Trace, String> {
-        crate::load::ron_options()
-            .from_str(text)
-            .map_err(|e| format!("{}: {}", e.span.start, e.code))
-    }
-
     /// Re-executes the trace with the step relation: each step must be enabled and lead to
     /// the recorded changes. Returns the steps and states it passes through.
     pub fn replay(&self, system: &System) -> Result<Vec<(OwnedStep, State)>, ReplayError> {

@@ -9,8 +9,9 @@
 //! is then updated by the plan's effects (`EnabledSet::update_planned`), as the engine
 //! does.
 
+use bip_lang::load_str;
 use bip_model::{
-    load_str, EnabledSet, FirePlans, Label, OwnedStep, PlanId, RangeError, State, Steps, System,
+    EnabledSet, FirePlans, Label, OwnedStep, PlanId, RangeError, State, Steps, System,
 };
 use proptest::prelude::*;
 
@@ -270,7 +271,7 @@ fn robot_models_agree_along_random_walks() {
         "tests/mini.ron",
     ] {
         let path = format!("{}/../robots/{model}", env!("CARGO_MANIFEST_DIR"));
-        let sys = bip_model::load_file(std::path::Path::new(&path)).expect("loads");
+        let sys = bip_lang::load_file(std::path::Path::new(&path)).expect("loads");
         let (pooled, planned) = walk_agrees(model, &sys, 3000);
         assert!(pooled > 1000, "{model}: {pooled} pooled steps looked at");
         assert!(

@@ -10,7 +10,8 @@
 
 use std::collections::HashMap;
 
-use bip_model::{load_str, State, Steps, System};
+use bip_lang::load_str;
+use bip_model::{State, Steps, System};
 use proptest::prelude::*;
 
 mod support;

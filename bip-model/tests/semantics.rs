@@ -1,6 +1,7 @@
 //! One test per rule of MODEL.md's step semantics, on small models written out in full.
 
-use bip_model::{load_str, Label, Liveness, LivenessChecker, RangeErrorKind, State, Steps, System};
+use bip_lang::load_str;
+use bip_model::{Label, Liveness, LivenessChecker, RangeErrorKind, State, Steps, System};
 
 fn load(text: &str) -> System {
     match load_str("test.ron", text) {

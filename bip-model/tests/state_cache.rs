@@ -5,8 +5,9 @@
 //! state `System::fire` gives. On random systems (the generator of `reference.rs`) and on
 //! the robot models, with caches too small to hold the walk, large ones, and none.
 
+use bip_lang::load_str;
 use bip_model::{
-    load_str, EnabledSet, FirePlans, Label, OwnedStep, PlanId, State, StateCache, Steps, System,
+    EnabledSet, FirePlans, Label, OwnedStep, PlanId, State, StateCache, Steps, System,
 };
 
 mod support;
@@ -156,7 +157,7 @@ fn robot_models_agree_with_and_without_room() {
         "pipeline.ron",
     ] {
         let path = format!("{}/../robots/{model}", env!("CARGO_MANIFEST_DIR"));
-        let sys = bip_model::load_file(std::path::Path::new(&path)).expect("loads");
+        let sys = bip_lang::load_file(std::path::Path::new(&path)).expect("loads");
         for capacity in [16, 100_000] {
             let seen = walk(model, &sys, capacity, 20, 200, capacity as u64);
             assert!(seen.compared > 2_000, "{model}: {}", seen.compared);
@@ -170,7 +171,7 @@ fn robot_models_agree_with_and_without_room() {
 #[test]
 fn a_full_cache_that_seldom_knows_rests() {
     let path = format!("{}/../robots/rover.ron", env!("CARGO_MANIFEST_DIR"));
-    let sys = bip_model::load_file(std::path::Path::new(&path)).expect("loads");
+    let sys = bip_lang::load_file(std::path::Path::new(&path)).expect("loads");
     let seen = walk_resting("rover", &sys, 2, (64, 200), (20, 300), 9);
     let s = seen.stats;
     assert!(s.rests >= 5, "{s:?}");
@@ -185,7 +186,7 @@ fn a_full_cache_that_seldom_knows_rests() {
 #[test]
 fn a_full_cache_stays_full() {
     let path = format!("{}/../robots/rover.ron", env!("CARGO_MANIFEST_DIR"));
-    let sys = bip_model::load_file(std::path::Path::new(&path)).expect("loads");
+    let sys = bip_lang::load_file(std::path::Path::new(&path)).expect("loads");
     let seen = walk("rover", &sys, 5, 10, 300, 9);
     assert_eq!(seen.stats.states, 5, "{:?}", seen.stats);
     assert!(

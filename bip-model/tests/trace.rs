@@ -1,7 +1,8 @@
 //! The shared trace format: built from a path, written and read as RON, replayed with the
 //! step relation, shown readably.
 
-use bip_model::{load_str, OwnedStep, State, System, Trace, TraceValue, Verdict};
+use bip_lang::load_str;
+use bip_model::{OwnedStep, State, System, Trace, TraceValue, Verdict};
 
 fn system(text: &str) -> System {
     load_str("t.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()))
@@ -44,10 +45,10 @@ fn philosophers_deadlock_trace_round_trips_and_replays() {
             ("fork[0]", &TraceValue::Location("taken".into()))
         ]
     );
-    let text = trace.to_ron();
+    let text = bip_lang::trace_file::to_ron(&trace);
     assert!(text.starts_with("Trace("), "{text}");
     assert!(text.contains("verdict: Deadlock"), "{text}");
-    let back = Trace::from_ron(&text).expect("reads back");
+    let back = bip_lang::trace_file::from_ron(&text).expect("reads back");
     assert_eq!(back, trace);
     let replayed = back.replay(&sys).expect("replays");
     assert_eq!(replayed.len(), 5);
@@ -97,8 +98,8 @@ fn data_changes_are_recorded_with_their_types() {
         put.state.iter().nth(1).map(|(_, v)| v),
         Some(&TraceValue::Int(1))
     );
-    let text = trace.to_ron();
-    assert_eq!(Trace::from_ron(&text).expect("reads"), trace);
+    let text = bip_lang::trace_file::to_ron(&trace);
+    assert_eq!(bip_lang::trace_file::from_ron(&text).expect("reads"), trace);
     trace.replay(&sys).expect("replays");
 }
 
@@ -120,6 +121,6 @@ fn display_shows_old_and_new_values() {
 
 #[test]
 fn malformed_trace_text_is_an_error() {
-    assert!(Trace::from_ron("Trace(system: \"x\")").is_err());
-    assert!(Trace::from_ron("not ron at all").is_err());
+    assert!(bip_lang::trace_file::from_ron("Trace(system: \"x\")").is_err());
+    assert!(bip_lang::trace_file::from_ron("not ron at all").is_err());
 }

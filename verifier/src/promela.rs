@@ -25,7 +25,7 @@ use std::collections::HashSet;
 use std::fmt::Write as _;
 
 use bip_model::eval::Expr;
-use bip_model::expr::{BinOp, QuantKind};
+use bip_model::ops::{BinOp, QuantKind};
 use bip_model::{PropertyKind, Role, System, Target};
 
 /// Bound on the number of `d_step`s of one export.

@@ -19,7 +19,8 @@
 
 use std::time::Duration;
 
-use bip_model::{load_str, System, Verdict as TraceVerdict};
+use bip_lang::load_str;
+use bip_model::{System, Verdict as TraceVerdict};
 use bip_verifier::{verify, Options, PropertyKind, Report, Stop, Verdict, RANGE_ERRORS};
 
 fn with_n(file: &str, n: u32) -> System {

@@ -5,7 +5,8 @@
 
 use std::collections::{HashMap, VecDeque};
 
-use bip_model::{load_str, State, System};
+use bip_lang::load_str;
+use bip_model::{State, System};
 use bip_verifier::{verify, Options, Report, Verdict, RANGE_ERRORS};
 use proptest::prelude::*;
 

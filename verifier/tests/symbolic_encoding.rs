@@ -11,7 +11,8 @@ mod common;
 
 use std::collections::BTreeSet;
 
-use bip_model::{load_str, PropertyKind, State, Steps, System};
+use bip_lang::load_str;
+use bip_model::{PropertyKind, State, Steps, System};
 use bip_verifier::symbolic::encode::{Encoding, StepFilter, StepVars};
 use bip_verifier::symbolic::term::{err_formula, lit, not};
 use proptest::prelude::*;

@@ -4,7 +4,8 @@
 //! that replays into a deadlock), and a deadlock-free model whose invariants are too weak
 //! to prove it (a "possible deadlock", never "holds").
 
-use bip_model::{load_str, Liveness, LivenessChecker, Steps, System, Verdict as TraceVerdict};
+use bip_lang::load_str;
+use bip_model::{Liveness, LivenessChecker, Steps, System, Verdict as TraceVerdict};
 use bip_verifier::{
     symbolic, verify, Method, Options, PropertyKind, Report, SymbolicOptions, Verdict,
 };

@@ -5,7 +5,8 @@
 
 mod common;
 
-use bip_model::{load_str, System, Verdict as TraceVerdict};
+use bip_lang::load_str;
+use bip_model::{System, Verdict as TraceVerdict};
 use bip_verifier::{symbolic, verify, Options, PropertyKind, Report, SymbolicOptions};
 use proptest::prelude::*;
 

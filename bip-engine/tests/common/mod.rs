@@ -9,11 +9,11 @@ use bip_model::{PropertyKind, Rng, System, Trace};
 
 pub fn load(name: &str) -> System {
     let p = format!("{}/../robots/{name}", env!("CARGO_MANIFEST_DIR"));
-    bip_model::load_file(std::path::Path::new(&p)).unwrap_or_else(|e| panic!("{}", e.summary()))
+    bip_lang::load_file(std::path::Path::new(&p)).unwrap_or_else(|e| panic!("{}", e.summary()))
 }
 
 pub fn load_str(text: &str) -> System {
-    bip_model::load_str("test.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()))
+    bip_lang::load_str("test.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()))
 }
 
 /// A small layer for fault tests: an activity whose codel writes ids, throws, and loops.

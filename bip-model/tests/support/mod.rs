@@ -1,2 +1,1 @@
-pub mod errors;
 pub mod random_system;

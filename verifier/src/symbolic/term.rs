@@ -12,7 +12,7 @@
 //! literals without asking the solver.
 
 use bip_model::eval::{Expr, MAX_QUANT_DEPTH};
-use bip_model::expr::{BinOp, QuantKind};
+use bip_model::ops::{BinOp, QuantKind};
 use z3::ast::{Bool, Int};
 
 const I64_MIN: i128 = i64::MIN as i128;

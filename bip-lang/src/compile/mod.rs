@@ -8,16 +8,15 @@ mod resolve;
 use std::collections::HashMap;
 
 use crate::diag::{Errors, ModelError};
-use crate::eval;
 use crate::expr::{self, parse_action, parse_expr, parse_range, ExprKind};
 use crate::source::{ConstExpr, ConstValue, Span, Spanned};
-use crate::state::{State, StateLayout};
 use crate::syntax::{
     AtomDef, ComponentDef, ConnectorDef, ConnectorKindDef, PropertyDef, SystemDef, Text, TypeDef,
 };
-use crate::system::{
+use bip_model::eval;
+use bip_model::{
     Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule, Property,
-    PropertyKind, System, Target, Transition, Var, VarType,
+    PropertyKind, System, SystemParts, Target, Transition, Var, VarType,
 };
 
 pub(crate) use resolve::one_of;
@@ -69,13 +68,7 @@ pub(crate) fn compile_core(
             )]);
         }
     }
-    let (rules, rules_by_low) = priorities;
-    let layout = StateLayout::new(&c.slot_ranges);
-    let enable_index =
-        crate::step::EnableIndex::new(&c.atoms, &c.components, &c.interactions, &c.slot_ranges);
-    let priority_masks =
-        crate::priority_masks::PriorityMasks::new(&rules, &rules_by_low, c.interactions.len());
-    let mut system = System {
+    let system = System::new(SystemParts {
         name: def.name.value.clone(),
         tick_ms,
         constants: c.const_list,
@@ -84,18 +77,13 @@ pub(crate) fn compile_core(
         components: c.components,
         connectors: c.connectors,
         interactions: c.interactions,
-        priorities: rules,
+        priorities,
         declared_priorities: def.priorities.len(),
         properties,
-        layout,
-        initial: State::from_slots(c.initial),
-        rules_by_low,
+        initial: c.initial,
         slot_ranges: c.slot_ranges,
         genom: None,
-        enable_index,
-        priority_masks,
-    };
-    system.enable_index.tables = crate::step_tables::StepTables::build(&system);
+    });
     Ok((system, extra))
 }
 
@@ -361,15 +349,15 @@ impl Compiler {
             });
         }
 
-        let mut atom = Atom {
-            name: name.value.clone(),
-            locations: a.locations.iter().map(|l| l.value.clone()).collect(),
+        // the atom as far as its transitions' guards and actions need it
+        let atom = Atom::new(
+            name.value.clone(),
+            a.locations.iter().map(|l| l.value.clone()).collect(),
             initial,
-            ports: a.ports.iter().map(|p| p.value.clone()).collect(),
+            a.ports.iter().map(|p| p.value.clone()).collect(),
             vars,
-            transitions: Vec::new(),
-            by_loc_port: Vec::new(),
-        };
+            Vec::new(),
+        );
         let mut transitions = Vec::new();
         for t in &a.transitions {
             let from = lookup_loc(&mut self.errors, &t.from);
@@ -406,23 +394,14 @@ impl Compiler {
                 });
             }
         }
-        // index transitions by (from, port); the sort is stable, so the written order of
-        // transitions that share a location and port is kept
-        let cols = atom.ports.len() + 1;
-        let col = |t: &Transition| t.port.map_or(cols - 1, |p| p as usize);
-        transitions.sort_by_key(|t| (t.from as usize, col(t)));
-        let mut by_loc_port = vec![0..0; atom.locations.len() * cols];
-        for (k, t) in transitions.iter().enumerate() {
-            let cell = &mut by_loc_port[t.from as usize * cols + col(t)];
-            if cell.start == cell.end {
-                *cell = k as u32..k as u32 + 1;
-            } else {
-                cell.end = k as u32 + 1;
-            }
-        }
-        atom.transitions = transitions;
-        atom.by_loc_port = by_loc_port;
-        atom
+        Atom::new(
+            atom.name,
+            atom.locations,
+            atom.initial,
+            atom.ports,
+            atom.vars,
+            transitions,
+        )
     }
 
     /// Checks an initial value against its variable's type and range.
@@ -883,7 +862,7 @@ impl Compiler {
         })
     }
 
-    fn priorities(&mut self, def: &SystemDef) -> (Vec<PriorityRule>, Vec<Vec<u32>>) {
+    fn priorities(&mut self, def: &SystemDef) -> Vec<PriorityRule> {
         let mut declared = Vec::new();
         for p in &def.priorities {
             let low = self.priority_target(&p.low);
@@ -902,11 +881,11 @@ impl Compiler {
                 });
             }
         }
-        match priority::close(&declared, self.interactions.len()) {
+        match priority::close(&declared) {
             Ok(r) => r,
             Err(e) => {
                 self.errors.push(e);
-                (Vec::new(), vec![Vec::new(); self.interactions.len()])
+                Vec::new()
             }
         }
     }

@@ -271,7 +271,7 @@ fn spanned_token<T>(value: T, tok: Option<Token>) -> Spanned<T> {
     }
 }
 
-pub use crate::ordered_map::OrderedMap;
+pub use bip_model::OrderedMap;
 
 /// Whether the next identifier token `word` in the file is followed by `(`. Used where
 /// the format allows both `DeadlockFree` and `DeadlockFree(terminal: …)`, which serde's

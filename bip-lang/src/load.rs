@@ -9,7 +9,7 @@ use crate::compile::compile;
 use crate::diag::{LoadError, ModelError};
 use crate::source::{offset_of, with_positions, Span};
 use crate::syntax::SystemDef;
-use crate::system::System;
+use bip_model::System;
 
 /// The `ron` options every model file is read with (MODEL.md: `implicit_some` and
 /// `unwrap_newtypes` are on).

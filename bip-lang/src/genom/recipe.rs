@@ -1,10 +1,10 @@
 //! The engine's map by names, as the expansion writes it (a recipe); once the expanded
 //! model is compiled, [`Recipe::resolve`] turns the names into the system's indices.
 
-use super::map::*;
-use crate::eval;
 use crate::syntax::{ServiceKind, Text};
-use crate::system::System;
+use bip_model::eval;
+use bip_model::genom::map::*;
+use bip_model::System;
 
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Recipe {

@@ -5,7 +5,8 @@
 
 use std::collections::{HashSet, VecDeque};
 
-use bip_model::{expand_str, load_str, Label, State, System};
+use bip_lang::{expand_str, load_str};
+use bip_model::{Label, State, System};
 use proptest::prelude::*;
 
 #[derive(Clone, Debug)]

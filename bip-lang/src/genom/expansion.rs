@@ -6,7 +6,7 @@ use super::{build, check, names, origin};
 use crate::compile::{compile_core, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::syntax::{PropertyDef, SystemDef, Text};
-use crate::system::System;
+use bip_model::System;
 use build::UserTexts;
 use check::ConstraintKind;
 use origin::Origins;
@@ -88,7 +88,7 @@ pub(crate) fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
 }
 
 impl Expansion {
-    /// Compiles the expanded model into a [`System`] with its [`GenomMap`](super::map::GenomMap); `def` is the
+    /// Compiles the expanded model into a [`System`] with its [`GenomMap`](bip_model::genom::map::GenomMap); `def` is the
     /// model it was expanded from. Errors point into the model's file (the expanded texts
     /// that hold user texts have spans of their own, which this maps back).
     pub fn compile(&self, def: &SystemDef) -> Result<System, Vec<ModelError>> {

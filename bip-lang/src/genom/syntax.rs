@@ -1,9 +1,9 @@
 //! The GenoM layer of the file format (MODEL.md section 4): modules and constraints, as
 //! written. `genom::check` validates them; `genom::build` expands them into BIP core.
 
-pub use crate::genom::map::ServiceKind;
 use crate::source::ConstExpr;
 use crate::syntax::{Text, VarDef};
+pub use bip_model::genom::map::ServiceKind;
 
 /// A GenoM3-style module: ids, execution tasks, out ports and services.
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]

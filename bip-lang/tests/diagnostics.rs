@@ -3,7 +3,7 @@
 mod support;
 use support::errors::{assert_error, first_error};
 
-use bip_model::{load_file, load_str, LoadError};
+use bip_lang::{load_file, load_str, LoadError};
 
 /// A small valid model with `{ATOM}`-style holes filled by each test.
 fn model(atoms: &str, components: &str, connectors: &str, extra: &str) -> String {

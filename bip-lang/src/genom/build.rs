@@ -6,7 +6,6 @@
 use std::collections::{BTreeMap, HashMap, HashSet};
 
 use super::check::{ConstraintKind, Layer, Module, PortRef, Service, ServiceRef, Yield, ETHER};
-use super::map::Reason;
 use super::names::*;
 use super::origin::{Origins, Src};
 use super::recipe::{Recipe, RecipeCodel, RecipeCondition, RecipeModule, RecipeService};
@@ -17,6 +16,7 @@ use crate::syntax::{
     AtomDef, ComponentDef, ConnectorDef, ConnectorKindDef, PriorityDef, PropertyDef, Role,
     SystemDef, Text, TransitionDef, TypeDef, VarDef,
 };
+use bip_model::genom::map::Reason;
 
 /// The result of expanding a model: its core form, the recipe of the engine's map, and
 /// where the expanded texts come from (compile it with [`Expansion::compile`], which puts

@@ -6,7 +6,8 @@ use support::errors::{assert_error, first_error};
 
 use std::collections::HashSet;
 
-use bip_model::{expand_str, load_str, parse_str, State, System};
+use bip_lang::{expand_str, load_str, parse_str};
+use bip_model::{State, System};
 
 /// A valid model: `sick` and `ndd`, one constraint; each test breaks one thing.
 const GOOD: &str = r#"System(

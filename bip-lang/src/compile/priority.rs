@@ -12,9 +12,9 @@ use std::collections::HashSet;
 use std::ops::Range;
 
 use crate::diag::ModelError;
-use crate::eval;
 use crate::source::Span;
-use crate::system::PriorityRule;
+use bip_model::eval;
+use bip_model::PriorityRule;
 
 /// A priority as declared, resolved.
 pub(super) struct Declared {
@@ -45,10 +45,7 @@ fn overlap(a: &Range<u32>, b: &Range<u32>) -> bool {
 
 /// Closes the declared priorities transitively; an error if the relation has a cycle.
 /// Returns the rules and, per interaction, the rules in which it is the lower one.
-pub(super) fn close(
-    declared: &[Declared],
-    interactions: usize,
-) -> Result<(Vec<PriorityRule>, Vec<Vec<u32>>), ModelError> {
+pub(super) fn close(declared: &[Declared]) -> Result<Vec<PriorityRule>, ModelError> {
     let mut rules: Vec<Rule> = Vec::new();
     let mut seen: HashSet<(u32, u32, u32, u32, Vec<u32>)> = HashSet::new();
     let mut add = |rules: &mut Vec<Rule>, r: Rule| -> Result<(), ModelError> {
@@ -114,32 +111,25 @@ pub(super) fn close(
         }
         i += 1;
     }
-    let mut by_low = vec![Vec::new(); interactions];
     let out = rules
         .iter()
-        .enumerate()
-        .map(|(r, rule)| {
-            for i in rule.low.clone() {
-                by_low[i as usize].push(r as u32);
-            }
-            PriorityRule {
-                low: rule.low.clone(),
-                high: rule.high.clone(),
-                when: rule
-                    .when
-                    .iter()
-                    .filter_map(|&k| declared[k as usize].when.clone())
-                    .collect(),
-                origin: rule
-                    .chain
-                    .iter()
-                    .map(|&k| declared[k as usize].text.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            }
+        .map(|rule| PriorityRule {
+            low: rule.low.clone(),
+            high: rule.high.clone(),
+            when: rule
+                .when
+                .iter()
+                .filter_map(|&k| declared[k as usize].when.clone())
+                .collect(),
+            origin: rule
+                .chain
+                .iter()
+                .map(|&k| declared[k as usize].text.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
         })
         .collect();
-    Ok((out, by_low))
+    Ok(out)
 }
 
 fn cycle_error(declared: &[Declared], chain: &[u32]) -> ModelError {

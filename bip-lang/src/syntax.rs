@@ -13,7 +13,7 @@ pub use crate::genom::syntax::{
     CodelDef, ConstraintDef, ModuleDef, PortDef, ServiceDef, ServiceKind, TaskDef,
 };
 use crate::source::{ident_has_parens, ConstExpr, OrderedMap, Spanned};
-pub use crate::system::Role;
+pub use bip_model::Role;
 
 pub type Text = Spanned<String>;
 

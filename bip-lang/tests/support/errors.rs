@@ -2,7 +2,7 @@
 
 #![allow(dead_code)]
 
-use bip_model::load_str;
+use bip_lang::load_str;
 
 /// Loads `text`, expects it to fail, and returns the first error's message, the text its
 /// span covers, and its (line, column).

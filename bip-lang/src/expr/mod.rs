@@ -10,8 +10,8 @@ use std::fmt;
 
 pub use parse::{parse_action, parse_expr, parse_range, ParseError};
 
-pub use crate::ops::{BinOp, QuantKind};
 use crate::source::Span;
+pub use bip_model::ops::{BinOp, QuantKind};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Expr {

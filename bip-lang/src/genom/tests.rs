@@ -3,11 +3,12 @@
 
 use std::collections::{HashMap, VecDeque};
 
-use crate::state::State;
-use crate::step::Steps;
+use crate::load_str;
 use crate::syntax::{PropertyDef, SystemDef};
-use crate::system::{PropertyKind, System};
-use crate::{load_str, Liveness, LivenessChecker};
+use bip_model::State;
+use bip_model::Steps;
+use bip_model::{Liveness, LivenessChecker};
+use bip_model::{PropertyKind, System};
 
 /// What a breadth-first exploration found.
 struct Explored {
@@ -49,7 +50,7 @@ impl Explored {
 
 /// Compiles a global expression, GenoM names allowed, over the model `sys` was loaded
 /// from: it is added to the model as an invariant, which the expansion rewrites.
-fn compile_expr(sys: &System, expr: &str) -> crate::eval::Expr {
+fn compile_expr(sys: &System, expr: &str) -> bip_model::eval::Expr {
     let mut def = MODELS
         .with(|d| d.borrow().get(&sys.name).cloned())
         .expect("the model was loaded with `load`");

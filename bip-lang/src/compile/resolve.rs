@@ -1,12 +1,12 @@
 //! Name resolution and type checking of expressions: from the syntax tree (`expr::Expr`)
-//! to a compiled, folded [`eval::Expr`](crate::eval::Expr).
+//! to a compiled, folded [`eval::Expr`](bip_model::eval::Expr).
 
 use std::collections::HashMap;
 
-use crate::eval::{self, Indexed, Quant, MAX_QUANT_DEPTH};
 use crate::expr::{self, BinOp, ExprKind, QuantKind, UnOp};
 use crate::source::Span;
-use crate::system::{Atom, Component, Family};
+use bip_model::eval::{self, Indexed, Quant, MAX_QUANT_DEPTH};
+use bip_model::{Atom, Component, Family};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Ty {
@@ -154,8 +154,8 @@ impl<'a> Resolver<'a> {
                     };
                 };
                 let ty = match atom.vars[var as usize].ty {
-                    crate::system::VarType::Bool => Ty::Bool,
-                    crate::system::VarType::Int { .. } => Ty::Int,
+                    bip_model::VarType::Bool => Ty::Bool,
+                    bip_model::VarType::Int { .. } => Ty::Int,
                 };
                 (self.slot_read(comp, 1 + var, None), ty)
             }
@@ -319,8 +319,8 @@ impl<'a> Resolver<'a> {
         if let Place::Atom(atom) = self.place {
             if let Some(v) = atom.var_index(n) {
                 let ty = match atom.vars[v as usize].ty {
-                    crate::system::VarType::Bool => Ty::Bool,
-                    crate::system::VarType::Int { .. } => Ty::Int,
+                    bip_model::VarType::Bool => Ty::Bool,
+                    bip_model::VarType::Int { .. } => Ty::Int,
                 };
                 return Ok((C::Local(v), ty));
             }

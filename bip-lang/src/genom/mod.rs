@@ -1,0 +1,26 @@
+//! The GenoM layer (docs/model.md, "The GenoM layer"): GenoM3-style modules and constraints, expanded
+//! into BIP core so that the verifier and the engine only ever see atoms, connectors and
+//! priorities. docs/genom.md describes the expansion and its generated names.
+//!
+//! - `syntax`: the file format of modules and constraints;
+//! - `check`: validation with positions;
+//! - `names`: the generated names and the rewriting of GenoM names in expressions;
+//! - `build`: the expansion itself;
+//! - `recipe`: the engine's map of the layer by names, as the expansion writes it; once
+//!   the expanded model is compiled it becomes a [`bip_model::GenomMap`].
+
+mod build;
+mod check;
+mod expansion;
+mod names;
+mod origin;
+mod recipe;
+pub mod syntax;
+
+#[cfg(test)]
+mod tests;
+
+pub use build::Expansion;
+
+pub(crate) use expansion::compile;
+pub use expansion::expand;

@@ -1,0 +1,28 @@
+//! `bip-lang`: bip's model language, from a file to a compiled [`bip_model::System`].
+//!
+//! The front end's pipeline runs one way: the text is parsed with positions ([`source`],
+//! [`syntax`], [`expr`]), a GenoM layer is expanded into atoms and connectors ([`genom`]),
+//! and the result is validated and compiled ([`compile()`]) into the plain data of a
+//! [`bip_model::System`]. Every error on the way is a [`ModelError`] with a span in the
+//! user's file, reported together as a [`LoadError`] ([`diag`]).
+//!
+//! - [`load_file`] / [`load_str`] read and compile a model;
+//! - [`parse_str`], [`expand_str`] and [`compile_def`] run the stages one at a time;
+//! - [`trace_file`] reads and writes the trace format.
+
+mod compile;
+pub mod diag;
+pub mod expr;
+pub mod genom;
+mod load;
+pub mod source;
+pub mod syntax;
+pub mod trace_file;
+
+pub use compile::{compile, Ty};
+pub use diag::{LoadError, ModelError};
+pub use genom::expand;
+pub use load::{
+    compile_def, expand_file, expand_str, load_file, load_str, parse_str, read_model_file,
+    ron_options,
+};
