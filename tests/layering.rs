@@ -25,28 +25,27 @@ const CRATES: &[Layers] = &[
         src: "bip-model/src",
         layers: &[
             (
-                "leaves",
+                "values",
                 &["ops", "rng", "radix", "ordered_map", "state", "eval"],
             ),
+            ("parts", &["model", "steps", "genom::map"]),
             (
-                "system",
-                &[
-                    "system",
-                    "fast_path",
-                    "priority_masks",
-                    "step_tables",
-                    "step",
-                    "assemble",
-                ],
+                "tables",
+                &["fast_path", "priority_masks", "step_tables", "enable_index"],
             ),
-            ("semantics", &["deadlock", "trace", "genom"]),
+            ("system", &["system"]),
+            (
+                "semantics",
+                &["step", "assemble", "deadlock", "trace", "genom"],
+            ),
             (
                 "acceleration",
                 &[
                     "watches",
-                    "incremental",
-                    "fire_plan",
+                    "found",
                     "plan_effects",
+                    "fire_plan",
+                    "incremental",
                     "state_cache",
                 ],
             ),

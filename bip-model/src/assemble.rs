@@ -4,17 +4,16 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use core::ops::Range;
-
+use crate::enable_index::EnableIndex;
 use crate::genom::GenomMap;
+use crate::model::{
+    Atom, Component, Connector, Family, Interaction, PriorityRule, Property, RangeError,
+};
 use crate::priority_masks::PriorityMasks;
 use crate::state::{State, StateLayout};
-use crate::step::EnableIndex;
-use crate::step_tables::StepTables;
-use crate::system::{
-    Atom, Component, Connector, Family, Interaction, PriorityRule, Property, System, Transition,
-    Var,
-};
+use crate::step_tables::{StepTables, Tabulated};
+use crate::steps::{Choices, Pick};
+use crate::system::System;
 
 /// What a model states once its names are resolved: the input of [`System::new`].
 #[derive(Clone, Debug, Default)]
@@ -86,37 +85,30 @@ impl System {
     }
 }
 
-impl Atom {
-    /// An atom type whose transitions are indexed by (location, port); transitions that
-    /// share a location and a port keep their written order.
-    pub fn new(
-        name: String,
-        locations: Vec<String>,
-        initial: u32,
-        ports: Vec<String>,
-        vars: Vec<Var>,
-        mut transitions: Vec<Transition>,
-    ) -> Atom {
-        let cols = ports.len() + 1;
-        let col = |t: &Transition| t.port.map_or(cols - 1, |p| p as usize);
-        transitions.sort_by_key(|t| (t.from as usize, col(t)));
-        let mut by_loc_port: Vec<Range<u32>> = vec![0..0; locations.len() * cols];
-        for (k, t) in transitions.iter().enumerate() {
-            let cell = &mut by_loc_port[t.from as usize * cols + col(t)];
-            if cell.start == cell.end {
-                *cell = k as u32..k as u32 + 1;
-            } else {
-                cell.end = k as u32 + 1;
-            }
-        }
-        Atom {
-            name,
-            locations,
-            initial,
-            ports,
-            vars,
-            transitions,
-            by_loc_port,
-        }
+impl Tabulated for System {
+    fn interactions(&self) -> u32 {
+        self.interactions.len() as u32
+    }
+
+    fn initial_state(&self) -> State {
+        System::initial_state(self)
+    }
+
+    fn slot_range(&self, slot: u32) -> Option<(i64, i64)> {
+        self.slot_ranges.get(slot as usize).copied()
+    }
+
+    fn reads(&self, i: u32, f: &mut dyn FnMut(u32)) {
+        self.interaction_reads(i, &mut |s, _| f(s));
+    }
+
+    fn picks(
+        &self,
+        state: &State,
+        i: u32,
+        scratch: &mut Choices,
+        picks: &mut Vec<Pick>,
+    ) -> Result<(usize, bool), RangeError> {
+        self.compute_interaction_picks(state, i, scratch, picks)
     }
 }

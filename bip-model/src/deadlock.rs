@@ -11,9 +11,10 @@ use crate::prelude::*;
 
 use hashbrown::HashSet;
 
+use crate::model::{RangeError, Role};
 use crate::state::State;
-use crate::step::Steps;
-use crate::system::{RangeError, Role, System};
+use crate::steps::Steps;
+use crate::system::System;
 
 /// The answer for one state.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -17,9 +17,9 @@
 use crate::prelude::*;
 
 use crate::eval::{binary, EvalError, Expr};
+use crate::model::{Assign, Target};
 use crate::ops::BinOp;
 use crate::radix::{key, Digit, Digits};
-use crate::system::{Assign, Target};
 
 /// How a guard is evaluated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -17,9 +17,11 @@ use crate::prelude::*;
 use alloc::collections::BTreeMap;
 
 use crate::fast_path::ActionCode;
+use crate::model::RangeError;
 use crate::state::State;
-use crate::step::{ActionOf, FireOp, Label, Pick, Step};
-use crate::system::{RangeError, System};
+use crate::step::{ActionOf, FireOp};
+use crate::steps::{Label, Pick, Step};
+use crate::system::System;
 
 /// No plan.
 const NONE: u32 = u32::MAX;

@@ -34,13 +34,16 @@ use crate::prelude::*;
 
 use alloc::sync::Arc;
 
+use crate::enable_index::Read;
 use crate::fire_plan::{FirePlans, PlanId};
+use crate::found::Found;
+use crate::model::RangeError;
 use crate::plan_effects::{PlanEffects, SlotEffect};
 use crate::priority_masks::{bit, set_bit, PriorityMasks};
 use crate::state::State;
-use crate::step::{Choices, Label, Pick, Read, Step, Steps};
-use crate::step_tables::{Entry, LastKey};
-use crate::system::{RangeError, System};
+use crate::step_tables::LastKey;
+use crate::steps::{Choices, Label, Pick, Step, Steps};
+use crate::system::System;
 use crate::watches::{location_bit, Dep, Mark, Watches, ANYWHERE};
 
 /// The enabled steps of one state of one system (after priorities), maintained
@@ -115,7 +118,7 @@ impl EnabledSet {
         // slot -> interactions whose steps read it, each with where the read matters
         let mut per_slot: Vec<Vec<Dep>> = vec![Vec::new(); n_slots];
         // the locations of a participant from which it has transitions on its port
-        let ready_at = |p: &crate::system::PortRef| {
+        let ready_at = |p: &crate::model::PortRef| {
             let atom = system.atom_of(p.component);
             let from = atom.transitions.iter().filter(|t| t.port == Some(p.port));
             from.fold(0u64, |m, t| m | location_bit(t.from))
@@ -773,33 +776,6 @@ impl Evaluation {
     pub(crate) fn bytes(&self) -> usize {
         self.found.len() * core::mem::size_of::<Found>()
             + (self.pre.len() + self.stale.len() + self.when_suppressed.len()) * 8
-    }
-}
-
-/// What the last evaluation of an interaction found: `width` picks per step (0: no step),
-/// in `pool[start..start + len]` if `in_pool`; `ready` if its required ports all had an
-/// enabled transition (only then does what the connector's guard reads matter).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Found {
-    start: u32,
-    len: u32,
-    width: u32,
-    ready: bool,
-    in_pool: bool,
-}
-
-impl Found {
-    /// A step table entry's steps.
-    #[inline(always)]
-    pub(crate) fn of(e: &Entry) -> Found {
-        let (start, len) = e.span();
-        Found {
-            start,
-            len,
-            width: e.width() as u32,
-            ready: e.ready(),
-            in_pool: true,
-        }
     }
 }
 

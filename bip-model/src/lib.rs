@@ -27,11 +27,14 @@ mod prelude {
 
 mod assemble;
 mod deadlock;
+mod enable_index;
 pub mod eval;
 mod fast_path;
 mod fire_plan;
+mod found;
 pub mod genom;
 mod incremental;
+mod model;
 pub mod ops;
 mod ordered_map;
 mod plan_effects;
@@ -42,6 +45,7 @@ mod state;
 mod state_cache;
 mod step;
 mod step_tables;
+mod steps;
 mod system;
 pub mod trace;
 mod watches;
@@ -51,15 +55,15 @@ pub use deadlock::{Liveness, LivenessChecker};
 pub use fire_plan::{FirePlans, PlanId};
 pub use genom::GenomMap;
 pub use incremental::{Enabled, EnabledSet};
+pub use model::{
+    Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule, Property,
+    PropertyKind, RangeError, RangeErrorKind, Role, Target, Transition, Var, VarType,
+};
 pub use ordered_map::OrderedMap;
 pub use plan_effects::PlanEffects;
 pub use rng::Rng;
 pub use state::{State, StateLayout};
 pub use state_cache::{CacheStats, StateCache};
-pub use step::{Label, OwnedStep, Pick, Step, Steps};
-pub use system::{
-    Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule, Property,
-    PropertyKind, RangeError, RangeErrorKind, Role, Summary, System, Target, Transition, Var,
-    VarType,
-};
+pub use steps::{Label, OwnedStep, Pick, Step, Steps};
+pub use system::{Summary, System};
 pub use trace::{Trace, TraceStep, TraceValue, Verdict};

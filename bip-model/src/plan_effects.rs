@@ -18,7 +18,7 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use crate::incremental::Found;
+use crate::found::Found;
 use crate::watches::Mark;
 
 /// What firing each plan of a [`crate::FirePlans`] does to the

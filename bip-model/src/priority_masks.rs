@@ -9,7 +9,7 @@ use crate::prelude::*;
 
 use alloc::collections::BTreeMap;
 
-use crate::system::PriorityRule;
+use crate::model::PriorityRule;
 
 #[derive(Clone, Debug, Default)]
 pub(crate) struct PriorityMasks {

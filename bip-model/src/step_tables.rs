@@ -25,9 +25,10 @@ use crate::prelude::*;
 
 use alloc::sync::Arc;
 
+use crate::model::RangeError;
 use crate::radix::{key, Digit, Digits};
-use crate::step::{Choices, Pick};
-use crate::system::System;
+use crate::state::State;
+use crate::steps::{Choices, Pick};
 
 /// The most combinations one table may have.
 const MAX_TABLE: u64 = 4096;
@@ -38,6 +39,26 @@ const MAX_PICKS: usize = 1 << 20;
 
 /// No table.
 const NONE: u32 = u32::MAX;
+
+/// The step relation as the tables see it: what each interaction's steps read, and its
+/// steps before priorities in a state. The tables are its answers, kept.
+pub(crate) trait Tabulated {
+    fn interactions(&self) -> u32;
+    /// A state whose slots all hold values of their ranges.
+    fn initial_state(&self) -> State;
+    fn slot_range(&self, slot: u32) -> Option<(i64, i64)>;
+    /// Every slot the steps of interaction `i` read (a slot may come more than once).
+    fn reads(&self, i: u32, f: &mut dyn FnMut(u32));
+    /// The steps of interaction `i` in `state` before priorities, into `picks`: how many
+    /// picks a step has, and whether the interaction is ready.
+    fn picks(
+        &self,
+        state: &State,
+        i: u32,
+        scratch: &mut Choices,
+        picks: &mut Vec<Pick>,
+    ) -> Result<(usize, bool), RangeError>;
+}
 
 /// The tables of one system.
 #[derive(Clone, Debug, Default)]
@@ -110,27 +131,25 @@ impl StepTables {
     /// Tabulates the interactions of `system` that fit (the system's own tables must be
     /// empty: its steps are computed by the relation).
     // systems are compiled with `std` (loading needs it); a no-std build receives them
-    pub(crate) fn build(system: &System) -> StepTables {
+    pub(crate) fn build(relation: &impl Tabulated) -> StepTables {
         let none = Table {
             digits: (0, 0),
             entries: NONE,
             size: 0,
         };
         let mut t = StepTables {
-            of: vec![none; system.interactions.len()],
+            of: vec![none; relation.interactions() as usize],
             ..StepTables::default()
         };
         let mut picks = Vec::new();
-        let mut state = system.initial_state();
+        let mut state = relation.initial_state();
         let mut scratch = Choices::default();
         let mut reads = Vec::new();
         let mut last_digits: Option<(u32, u32)> = None;
-        for i in 0..system.interactions.len() as u32 {
+        for i in 0..relation.interactions() {
             reads.clear();
-            system.interaction_reads(i, &mut |s, _| reads.push((s, false)));
-            let Some(d) = Digits::new(&mut reads, |s, _| {
-                system.slot_ranges.get(s as usize).copied()
-            }) else {
+            relation.reads(i, &mut |s| reads.push((s, false)));
+            let Some(d) = Digits::new(&mut reads, |s, _| relation.slot_range(s)) else {
                 continue;
             };
             if d.size > MAX_TABLE || t.entries.len() + d.size as usize > MAX_ENTRIES {
@@ -141,21 +160,20 @@ impl StepTables {
                 // every slot the steps read is set; the others do not matter
                 d.set(key, state.slots_mut(), 0);
                 let start = picks.len();
-                let entry =
-                    match system.compute_interaction_picks(&state, i, &mut scratch, &mut picks) {
-                        Ok((width, ready)) => Entry {
-                            start: start as u32,
-                            len: (picks.len() - start) as u32,
-                            width: width as u16,
-                            ready,
-                            // (no interaction has so many participants)
-                            known: u16::try_from(width).is_ok(),
-                        },
-                        Err(_) => {
-                            picks.truncate(start);
-                            Entry::default()
-                        }
-                    };
+                let entry = match relation.picks(&state, i, &mut scratch, &mut picks) {
+                    Ok((width, ready)) => Entry {
+                        start: start as u32,
+                        len: (picks.len() - start) as u32,
+                        width: width as u16,
+                        ready,
+                        // (no interaction has so many participants)
+                        known: u16::try_from(width).is_ok(),
+                    },
+                    Err(_) => {
+                        picks.truncate(start);
+                        Entry::default()
+                    }
+                };
                 t.entries.push(entry);
             }
             if picks.len() > MAX_PICKS {
@@ -267,14 +285,5 @@ impl StepTables {
                 t.entries = NONE;
             }
         }
-    }
-}
-
-impl System {
-    /// Computes the steps of the interactions `which` selects from the state each time,
-    /// without their step tables: for tests that check the tables against the computation,
-    /// and to measure what the tables bring. The steps are the same either way.
-    pub fn drop_step_tables(&mut self, which: impl Fn(u32) -> bool) {
-        self.enable_index.tables.drop_where(which);
     }
 }

@@ -7,29 +7,12 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use core::ops::Range;
-
 use crate::eval::{Env, EvalError, Expr};
+use crate::model::{
+    Atom, Component, Connector, Family, Interaction, PriorityRule, Property, RangeError,
+    RangeErrorKind, Role,
+};
 use crate::state::{State, StateLayout};
-
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize, serde::Serialize,
-)]
-pub enum Role {
-    /// The system's own work (the default; every internal transition is progress).
-    #[default]
-    Progress,
-    /// The passage of time (a clock tick).
-    Time,
-    /// A stimulus the environment may give at any time (a request); not progress.
-    Environment,
-}
-
-impl Role {
-    pub fn is_progress(&self) -> bool {
-        *self == Role::Progress
-    }
-}
 
 /// A compiled model.
 #[derive(Clone, Debug)]
@@ -58,215 +41,10 @@ pub struct System {
     /// and sends requests with (docs/genom.md, "The engine's map").
     pub genom: Option<crate::genom::GenomMap>,
     /// Flat tables for the step relation's inner loop.
-    pub(crate) enable_index: crate::step::EnableIndex,
+    pub(crate) enable_index: crate::enable_index::EnableIndex,
     /// The priorities as sparse bit masks, for deciding suppression quickly.
     pub(crate) priority_masks: crate::priority_masks::PriorityMasks,
 }
-
-/// An atom type: locations, ports, variables and transitions.
-#[derive(Clone, Debug)]
-pub struct Atom {
-    pub name: String,
-    pub locations: Vec<String>,
-    pub initial: u32,
-    pub ports: Vec<String>,
-    pub vars: Vec<Var>,
-    /// Sorted by (from, port) so that `by_loc_port` can index them.
-    pub transitions: Vec<Transition>,
-    /// Transitions from location `l` on port `p` are `transitions[by_loc_port[l * (ports+1) + p]]`;
-    /// the last column (`p == ports.len()`) holds the internal transitions.
-    pub(crate) by_loc_port: Vec<Range<u32>>,
-}
-
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum VarType {
-    Bool,
-    Int { lo: i64, hi: i64 },
-}
-
-impl VarType {
-    pub fn range(&self) -> (i64, i64) {
-        match self {
-            VarType::Bool => (0, 1),
-            VarType::Int { lo, hi } => (*lo, *hi),
-        }
-    }
-}
-
-#[derive(Clone, Debug)]
-pub struct Var {
-    pub name: String,
-    pub ty: VarType,
-    pub init: i64,
-}
-
-#[derive(Clone, Debug)]
-pub struct Transition {
-    pub from: u32,
-    /// `None` for an internal transition.
-    pub port: Option<u32>,
-    pub to: u32,
-    pub guard: Option<Expr>,
-    pub action: Vec<Assign>,
-}
-
-/// `target = value`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Assign {
-    pub target: Target,
-    pub value: Expr,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Target {
-    /// A variable of the component taking the transition (offset from its slot base).
-    Local(u32),
-    /// A fixed slot (connector actions).
-    Slot(u32),
-}
-
-/// A `components` entry: `count` instances of one atom (or a single one).
-#[derive(Clone, Debug)]
-pub struct Family {
-    pub name: String,
-    pub atom: u32,
-    /// `None` for a single instance named like the family.
-    pub count: Option<u32>,
-    pub first: u32,
-}
-
-impl Family {
-    pub fn members(&self) -> Range<u32> {
-        self.first..self.first + self.count.unwrap_or(1)
-    }
-}
-
-/// A component instance.
-#[derive(Clone, Debug)]
-pub struct Component {
-    /// `fork[2]`, or `battery` for a single instance.
-    pub name: String,
-    pub family: u32,
-    pub atom: u32,
-    /// Slot of its location; its variables follow.
-    pub slot: u32,
-}
-
-impl Component {
-    /// Slot of its variable `n`.
-    pub fn var_slot(&self, n: u32) -> u32 {
-        self.slot + 1 + n
-    }
-}
-
-/// A `connectors` entry, instantiated once per `forall` value.
-#[derive(Clone, Debug)]
-pub struct Connector {
-    pub name: String,
-    pub interactions: Range<u32>,
-    pub broadcast: bool,
-    pub role: Role,
-    /// The `forall` variable's values, one per interaction; empty without `forall`.
-    pub indices: Vec<i64>,
-}
-
-/// One connector instance.
-#[derive(Clone, Debug)]
-pub struct Interaction {
-    /// `left[3]`, or the connector's name without `forall`.
-    pub name: String,
-    pub connector: u32,
-    /// The ports in the order written (the broadcast trigger first if it was not listed).
-    pub ports: Vec<PortRef>,
-    /// For a broadcast, the position of the trigger in `ports`.
-    pub trigger: Option<u32>,
-    pub guard: Option<Expr>,
-    pub action: Vec<Assign>,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct PortRef {
-    pub component: u32,
-    pub port: u32,
-}
-
-/// After transitive closure: an interaction in `low` is suppressed in a state where an
-/// interaction in `high` is enabled and every `when` holds.
-#[derive(Clone, Debug)]
-pub struct PriorityRule {
-    pub low: Range<u32>,
-    pub high: Range<u32>,
-    pub when: Vec<Expr>,
-    /// `low < high` as written, or the chain it was derived from.
-    pub origin: String,
-}
-
-#[derive(Clone, Debug)]
-pub struct Property {
-    pub name: String,
-    pub kind: PropertyKind,
-    /// The expression as written, for reports.
-    pub text: String,
-}
-
-#[derive(Clone, Debug)]
-pub enum PropertyKind {
-    DeadlockFree { terminal: Option<Expr> },
-    Invariant(Expr),
-    Reachable(Expr),
-}
-
-/// A range error: the model computed a value it cannot hold or an operation that has no
-/// value. MODEL.md makes this a violation, reported with a trace like a failed invariant.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct RangeError {
-    /// What was being evaluated: `guard of phil[0] (thinking -take-> hungry)`,
-    /// `action of left[0]`, or a property name.
-    pub context: String,
-    pub kind: RangeErrorKind,
-}
-
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum RangeErrorKind {
-    OutOfRange {
-        var: String,
-        value: i64,
-        lo: i64,
-        hi: i64,
-    },
-    DivisionByZero,
-    Overflow,
-    IndexOutOfBounds {
-        family: String,
-        index: i64,
-        count: u32,
-    },
-}
-
-impl core::fmt::Display for RangeError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match &self.kind {
-            RangeErrorKind::OutOfRange { var, value, lo, hi } => write!(
-                f,
-                "{var} = {value} is outside {lo}..={hi} in the {}",
-                self.context
-            ),
-            RangeErrorKind::DivisionByZero => write!(f, "division by zero in the {}", self.context),
-            RangeErrorKind::Overflow => write!(f, "integer overflow in the {}", self.context),
-            RangeErrorKind::IndexOutOfBounds {
-                family,
-                index,
-                count,
-            } => write!(
-                f,
-                "index {index} is outside {family}[0..{count}] in the {}",
-                self.context
-            ),
-        }
-    }
-}
-
-impl core::error::Error for RangeError {}
 
 impl System {
     /// The services a client of the GenoM layer may request, as `(module, service)`
@@ -380,10 +158,10 @@ impl System {
     }
 
     /// The role of a step's interaction (internal transitions are progress).
-    pub fn role(&self, label: crate::step::Label) -> Role {
+    pub fn role(&self, label: crate::steps::Label) -> Role {
         match label {
-            crate::step::Label::Internal { .. } => Role::Progress,
-            crate::step::Label::Interaction(i) => {
+            crate::steps::Label::Internal { .. } => Role::Progress,
+            crate::steps::Label::Interaction(i) => {
                 let c = self.interactions[i as usize].connector;
                 self.connectors[c as usize].role
             }
@@ -407,33 +185,6 @@ impl System {
             "{}: {} -{}-> {}",
             comp.name, atom.locations[t.from as usize], port, atom.locations[t.to as usize]
         )
-    }
-}
-
-impl Atom {
-    /// Transitions from `loc` on `port` (`None`: internal ones).
-    pub fn transitions_from(&self, loc: u32, port: Option<u32>) -> Range<u32> {
-        let cols = self.ports.len() + 1;
-        let col = port.map_or(self.ports.len(), |p| p as usize);
-        self.by_loc_port[loc as usize * cols + col].clone()
-    }
-
-    pub fn location_index(&self, name: &str) -> Option<u32> {
-        self.locations
-            .iter()
-            .position(|l| l == name)
-            .map(|i| i as u32)
-    }
-
-    pub fn port_index(&self, name: &str) -> Option<u32> {
-        self.ports.iter().position(|l| l == name).map(|i| i as u32)
-    }
-
-    pub fn var_index(&self, name: &str) -> Option<u32> {
-        self.vars
-            .iter()
-            .position(|v| v.name == name)
-            .map(|i| i as u32)
     }
 }
 
@@ -484,5 +235,14 @@ impl System {
             properties: self.properties.len(),
             bits_per_state: self.layout.bits(),
         }
+    }
+}
+
+impl System {
+    /// Computes the steps of the interactions `which` selects from the state each time,
+    /// without their step tables: for tests that check the tables against the computation,
+    /// and to measure what the tables bring. The steps are the same either way.
+    pub fn drop_step_tables(&mut self, which: impl Fn(u32) -> bool) {
+        self.enable_index.tables.drop_where(which);
     }
 }

@@ -10,10 +10,11 @@ use hashbrown::HashMap;
 
 use serde::{Deserialize, Serialize};
 
+use crate::model::{RangeError, VarType};
 use crate::ordered_map::OrderedMap;
 use crate::state::State;
-use crate::step::{OwnedStep, Steps};
-use crate::system::{RangeError, System, VarType};
+use crate::steps::{OwnedStep, Steps};
+use crate::system::System;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename = "Trace", deny_unknown_fields)]

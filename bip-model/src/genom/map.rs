@@ -12,8 +12,6 @@ use crate::prelude::*;
 use core::ops::Range;
 
 use crate::eval;
-use crate::state::State;
-use crate::system::{RangeError, System};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 pub enum ServiceKind {
@@ -164,12 +162,6 @@ pub struct Condition {
     pub expr: eval::Expr,
 }
 
-impl Condition {
-    pub fn holds(&self, system: &System, state: &State) -> Result<bool, RangeError> {
-        system.holds(&self.expr, state, &self.text)
-    }
-}
-
 /// Why a request is refused or a codel held.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Reason {
@@ -229,24 +221,7 @@ impl GenomMap {
     }
 }
 
-impl ServiceMap {
-    /// The conditions that refuse a request in `state` (empty: the request is accepted,
-    /// unless a user port of an extending connector is not ready).
-    pub fn refused_by(
-        &self,
-        system: &System,
-        state: &State,
-    ) -> Result<Vec<&Condition>, RangeError> {
-        failed(&self.refusals, system, state)
-    }
-}
-
 impl CodelMap {
-    /// The conditions that hold the codel back in `state`.
-    pub fn held_by(&self, system: &System, state: &State) -> Result<Vec<&Condition>, RangeError> {
-        failed(&self.holds, system, state)
-    }
-
     /// The module transition that writes `value(k)` into the `k`-th field of
     /// [`CodelMap::ids`]; `None` if a value is outside its field's range.
     pub fn ids_transition(&self, mut value: impl FnMut(usize) -> i64) -> Option<u32> {
@@ -267,18 +242,4 @@ impl CodelMap {
             .iter()
             .find(|y| y.transitions.contains(&transition))
     }
-}
-
-fn failed<'c>(
-    conds: &'c [Condition],
-    system: &System,
-    state: &State,
-) -> Result<Vec<&'c Condition>, RangeError> {
-    let mut out = Vec::new();
-    for c in conds {
-        if !c.holds(system, state)? {
-            out.push(c);
-        }
-    }
-    Ok(out)
 }

@@ -2,6 +2,7 @@
 //! [`crate::System::genom`]) and why a deadlock state is stuck ([`Stuck`]). The expansion
 //! of modules and constraints into atoms and connectors is the front end's (`bip-lang`).
 
+mod conditions;
 pub mod map;
 mod stuck;
 

@@ -8,9 +8,10 @@ use crate::prelude::*;
 use hashbrown::HashSet;
 
 use super::map::{Condition, GenomMap};
+use crate::model::{RangeError, Role};
 use crate::state::State;
-use crate::step::Steps;
-use crate::system::{RangeError, Role, System};
+use crate::steps::Steps;
+use crate::system::System;
 
 /// A codel held back: its activity's own transition is enabled, the constraints are not.
 #[derive(Clone, Debug)]
