@@ -311,6 +311,21 @@ fn walk_agrees(model: &str, sys: &System, steps: usize) -> (usize, usize) {
                 let len = steps.len() * width as usize;
                 let in_pool = set.pool()[at..at + len].chunks(width as usize);
                 assert!(in_pool.eq(steps.iter().map(|p| &p[..])), "{model}: {i}");
+                // each pooled step finds its plan by its place, of its interaction and
+                // width and with its picks; no place inside a step names a plan
+                for k in 0..n {
+                    let at = start + k * width;
+                    let Some(p) = plans.plan_at(at, width, i) else {
+                        panic!("{model}: no plan for the step of interaction {i} at {at}")
+                    };
+                    let (pi, pat, pwidth) = plans.step(p);
+                    assert_eq!((pi, pwidth), (i, width), "{model}");
+                    let picks = |a: u32| &set.pool()[a as usize..(a + width) as usize];
+                    assert_eq!(picks(pat), picks(at), "{model}");
+                    for inside in 1..width {
+                        assert!(plans.plan_at(at + inside, width, i).is_none(), "{model}");
+                    }
+                }
             }
             pooled += usize::from(set.pooled_steps(i).is_some());
         }
