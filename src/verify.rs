@@ -212,7 +212,7 @@ fn save_traces(dir: &Path, report: &Report) -> Result<Vec<(String, PathBuf)>, St
             continue;
         };
         let path = dir.join(format!("{}.trace.ron", file_name(&p.name)));
-        std::fs::write(&path, bip_lang::trace_file::to_ron(&trace) + "\n")
+        std::fs::write(&path, bip_lang::trace_file::to_ron(trace) + "\n")
             .map_err(|e| format!("cannot write the trace {}: {e}", path.display()))?;
         out.push((p.name.clone(), path));
     }
