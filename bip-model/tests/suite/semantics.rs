@@ -328,7 +328,7 @@ fn guard_that_cannot_be_evaluated_is_a_range_error_of_the_state() {
 
 #[test]
 fn deadlock_is_no_enabled_step_without_time() {
-    let sys = load(include_str!("../../robots/philosophers.ron"));
+    let sys = load(include_str!("../../../robots/philosophers.ron"));
     let all_hungry: Vec<&str> = vec!["left[0]", "left[1]", "left[2]", "left[3]", "left[4]"];
     let s = state_after(&sys, &all_hungry);
     let mut steps = Steps::new();
@@ -449,8 +449,8 @@ fn initial_values_defaults_and_self_index() {
 #[test]
 fn packed_states_round_trip_on_examples() {
     for text in [
-        include_str!("../../robots/philosophers.ron"),
-        include_str!("../../robots/pipeline.ron"),
+        include_str!("../../../robots/philosophers.ron"),
+        include_str!("../../../robots/pipeline.ron"),
     ] {
         let sys = load(text);
         let mut frontier = vec![sys.initial_state()];
@@ -469,7 +469,7 @@ fn packed_states_round_trip_on_examples() {
 
 #[test]
 fn property_expressions_evaluate_on_states() {
-    let sys = load(include_str!("../../robots/philosophers.ron"));
+    let sys = load(include_str!("../../../robots/philosophers.ron"));
     let someone_eats = sys
         .properties
         .iter()

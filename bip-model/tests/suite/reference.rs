@@ -14,8 +14,7 @@ use bip_lang::load_str;
 use bip_model::{State, Steps, System};
 use proptest::prelude::*;
 
-mod support;
-use support::random_system::*;
+use crate::support::random_system::*;
 
 // --------------------------------------------------------------------------------------
 // The reference interpreter.

@@ -27,7 +27,7 @@ fn path(sys: &System, names: &[&str]) -> Vec<(OwnedStep, State)> {
 
 #[test]
 fn philosophers_deadlock_trace_round_trips_and_replays() {
-    let sys = system(include_str!("../../robots/philosophers.ron"));
+    let sys = system(include_str!("../../../robots/philosophers.ron"));
     let names = ["left[0]", "left[1]", "left[2]", "left[3]", "left[4]"];
     let p = path(&sys, &names);
     let trace = Trace::from_path(&sys, Verdict::Deadlock, &p);
@@ -57,7 +57,7 @@ fn philosophers_deadlock_trace_round_trips_and_replays() {
 
 #[test]
 fn replay_rejects_a_step_that_is_not_enabled_or_leads_elsewhere() {
-    let sys = system(include_str!("../../robots/philosophers.ron"));
+    let sys = system(include_str!("../../../robots/philosophers.ron"));
     let mut trace = Trace::from_path(&sys, Verdict::None, &path(&sys, &["left[0]", "left[1]"]));
     trace.steps[1].step = "right[0]".into(); // fork[1] is free but recorded changes differ
     let err = trace.replay(&sys).expect_err("wrong state");
@@ -88,7 +88,7 @@ fn replay_rejects_a_step_that_is_not_enabled_or_leads_elsewhere() {
 
 #[test]
 fn data_changes_are_recorded_with_their_types() {
-    let sys = system(include_str!("../../robots/pipeline.ron"));
+    let sys = system(include_str!("../../../robots/pipeline.ron"));
     let p = path(&sys, &["tick", "put"]);
     let trace = Trace::from_path(&sys, Verdict::Witness("x".into()), &p);
     let put = &trace.steps[1];
@@ -105,7 +105,7 @@ fn data_changes_are_recorded_with_their_types() {
 
 #[test]
 fn display_shows_old_and_new_values() {
-    let sys = system(include_str!("../../robots/pipeline.ron"));
+    let sys = system(include_str!("../../../robots/pipeline.ron"));
     let trace = Trace::from_path(
         &sys,
         Verdict::Violation("p".into()),

@@ -10,8 +10,7 @@ use bip_model::{
     EnabledSet, FirePlans, Label, OwnedStep, PlanId, State, StateCache, Steps, System,
 };
 
-mod support;
-use support::random_system::*;
+use crate::support::random_system::*;
 
 fn full(sys: &System, s: &State, buf: &mut Steps) -> Option<Vec<OwnedStep>> {
     sys.enabled_steps(s, buf).ok()?;

@@ -15,8 +15,7 @@ use bip_model::{
 };
 use proptest::prelude::*;
 
-mod support;
-use support::random_system::*;
+use crate::support::random_system::*;
 
 fn full(sys: &System, s: &State, buf: &mut Steps) -> Result<Vec<OwnedStep>, ()> {
     sys.enabled_steps(s, buf).map_err(|_| ())?;
