@@ -1,6 +1,6 @@
 //! What a deadlock is, for every tool (docs/model.md, "Deadlocks, time and the environment").
 //!
-//! Without connectors of role `Time` or `Environment` this is MODEL.md's definition: a state
+//! Without connectors of role `Time` or `Environment` a deadlock is a state
 //! with no enabled step. With them, time passing and requests arriving are not progress: a
 //! state is a deadlock when no progress step is enabled in it, nor in any state that time
 //! steps alone lead to. (A clock can always tick and a client can always send; without

@@ -182,7 +182,7 @@ pub enum PropertyKind {
 }
 
 /// A range error: the model computed a value it cannot hold or an operation that has no
-/// value. MODEL.md makes this a violation, reported with a trace like a failed invariant.
+/// value. The model language makes this a violation (docs/model.md, "Range errors"), reported with a trace like a failed invariant.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RangeError {
     /// What was being evaluated: `guard of phil[0] (thinking -take-> hungry)`,

@@ -1,4 +1,4 @@
-//! The step relation of MODEL.md ("Semantics (one step)"): the enabled steps of a state and
+//! The step relation of docs/model.md ("Semantics: one step"): the enabled steps of a state and
 //! the firing of a step. This is the one implementation the verifier, the simulator and the
 //! engine share.
 //!

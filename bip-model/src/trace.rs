@@ -1,4 +1,4 @@
-//! The shared trace format (MODEL.md section 5): counterexamples, witnesses, simulations
+//! The shared trace format (docs/model.md, "Traces"): counterexamples, witnesses, simulations
 //! and engine recordings. Each step names the fired interaction (or `comp.internal`) and
 //! the locations and variables that changed.
 

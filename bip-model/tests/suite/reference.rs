@@ -2,7 +2,7 @@
 //!
 //! A random small system is generated as plain Rust data, written out as a RON model and
 //! loaded by bip-model. The reference interpreter below reads the same data and applies
-//! MODEL.md's "Semantics (one step)" word for word: no indices, no closure tables, no
+//! docs/model.md's "Semantics: one step" word for word: no indices, no closure tables, no
 //! folding. Along random walks, every state's successors must agree exactly (as multisets
 //! of interaction name and successor state), and so must range errors.
 //!

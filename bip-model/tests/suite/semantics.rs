@@ -1,4 +1,4 @@
-//! One test per rule of MODEL.md's step semantics, on small models written out in full.
+//! One test per rule of the step semantics (docs/model.md, "Semantics: one step"), on small models written out in full.
 
 use bip_lang::load_str;
 use bip_model::{Label, Liveness, LivenessChecker, RangeErrorKind, State, Steps, System};
