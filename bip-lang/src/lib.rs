@@ -19,10 +19,10 @@ pub mod source;
 pub mod syntax;
 pub mod trace_file;
 
-pub use compile::{compile, Ty};
+pub use compile::Ty;
 pub use diag::{LoadError, ModelError};
 pub use genom::expand;
 pub use load::{
-    compile_def, expand_file, expand_str, load_file, load_str, parse_str, read_model_file,
+    compile, compile_def, expand_file, expand_str, load_file, load_str, parse_str, read_model_file,
     ron_options,
 };

@@ -81,12 +81,6 @@ pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
     build::build(&layer, def, ages, user, origins)
 }
 
-/// Expands and compiles a model with a GenoM layer; the system carries its [`GenomMap`].
-pub(crate) fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
-    let expansion = expand(def)?;
-    expansion.compile(def)
-}
-
 impl Expansion {
     /// Compiles the expanded model into a [`System`] with its [`GenomMap`](bip_model::genom::map::GenomMap); `def` is the
     /// model it was expanded from. Errors point into the model's file (the expanded texts

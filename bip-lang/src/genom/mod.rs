@@ -22,5 +22,4 @@ mod tests;
 
 pub use build::Expansion;
 
-pub(crate) use expansion::compile;
 pub use expansion::expand;
