@@ -24,5 +24,5 @@ pub use diag::{LoadError, ModelError};
 pub use genom::expand;
 pub use load::{
     compile, compile_def, expand_file, expand_str, load_file, load_str, parse_str, read_model_file,
-    ron_options,
 };
+pub use syntax::ron_options;

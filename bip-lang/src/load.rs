@@ -4,21 +4,12 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use ron::extensions::Extensions;
-
 use crate::compile::compile_core;
 use crate::diag::{LoadError, ModelError};
 use crate::genom;
 use crate::source::{offset_of, with_positions, Span};
-use crate::syntax::SystemDef;
+use crate::syntax::{ron_options, SystemDef};
 use bip_model::System;
-
-/// The `ron` options every model file is read with (MODEL.md: `implicit_some` and
-/// `unwrap_newtypes` are on).
-pub fn ron_options() -> ron::Options {
-    ron::Options::default()
-        .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_NEWTYPES)
-}
 
 /// Reads a file's text. Errors name the file.
 pub fn read_model_file(path: &Path) -> Result<String, LoadError> {
