@@ -6,6 +6,12 @@
 //! [`bip_model::System`]. Every error on the way is a [`ModelError`] with a span in the
 //! user's file, reported together as a [`LoadError`] ([`diag`]).
 //!
+//! Modules import down these layers only (`tests/layering.rs` checks it), lowest first:
+//! positions (`source`, `diag`); the file format (`syntax`, `expr`, `genom::syntax`);
+//! `compile`, which knows only BIP core; `genom`, whose expansion evaluates constants and
+//! compiles its result through `compile`; files (`load`, which chooses between compiling a
+//! core model and expanding a GenoM layer first, and `trace_file`).
+//!
 //! - [`load_file`] / [`load_str`] read and compile a model;
 //! - [`parse_str`], [`expand_str`] and [`compile_def`] run the stages one at a time;
 //! - [`trace_file`] reads and writes the trace format.

@@ -1,7 +1,7 @@
 //! The model file format: what a user writes in a `.ron` file (MODEL.md), as serde types.
 //!
 //! These types hold the text as written (names and expressions are strings with their
-//! positions); `compile` resolves them into a [`crate::System`]. They also serialize back
+//! positions); `compile` resolves them into a [`bip_model::System`]. They also serialize back
 //! to RON, which is how `bip expand` prints an expanded model.
 
 mod var;
