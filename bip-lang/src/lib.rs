@@ -6,6 +6,12 @@
 //! [`bip_model::System`]. Every error on the way is a [`ModelError`] with a span in the
 //! user's file, reported together as a [`LoadError`] ([`diag`]).
 //!
+//! Modules import down these layers only (`tests/layering.rs` checks it), lowest first:
+//! positions (`source`, `diag`); the file format (`syntax`, `expr`, `genom::syntax`);
+//! `compile`, which knows only BIP core; `genom`, whose expansion evaluates constants and
+//! compiles its result through `compile`; files (`load`, which chooses between compiling a
+//! core model and expanding a GenoM layer first, and `trace_file`).
+//!
 //! - [`load_file`] / [`load_str`] read and compile a model;
 //! - [`parse_str`], [`expand_str`] and [`compile_def`] run the stages one at a time;
 //! - [`trace_file`] reads and writes the trace format.
@@ -19,10 +25,10 @@ pub mod source;
 pub mod syntax;
 pub mod trace_file;
 
-pub use compile::{compile, Ty};
+pub use compile::Ty;
 pub use diag::{LoadError, ModelError};
 pub use genom::expand;
 pub use load::{
-    compile_def, expand_file, expand_str, load_file, load_str, parse_str, read_model_file,
-    ron_options,
+    compile, compile_def, expand_file, expand_str, load_file, load_str, parse_str, read_model_file,
 };
+pub use syntax::ron_options;

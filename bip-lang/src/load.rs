@@ -1,22 +1,15 @@
-//! Reading a model file: RON parsing with positions, then compilation.
+//! The front end's pipeline, from a model file to a [`System`]: RON parsing with
+//! positions, the expansion of a GenoM layer into BIP core, then compilation.
 
 use std::path::Path;
 use std::sync::Arc;
 
-use ron::extensions::Extensions;
-
-use crate::compile::compile;
+use crate::compile::compile_core;
 use crate::diag::{LoadError, ModelError};
+use crate::genom;
 use crate::source::{offset_of, with_positions, Span};
-use crate::syntax::SystemDef;
+use crate::syntax::{ron_options, SystemDef};
 use bip_model::System;
-
-/// The `ron` options every model file is read with (MODEL.md: `implicit_some` and
-/// `unwrap_newtypes` are on).
-pub fn ron_options() -> ron::Options {
-    ron::Options::default()
-        .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_NEWTYPES)
-}
 
 /// Reads a file's text. Errors name the file.
 pub fn read_model_file(path: &Path) -> Result<String, LoadError> {
@@ -70,7 +63,7 @@ pub fn expand_str(name: &str, text: &str) -> Result<SystemDef, LoadError> {
         return Ok(def);
     }
     let expansion =
-        crate::genom::expand(&def).map_err(|errors| LoadError::model(name, &shared, errors))?;
+        genom::expand(&def).map_err(|errors| LoadError::model(name, &shared, errors))?;
     compile_def(name, &shared, &def)?;
     Ok(expansion.def)
 }
@@ -80,6 +73,18 @@ pub fn expand_file(path: impl AsRef<Path>) -> Result<SystemDef, LoadError> {
     let path = path.as_ref();
     let text = read_model_file(path)?;
     expand_str(&path.display().to_string(), &text)
+}
+
+/// Compiles a parsed model. On failure, returns every error found.
+///
+/// A model with a GenoM layer (`modules`, `constraints`) is first expanded into BIP core
+/// ([`genom::expand`]); the compiled system then carries the map the engine binds codels
+/// and requests with ([`System::genom`]).
+pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
+    if def.has_genom_layer() {
+        return genom::expand(def)?.compile(def);
+    }
+    compile_core(def, &[]).map(|(system, _)| system)
 }
 
 /// Compiles parsed file-format types; `text` is the file they came from (for positions).

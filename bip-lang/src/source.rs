@@ -71,6 +71,9 @@ impl<T> Spanned<T> {
     }
 }
 
+/// A string as written in the file (a name, an expression), with its position.
+pub type Text = Spanned<String>;
+
 impl Spanned<String> {
     pub fn as_str(&self) -> &str {
         &self.value

@@ -3,7 +3,7 @@
 
 use bip_model::Trace;
 
-use crate::load::ron_options;
+use crate::syntax::ron_options;
 
 /// The trace as pretty RON: `Trace(` then its steps, each written
 /// `(step: "...", state: {...})`.

@@ -27,20 +27,9 @@ use resolve::{ConstInfo, Names, Place, ResolveError, Resolver};
 /// enough that a typo (`count: "10000000000"`) is an error rather than an out-of-memory.
 const MAX_COUNT: i64 = 10_000_000;
 
-/// Compiles a parsed model. On failure, returns every error found.
-///
-/// A model with a GenoM layer (`modules`, `constraints`) is first expanded into BIP core
-/// (`genom::expand`); the compiled system then carries the map the engine binds codels
-/// and requests with ([`System::genom`]).
-pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
-    if def.has_genom_layer() {
-        return crate::genom::compile(def);
-    }
-    compile_core(def, &[]).map(|(system, _)| system)
-}
-
-/// Compiles a core model (the GenoM layer, if any, is ignored), plus `extra` global
-/// boolean expressions over it (the GenoM layer's conditions, for the engine's map).
+/// Compiles a core model (its GenoM layer, if any, is ignored: it must have been expanded
+/// first), plus `extra` global boolean expressions over it (the GenoM layer's conditions,
+/// for the engine's map). On failure, returns every error found.
 pub(crate) fn compile_core(
     def: &SystemDef,
     extra: &[Text],

@@ -10,7 +10,7 @@ use super::names::*;
 use super::origin::{Origins, Src};
 use super::recipe::{Recipe, RecipeCodel, RecipeCondition, RecipeModule, RecipeService};
 use crate::diag::{Errors, ModelError};
-use crate::expr::{parse_expr, ExprKind};
+use crate::expr::{parse_expr, reprint, ExprKind};
 use crate::source::{ConstExpr, ConstValue, OrderedMap, Span, Spanned};
 use crate::syntax::{
     AtomDef, ComponentDef, ConnectorDef, ConnectorKindDef, PriorityDef, PropertyDef, Role,
@@ -49,11 +49,6 @@ struct Cond {
 
 fn text(s: impl Into<String>) -> Text {
     Spanned::generated(s.into())
-}
-
-/// Normalises a generated expression (fewest parentheses) for the printed model.
-pub(super) fn tidy(s: &str) -> String {
-    parse_expr(s).map_or_else(|_| s.to_string(), |e| e.to_string())
 }
 
 /// A generated rendezvous connector (guards and actions are set when it is finished).
@@ -724,7 +719,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                     let count = others(services, &|c| format!("({c}@{ETHER} ? 0 : 1)"));
                     start.push(Cond {
                         reason,
-                        src: Src::gen(tidy(&format!("{} < {max}", count.join(" + ")))),
+                        src: Src::gen(reprint(&format!("{} < {max}", count.join(" + ")))),
                     });
                 }
                 ConstraintKind::Requires { service, active } if *service == r => {

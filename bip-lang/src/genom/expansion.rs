@@ -2,7 +2,7 @@
 //! expansion with its engine map.
 
 use super::build::Expansion;
-use super::{build, check, names, origin};
+use super::{build, check, origin, rewrite};
 use crate::compile::{compile_core, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::syntax::{PropertyDef, SystemDef, Text};
@@ -23,7 +23,7 @@ pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
     for e in const_errors {
         errors.push(e);
     }
-    let mut rw = names::Rewriter::new(&layer, &consts);
+    let mut rw = rewrite::Rewriter::new(&layer, &consts);
     let mut origins = Origins::default();
     let mut user = UserTexts::default();
     // each user text, rewritten if it names GenoM things, becomes a piece with its origin
@@ -79,12 +79,6 @@ pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
     }
     let ages = std::mem::take(&mut rw.ages);
     build::build(&layer, def, ages, user, origins)
-}
-
-/// Expands and compiles a model with a GenoM layer; the system carries its [`GenomMap`].
-pub(crate) fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
-    let expansion = expand(def)?;
-    expansion.compile(def)
 }
 
 impl Expansion {

@@ -4,7 +4,9 @@
 //!
 //! - `syntax`: the file format of modules and constraints;
 //! - `check`: validation with positions;
-//! - `names`: the generated names and the rewriting of GenoM names in expressions;
+//! - `names`: the generated names;
+//! - `rewrite`: the rewriting of GenoM names in users' expressions into generated ones;
+//! - `origin`: where the expanded texts come from, to put errors back in the user's file;
 //! - `build`: the expansion itself;
 //! - `recipe`: the engine's map of the layer by names, as the expansion writes it; once
 //!   the expanded model is compiled it becomes a [`bip_model::GenomMap`].
@@ -15,6 +17,7 @@ mod expansion;
 mod names;
 mod origin;
 mod recipe;
+mod rewrite;
 pub mod syntax;
 
 #[cfg(test)]
@@ -22,5 +25,4 @@ mod tests;
 
 pub use build::Expansion;
 
-pub(crate) use expansion::compile;
 pub use expansion::expand;

@@ -13,7 +13,7 @@
 use std::ops::Range;
 
 use crate::diag::ModelError;
-use crate::expr::{Expr, ExprKind};
+use crate::expr::{reprint, Expr, ExprKind};
 use crate::source::{Span, Spanned};
 use crate::syntax::Text;
 
@@ -61,7 +61,7 @@ impl Src {
     /// Generated text printed with the fewest parentheses; user text as it is.
     fn tidy(self) -> Src {
         if self.is_generated() {
-            Src::gen(super::build::tidy(&self.plain()))
+            Src::gen(reprint(&self.plain()))
         } else {
             self
         }

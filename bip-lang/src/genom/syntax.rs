@@ -1,8 +1,8 @@
 //! The GenoM layer of the file format (MODEL.md section 4): modules and constraints, as
 //! written. `genom::check` validates them; `genom::build` expands them into BIP core.
 
-use crate::source::ConstExpr;
-use crate::syntax::{Text, VarDef};
+use crate::source::{ConstExpr, Text};
+use crate::syntax::VarDef;
 pub use bip_model::genom::map::ServiceKind;
 
 /// A GenoM3-style module: ids, execution tasks, out ports and services.

@@ -1,21 +1,31 @@
 //! The model file format: what a user writes in a `.ron` file (MODEL.md), as serde types.
 //!
 //! These types hold the text as written (names and expressions are strings with their
-//! positions); `compile` resolves them into a [`crate::System`]. They also serialize back
+//! positions); `compile` resolves them into a [`bip_model::System`]. They also serialize back
 //! to RON, which is how `bip expand` prints an expanded model.
+
+mod var;
 
 use std::fmt;
 
+use ron::extensions::Extensions;
 use serde::de::{self, Deserialize, Deserializer, EnumAccess, MapAccess, VariantAccess, Visitor};
 use serde::ser::{Serialize, SerializeStructVariant, Serializer};
 
 pub use crate::genom::syntax::{
     CodelDef, ConstraintDef, ModuleDef, PortDef, ServiceDef, ServiceKind, TaskDef,
 };
-use crate::source::{ident_has_parens, ConstExpr, OrderedMap, Spanned};
+pub use crate::source::Text;
+use crate::source::{ident_has_parens, ConstExpr, OrderedMap};
 pub use bip_model::Role;
+pub use var::{TypeDef, VarDef};
 
-pub type Text = Spanned<String>;
+/// The `ron` options every model file is read and printed with (docs/model.md:
+/// `implicit_some` and `unwrap_newtypes` are on); trace files share them.
+pub fn ron_options() -> ron::Options {
+    ron::Options::default()
+        .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_NEWTYPES)
+}
 
 /// A whole model file: one `System(...)`.
 #[derive(Clone, Debug, Default, serde::Deserialize, serde::Serialize)]
@@ -52,7 +62,7 @@ impl SystemDef {
             .struct_names(true)
             .depth_limit(4)
             .extensions(ron::extensions::Extensions::IMPLICIT_SOME);
-        let text = crate::load::ron_options().to_string_pretty(self, config)?;
+        let text = ron_options().to_string_pretty(self, config)?;
         Ok(tidy_ron(&text))
     }
 
@@ -136,23 +146,6 @@ pub struct AtomDef {
     pub vars: Vec<VarDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub transitions: Vec<TransitionDef>,
-}
-
-#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct VarDef {
-    pub name: Text,
-    pub ty: TypeDef,
-    /// Initial value; defaults to the lower bound of an `Int` and `false` for a `Bool`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub init: Option<ConstExpr>,
-}
-
-#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
-pub enum TypeDef {
-    Bool,
-    /// `Int(lo, hi)`, both bounds included; bounds may be constant expressions.
-    Int(ConstExpr, ConstExpr),
 }
 
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
