@@ -118,6 +118,13 @@ pub fn run(args: &Args) -> u8 {
         timeout: args.timeout,
         stop_at_first: args.stop_at_first,
         liveness_bound: 0,
+        symbolic: bip_verifier::SymbolicOptions {
+            solver_timeout: Some(args.solver_timeout),
+            rlimit: args.rlimit,
+            max_depth: args.max_depth,
+            confirm_states: args.confirm_states,
+            ..bip_verifier::SymbolicOptions::default()
+        },
     };
     let show_progress =
         !args.quiet && args.format == Format::Text && std::io::stderr().is_terminal();
@@ -137,20 +144,12 @@ pub fn run(args: &Args) -> u8 {
             ));
         }
     };
-    let symbolic = bip_verifier::SymbolicOptions {
-        solver_timeout: Some(args.solver_timeout),
-        timeout: args.timeout,
-        rlimit: args.rlimit,
-        max_depth: args.max_depth,
-        confirm_states: args.confirm_states,
-        jobs: args.jobs.unwrap_or(0),
-        ..bip_verifier::SymbolicOptions::default()
+    let method = match args.method {
+        MethodArg::Explicit => Method::Explicit,
+        MethodArg::Symbolic => Method::Symbolic,
+        MethodArg::Auto => Method::Auto,
     };
-    let result = match args.method {
-        MethodArg::Explicit => bip_verifier::verify(&system, &options, &on_progress),
-        MethodArg::Symbolic => bip_verifier::symbolic::verify(&system, &symbolic),
-        MethodArg::Auto => bip_verifier::verify_auto(&system, &options, &symbolic, &on_progress),
-    };
+    let result = bip_verifier::verify(&system, method, &options, &on_progress);
     if let Some(bar) = bar.lock().unwrap_or_else(|e| e.into_inner()).take() {
         bar.finish_and_clear();
     }

@@ -27,7 +27,11 @@ use bip_model::{
 };
 use rayon::prelude::*;
 
+use crate::error::VerifyError;
 use crate::memory;
+use crate::options::Options;
+use crate::progress::Progress;
+use crate::properties::{checked_properties, RANGE_ERRORS};
 use crate::report::{Method, PropertyKind, PropertyResult, Report, Stats, Stop, Verdict};
 use crate::visited::{hash, shard_of, Chunk, ShardFull, StateId, Visited, SHARDS};
 
@@ -37,49 +41,6 @@ const CHUNK_STATES: u32 = 1024;
 const CHUNKS_PER_WORKER: usize = 8;
 /// Memory the liveness checker of one worker may use for its memory of states.
 const LIVENESS_MEMO_BYTES: usize = 32 << 20;
-
-/// How to run.
-#[derive(Clone, Debug, Default)]
-pub struct Options {
-    /// Worker threads; 0 for one per core.
-    pub jobs: usize,
-    /// Stop (inconclusive) once this many states are stored and more remain to explore.
-    pub max_states: Option<u64>,
-    /// Stop (inconclusive) before the run would use more memory; `None` takes
-    /// [`memory::default_limit`].
-    pub max_memory: Option<u64>,
-    /// Stop (inconclusive) after this long.
-    pub timeout: Option<Duration>,
-    /// Stop as soon as one property fails.
-    pub stop_at_first: bool,
-    /// Bound on the states the deadlock check explores by time steps alone from one state
-    /// (0: `bip-model`'s default). Past it, the state's liveness is unknown and
-    /// `DeadlockFree` cannot hold.
-    pub liveness_bound: usize,
-}
-
-/// Something that went wrong besides the model's verdicts.
-#[derive(Debug, thiserror::Error)]
-pub enum VerifyError {
-    #[error("cannot start the worker threads: {0}")]
-    Threads(String),
-    /// A trace could not be rebuilt from the stored states: a bug in bip.
-    #[error("internal error: {0}")]
-    Internal(String),
-}
-
-/// Progress of a run, for a progress line.
-#[derive(Clone, Debug)]
-pub struct Progress {
-    pub states: u64,
-    pub transitions: u64,
-    pub depth: u32,
-    /// States of the level being explored, and how many of them are done.
-    pub level_states: u64,
-    pub level_done: u64,
-    pub elapsed: Duration,
-    pub store_bytes: u64,
-}
 
 /// What one property checks, with its compiled expression.
 enum Check<'a> {
@@ -95,9 +56,6 @@ struct Target<'a> {
     expr: String,
     check: Check<'a>,
 }
-
-/// The name of the result that reports range errors.
-pub const RANGE_ERRORS: &str = "RangeErrors";
 
 /// The properties a run checks: the model's (deadlock freedom if it has none), and range
 /// errors, which are always checked.
@@ -137,21 +95,6 @@ fn targets(system: &System) -> Vec<Target<'_>> {
         check: Check::RangeErrors,
     });
     out
-}
-
-/// The model properties a verification checks, whatever the method: the model's, or
-/// `DeadlockFree` if it declares none. Range errors are checked besides, as
-/// [`RANGE_ERRORS`].
-pub fn checked_properties(system: &System) -> Vec<Cow<'_, Property>> {
-    if system.properties.is_empty() {
-        vec![Cow::Owned(Property {
-            name: "DeadlockFree".into(),
-            kind: ModelKind::DeadlockFree { terminal: None },
-            text: String::new(),
-        })]
-    } else {
-        system.properties.iter().map(Cow::Borrowed).collect()
-    }
 }
 
 /// What was found about a property in a state.
@@ -254,7 +197,7 @@ const REC_HEADER: usize = 12;
 /// Verifies every property of `system` by explicit-state exploration.
 ///
 /// `progress` is called from time to time (about four times a second) during long runs.
-pub fn verify(
+pub(crate) fn verify(
     system: &System,
     options: &Options,
     progress: &(dyn Fn(&Progress) + Sync),

@@ -20,7 +20,7 @@
 use std::time::Duration;
 
 use bip_model::{load_str, System, Verdict as TraceVerdict};
-use bip_verifier::{verify, Options, PropertyKind, Report, Stop, Verdict, RANGE_ERRORS};
+use bip_verifier::{verify, Method, Options, PropertyKind, Report, Stop, Verdict, RANGE_ERRORS};
 
 fn with_n(file: &str, n: u32) -> System {
     let text = std::fs::read_to_string(format!("{}/../robots/{file}", env!("CARGO_MANIFEST_DIR")))
@@ -30,7 +30,7 @@ fn with_n(file: &str, n: u32) -> System {
 }
 
 fn run(system: &System, options: &Options) -> Report {
-    verify(system, options, &|_| {}).unwrap()
+    verify(system, Method::Explicit, options, &|_| {}).unwrap()
 }
 
 fn opts(jobs: usize) -> Options {

@@ -6,7 +6,7 @@
 use std::collections::{HashMap, VecDeque};
 
 use bip_model::{load_str, State, System};
-use bip_verifier::{verify, Options, Report, Verdict, RANGE_ERRORS};
+use bip_verifier::{verify, Method, Options, Report, Verdict, RANGE_ERRORS};
 use proptest::prelude::*;
 
 /// A random system in the model format: `atoms` atom types with 2-3 locations, a small
@@ -180,7 +180,7 @@ proptest! {
             Ok(s) => s,
             Err(e) => return Err(TestCaseError::fail(format!("{}\n{text}", e.summary()))),
         };
-        let run = |jobs| without_timing(verify(&sys, &Options { jobs, ..Options::default() }, &|_| {}).unwrap());
+        let run = |jobs| without_timing(verify(&sys, Method::Explicit, &Options { jobs, ..Options::default() }, &|_| {}).unwrap());
         let one = run(1);
         for jobs in [2, 3] {
             prop_assert_eq!(&run(jobs), &one);

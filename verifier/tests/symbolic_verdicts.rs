@@ -6,18 +6,21 @@
 mod common;
 
 use bip_model::{load_str, System, Verdict as TraceVerdict};
-use bip_verifier::{symbolic, verify, Options, PropertyKind, Report, SymbolicOptions};
+use bip_verifier::{verify, Method, Options, PropertyKind, Report, SymbolicOptions};
 use proptest::prelude::*;
 
-fn symbolic_options() -> SymbolicOptions {
-    SymbolicOptions {
-        // deterministic budgets: the same verdicts on every machine
-        solver_timeout: None,
-        rlimit: Some(20_000_000),
-        max_depth: 6,
-        confirm_states: 2_000,
+fn symbolic_options() -> Options {
+    Options {
         jobs: 1,
-        ..SymbolicOptions::default()
+        symbolic: SymbolicOptions {
+            // deterministic budgets: the same verdicts on every machine
+            solver_timeout: None,
+            rlimit: Some(20_000_000),
+            max_depth: 6,
+            confirm_states: 2_000,
+            ..SymbolicOptions::default()
+        },
+        ..Options::default()
     }
 }
 
@@ -84,6 +87,7 @@ fn check(seed: u64, with_roles: bool) -> Result<(), TestCaseError> {
         .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e.summary())))?;
     let explicit = verify(
         &sys,
+        Method::Explicit,
         &Options {
             jobs: 1,
             ..Options::default()
@@ -91,7 +95,7 @@ fn check(seed: u64, with_roles: bool) -> Result<(), TestCaseError> {
         &|_| {},
     )
     .unwrap();
-    let sym = symbolic::verify(&sys, &symbolic_options()).unwrap();
+    let sym = verify(&sys, Method::Symbolic, &symbolic_options(), &|_| {}).unwrap();
     compare(&sys, &text, &explicit, &sym)
 }
 

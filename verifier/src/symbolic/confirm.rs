@@ -19,7 +19,8 @@ use bip_model::{
     Verdict as TraceVerdict,
 };
 
-use crate::explore::{verify, Options};
+use crate::explore;
+use crate::options::Options;
 use crate::report::Verdict;
 
 /// The trace through `states` (the first is the initial state), each step found with the
@@ -81,7 +82,7 @@ pub fn bounded_explicit(
         max_memory: Some(max_memory),
         ..Options::default()
     };
-    let report = verify(&one, &options, &|_| {}).ok()?;
+    let report = explore::verify(&one, &options, &|_| {}).ok()?;
     let p = report.property(&property.name)?;
     Some(Bounded {
         verdict: p.verdict.clone(),

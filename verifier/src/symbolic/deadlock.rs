@@ -188,12 +188,12 @@ pub fn deadlock_free(p: &mut Prover<'_>, prop: &Property, range_errors_proved: b
             }
             // confirm by explicit search
             let opts = &p.options;
-            if opts.confirm_states > 0 {
+            if opts.symbolic.confirm_states > 0 {
                 if let Some(b) = confirm::bounded_explicit(
                     sys,
                     prop,
-                    opts.confirm_states,
-                    opts.confirm_memory,
+                    opts.symbolic.confirm_states,
+                    opts.symbolic.confirm_memory,
                     opts.jobs,
                 ) {
                     if b.verdict.fails() || (b.complete && b.verdict.holds()) {
@@ -202,7 +202,7 @@ pub fn deadlock_free(p: &mut Prover<'_>, prop: &Property, range_errors_proved: b
                 }
             }
             if let Some(trace) =
-                confirm::greedy_deadlock(sys, &state, terminal, p.options.confirm_states)
+                confirm::greedy_deadlock(sys, &state, terminal, p.options.symbolic.confirm_states)
             {
                 if trace.replay(sys).is_ok() {
                     return Finding::Deadlock(trace);

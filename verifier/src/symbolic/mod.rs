@@ -32,56 +32,29 @@ mod solver;
 pub mod term;
 pub mod traps;
 
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use bip_model::{PropertyKind as ModelKind, System, Trace};
 
-use crate::explore::{checked_properties, VerifyError, RANGE_ERRORS};
+use crate::error::VerifyError;
 use crate::memory;
+use crate::options::Options;
+use crate::progress::Progress;
+use crate::properties::{checked_properties, RANGE_ERRORS};
 use crate::report::{
     Method, PropertyKind, PropertyResult, Report, Stats, Stop, SymbolicStats, Verdict,
 };
 use induction::Goal;
 use prover::Prover;
 
-pub use solver::Budget;
-
-/// How to run the symbolic method.
-#[derive(Clone, Debug)]
-pub struct SymbolicOptions {
-    /// Wall-clock limit of one solver call.
-    pub solver_timeout: Option<Duration>,
-    /// Wall-clock limit of the whole run.
-    pub timeout: Option<Duration>,
-    /// z3's deterministic resource limit per solver call (for reproducible runs).
-    pub rlimit: Option<u32>,
-    /// Deepest bounded model check, and largest k of k-induction.
-    pub max_depth: u32,
-    /// States the explicit confirmation of a candidate deadlock may explore (breadth-first,
-    /// then steps of the greedy search); 0 turns confirmation off.
-    pub confirm_states: u64,
-    /// Memory the bounded breadth-first confirmation may use.
-    pub confirm_memory: u64,
-    /// Worker threads of the explicit confirmation (0: one per core).
-    pub jobs: usize,
-}
-
-impl Default for SymbolicOptions {
-    fn default() -> Self {
-        SymbolicOptions {
-            solver_timeout: Some(Duration::from_secs(120)),
-            timeout: None,
-            rlimit: None,
-            max_depth: 20,
-            confirm_states: 200_000,
-            confirm_memory: 512 << 20,
-            jobs: 0,
-        }
-    }
-}
-
-/// Verifies every property of `system` symbolically.
-pub fn verify(system: &System, options: &SymbolicOptions) -> Result<Report, VerifyError> {
+/// Verifies every property of `system` symbolically. Reads `options.symbolic`, the time
+/// limit and, for the explicit confirmation of deadlock candidates, the workers. Reports no
+/// progress yet.
+pub(crate) fn verify(
+    system: &System,
+    options: &Options,
+    _progress: &(dyn Fn(&Progress) + Sync),
+) -> Result<Report, VerifyError> {
     // z3's context is per thread, and deep terms recurse: one thread with a large stack
     std::thread::scope(|scope| {
         std::thread::Builder::new()
@@ -120,7 +93,7 @@ fn after(trace: &Trace) -> String {
     format!("after {n} step{}", if n == 1 { "" } else { "s" })
 }
 
-fn run(system: &System, options: &SymbolicOptions) -> Report {
+fn run(system: &System, options: &Options) -> Report {
     let started = Instant::now();
     let mut p = Prover::new(system, options.clone());
     let invariant_seconds = started.elapsed().as_secs_f64();
