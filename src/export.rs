@@ -22,7 +22,7 @@ pub fn run(args: &Args) -> u8 {
             return exit::ERROR;
         }
     };
-    let text = match bip_verifier::promela::to_promela(&system) {
+    let text = match bip_verifier::to_promela(&system) {
         Ok(t) => t,
         Err(e) => {
             eprintln!("error: {e}");

@@ -7,8 +7,7 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 use bip_model::System;
-use bip_verifier::report::human_bytes;
-use bip_verifier::{Method, Outcome, Progress, PropertyKind, Report, Verdict};
+use bip_verifier::{human_bytes, Method, Outcome, Progress, PropertyKind, Report, Verdict};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::{exit, report};
@@ -84,7 +83,7 @@ pub struct Args {
 }
 
 fn parse_size(s: &str) -> Result<u64, String> {
-    bip_verifier::memory::parse_size(s)
+    bip_verifier::parse_size(s)
 }
 
 fn parse_seconds(s: &str) -> Result<Duration, String> {

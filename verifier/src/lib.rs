@@ -7,32 +7,35 @@
 //!   checking), with candidates confirmed explicitly (`symbolic/`);
 //! - auto: explicit within a budget, symbolic for what it leaves open (`auto.rs`).
 //!
-//! [`report`] holds the verdicts and statistics any method produces; [`promela`] writes
-//! the same system as a Promela model, to cross-check with SPIN.
+//! Every method fills the same [`Report`] (`report.rs`). [`to_promela`] writes the same
+//! system as a Promela model, to cross-check with SPIN (`promela.rs`).
 //!
 //! Every method uses `bip-model`'s step relation and deadlock definition; none has a
 //! notion of its own of "enabled" or "deadlock".
 
-pub mod auto;
+mod auto;
 mod error;
-pub mod explore;
-pub mod memory;
+mod explore;
+mod memory;
 mod options;
 mod progress;
-pub mod promela;
+mod promela;
 mod properties;
-pub mod report;
-pub mod symbolic;
-pub mod visited;
+mod report;
+mod symbolic;
+mod visited;
 
 use bip_model::System;
 
 pub use error::VerifyError;
+pub use memory::{parse_size, resident_bytes};
 pub use options::{Options, SymbolicOptions};
 pub use progress::Progress;
+pub use promela::{to_promela, ExportError};
 pub use properties::RANGE_ERRORS;
 pub use report::{
-    Method, Outcome, PropertyKind, PropertyResult, Report, Stats, Stop, SymbolicStats, Verdict,
+    human_bytes, Method, Outcome, PropertyKind, PropertyResult, Report, Stats, Stop, SymbolicStats,
+    Verdict,
 };
 
 /// Verifies every property of `system` (deadlock freedom if it declares none, and range

@@ -13,7 +13,7 @@ pub struct Options {
     /// remain to explore.
     pub max_states: Option<u64>,
     /// Explicit method: stop (inconclusive) before the run would use more memory; `None`
-    /// takes [`default_limit`](crate::memory::default_limit).
+    /// takes 3/4 of the memory available when the run starts.
     pub max_memory: Option<u64>,
     /// Stop (inconclusive) after this long.
     pub timeout: Option<Duration>,

@@ -307,7 +307,7 @@ fn limits_end_the_run_inconclusive() {
     assert!(r.stats.seconds < 20.0);
 
     // a limit far below what the exploration needs: it stops before reaching it
-    let limit = bip_verifier::memory::resident_bytes().unwrap_or(0) + (48 << 20);
+    let limit = bip_verifier::resident_bytes().unwrap_or(0) + (48 << 20);
     let r = run(
         &sys,
         &Options {

@@ -22,15 +22,17 @@
 
 mod confirm;
 mod deadlock;
-pub mod encode;
+mod encode;
+#[cfg(test)]
+mod encoding_tests;
 mod induction;
-pub mod invariants;
-pub mod net;
+mod invariants;
+mod net;
 mod prover;
-pub mod semiflows;
+mod semiflows;
 mod solver;
-pub mod term;
-pub mod traps;
+mod term;
+mod traps;
 
 use std::time::Instant;
 
