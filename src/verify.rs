@@ -7,7 +7,9 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 use bip_model::System;
-use bip_verifier::{human_bytes, Method, Outcome, Progress, PropertyKind, Report, Verdict};
+use bip_verifier::{
+    human_bytes, CheckKind, Method, Progress, PropertyVerdict, Report, VerifyOutcome,
+};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::{exit, report};
@@ -161,9 +163,9 @@ pub fn run(args: &Args) -> u8 {
     };
     match write_outputs(args, &system, &report) {
         Ok(()) => match report.outcome() {
-            Outcome::AllHold => exit::OK,
-            Outcome::SomeFail => exit::FAILED,
-            Outcome::Inconclusive => exit::INCONCLUSIVE,
+            VerifyOutcome::AllHold => exit::OK,
+            VerifyOutcome::SomeFail => exit::FAILED,
+            VerifyOutcome::Inconclusive => exit::INCONCLUSIVE,
         },
         Err(message) => {
             eprintln!("error: {message}");
@@ -238,12 +240,12 @@ fn method_name(method: Method) -> &'static str {
     }
 }
 
-fn kind_name(kind: PropertyKind) -> &'static str {
+fn kind_name(kind: CheckKind) -> &'static str {
     match kind {
-        PropertyKind::DeadlockFree => "deadlock freedom",
-        PropertyKind::Invariant => "invariant",
-        PropertyKind::Reachable => "reachability",
-        PropertyKind::RangeErrors => "range errors",
+        CheckKind::DeadlockFree => "deadlock freedom",
+        CheckKind::Invariant => "invariant",
+        CheckKind::Reachable => "reachability",
+        CheckKind::RangeErrors => "range errors",
     }
 }
 
@@ -278,12 +280,14 @@ fn text_report(
         .unwrap_or(0);
     for p in &report.properties {
         let (word, mut detail) = match &p.verdict {
-            Verdict::Holds { witness: Some(t) } => {
+            PropertyVerdict::Holds { witness: Some(t) } => {
                 ("holds", format!("witness after {} steps", t.steps.len()))
             }
-            Verdict::Holds { witness: None } => ("holds", p.note.clone().unwrap_or_default()),
-            Verdict::Fails { reason, .. } => ("FAILS", reason.clone()),
-            Verdict::Inconclusive { reason } => ("inconclusive", reason.clone()),
+            PropertyVerdict::Holds { witness: None } => {
+                ("holds", p.note.clone().unwrap_or_default())
+            }
+            PropertyVerdict::Fails { reason, .. } => ("FAILS", reason.clone()),
+            PropertyVerdict::Inconclusive { reason } => ("inconclusive", reason.clone()),
         };
         if report.method == Method::Auto {
             detail = format!("[{}] {detail}", method_name(p.method));
@@ -307,7 +311,7 @@ fn text_report(
             kind_name(p.kind),
             trace.display(Some(system))
         );
-        if p.kind == PropertyKind::DeadlockFree && p.verdict.fails() {
+        if p.kind == CheckKind::DeadlockFree && p.verdict.fails() {
             write_why_stuck(&mut s, system, trace);
         }
         if let Some((_, path)) = saved.iter().find(|(n, _)| *n == p.name) {
@@ -317,7 +321,7 @@ fn text_report(
     if report
         .properties
         .iter()
-        .any(|p| p.kind == PropertyKind::RangeErrors && p.verdict.fails())
+        .any(|p| p.kind == CheckKind::RangeErrors && p.verdict.fails())
     {
         let _ = writeln!(
             s,
@@ -367,16 +371,18 @@ fn text_report(
     let undecided = report
         .properties
         .iter()
-        .filter(|p| matches!(p.verdict, Verdict::Inconclusive { .. }))
+        .filter(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }))
         .count();
     let _ = match report.outcome() {
-        Outcome::AllHold => writeln!(s, "result: all {} properties hold", report.properties.len()),
-        Outcome::SomeFail => writeln!(
+        VerifyOutcome::AllHold => {
+            writeln!(s, "result: all {} properties hold", report.properties.len())
+        }
+        VerifyOutcome::SomeFail => writeln!(
             s,
             "result: {fails} of {} properties fail",
             report.properties.len()
         ),
-        Outcome::Inconclusive => {
+        VerifyOutcome::Inconclusive => {
             writeln!(s, "result: inconclusive ({undecided} properties undecided)")
         }
     };
@@ -415,7 +421,7 @@ fn json_report(args: &Args, report: &Report) -> Result<String, String> {
     #[derive(serde::Serialize)]
     struct Doc<'a> {
         file: String,
-        outcome: Outcome,
+        outcome: VerifyOutcome,
         #[serde(flatten)]
         report: &'a Report,
     }
@@ -434,7 +440,7 @@ fn junit_report(args: &Args, report: &Report) -> String {
     let failures = props.iter().filter(|p| p.verdict.fails()).count();
     let errors = props
         .iter()
-        .filter(|p| matches!(p.verdict, Verdict::Inconclusive { .. }))
+        .filter(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }))
         .count();
     let suite = format!("bip verify {}", args.file.display());
     let mut s = String::new();
@@ -462,10 +468,10 @@ fn junit_report(args: &Args, report: &Report) -> String {
             report.stats.seconds
         );
         match &p.verdict {
-            Verdict::Holds { .. } => {
+            PropertyVerdict::Holds { .. } => {
                 let _ = writeln!(s, "/>");
             }
-            Verdict::Fails { reason, trace } => {
+            PropertyVerdict::Fails { reason, trace } => {
                 let body = trace
                     .as_ref()
                     .map(|t| t.display(None).to_string())
@@ -478,7 +484,7 @@ fn junit_report(args: &Args, report: &Report) -> String {
                     xml(&body)
                 );
             }
-            Verdict::Inconclusive { reason } => {
+            PropertyVerdict::Inconclusive { reason } => {
                 // an undecided property is not a pass: report it as an error, not as skipped
                 let _ = writeln!(
                     s,

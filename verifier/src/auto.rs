@@ -14,7 +14,7 @@ use bip_model::System;
 use crate::error::VerifyError;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::report::{Method, Report, Verdict};
+use crate::report::{Method, PropertyVerdict, Report};
 use crate::{explore, symbolic};
 
 /// States the explicit phase may store.
@@ -39,7 +39,7 @@ pub(crate) fn verify(
     let open = explicit
         .properties
         .iter()
-        .any(|p| matches!(p.verdict, Verdict::Inconclusive { .. }));
+        .any(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }));
     if !open || explicit.properties.iter().any(|p| p.verdict.fails()) && options.stop_at_first {
         return Ok(Report {
             method: Method::Auto,
@@ -54,14 +54,14 @@ pub(crate) fn verify(
     let symbolic = symbolic::verify(system, &symbolic_options, progress)?;
     let mut report = explicit;
     for (mine, theirs) in report.properties.iter_mut().zip(symbolic.properties) {
-        if matches!(mine.verdict, Verdict::Inconclusive { .. }) {
+        if matches!(mine.verdict, PropertyVerdict::Inconclusive { .. }) {
             *mine = theirs;
         }
     }
     let undecided = report
         .properties
         .iter()
-        .any(|p| matches!(p.verdict, Verdict::Inconclusive { .. }));
+        .any(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }));
     if !undecided {
         report.stopped = None;
     } else if report.stopped.is_none() {

@@ -32,7 +32,7 @@ use crate::memory;
 use crate::options::Options;
 use crate::progress::Progress;
 use crate::properties::{checked_properties, RANGE_ERRORS};
-use crate::report::{Method, PropertyKind, PropertyResult, Report, Stats, Stop, Verdict};
+use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 use crate::visited::{hash, shard_of, Chunk, ShardFull, StateId, Visited, SHARDS};
 
 /// States per chunk: large enough to amortise scheduling, small enough to balance.
@@ -52,7 +52,7 @@ enum Check<'a> {
 
 struct Target<'a> {
     name: String,
-    kind: PropertyKind,
+    kind: CheckKind,
     expr: String,
     check: Check<'a>,
 }
@@ -66,19 +66,16 @@ fn targets(system: &System) -> Vec<Target<'_>> {
             let (kind, check) = match &p {
                 Cow::Borrowed(Property { kind, .. }) => match kind {
                     ModelKind::DeadlockFree { terminal } => (
-                        PropertyKind::DeadlockFree,
+                        CheckKind::DeadlockFree,
                         Check::Deadlock {
                             terminal: terminal.as_ref(),
                         },
                     ),
-                    ModelKind::Invariant(e) => (PropertyKind::Invariant, Check::Invariant(e)),
-                    ModelKind::Reachable(e) => (PropertyKind::Reachable, Check::Reachable(e)),
+                    ModelKind::Invariant(e) => (CheckKind::Invariant, Check::Invariant(e)),
+                    ModelKind::Reachable(e) => (CheckKind::Reachable, Check::Reachable(e)),
                 },
                 // the default property: deadlock freedom without terminal states
-                Cow::Owned(_) => (
-                    PropertyKind::DeadlockFree,
-                    Check::Deadlock { terminal: None },
-                ),
+                Cow::Owned(_) => (CheckKind::DeadlockFree, Check::Deadlock { terminal: None }),
             };
             Target {
                 name: p.name.clone(),
@@ -90,7 +87,7 @@ fn targets(system: &System) -> Vec<Target<'_>> {
         .collect();
     out.push(Target {
         name: RANGE_ERRORS.into(),
-        kind: PropertyKind::RangeErrors,
+        kind: CheckKind::RangeErrors,
         expr: String::new(),
         check: Check::RangeErrors,
     });
@@ -461,7 +458,7 @@ impl<'a> Explorer<'a> {
             .find(|&l| self.visited.level_len(l) > 0)
             .unwrap_or(0) as u32;
         let complete = stopped.is_none() && !self.stopped_decided;
-        let stats = Stats {
+        let stats = RunStats {
             states,
             complete,
             transitions: self.transitions,
@@ -512,7 +509,7 @@ impl<'a> Explorer<'a> {
         })
     }
 
-    fn verdict_of(&self, t: &Target<'_>, f: &Finding) -> Result<Verdict, VerifyError> {
+    fn verdict_of(&self, t: &Target<'_>, f: &Finding) -> Result<PropertyVerdict, VerifyError> {
         use bip_model::Verdict as TraceVerdict;
         let (trace_verdict, reason) = match &f.what {
             Found::Deadlock => (TraceVerdict::Deadlock, "deadlock".to_string()),
@@ -530,10 +527,10 @@ impl<'a> Explorer<'a> {
         let n = trace.steps.len();
         let after = format!("after {n} step{}", if n == 1 { "" } else { "s" });
         Ok(match f.what {
-            Found::Witness => Verdict::Holds {
+            Found::Witness => PropertyVerdict::Holds {
                 witness: Some(trace),
             },
-            _ => Verdict::Fails {
+            _ => PropertyVerdict::Fails {
                 reason: format!("{reason} {after}"),
                 trace: Some(trace),
             },
@@ -541,24 +538,24 @@ impl<'a> Explorer<'a> {
     }
 
     /// The verdict of a property nothing was found about.
-    fn open_verdict(&self, t: &Target<'_>, stopped: Option<&Stop>, states: u64) -> Verdict {
+    fn open_verdict(&self, t: &Target<'_>, stopped: Option<&Stop>, states: u64) -> PropertyVerdict {
         if let Some(stop) = stopped {
-            return Verdict::Inconclusive {
+            return PropertyVerdict::Inconclusive {
                 reason: format!("{stop} after {states} states"),
             };
         }
         match t.check {
-            Check::Reachable(_) => Verdict::Fails {
+            Check::Reachable(_) => PropertyVerdict::Fails {
                 reason: format!("no reachable state satisfies it ({states} states explored)"),
                 trace: None,
             },
-            Check::Deadlock { .. } if self.liveness_unknown > 0 => Verdict::Inconclusive {
+            Check::Deadlock { .. } if self.liveness_unknown > 0 => PropertyVerdict::Inconclusive {
                 reason: format!(
                     "in {} states without a progress step, the states reached by time steps alone exceed the liveness check's bound",
                     self.liveness_unknown
                 ),
             },
-            _ => Verdict::Holds { witness: None },
+            _ => PropertyVerdict::Holds { witness: None },
         }
     }
 }

@@ -34,8 +34,8 @@ pub use progress::Progress;
 pub use promela::{to_promela, ExportError};
 pub use properties::RANGE_ERRORS;
 pub use report::{
-    human_bytes, Method, Outcome, PropertyKind, PropertyResult, Report, Stats, Stop, SymbolicStats,
-    Verdict,
+    human_bytes, CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop,
+    SymbolicStats, VerifyOutcome,
 };
 
 /// Verifies every property of `system` (deadlock freedom if it declares none, and range

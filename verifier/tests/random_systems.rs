@@ -6,7 +6,7 @@
 use std::collections::{HashMap, VecDeque};
 
 use bip_model::{load_str, State, System};
-use bip_verifier::{verify, Method, Options, Report, Verdict, RANGE_ERRORS};
+use bip_verifier::{verify, Method, Options, PropertyVerdict, Report, RANGE_ERRORS};
 use proptest::prelude::*;
 
 /// A random system in the model format: `atoms` atom types with 2-3 locations, a small
@@ -192,7 +192,7 @@ proptest! {
         } else {
             // stopped once every verdict was final
             prop_assert!(one.stopped.is_none());
-            let all_final = one.properties.iter().all(|p| !matches!(p.verdict, Verdict::Inconclusive { .. }));
+            let all_final = one.properties.iter().all(|p| !matches!(p.verdict, PropertyVerdict::Inconclusive { .. }));
             prop_assert!(all_final);
             prop_assert!(one.stats.states <= depth.len() as u64);
         }
@@ -212,8 +212,8 @@ proptest! {
                     .map(|(_, &d)| d)
                     .min();
                 match (&p.verdict, nearest) {
-                    (Verdict::Fails { trace: Some(t), .. }, Some(d)) => prop_assert_eq!(t.steps.len(), d),
-                    (Verdict::Holds { .. }, None) => {}
+                    (PropertyVerdict::Fails { trace: Some(t), .. }, Some(d)) => prop_assert_eq!(t.steps.len(), d),
+                    (PropertyVerdict::Holds { .. }, None) => {}
                     (v, n) => return Err(TestCaseError::fail(format!("{v:?} but the nearest violation is at {n:?}"))),
                 }
             }

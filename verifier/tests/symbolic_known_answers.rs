@@ -5,7 +5,7 @@
 //! to prove it (a "possible deadlock", never "holds").
 
 use bip_model::{load_str, Liveness, LivenessChecker, Steps, System, Verdict as TraceVerdict};
-use bip_verifier::{verify, Method, Options, PropertyKind, Report, SymbolicOptions, Verdict};
+use bip_verifier::{verify, CheckKind, Method, Options, PropertyVerdict, Report, SymbolicOptions};
 
 fn example(file: &str) -> (String, System) {
     let path = format!("{}/../robots/{file}", env!("CARGO_MANIFEST_DIR"));
@@ -47,11 +47,11 @@ fn unconfirmed_options() -> Options {
     options
 }
 
-fn kind(v: &Verdict) -> &'static str {
+fn kind(v: &PropertyVerdict) -> &'static str {
     match v {
-        Verdict::Holds { .. } => "holds",
-        Verdict::Fails { .. } => "fails",
-        Verdict::Inconclusive { .. } => "inconclusive",
+        PropertyVerdict::Holds { .. } => "holds",
+        PropertyVerdict::Fails { .. } => "fails",
+        PropertyVerdict::Inconclusive { .. } => "inconclusive",
     }
 }
 
@@ -64,7 +64,7 @@ fn same_verdicts(file: &str) {
     for (e, s) in e.properties.iter().zip(&s.properties) {
         assert_eq!(e.name, s.name);
         assert!(
-            !matches!(e.verdict, Verdict::Inconclusive { .. }),
+            !matches!(e.verdict, PropertyVerdict::Inconclusive { .. }),
             "{file} {}: the explicit method must decide",
             e.name
         );
@@ -110,7 +110,7 @@ fn genom_rover_with_a_deadlock() {
     let e = explicit(&sys);
     let s = symbolic(&sys, &symbolic_options());
     for (e, s) in e.properties.iter().zip(&s.properties) {
-        if s.kind == PropertyKind::Reachable {
+        if s.kind == CheckKind::Reachable {
             // witnesses deeper than the bound may stay open; never a contradiction
             assert!(!(s.verdict.fails() && e.verdict.holds()), "{}", s.name);
             continue;
@@ -138,7 +138,7 @@ fn deadlocking_philosophers_give_a_confirmed_deadlock() {
         let s = symbolic(&sys, &symbolic_options());
         let dl = s.property("DeadlockFree").unwrap();
         // confirmed by the bounded explicit search, or by the search towards the candidate
-        let Verdict::Fails {
+        let PropertyVerdict::Fails {
             trace: Some(trace), ..
         } = &dl.verdict
         else {
@@ -201,7 +201,7 @@ fn too_weak_invariants_give_a_possible_deadlock_not_holds() {
     assert!(e.property("DeadlockFree").unwrap().verdict.holds());
     let s = symbolic(&sys, &unconfirmed_options());
     let dl = s.property("DeadlockFree").unwrap();
-    let Verdict::Inconclusive { reason } = &dl.verdict else {
+    let PropertyVerdict::Inconclusive { reason } = &dl.verdict else {
         panic!("{:?}", dl.verdict)
     };
     assert!(reason.contains("possible deadlock"), "{reason}");

@@ -6,7 +6,7 @@
 mod common;
 
 use bip_model::{load_str, System, Verdict as TraceVerdict};
-use bip_verifier::{verify, Method, Options, PropertyKind, Report, SymbolicOptions};
+use bip_verifier::{verify, CheckKind, Method, Options, Report, SymbolicOptions};
 use proptest::prelude::*;
 
 fn symbolic_options() -> Options {
@@ -47,7 +47,7 @@ fn compare(sys: &System, text: &str, explicit: &Report, sym: &Report) -> Result<
                 .map_or(sys.initial_state(), |(_, st)| st.clone());
             match &t.verdict {
                 TraceVerdict::Deadlock => {
-                    prop_assert_eq!(s.kind, PropertyKind::DeadlockFree);
+                    prop_assert_eq!(s.kind, CheckKind::DeadlockFree);
                     let mut steps = bip_model::Steps::new();
                     sys.enabled_steps(&last, &mut steps).unwrap();
                     let mut checker = bip_model::LivenessChecker::default();
@@ -72,7 +72,7 @@ fn compare(sys: &System, text: &str, explicit: &Report, sym: &Report) -> Result<
             }
             // counterexamples are shortest, as the explicit method's are
             if let Some(et) = e.verdict.trace() {
-                if e.verdict.fails() == s.verdict.fails() && s.kind != PropertyKind::DeadlockFree {
+                if e.verdict.fails() == s.verdict.fails() && s.kind != CheckKind::DeadlockFree {
                     prop_assert_eq!(et.steps.len(), t.steps.len(), "{}\n{}", s.name, text);
                 }
             }

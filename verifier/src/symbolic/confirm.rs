@@ -21,7 +21,7 @@ use bip_model::{
 
 use crate::explore;
 use crate::options::Options;
-use crate::report::Verdict;
+use crate::report::PropertyVerdict;
 
 /// The trace through `states` (the first is the initial state), each step found with the
 /// step relation; an error names the first pair no step connects.
@@ -60,7 +60,7 @@ pub fn trace_through(
 
 /// What a bounded explicit exploration says about one property.
 pub struct Bounded {
-    pub verdict: Verdict,
+    pub verdict: PropertyVerdict,
     /// Every reachable state was explored.
     pub complete: bool,
     pub states: u64,

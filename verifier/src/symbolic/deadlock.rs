@@ -30,7 +30,7 @@ use super::encode::{StepFilter, StepVars};
 use super::prover::{Placed, Prover};
 use super::solver::Answer;
 use super::term::{and, err_formula, implies, not, or};
-use crate::report::Verdict;
+use crate::report::PropertyVerdict;
 
 /// How far the time look-ahead may grow.
 const MAX_LOOKAHEAD: usize = 64;
@@ -47,7 +47,7 @@ pub enum Finding {
     /// A real deadlock, replayed with the step relation.
     Deadlock(Trace),
     /// An explicit exploration decided (a complete one, or one that found a failure).
-    Explicit(Verdict, u64),
+    Explicit(PropertyVerdict, u64),
     /// A state satisfying every invariant and the deadlock predicate, not confirmed.
     Possible(State),
     Unknown(String),

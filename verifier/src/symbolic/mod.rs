@@ -44,7 +44,7 @@ use crate::options::Options;
 use crate::progress::Progress;
 use crate::properties::{checked_properties, RANGE_ERRORS};
 use crate::report::{
-    Method, PropertyKind, PropertyResult, Report, Stats, Stop, SymbolicStats, Verdict,
+    CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop, SymbolicStats,
 };
 use induction::Goal;
 use prover::Prover;
@@ -71,13 +71,13 @@ pub(crate) fn verify(
 
 /// One property's outcome.
 struct Outcome {
-    verdict: Verdict,
+    verdict: PropertyVerdict,
     method: Method,
     note: Option<String>,
 }
 
 impl Outcome {
-    fn symbolic(verdict: Verdict, note: Option<String>) -> Outcome {
+    fn symbolic(verdict: PropertyVerdict, note: Option<String>) -> Outcome {
         Outcome {
             verdict,
             method: Method::Symbolic,
@@ -86,7 +86,7 @@ impl Outcome {
     }
 
     fn unknown(reason: String) -> Outcome {
-        Outcome::symbolic(Verdict::Inconclusive { reason }, None)
+        Outcome::symbolic(PropertyVerdict::Inconclusive { reason }, None)
     }
 }
 
@@ -112,15 +112,15 @@ fn run(system: &System, options: &Options) -> Report {
         let t0 = Instant::now();
         let (kind, outcome) = match &prop.kind {
             ModelKind::DeadlockFree { .. } => (
-                PropertyKind::DeadlockFree,
+                CheckKind::DeadlockFree,
                 deadlock(&mut p, prop, range_proved),
             ),
             ModelKind::Invariant(e) => (
-                PropertyKind::Invariant,
+                CheckKind::Invariant,
                 safety(&mut p, Goal::Invariant(e, &prop.name)),
             ),
             ModelKind::Reachable(e) => (
-                PropertyKind::Reachable,
+                CheckKind::Reachable,
                 safety(&mut p, Goal::Reach(e, &prop.name)),
             ),
         };
@@ -136,7 +136,7 @@ fn run(system: &System, options: &Options) -> Report {
     }
     properties.push(PropertyResult {
         name: RANGE_ERRORS.into(),
-        kind: PropertyKind::RangeErrors,
+        kind: CheckKind::RangeErrors,
         expr: String::new(),
         verdict: range.verdict,
         method: range.method,
@@ -150,11 +150,11 @@ fn run(system: &System, options: &Options) -> Report {
         model: system.name.clone(),
         method: Method::Symbolic,
         properties,
-        stats: Stats {
+        stats: RunStats {
             seconds,
             peak_memory_bytes: memory::peak_resident_bytes(),
             jobs: 1,
-            ..Stats::default()
+            ..RunStats::default()
         },
         stopped,
         symbolic: Some(SymbolicStats {
@@ -176,7 +176,7 @@ fn deadlock(p: &mut Prover<'_>, prop: &bip_model::Property, range_proved: bool) 
     use deadlock::Finding;
     match deadlock::deadlock_free(p, prop, range_proved) {
         Finding::Proved { candidates } => Outcome::symbolic(
-            Verdict::Holds { witness: None },
+            PropertyVerdict::Holds { witness: None },
             Some(if candidates == 0 {
                 "invariants ∧ deadlock predicate unsatisfiable".into()
             } else {
@@ -184,7 +184,7 @@ fn deadlock(p: &mut Prover<'_>, prop: &bip_model::Property, range_proved: bool) 
             }),
         ),
         Finding::Deadlock(trace) => Outcome::symbolic(
-            Verdict::Fails {
+            PropertyVerdict::Fails {
                 reason: format!("deadlock {} (confirmed by explicit search)", after(&trace)),
                 trace: Some(trace),
             },
@@ -212,27 +212,29 @@ fn safety(p: &mut Prover<'_>, goal: Goal<'_>) -> Outcome {
     let reach = matches!(goal, Goal::Reach(..));
     match induction::prove(p, goal) {
         Finding::Holds { how } if reach => Outcome::symbolic(
-            Verdict::Fails {
+            PropertyVerdict::Fails {
                 reason: format!("no reachable state satisfies it (proved: {how})"),
                 trace: None,
             },
             Some(how),
         ),
-        Finding::Holds { how } => Outcome::symbolic(Verdict::Holds { witness: None }, Some(how)),
+        Finding::Holds { how } => {
+            Outcome::symbolic(PropertyVerdict::Holds { witness: None }, Some(how))
+        }
         Finding::Bad(trace) => {
             let verdict = match &trace.verdict {
-                bip_model::Verdict::Witness(_) => Verdict::Holds {
+                bip_model::Verdict::Witness(_) => PropertyVerdict::Holds {
                     witness: Some(trace),
                 },
-                bip_model::Verdict::Violation(_) => Verdict::Fails {
+                bip_model::Verdict::Violation(_) => PropertyVerdict::Fails {
                     reason: format!("violated {}", after(&trace)),
                     trace: Some(trace),
                 },
-                bip_model::Verdict::RangeError(m) => Verdict::Fails {
+                bip_model::Verdict::RangeError(m) => PropertyVerdict::Fails {
                     reason: format!("range error: {m} {}", after(&trace)),
                     trace: Some(trace),
                 },
-                _ => Verdict::Inconclusive {
+                _ => PropertyVerdict::Inconclusive {
                     reason: "internal error: unexpected trace".into(),
                 },
             };
