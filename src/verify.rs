@@ -12,7 +12,7 @@ use bip_verifier::{
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::{exit, report};
+use crate::{exit, load};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Format {
@@ -96,12 +96,8 @@ fn parse_seconds(s: &str) -> Result<Duration, String> {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let system = match bip_model::load_file(&args.file) {
-        Ok(s) => s,
-        Err(e) => {
-            report::load_error(&e);
-            return exit::ERROR;
-        }
+    let Some(system) = load::system(&args.file) else {
+        return exit::ERROR;
     };
     if let Some(dir) = &args.trace_dir {
         if let Err(e) = std::fs::create_dir_all(dir) {
