@@ -2,8 +2,8 @@
 
 use std::time::Duration;
 
-/// Progress of a run. The explicit exploration reports it about four times a second; the
-/// symbolic method reports nothing yet.
+/// Progress of a run. The explicit exploration reports it about four times a second (also
+/// in `--method auto`'s explicit phase); the symbolic method reports none.
 #[derive(Clone, Debug)]
 pub struct Progress {
     pub states: u64,

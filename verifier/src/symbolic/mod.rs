@@ -50,8 +50,9 @@ use induction::Goal;
 use prover::Prover;
 
 /// Verifies every property of `system` symbolically. Reads `options.symbolic`, the time
-/// limit and, for the explicit confirmation of deadlock candidates, the workers. Reports no
-/// progress yet.
+/// limit and, for the explicit confirmation of deadlock candidates, the workers. Takes a
+/// progress callback as every method does, and never calls it: [`Progress`] counts the
+/// states of an exploration.
 pub(crate) fn verify(
     system: &System,
     options: &Options,
