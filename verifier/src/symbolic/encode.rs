@@ -100,6 +100,11 @@ pub struct Enabling {
     pub trans_en: Vec<Vec<Bool>>,
     /// Per component, per port (the last index: internal): some transition on it is enabled.
     pub port_en: Vec<Vec<Bool>>,
+    /// Per interaction: enabled before priorities. Read by no query, but held as long as
+    /// the rest: z3 gives the ids of freed terms to new ones, and the ids order its search,
+    /// so freeing these earlier changes which of equally short traces a proof reports.
+    #[allow(dead_code)]
+    inter_en: Vec<Bool>,
     /// Per interaction: enabled and not suppressed by a priority.
     pub allowed: Vec<Bool>,
     /// Computing the enabled steps fails: a guard, connector guard or priority condition
@@ -481,6 +486,7 @@ impl<'s> Encoding<'s> {
         Enabling {
             trans_en,
             port_en,
+            inter_en,
             allowed,
             guard_error: or(errors),
         }
