@@ -4,7 +4,8 @@
 use bip_model::Trace;
 use serde::Serialize;
 
-/// How the verdicts were obtained.
+/// A method of verification: the one [`verify`](crate::verify) is asked to run, and the one
+/// that gave a report or a verdict (a verdict's is never `Auto`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
@@ -26,7 +27,8 @@ impl std::fmt::Display for Method {
     }
 }
 
-/// What kind of property a result is about.
+/// What a result checks: a kind of model property (`bip_model::PropertyKind`, without its
+/// expression), or range errors.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CheckKind {
@@ -127,7 +129,8 @@ impl std::fmt::Display for Stop {
     }
 }
 
-/// Figures of one run.
+/// Figures of one run: an exploration's; a symbolic run fills only the time, the memory
+/// and the workers (its own figures are [`SymbolicStats`]).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct RunStats {
     /// Distinct states stored.
