@@ -2,17 +2,14 @@
 
 use std::path::PathBuf;
 
-use crate::{exit, report};
+use crate::{exit, load};
 
 pub fn run(files: &[PathBuf]) -> u8 {
     let mut code = exit::OK;
     for path in files {
-        match bip_lang::load_file(path) {
-            Ok(system) => print_summary(path, &system),
-            Err(e) => {
-                report::load_error(&e);
-                code = exit::ERROR;
-            }
+        match load::system(path) {
+            Some(system) => print_summary(path, &system),
+            None => code = exit::ERROR,
         }
     }
     code

@@ -3,15 +3,11 @@
 
 use std::path::Path;
 
-use crate::{exit, report};
+use crate::{exit, load};
 
 pub fn run(file: &Path) -> u8 {
-    let def = match bip_lang::expand_file(file) {
-        Ok(def) => def,
-        Err(e) => {
-            report::load_error(&e);
-            return exit::ERROR;
-        }
+    let Some(def) = load::expanded(file) else {
+        return exit::ERROR;
     };
     match def.to_ron() {
         Ok(text) => {

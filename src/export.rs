@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::{exit, report};
+use crate::{exit, load};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -15,14 +15,10 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let system = match bip_lang::load_file(&args.file) {
-        Ok(s) => s,
-        Err(e) => {
-            report::load_error(&e);
-            return exit::ERROR;
-        }
+    let Some(system) = load::system(&args.file) else {
+        return exit::ERROR;
     };
-    let text = match bip_verifier::promela::to_promela(&system) {
+    let text = match bip_verifier::to_promela(&system) {
         Ok(t) => t,
         Err(e) => {
             eprintln!("error: {e}");

@@ -1,15 +1,19 @@
 //! `bip`: verify a robot functional layer model, and run it.
 //!
-//! A thin layer over the libraries: argument parsing, output formatting, exit codes.
-//! Exit codes: 0 all properties hold (or the command succeeded), 1 a property fails,
-//! 2 the model or the command is wrong, 3 the result is inconclusive.
+//! A thin layer over the libraries: argument parsing, output formatting, exit codes. This
+//! file parses and dispatches to one module per command. Exit codes (`exit.rs`): 0 all
+//! properties hold (or the command succeeded), 1 a property fails, 2 the model or the
+//! command is wrong, 3 the result is inconclusive.
 
 mod check;
+mod exit;
 mod expand;
 mod export;
+mod load;
 mod replay;
 mod report;
 mod simulate;
+mod startup;
 mod verify;
 
 use std::path::PathBuf;
@@ -61,18 +65,10 @@ enum Command {
     Replay(replay::Args),
 }
 
-/// Exit codes shared by every command.
-pub mod exit {
-    pub const OK: u8 = 0;
-    pub const FAILED: u8 = 1;
-    pub const ERROR: u8 = 2;
-    pub const INCONCLUSIVE: u8 = 3;
-}
-
 fn main() -> ExitCode {
-    restore_sigpipe();
+    startup::restore_sigpipe();
     let cli = Cli::parse();
-    init_logging(cli.verbose);
+    startup::init_logging(cli.verbose);
     let code = match cli.command {
         Command::Check { files } => check::run(&files),
         Command::Expand { file } => expand::run(&file),
@@ -82,30 +78,4 @@ fn main() -> ExitCode {
         Command::Replay(args) => replay::run(&args),
     };
     ExitCode::from(code)
-}
-
-/// Rust ignores SIGPIPE, so printing into a closed pipe (`bip replay ... | head`) would
-/// panic; restore the default, and end quietly as `head`'s other writers do.
-fn restore_sigpipe() {
-    #[cfg(unix)]
-    // SAFETY: called first thing in main, before any thread exists; SIG_DFL is a valid
-    // disposition for SIGPIPE.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
-    }
-}
-
-fn init_logging(verbose: u8) {
-    use tracing_subscriber::EnvFilter;
-    let default = match verbose {
-        0 => "warn",
-        1 => "info",
-        2 => "debug",
-        _ => "trace",
-    };
-    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default));
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .try_init();
 }

@@ -7,11 +7,12 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 use bip_model::System;
-use bip_verifier::report::human_bytes;
-use bip_verifier::{Method, Outcome, Progress, PropertyKind, Report, Verdict};
+use bip_verifier::{
+    human_bytes, CheckKind, Method, Progress, PropertyVerdict, Report, VerifyOutcome,
+};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::{exit, report};
+use crate::{exit, load};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Format {
@@ -84,7 +85,7 @@ pub struct Args {
 }
 
 fn parse_size(s: &str) -> Result<u64, String> {
-    bip_verifier::memory::parse_size(s)
+    bip_verifier::parse_size(s)
 }
 
 fn parse_seconds(s: &str) -> Result<Duration, String> {
@@ -95,12 +96,8 @@ fn parse_seconds(s: &str) -> Result<Duration, String> {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let system = match bip_lang::load_file(&args.file) {
-        Ok(s) => s,
-        Err(e) => {
-            report::load_error(&e);
-            return exit::ERROR;
-        }
+    let Some(system) = load::system(&args.file) else {
+        return exit::ERROR;
     };
     if let Some(dir) = &args.trace_dir {
         if let Err(e) = std::fs::create_dir_all(dir) {
@@ -118,6 +115,13 @@ pub fn run(args: &Args) -> u8 {
         timeout: args.timeout,
         stop_at_first: args.stop_at_first,
         liveness_bound: 0,
+        symbolic: bip_verifier::SymbolicOptions {
+            solver_timeout: Some(args.solver_timeout),
+            rlimit: args.rlimit,
+            max_depth: args.max_depth,
+            confirm_states: args.confirm_states,
+            ..bip_verifier::SymbolicOptions::default()
+        },
     };
     let show_progress =
         !args.quiet && args.format == Format::Text && std::io::stderr().is_terminal();
@@ -137,20 +141,12 @@ pub fn run(args: &Args) -> u8 {
             ));
         }
     };
-    let symbolic = bip_verifier::SymbolicOptions {
-        solver_timeout: Some(args.solver_timeout),
-        timeout: args.timeout,
-        rlimit: args.rlimit,
-        max_depth: args.max_depth,
-        confirm_states: args.confirm_states,
-        jobs: args.jobs.unwrap_or(0),
-        ..bip_verifier::SymbolicOptions::default()
+    let method = match args.method {
+        MethodArg::Explicit => Method::Explicit,
+        MethodArg::Symbolic => Method::Symbolic,
+        MethodArg::Auto => Method::Auto,
     };
-    let result = match args.method {
-        MethodArg::Explicit => bip_verifier::verify(&system, &options, &on_progress),
-        MethodArg::Symbolic => bip_verifier::symbolic::verify(&system, &symbolic),
-        MethodArg::Auto => bip_verifier::verify_auto(&system, &options, &symbolic, &on_progress),
-    };
+    let result = bip_verifier::verify(&system, method, &options, &on_progress);
     if let Some(bar) = bar.lock().unwrap_or_else(|e| e.into_inner()).take() {
         bar.finish_and_clear();
     }
@@ -163,9 +159,9 @@ pub fn run(args: &Args) -> u8 {
     };
     match write_outputs(args, &system, &report) {
         Ok(()) => match report.outcome() {
-            Outcome::AllHold => exit::OK,
-            Outcome::SomeFail => exit::FAILED,
-            Outcome::Inconclusive => exit::INCONCLUSIVE,
+            VerifyOutcome::AllHold => exit::OK,
+            VerifyOutcome::SomeFail => exit::FAILED,
+            VerifyOutcome::Inconclusive => exit::INCONCLUSIVE,
         },
         Err(message) => {
             eprintln!("error: {message}");
@@ -240,12 +236,12 @@ fn method_name(method: Method) -> &'static str {
     }
 }
 
-fn kind_name(kind: PropertyKind) -> &'static str {
+fn kind_name(kind: CheckKind) -> &'static str {
     match kind {
-        PropertyKind::DeadlockFree => "deadlock freedom",
-        PropertyKind::Invariant => "invariant",
-        PropertyKind::Reachable => "reachability",
-        PropertyKind::RangeErrors => "range errors",
+        CheckKind::DeadlockFree => "deadlock freedom",
+        CheckKind::Invariant => "invariant",
+        CheckKind::Reachable => "reachability",
+        CheckKind::RangeErrors => "range errors",
     }
 }
 
@@ -280,12 +276,14 @@ fn text_report(
         .unwrap_or(0);
     for p in &report.properties {
         let (word, mut detail) = match &p.verdict {
-            Verdict::Holds { witness: Some(t) } => {
+            PropertyVerdict::Holds { witness: Some(t) } => {
                 ("holds", format!("witness after {} steps", t.steps.len()))
             }
-            Verdict::Holds { witness: None } => ("holds", p.note.clone().unwrap_or_default()),
-            Verdict::Fails { reason, .. } => ("FAILS", reason.clone()),
-            Verdict::Inconclusive { reason } => ("inconclusive", reason.clone()),
+            PropertyVerdict::Holds { witness: None } => {
+                ("holds", p.note.clone().unwrap_or_default())
+            }
+            PropertyVerdict::Fails { reason, .. } => ("FAILS", reason.clone()),
+            PropertyVerdict::Inconclusive { reason } => ("inconclusive", reason.clone()),
         };
         if report.method == Method::Auto {
             detail = format!("[{}] {detail}", method_name(p.method));
@@ -309,7 +307,7 @@ fn text_report(
             kind_name(p.kind),
             trace.display(Some(system))
         );
-        if p.kind == PropertyKind::DeadlockFree && p.verdict.fails() {
+        if p.kind == CheckKind::DeadlockFree && p.verdict.fails() {
             write_why_stuck(&mut s, system, trace);
         }
         if let Some((_, path)) = saved.iter().find(|(n, _)| *n == p.name) {
@@ -319,7 +317,7 @@ fn text_report(
     if report
         .properties
         .iter()
-        .any(|p| p.kind == PropertyKind::RangeErrors && p.verdict.fails())
+        .any(|p| p.kind == CheckKind::RangeErrors && p.verdict.fails())
     {
         let _ = writeln!(
             s,
@@ -369,16 +367,18 @@ fn text_report(
     let undecided = report
         .properties
         .iter()
-        .filter(|p| matches!(p.verdict, Verdict::Inconclusive { .. }))
+        .filter(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }))
         .count();
     let _ = match report.outcome() {
-        Outcome::AllHold => writeln!(s, "result: all {} properties hold", report.properties.len()),
-        Outcome::SomeFail => writeln!(
+        VerifyOutcome::AllHold => {
+            writeln!(s, "result: all {} properties hold", report.properties.len())
+        }
+        VerifyOutcome::SomeFail => writeln!(
             s,
             "result: {fails} of {} properties fail",
             report.properties.len()
         ),
-        Outcome::Inconclusive => {
+        VerifyOutcome::Inconclusive => {
             writeln!(s, "result: inconclusive ({undecided} properties undecided)")
         }
     };
@@ -417,7 +417,7 @@ fn json_report(args: &Args, report: &Report) -> Result<String, String> {
     #[derive(serde::Serialize)]
     struct Doc<'a> {
         file: String,
-        outcome: Outcome,
+        outcome: VerifyOutcome,
         #[serde(flatten)]
         report: &'a Report,
     }
@@ -436,7 +436,7 @@ fn junit_report(args: &Args, report: &Report) -> String {
     let failures = props.iter().filter(|p| p.verdict.fails()).count();
     let errors = props
         .iter()
-        .filter(|p| matches!(p.verdict, Verdict::Inconclusive { .. }))
+        .filter(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }))
         .count();
     let suite = format!("bip verify {}", args.file.display());
     let mut s = String::new();
@@ -464,10 +464,10 @@ fn junit_report(args: &Args, report: &Report) -> String {
             report.stats.seconds
         );
         match &p.verdict {
-            Verdict::Holds { .. } => {
+            PropertyVerdict::Holds { .. } => {
                 let _ = writeln!(s, "/>");
             }
-            Verdict::Fails { reason, trace } => {
+            PropertyVerdict::Fails { reason, trace } => {
                 let body = trace
                     .as_ref()
                     .map(|t| t.display(None).to_string())
@@ -480,7 +480,7 @@ fn junit_report(args: &Args, report: &Report) -> String {
                     xml(&body)
                 );
             }
-            Verdict::Inconclusive { reason } => {
+            PropertyVerdict::Inconclusive { reason } => {
                 // an undecided property is not a pass: report it as an error, not as skipped
                 let _ = writeln!(
                     s,

@@ -7,23 +7,24 @@
 //! reachable state, every "holds". The properties it leaves undecided go to the symbolic
 //! method. Each property's result says which method decided it.
 
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use bip_model::System;
 
-use crate::explore::{verify, Options, Progress, VerifyError};
-use crate::report::{Method, Report, Verdict};
-use crate::symbolic::{self, SymbolicOptions};
+use crate::error::VerifyError;
+use crate::options::Options;
+use crate::progress::Progress;
+use crate::report::{Method, PropertyVerdict, Report};
+use crate::{explore, symbolic};
 
 /// States the explicit phase may store.
-pub const AUTO_STATES: u64 = 1_000_000;
+const AUTO_STATES: u64 = 1_000_000;
 /// Bytes of stored states the explicit phase may use.
-pub const AUTO_BYTES: u64 = 256 << 20;
+const AUTO_BYTES: u64 = 256 << 20;
 
-pub fn verify_auto(
+pub(crate) fn verify(
     system: &System,
     options: &Options,
-    symbolic_options: &SymbolicOptions,
     progress: &(dyn Fn(&Progress) + Sync),
 ) -> Result<Report, VerifyError> {
     let started = Instant::now();
@@ -34,36 +35,33 @@ pub fn verify_auto(
         max_states: Some(options.max_states.map_or(budget, |m| m.min(budget))),
         ..options.clone()
     };
-    let explicit = verify(system, &explicit_options, progress)?;
+    let explicit = explore::verify(system, &explicit_options, progress)?;
     let open = explicit
         .properties
         .iter()
-        .any(|p| matches!(p.verdict, Verdict::Inconclusive { .. }));
+        .any(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }));
     if !open || explicit.properties.iter().any(|p| p.verdict.fails()) && options.stop_at_first {
         return Ok(Report {
             method: Method::Auto,
             ..explicit
         });
     }
-    let mut sym_options = symbolic_options.clone();
-    if let Some(t) = options.timeout {
-        let left = t.saturating_sub(started.elapsed());
-        sym_options.timeout = Some(sym_options.timeout.map_or(left, |s| s.min(left)));
-        if left.is_zero() {
-            sym_options.timeout = Some(Duration::ZERO);
-        }
-    }
-    let symbolic = symbolic::verify(system, &sym_options)?;
+    // the symbolic method gets the time that remains
+    let symbolic_options = Options {
+        timeout: options.timeout.map(|t| t.saturating_sub(started.elapsed())),
+        ..options.clone()
+    };
+    let symbolic = symbolic::verify(system, &symbolic_options, progress)?;
     let mut report = explicit;
     for (mine, theirs) in report.properties.iter_mut().zip(symbolic.properties) {
-        if matches!(mine.verdict, Verdict::Inconclusive { .. }) {
+        if matches!(mine.verdict, PropertyVerdict::Inconclusive { .. }) {
             *mine = theirs;
         }
     }
     let undecided = report
         .properties
         .iter()
-        .any(|p| matches!(p.verdict, Verdict::Inconclusive { .. }));
+        .any(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }));
     if !undecided {
         report.stopped = None;
     } else if report.stopped.is_none() {

@@ -27,8 +27,12 @@ use bip_model::{
 };
 use rayon::prelude::*;
 
+use crate::error::VerifyError;
 use crate::memory;
-use crate::report::{Method, PropertyKind, PropertyResult, Report, Stats, Stop, Verdict};
+use crate::options::Options;
+use crate::progress::Progress;
+use crate::properties::{checked_properties, RANGE_ERRORS};
+use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 use crate::visited::{hash, shard_of, Chunk, ShardFull, StateId, Visited, SHARDS};
 
 /// States per chunk: large enough to amortise scheduling, small enough to balance.
@@ -37,49 +41,6 @@ const CHUNK_STATES: u32 = 1024;
 const CHUNKS_PER_WORKER: usize = 8;
 /// Memory the liveness checker of one worker may use for its memory of states.
 const LIVENESS_MEMO_BYTES: usize = 32 << 20;
-
-/// How to run.
-#[derive(Clone, Debug, Default)]
-pub struct Options {
-    /// Worker threads; 0 for one per core.
-    pub jobs: usize,
-    /// Stop (inconclusive) once this many states are stored and more remain to explore.
-    pub max_states: Option<u64>,
-    /// Stop (inconclusive) before the run would use more memory; `None` takes
-    /// [`memory::default_limit`].
-    pub max_memory: Option<u64>,
-    /// Stop (inconclusive) after this long.
-    pub timeout: Option<Duration>,
-    /// Stop as soon as one property fails.
-    pub stop_at_first: bool,
-    /// Bound on the states the deadlock check explores by time steps alone from one state
-    /// (0: `bip-model`'s default). Past it, the state's liveness is unknown and
-    /// `DeadlockFree` cannot hold.
-    pub liveness_bound: usize,
-}
-
-/// Something that went wrong besides the model's verdicts.
-#[derive(Debug, thiserror::Error)]
-pub enum VerifyError {
-    #[error("cannot start the worker threads: {0}")]
-    Threads(String),
-    /// A trace could not be rebuilt from the stored states: a bug in bip.
-    #[error("internal error: {0}")]
-    Internal(String),
-}
-
-/// Progress of a run, for a progress line.
-#[derive(Clone, Debug)]
-pub struct Progress {
-    pub states: u64,
-    pub transitions: u64,
-    pub depth: u32,
-    /// States of the level being explored, and how many of them are done.
-    pub level_states: u64,
-    pub level_done: u64,
-    pub elapsed: Duration,
-    pub store_bytes: u64,
-}
 
 /// What one property checks, with its compiled expression.
 enum Check<'a> {
@@ -91,13 +52,10 @@ enum Check<'a> {
 
 struct Target<'a> {
     name: String,
-    kind: PropertyKind,
+    kind: CheckKind,
     expr: String,
     check: Check<'a>,
 }
-
-/// The name of the result that reports range errors.
-pub const RANGE_ERRORS: &str = "RangeErrors";
 
 /// The properties a run checks: the model's (deadlock freedom if it has none), and range
 /// errors, which are always checked.
@@ -108,19 +66,16 @@ fn targets(system: &System) -> Vec<Target<'_>> {
             let (kind, check) = match &p {
                 Cow::Borrowed(Property { kind, .. }) => match kind {
                     ModelKind::DeadlockFree { terminal } => (
-                        PropertyKind::DeadlockFree,
+                        CheckKind::DeadlockFree,
                         Check::Deadlock {
                             terminal: terminal.as_ref(),
                         },
                     ),
-                    ModelKind::Invariant(e) => (PropertyKind::Invariant, Check::Invariant(e)),
-                    ModelKind::Reachable(e) => (PropertyKind::Reachable, Check::Reachable(e)),
+                    ModelKind::Invariant(e) => (CheckKind::Invariant, Check::Invariant(e)),
+                    ModelKind::Reachable(e) => (CheckKind::Reachable, Check::Reachable(e)),
                 },
                 // the default property: deadlock freedom without terminal states
-                Cow::Owned(_) => (
-                    PropertyKind::DeadlockFree,
-                    Check::Deadlock { terminal: None },
-                ),
+                Cow::Owned(_) => (CheckKind::DeadlockFree, Check::Deadlock { terminal: None }),
             };
             Target {
                 name: p.name.clone(),
@@ -132,26 +87,11 @@ fn targets(system: &System) -> Vec<Target<'_>> {
         .collect();
     out.push(Target {
         name: RANGE_ERRORS.into(),
-        kind: PropertyKind::RangeErrors,
+        kind: CheckKind::RangeErrors,
         expr: String::new(),
         check: Check::RangeErrors,
     });
     out
-}
-
-/// The model properties a verification checks, whatever the method: the model's, or
-/// `DeadlockFree` if it declares none. Range errors are checked besides, as
-/// [`RANGE_ERRORS`].
-pub fn checked_properties(system: &System) -> Vec<Cow<'_, Property>> {
-    if system.properties.is_empty() {
-        vec![Cow::Owned(Property {
-            name: "DeadlockFree".into(),
-            kind: ModelKind::DeadlockFree { terminal: None },
-            text: String::new(),
-        })]
-    } else {
-        system.properties.iter().map(Cow::Borrowed).collect()
-    }
 }
 
 /// What was found about a property in a state.
@@ -254,7 +194,7 @@ const REC_HEADER: usize = 12;
 /// Verifies every property of `system` by explicit-state exploration.
 ///
 /// `progress` is called from time to time (about four times a second) during long runs.
-pub fn verify(
+pub(crate) fn verify(
     system: &System,
     options: &Options,
     progress: &(dyn Fn(&Progress) + Sync),
@@ -518,7 +458,7 @@ impl<'a> Explorer<'a> {
             .find(|&l| self.visited.level_len(l) > 0)
             .unwrap_or(0) as u32;
         let complete = stopped.is_none() && !self.stopped_decided;
-        let stats = Stats {
+        let stats = RunStats {
             states,
             complete,
             transitions: self.transitions,
@@ -569,7 +509,7 @@ impl<'a> Explorer<'a> {
         })
     }
 
-    fn verdict_of(&self, t: &Target<'_>, f: &Finding) -> Result<Verdict, VerifyError> {
+    fn verdict_of(&self, t: &Target<'_>, f: &Finding) -> Result<PropertyVerdict, VerifyError> {
         use bip_model::Verdict as TraceVerdict;
         let (trace_verdict, reason) = match &f.what {
             Found::Deadlock => (TraceVerdict::Deadlock, "deadlock".to_string()),
@@ -587,10 +527,10 @@ impl<'a> Explorer<'a> {
         let n = trace.steps.len();
         let after = format!("after {n} step{}", if n == 1 { "" } else { "s" });
         Ok(match f.what {
-            Found::Witness => Verdict::Holds {
+            Found::Witness => PropertyVerdict::Holds {
                 witness: Some(trace),
             },
-            _ => Verdict::Fails {
+            _ => PropertyVerdict::Fails {
                 reason: format!("{reason} {after}"),
                 trace: Some(trace),
             },
@@ -598,24 +538,24 @@ impl<'a> Explorer<'a> {
     }
 
     /// The verdict of a property nothing was found about.
-    fn open_verdict(&self, t: &Target<'_>, stopped: Option<&Stop>, states: u64) -> Verdict {
+    fn open_verdict(&self, t: &Target<'_>, stopped: Option<&Stop>, states: u64) -> PropertyVerdict {
         if let Some(stop) = stopped {
-            return Verdict::Inconclusive {
+            return PropertyVerdict::Inconclusive {
                 reason: format!("{stop} after {states} states"),
             };
         }
         match t.check {
-            Check::Reachable(_) => Verdict::Fails {
+            Check::Reachable(_) => PropertyVerdict::Fails {
                 reason: format!("no reachable state satisfies it ({states} states explored)"),
                 trace: None,
             },
-            Check::Deadlock { .. } if self.liveness_unknown > 0 => Verdict::Inconclusive {
+            Check::Deadlock { .. } if self.liveness_unknown > 0 => PropertyVerdict::Inconclusive {
                 reason: format!(
                     "in {} states without a progress step, the states reached by time steps alone exceed the liveness check's bound",
                     self.liveness_unknown
                 ),
             },
-            _ => Verdict::Holds { witness: None },
+            _ => PropertyVerdict::Holds { witness: None },
         }
     }
 }

@@ -1,26 +1,56 @@
 //! `bip-verifier`: verification of bip models.
 //!
-//! - [`explore::verify`]: explicit-state verification, breadth-first and parallel, with
-//!   shortest counterexamples (`explore.rs`, over the visited set of `visited.rs`);
-//! - [`symbolic::verify`]: symbolic proofs with z3 (compositional deadlock freedom,
-//!   k-induction, bounded model checking), with candidates confirmed explicitly;
-//! - [`report`]: the verdicts and statistics any method produces;
-//! - [`promela`]: the same system as a Promela model, to cross-check with SPIN.
+//! [`verify`] is the one entry point, for every [`Method`]:
+//! - explicit-state verification, breadth-first and parallel, with shortest
+//!   counterexamples (`explore.rs`, over the visited set of `visited.rs`);
+//! - symbolic proofs with z3 (compositional deadlock freedom, k-induction, bounded model
+//!   checking), with candidates confirmed explicitly (`symbolic/`);
+//! - auto: explicit within a budget, symbolic for what it leaves open (`auto.rs`).
+//!
+//! Every method fills the same [`Report`] (`report.rs`). [`to_promela`] writes the same
+//! system as a Promela model, to cross-check with SPIN (`promela.rs`).
 //!
 //! Every method uses `bip-model`'s step relation and deadlock definition; none has a
 //! notion of its own of "enabled" or "deadlock".
 
-pub mod auto;
-pub mod explore;
-pub mod memory;
-pub mod promela;
-pub mod report;
-pub mod symbolic;
-pub mod visited;
+mod auto;
+mod error;
+mod explore;
+mod memory;
+mod options;
+mod progress;
+mod promela;
+mod properties;
+mod report;
+mod symbolic;
+mod visited;
 
-pub use auto::verify_auto;
-pub use explore::{checked_properties, verify, Options, Progress, VerifyError, RANGE_ERRORS};
+use bip_model::System;
+
+pub use error::VerifyError;
+pub use memory::{parse_size, resident_bytes};
+pub use options::{Options, SymbolicOptions};
+pub use progress::Progress;
+pub use promela::{to_promela, ExportError};
+pub use properties::RANGE_ERRORS;
 pub use report::{
-    Method, Outcome, PropertyKind, PropertyResult, Report, Stats, Stop, SymbolicStats, Verdict,
+    human_bytes, CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop,
+    SymbolicStats, VerifyOutcome,
 };
-pub use symbolic::SymbolicOptions;
+
+/// Verifies every property of `system` (deadlock freedom if it declares none, and range
+/// errors always) with `method`, within the limits of `options`.
+///
+/// `progress` is called from time to time during long runs, from any thread.
+pub fn verify(
+    system: &System,
+    method: Method,
+    options: &Options,
+    progress: &(dyn Fn(&Progress) + Sync),
+) -> Result<Report, VerifyError> {
+    match method {
+        Method::Explicit => explore::verify(system, options, progress),
+        Method::Symbolic => symbolic::verify(system, options, progress),
+        Method::Auto => auto::verify(system, options, progress),
+    }
+}

@@ -4,7 +4,8 @@
 use bip_model::Trace;
 use serde::Serialize;
 
-/// How the verdicts were obtained.
+/// A method of verification: the one [`verify`](crate::verify) is asked to run, and the one
+/// that gave a report or a verdict (a verdict's is never `Auto`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
@@ -26,10 +27,11 @@ impl std::fmt::Display for Method {
     }
 }
 
-/// What kind of property a result is about.
+/// What a result checks: a kind of model property (`bip_model::PropertyKind`, without its
+/// expression), or range errors.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum PropertyKind {
+pub enum CheckKind {
     DeadlockFree,
     Invariant,
     Reachable,
@@ -40,7 +42,7 @@ pub enum PropertyKind {
 /// The verdict on one property.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(tag = "verdict", rename_all = "snake_case")]
-pub enum Verdict {
+pub enum PropertyVerdict {
     /// The property holds. For `Reachable`, `witness` leads to a state satisfying it.
     Holds {
         #[serde(skip_serializing_if = "Option::is_none")]
@@ -56,21 +58,21 @@ pub enum Verdict {
     Inconclusive { reason: String },
 }
 
-impl Verdict {
+impl PropertyVerdict {
     pub fn holds(&self) -> bool {
-        matches!(self, Verdict::Holds { .. })
+        matches!(self, PropertyVerdict::Holds { .. })
     }
 
     pub fn fails(&self) -> bool {
-        matches!(self, Verdict::Fails { .. })
+        matches!(self, PropertyVerdict::Fails { .. })
     }
 
     /// The counterexample or witness, if any.
     pub fn trace(&self) -> Option<&Trace> {
         match self {
-            Verdict::Holds { witness } => witness.as_ref(),
-            Verdict::Fails { trace, .. } => trace.as_ref(),
-            Verdict::Inconclusive { .. } => None,
+            PropertyVerdict::Holds { witness } => witness.as_ref(),
+            PropertyVerdict::Fails { trace, .. } => trace.as_ref(),
+            PropertyVerdict::Inconclusive { .. } => None,
         }
     }
 }
@@ -79,11 +81,11 @@ impl Verdict {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PropertyResult {
     pub name: String,
-    pub kind: PropertyKind,
+    pub kind: CheckKind,
     /// The expression as written (`terminal` for `DeadlockFree`), empty if none.
     pub expr: String,
     #[serde(flatten)]
-    pub verdict: Verdict,
+    pub verdict: PropertyVerdict,
     /// The method that gave the verdict (with `--method auto`, either).
     pub method: Method,
     /// How the verdict was obtained, when there is more to say (`2-induction`, ...).
@@ -127,9 +129,10 @@ impl std::fmt::Display for Stop {
     }
 }
 
-/// Figures of one run.
+/// Figures of one run: an exploration's; a symbolic run fills only the time, the memory
+/// and the workers (its own figures are [`SymbolicStats`]).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct Stats {
+pub struct RunStats {
     /// Distinct states stored.
     pub states: u64,
     /// True if every reachable state was stored and expanded: `states` is the number of
@@ -160,7 +163,7 @@ pub struct Report {
     pub model: String,
     pub method: Method,
     pub properties: Vec<PropertyResult>,
-    pub stats: Stats,
+    pub stats: RunStats,
     /// Why the run ended early, if it did.
     pub stopped: Option<Stop>,
     /// Figures of the symbolic method, when it ran.
@@ -192,7 +195,7 @@ pub struct SymbolicStats {
 /// The overall outcome, which decides the exit code.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Outcome {
+pub enum VerifyOutcome {
     /// Every property holds.
     AllHold,
     /// Some property fails (whatever the others say: a failure is final).
@@ -202,13 +205,13 @@ pub enum Outcome {
 }
 
 impl Report {
-    pub fn outcome(&self) -> Outcome {
+    pub fn outcome(&self) -> VerifyOutcome {
         if self.properties.iter().any(|p| p.verdict.fails()) {
-            Outcome::SomeFail
+            VerifyOutcome::SomeFail
         } else if self.properties.iter().all(|p| p.verdict.holds()) {
-            Outcome::AllHold
+            VerifyOutcome::AllHold
         } else {
-            Outcome::Inconclusive
+            VerifyOutcome::Inconclusive
         }
     }
 
@@ -237,10 +240,10 @@ pub fn human_bytes(n: u64) -> String {
 mod tests {
     use super::*;
 
-    fn result(verdict: Verdict) -> PropertyResult {
+    fn result(verdict: PropertyVerdict) -> PropertyResult {
         PropertyResult {
             name: "p".into(),
-            kind: PropertyKind::Invariant,
+            kind: CheckKind::Invariant,
             expr: String::new(),
             verdict,
             method: Method::Explicit,
@@ -248,12 +251,12 @@ mod tests {
         }
     }
 
-    fn report(verdicts: Vec<Verdict>) -> Report {
+    fn report(verdicts: Vec<PropertyVerdict>) -> Report {
         Report {
             model: "m".into(),
             method: Method::Explicit,
             properties: verdicts.into_iter().map(result).collect(),
-            stats: Stats::default(),
+            stats: RunStats::default(),
             stopped: None,
             symbolic: None,
         }
@@ -261,20 +264,23 @@ mod tests {
 
     #[test]
     fn a_failure_outranks_an_inconclusive_verdict() {
-        let holds = Verdict::Holds { witness: None };
-        let fails = Verdict::Fails {
+        let holds = PropertyVerdict::Holds { witness: None };
+        let fails = PropertyVerdict::Fails {
             reason: "x".into(),
             trace: None,
         };
-        let unknown = Verdict::Inconclusive { reason: "y".into() };
-        assert_eq!(report(vec![holds.clone()]).outcome(), Outcome::AllHold);
+        let unknown = PropertyVerdict::Inconclusive { reason: "y".into() };
+        assert_eq!(
+            report(vec![holds.clone()]).outcome(),
+            VerifyOutcome::AllHold
+        );
         assert_eq!(
             report(vec![holds.clone(), unknown.clone()]).outcome(),
-            Outcome::Inconclusive
+            VerifyOutcome::Inconclusive
         );
         assert_eq!(
             report(vec![unknown, fails, holds]).outcome(),
-            Outcome::SomeFail
+            VerifyOutcome::SomeFail
         );
     }
 

@@ -120,10 +120,6 @@ impl Shard {
         self.parents.len() as u32
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.parents.is_empty()
-    }
-
     pub fn state(&self, local: u32) -> &[u8] {
         let start = local as usize * self.width;
         &self.arena[start..start + self.width]
@@ -264,10 +260,6 @@ impl Visited {
 
     pub fn len(&self) -> u64 {
         self.shards.iter().map(|s| u64::from(s.len())).sum()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.shards.iter().all(Shard::is_empty)
     }
 
     pub fn shards_mut(&mut self) -> &mut [Shard] {

@@ -21,7 +21,9 @@ use std::time::Duration;
 
 use bip_lang::load_str;
 use bip_model::{System, Verdict as TraceVerdict};
-use bip_verifier::{verify, Options, PropertyKind, Report, Stop, Verdict, RANGE_ERRORS};
+use bip_verifier::{
+    verify, CheckKind, Method, Options, PropertyVerdict, Report, Stop, RANGE_ERRORS,
+};
 
 fn with_n(file: &str, n: u32) -> System {
     let text = std::fs::read_to_string(format!("{}/../robots/{file}", env!("CARGO_MANIFEST_DIR")))
@@ -31,7 +33,7 @@ fn with_n(file: &str, n: u32) -> System {
 }
 
 fn run(system: &System, options: &Options) -> Report {
-    verify(system, options, &|_| {}).unwrap()
+    verify(system, Method::Explicit, options, &|_| {}).unwrap()
 }
 
 fn opts(jobs: usize) -> Options {
@@ -70,7 +72,7 @@ fn philosophers_deadlock_with_the_shortest_counterexample() {
             assert_eq!(r.stats.states, transfer_count(n), "N = {n}");
             assert_eq!(r.stats.depth, n, "N = {n}");
             let p = r.property("DeadlockFree").unwrap();
-            let Verdict::Fails { trace: Some(t), .. } = &p.verdict else {
+            let PropertyVerdict::Fails { trace: Some(t), .. } = &p.verdict else {
                 panic!("N = {n}: {:?}", p.verdict)
             };
             assert_eq!(t.verdict, TraceVerdict::Deadlock);
@@ -85,7 +87,8 @@ fn philosophers_deadlock_with_the_shortest_counterexample() {
                 .unwrap()
                 .verdict
                 .holds());
-            let Verdict::Holds { witness: Some(w) } = &r.property("someone_eats").unwrap().verdict
+            let PropertyVerdict::Holds { witness: Some(w) } =
+                &r.property("someone_eats").unwrap().verdict
             else {
                 panic!("no witness")
             };
@@ -135,7 +138,8 @@ fn invariant_violation_range_error_and_witness_have_shortest_traces() {
     for jobs in [1, 2, 4] {
         let r = run(&sys, &opts(jobs));
         // a.x + b.y >= 4 first with b.y = 4 (2 steps)
-        let Verdict::Fails { trace: Some(t), .. } = &r.property("sum_small").unwrap().verdict
+        let PropertyVerdict::Fails { trace: Some(t), .. } =
+            &r.property("sum_small").unwrap().verdict
         else {
             panic!()
         };
@@ -144,8 +148,8 @@ fn invariant_violation_range_error_and_witness_have_shortest_traces() {
         t.replay(&sys).unwrap();
         // b.y = 4 + 2 is out of 0..=5: the state with b.y = 4 is 2 steps away
         let p = r.property(RANGE_ERRORS).unwrap();
-        assert_eq!(p.kind, PropertyKind::RangeErrors);
-        let Verdict::Fails {
+        assert_eq!(p.kind, CheckKind::RangeErrors);
+        let PropertyVerdict::Fails {
             trace: Some(t),
             reason,
         } = &p.verdict
@@ -156,13 +160,15 @@ fn invariant_violation_range_error_and_witness_have_shortest_traces() {
         assert!(reason.contains("b.y = 6 is outside 0..=5"), "{reason}");
         assert!(matches!(&t.verdict, TraceVerdict::RangeError(m) if m.contains("b.y")));
         // witness: five steps of a
-        let Verdict::Holds { witness: Some(w) } = &r.property("x_five").unwrap().verdict else {
+        let PropertyVerdict::Holds { witness: Some(w) } = &r.property("x_five").unwrap().verdict
+        else {
             panic!()
         };
         assert_eq!(w.steps.len(), 5);
         assert_eq!(w.verdict, TraceVerdict::Witness("x_five".into()));
         // y is always even: never 5
-        let Verdict::Fails { trace: None, .. } = &r.property("never").unwrap().verdict else {
+        let PropertyVerdict::Fails { trace: None, .. } = &r.property("never").unwrap().verdict
+        else {
             panic!()
         };
         // x: 0..=9 (10 values), y: 0, 2, 4 (6 overflows)
@@ -186,7 +192,7 @@ fn stop_at_first_leaves_the_rest_undecided() {
     assert!(r.property("sum_small").unwrap().verdict.fails());
     assert!(matches!(
         r.property("never").unwrap().verdict,
-        Verdict::Inconclusive { .. }
+        PropertyVerdict::Inconclusive { .. }
     ));
 }
 
@@ -200,7 +206,9 @@ fn no_property_means_deadlock_freedom_and_terminal_excuses() {
     )"#;
     let sys = load_str("line.ron", text).unwrap();
     let r = run(&sys, &opts(1));
-    let Verdict::Fails { trace: Some(t), .. } = &r.property("DeadlockFree").unwrap().verdict else {
+    let PropertyVerdict::Fails { trace: Some(t), .. } =
+        &r.property("DeadlockFree").unwrap().verdict
+    else {
         panic!()
     };
     assert_eq!(t.steps.len(), 2);
@@ -237,7 +245,9 @@ const CLOCKED: &str = r#"System(
 fn deadlocks_are_found_through_time_steps() {
     let sys = load_str("clocked.ron", CLOCKED).unwrap();
     let r = run(&sys, &opts(2));
-    let Verdict::Fails { trace: Some(t), .. } = &r.property("DeadlockFree").unwrap().verdict else {
+    let PropertyVerdict::Fails { trace: Some(t), .. } =
+        &r.property("DeadlockFree").unwrap().verdict
+    else {
         panic!("{:?}", r.properties)
     };
     // three ticks, go, the internal step
@@ -258,7 +268,7 @@ fn deadlocks_are_found_through_time_steps() {
     );
     let v = &r.property("DeadlockFree").unwrap().verdict;
     assert!(
-        matches!(v, Verdict::Inconclusive { reason } if reason.contains("liveness")),
+        matches!(v, PropertyVerdict::Inconclusive { reason } if reason.contains("liveness")),
         "{v:?}"
     );
 }
@@ -293,9 +303,9 @@ fn limits_end_the_run_inconclusive() {
         r.stats.states
     );
     assert!(r.properties.iter().all(
-        |p| matches!(&p.verdict, Verdict::Inconclusive { reason } if reason.contains("state limit"))
+        |p| matches!(&p.verdict, PropertyVerdict::Inconclusive { reason } if reason.contains("state limit"))
     ));
-    assert_eq!(r.outcome(), bip_verifier::Outcome::Inconclusive);
+    assert_eq!(r.outcome(), bip_verifier::VerifyOutcome::Inconclusive);
 
     let r = run(
         &sys,
@@ -308,7 +318,7 @@ fn limits_end_the_run_inconclusive() {
     assert!(r.stats.seconds < 20.0);
 
     // a limit far below what the exploration needs: it stops before reaching it
-    let limit = bip_verifier::memory::resident_bytes().unwrap_or(0) + (48 << 20);
+    let limit = bip_verifier::resident_bytes().unwrap_or(0) + (48 << 20);
     let r = run(
         &sys,
         &Options {

@@ -7,7 +7,7 @@ use std::collections::{HashMap, VecDeque};
 
 use bip_lang::load_str;
 use bip_model::{State, System};
-use bip_verifier::{verify, Options, Report, Verdict, RANGE_ERRORS};
+use bip_verifier::{verify, Method, Options, PropertyVerdict, Report, RANGE_ERRORS};
 use proptest::prelude::*;
 
 /// A random system in the model format: `atoms` atom types with 2-3 locations, a small
@@ -181,7 +181,7 @@ proptest! {
             Ok(s) => s,
             Err(e) => return Err(TestCaseError::fail(format!("{}\n{text}", e.summary()))),
         };
-        let run = |jobs| without_timing(verify(&sys, &Options { jobs, ..Options::default() }, &|_| {}).unwrap());
+        let run = |jobs| without_timing(verify(&sys, Method::Explicit, &Options { jobs, ..Options::default() }, &|_| {}).unwrap());
         let one = run(1);
         for jobs in [2, 3] {
             prop_assert_eq!(&run(jobs), &one);
@@ -193,7 +193,7 @@ proptest! {
         } else {
             // stopped once every verdict was final
             prop_assert!(one.stopped.is_none());
-            let all_final = one.properties.iter().all(|p| !matches!(p.verdict, Verdict::Inconclusive { .. }));
+            let all_final = one.properties.iter().all(|p| !matches!(p.verdict, PropertyVerdict::Inconclusive { .. }));
             prop_assert!(all_final);
             prop_assert!(one.stats.states <= depth.len() as u64);
         }
@@ -213,8 +213,8 @@ proptest! {
                     .map(|(_, &d)| d)
                     .min();
                 match (&p.verdict, nearest) {
-                    (Verdict::Fails { trace: Some(t), .. }, Some(d)) => prop_assert_eq!(t.steps.len(), d),
-                    (Verdict::Holds { .. }, None) => {}
+                    (PropertyVerdict::Fails { trace: Some(t), .. }, Some(d)) => prop_assert_eq!(t.steps.len(), d),
+                    (PropertyVerdict::Holds { .. }, None) => {}
                     (v, n) => return Err(TestCaseError::fail(format!("{v:?} but the nearest violation is at {n:?}"))),
                 }
             }

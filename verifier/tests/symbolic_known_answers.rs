@@ -6,9 +6,7 @@
 
 use bip_lang::load_str;
 use bip_model::{Liveness, LivenessChecker, Steps, System, Verdict as TraceVerdict};
-use bip_verifier::{
-    symbolic, verify, Method, Options, PropertyKind, Report, SymbolicOptions, Verdict,
-};
+use bip_verifier::{verify, CheckKind, Method, Options, PropertyVerdict, Report, SymbolicOptions};
 
 fn example(file: &str) -> (String, System) {
     let path = format!("{}/../robots/{file}", env!("CARGO_MANIFEST_DIR"));
@@ -24,23 +22,37 @@ fn with_n(file: &str, n: u32) -> System {
 }
 
 fn explicit(sys: &System) -> Report {
-    verify(sys, &Options::default(), &|_| {}).unwrap()
+    verify(sys, Method::Explicit, &Options::default(), &|_| {}).unwrap()
 }
 
-fn symbolic_options() -> SymbolicOptions {
-    SymbolicOptions {
-        solver_timeout: None,
-        rlimit: Some(200_000_000),
+fn symbolic(sys: &System, options: &Options) -> Report {
+    verify(sys, Method::Symbolic, options, &|_| {}).unwrap()
+}
+
+fn symbolic_options() -> Options {
+    Options {
         jobs: 1,
-        ..SymbolicOptions::default()
+        symbolic: SymbolicOptions {
+            solver_timeout: None,
+            rlimit: Some(200_000_000),
+            ..SymbolicOptions::default()
+        },
+        ..Options::default()
     }
 }
 
-fn kind(v: &Verdict) -> &'static str {
+/// Without the explicit confirmation of deadlock candidates.
+fn unconfirmed_options() -> Options {
+    let mut options = symbolic_options();
+    options.symbolic.confirm_states = 0;
+    options
+}
+
+fn kind(v: &PropertyVerdict) -> &'static str {
     match v {
-        Verdict::Holds { .. } => "holds",
-        Verdict::Fails { .. } => "fails",
-        Verdict::Inconclusive { .. } => "inconclusive",
+        PropertyVerdict::Holds { .. } => "holds",
+        PropertyVerdict::Fails { .. } => "fails",
+        PropertyVerdict::Inconclusive { .. } => "inconclusive",
     }
 }
 
@@ -48,12 +60,12 @@ fn kind(v: &Verdict) -> &'static str {
 fn same_verdicts(file: &str) {
     let (_, sys) = example(file);
     let e = explicit(&sys);
-    let s = symbolic::verify(&sys, &symbolic_options()).unwrap();
+    let s = symbolic(&sys, &symbolic_options());
     assert_eq!(e.properties.len(), s.properties.len());
     for (e, s) in e.properties.iter().zip(&s.properties) {
         assert_eq!(e.name, s.name);
         assert!(
-            !matches!(e.verdict, Verdict::Inconclusive { .. }),
+            !matches!(e.verdict, PropertyVerdict::Inconclusive { .. }),
             "{file} {}: the explicit method must decide",
             e.name
         );
@@ -97,9 +109,9 @@ fn examples_get_the_explicit_verdicts() {
 fn genom_rover_with_a_deadlock() {
     let (_, sys) = example("rover-deadlock.ron");
     let e = explicit(&sys);
-    let s = symbolic::verify(&sys, &symbolic_options()).unwrap();
+    let s = symbolic(&sys, &symbolic_options());
     for (e, s) in e.properties.iter().zip(&s.properties) {
-        if s.kind == PropertyKind::Reachable {
+        if s.kind == CheckKind::Reachable {
             // witnesses deeper than the bound may stay open; never a contradiction
             assert!(!(s.verdict.fails() && e.verdict.holds()), "{}", s.name);
             continue;
@@ -124,10 +136,10 @@ fn genom_rover_with_a_deadlock() {
 fn deadlocking_philosophers_give_a_confirmed_deadlock() {
     for n in [5, 40] {
         let sys = with_n("philosophers.ron", n);
-        let s = symbolic::verify(&sys, &symbolic_options()).unwrap();
+        let s = symbolic(&sys, &symbolic_options());
         let dl = s.property("DeadlockFree").unwrap();
         // confirmed by the bounded explicit search, or by the search towards the candidate
-        let Verdict::Fails {
+        let PropertyVerdict::Fails {
             trace: Some(trace), ..
         } = &dl.verdict
         else {
@@ -147,7 +159,7 @@ fn deadlocking_philosophers_give_a_confirmed_deadlock() {
         assert!(trace.steps.len() >= n as usize);
         // the deadlock-free variant of the same size is proved
         let sys = with_n("philosophers-asymmetric.ron", n);
-        let s = symbolic::verify(&sys, &symbolic_options()).unwrap();
+        let s = symbolic(&sys, &symbolic_options());
         assert!(s.property("DeadlockFree").unwrap().verdict.holds());
     }
 }
@@ -188,21 +200,14 @@ fn too_weak_invariants_give_a_possible_deadlock_not_holds() {
     let sys = load_str("weak.ron", WEAK).unwrap();
     let e = explicit(&sys);
     assert!(e.property("DeadlockFree").unwrap().verdict.holds());
-    let s = symbolic::verify(
-        &sys,
-        &SymbolicOptions {
-            confirm_states: 0,
-            ..symbolic_options()
-        },
-    )
-    .unwrap();
+    let s = symbolic(&sys, &unconfirmed_options());
     let dl = s.property("DeadlockFree").unwrap();
-    let Verdict::Inconclusive { reason } = &dl.verdict else {
+    let PropertyVerdict::Inconclusive { reason } = &dl.verdict else {
         panic!("{:?}", dl.verdict)
     };
     assert!(reason.contains("possible deadlock"), "{reason}");
     // with confirmation on, the bounded explicit search settles it (all 102 states)
-    let s = symbolic::verify(&sys, &symbolic_options()).unwrap();
+    let s = symbolic(&sys, &symbolic_options());
     let dl = s.property("DeadlockFree").unwrap();
     assert!(dl.verdict.holds(), "{:?}", dl.verdict);
     assert_eq!(dl.method, Method::Explicit);
@@ -219,14 +224,7 @@ fn too_weak_invariants_give_a_possible_deadlock_not_holds() {
 #[test]
 fn data_refined_places_prove_what_locations_alone_cannot() {
     let sys = load_str("weak.ron", &WEAK.replace("100", "20")).unwrap();
-    let s = symbolic::verify(
-        &sys,
-        &SymbolicOptions {
-            confirm_states: 0,
-            ..symbolic_options()
-        },
-    )
-    .unwrap();
+    let s = symbolic(&sys, &unconfirmed_options());
     let dl = s.property("DeadlockFree").unwrap();
     assert!(dl.verdict.holds(), "{:?}", dl.verdict);
     assert_eq!(dl.method, Method::Symbolic);

@@ -7,18 +7,21 @@ mod common;
 
 use bip_lang::load_str;
 use bip_model::{System, Verdict as TraceVerdict};
-use bip_verifier::{symbolic, verify, Options, PropertyKind, Report, SymbolicOptions};
+use bip_verifier::{verify, CheckKind, Method, Options, Report, SymbolicOptions};
 use proptest::prelude::*;
 
-fn symbolic_options() -> SymbolicOptions {
-    SymbolicOptions {
-        // deterministic budgets: the same verdicts on every machine
-        solver_timeout: None,
-        rlimit: Some(20_000_000),
-        max_depth: 6,
-        confirm_states: 2_000,
+fn symbolic_options() -> Options {
+    Options {
         jobs: 1,
-        ..SymbolicOptions::default()
+        symbolic: SymbolicOptions {
+            // deterministic budgets: the same verdicts on every machine
+            solver_timeout: None,
+            rlimit: Some(20_000_000),
+            max_depth: 6,
+            confirm_states: 2_000,
+            ..SymbolicOptions::default()
+        },
+        ..Options::default()
     }
 }
 
@@ -45,7 +48,7 @@ fn compare(sys: &System, text: &str, explicit: &Report, sym: &Report) -> Result<
                 .map_or(sys.initial_state(), |(_, st)| st.clone());
             match &t.verdict {
                 TraceVerdict::Deadlock => {
-                    prop_assert_eq!(s.kind, PropertyKind::DeadlockFree);
+                    prop_assert_eq!(s.kind, CheckKind::DeadlockFree);
                     let mut steps = bip_model::Steps::new();
                     sys.enabled_steps(&last, &mut steps).unwrap();
                     let mut checker = bip_model::LivenessChecker::default();
@@ -70,7 +73,7 @@ fn compare(sys: &System, text: &str, explicit: &Report, sym: &Report) -> Result<
             }
             // counterexamples are shortest, as the explicit method's are
             if let Some(et) = e.verdict.trace() {
-                if e.verdict.fails() == s.verdict.fails() && s.kind != PropertyKind::DeadlockFree {
+                if e.verdict.fails() == s.verdict.fails() && s.kind != CheckKind::DeadlockFree {
                     prop_assert_eq!(et.steps.len(), t.steps.len(), "{}\n{}", s.name, text);
                 }
             }
@@ -85,6 +88,7 @@ fn check(seed: u64, with_roles: bool) -> Result<(), TestCaseError> {
         .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e.summary())))?;
     let explicit = verify(
         &sys,
+        Method::Explicit,
         &Options {
             jobs: 1,
             ..Options::default()
@@ -92,7 +96,7 @@ fn check(seed: u64, with_roles: bool) -> Result<(), TestCaseError> {
         &|_| {},
     )
     .unwrap();
-    let sym = symbolic::verify(&sys, &symbolic_options()).unwrap();
+    let sym = verify(&sys, Method::Symbolic, &symbolic_options(), &|_| {}).unwrap();
     compare(&sys, &text, &explicit, &sym)
 }
 

@@ -19,8 +19,9 @@ use bip_model::{
     Verdict as TraceVerdict,
 };
 
-use crate::explore::{verify, Options};
-use crate::report::Verdict;
+use crate::explore;
+use crate::options::Options;
+use crate::report::PropertyVerdict;
 
 /// The trace through `states` (the first is the initial state), each step found with the
 /// step relation; an error names the first pair no step connects.
@@ -59,7 +60,7 @@ pub fn trace_through(
 
 /// What a bounded explicit exploration says about one property.
 pub struct Bounded {
-    pub verdict: Verdict,
+    pub verdict: PropertyVerdict,
     /// Every reachable state was explored.
     pub complete: bool,
     pub states: u64,
@@ -81,7 +82,7 @@ pub fn bounded_explicit(
         max_memory: Some(max_memory),
         ..Options::default()
     };
-    let report = verify(&one, &options, &|_| {}).ok()?;
+    let report = explore::verify(&one, &options, &|_| {}).ok()?;
     let p = report.property(&property.name)?;
     Some(Bounded {
         verdict: p.verdict.clone(),

@@ -30,7 +30,7 @@ use super::encode::{StepFilter, StepVars};
 use super::prover::{Placed, Prover};
 use super::solver::Answer;
 use super::term::{and, err_formula, implies, not, or};
-use crate::report::Verdict;
+use crate::report::PropertyVerdict;
 
 /// How far the time look-ahead may grow.
 const MAX_LOOKAHEAD: usize = 64;
@@ -47,7 +47,7 @@ pub enum Finding {
     /// A real deadlock, replayed with the step relation.
     Deadlock(Trace),
     /// An explicit exploration decided (a complete one, or one that found a failure).
-    Explicit(Verdict, u64),
+    Explicit(PropertyVerdict, u64),
     /// A state satisfying every invariant and the deadlock predicate, not confirmed.
     Possible(State),
     Unknown(String),
@@ -188,12 +188,12 @@ pub fn deadlock_free(p: &mut Prover<'_>, prop: &Property, range_errors_proved: b
             }
             // confirm by explicit search
             let opts = &p.options;
-            if opts.confirm_states > 0 {
+            if opts.symbolic.confirm_states > 0 {
                 if let Some(b) = confirm::bounded_explicit(
                     sys,
                     prop,
-                    opts.confirm_states,
-                    opts.confirm_memory,
+                    opts.symbolic.confirm_states,
+                    opts.symbolic.confirm_memory,
                     opts.jobs,
                 ) {
                     if b.verdict.fails() || (b.complete && b.verdict.holds()) {
@@ -202,7 +202,7 @@ pub fn deadlock_free(p: &mut Prover<'_>, prop: &Property, range_errors_proved: b
                 }
             }
             if let Some(trace) =
-                confirm::greedy_deadlock(sys, &state, terminal, p.options.confirm_states)
+                confirm::greedy_deadlock(sys, &state, terminal, p.options.symbolic.confirm_states)
             {
                 if trace.replay(sys).is_ok() {
                     return Finding::Deadlock(trace);

@@ -3,7 +3,7 @@
 //!
 //! This is the one necessary second description of `bip-model`'s step relation (DESIGN.md),
 //! mirrored from `bip-model/src/step.rs` rule for rule, and cross-checked against it by a
-//! property test on random systems (`verifier/tests/symbolic_encoding.rs`):
+//! property test on random systems (`verifier/src/symbolic/encoding_tests.rs`):
 //!
 //! - a frame holds one term per state slot: an `Int` per location and integer variable, a
 //!   `Bool` per boolean variable; slots with a single possible value are numerals;
@@ -63,8 +63,6 @@ pub struct Encoding<'s> {
     pub rules_by_low: Vec<Vec<u32>>,
     /// Per component, the interactions it takes part in and its position in their ports.
     pub inters_of: Vec<Vec<(u32, u32)>>,
-    /// Per interaction, the components whose variables its connector action writes.
-    pub action_writes: Vec<Vec<u32>>,
     pub roles: Vec<Role>,
 }
 
@@ -102,8 +100,11 @@ pub struct Enabling {
     pub trans_en: Vec<Vec<Bool>>,
     /// Per component, per port (the last index: internal): some transition on it is enabled.
     pub port_en: Vec<Vec<Bool>>,
-    /// Per interaction: enabled before priorities.
-    pub inter_en: Vec<Bool>,
+    /// Per interaction: enabled before priorities. Read by no query, but held as long as
+    /// the rest: z3 gives the ids of freed terms to new ones, and the ids order its search,
+    /// so freeing these earlier changes which of equally short traces a proof reports.
+    #[allow(dead_code)]
+    inter_en: Vec<Bool>,
     /// Per interaction: enabled and not suppressed by a priority.
     pub allowed: Vec<Bool>,
     /// Computing the enabled steps fails: a guard, connector guard or priority condition
@@ -138,7 +139,9 @@ impl StepFilter {
 
 /// The choice variables of one step.
 pub struct StepVars {
-    /// The step's label, numbered as in [`StepEnc::labels`].
+    /// The step's label: the interactions the filter lets through and that may be allowed,
+    /// in order, then the components that may take an internal transition (as
+    /// [`Encoding::step`] numbers them).
     pub sel: Choice,
     /// Per component: the transition it takes, if it takes part.
     pub tr: Vec<Choice>,
@@ -166,8 +169,6 @@ impl StepVars {
 
 /// One step from a frame.
 pub struct StepEnc {
-    /// The labels `sel` numbers.
-    pub labels: Vec<Label>,
     /// The choice is a step enabled in the frame (after priorities), broadcast receivers
     /// included exactly when enabled.
     pub valid: Bool,
@@ -210,22 +211,10 @@ impl<'s> Encoding<'s> {
             }
         }
         let mut inters_of = vec![Vec::new(); sys.components.len()];
-        let mut action_writes = Vec::with_capacity(sys.interactions.len());
         for (i, inter) in sys.interactions.iter().enumerate() {
             for (k, p) in inter.ports.iter().enumerate() {
                 inters_of[p.component as usize].push((i as u32, k as u32));
             }
-            let mut w: Vec<u32> = inter
-                .action
-                .iter()
-                .filter_map(|a| match a.target {
-                    Target::Slot(s) => Some(sys.component_of_slot(s)),
-                    Target::Local(_) => None,
-                })
-                .collect();
-            w.sort_unstable();
-            w.dedup();
-            action_writes.push(w);
         }
         let roles = sys
             .interactions
@@ -238,7 +227,6 @@ impl<'s> Encoding<'s> {
             by_port,
             rules_by_low,
             inters_of,
-            action_writes,
             roles,
         }
     }
@@ -555,7 +543,6 @@ impl<'s> Encoding<'s> {
         }
         if labels.is_empty() {
             return StepEnc {
-                labels,
                 valid: ff(),
                 fire_err: ff(),
                 next: f.slots.clone(),
@@ -704,7 +691,6 @@ impl<'s> Encoding<'s> {
             }
         }
         StepEnc {
-            labels,
             valid: and(valid),
             fire_err: or(fire_errs),
             next,

@@ -149,7 +149,7 @@ pub fn prove(p: &mut Prover<'_>, goal: Goal<'_>) -> Finding {
         }
     }
     // 2. and 3. bounded model checking and k-induction, side by side
-    let max = p.options.max_depth as usize;
+    let max = p.options.symbolic.max_depth as usize;
     let all = StepFilter::all(sys);
     let bmc = p.solver();
     let mut path: Vec<Frame> = vec![p.enc.concrete_frame(&sys.initial_state())];

@@ -22,66 +22,42 @@
 
 mod confirm;
 mod deadlock;
-pub mod encode;
+mod encode;
+#[cfg(test)]
+mod encoding_tests;
 mod induction;
-pub mod invariants;
-pub mod net;
+mod invariants;
+mod net;
 mod prover;
-pub mod semiflows;
+mod semiflows;
 mod solver;
-pub mod term;
-pub mod traps;
+mod term;
+mod traps;
 
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use bip_model::{PropertyKind as ModelKind, System, Trace};
 
-use crate::explore::{checked_properties, VerifyError, RANGE_ERRORS};
+use crate::error::VerifyError;
 use crate::memory;
+use crate::options::Options;
+use crate::progress::Progress;
+use crate::properties::{checked_properties, RANGE_ERRORS};
 use crate::report::{
-    Method, PropertyKind, PropertyResult, Report, Stats, Stop, SymbolicStats, Verdict,
+    CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop, SymbolicStats,
 };
 use induction::Goal;
 use prover::Prover;
 
-pub use solver::Budget;
-
-/// How to run the symbolic method.
-#[derive(Clone, Debug)]
-pub struct SymbolicOptions {
-    /// Wall-clock limit of one solver call.
-    pub solver_timeout: Option<Duration>,
-    /// Wall-clock limit of the whole run.
-    pub timeout: Option<Duration>,
-    /// z3's deterministic resource limit per solver call (for reproducible runs).
-    pub rlimit: Option<u32>,
-    /// Deepest bounded model check, and largest k of k-induction.
-    pub max_depth: u32,
-    /// States the explicit confirmation of a candidate deadlock may explore (breadth-first,
-    /// then steps of the greedy search); 0 turns confirmation off.
-    pub confirm_states: u64,
-    /// Memory the bounded breadth-first confirmation may use.
-    pub confirm_memory: u64,
-    /// Worker threads of the explicit confirmation (0: one per core).
-    pub jobs: usize,
-}
-
-impl Default for SymbolicOptions {
-    fn default() -> Self {
-        SymbolicOptions {
-            solver_timeout: Some(Duration::from_secs(120)),
-            timeout: None,
-            rlimit: None,
-            max_depth: 20,
-            confirm_states: 200_000,
-            confirm_memory: 512 << 20,
-            jobs: 0,
-        }
-    }
-}
-
-/// Verifies every property of `system` symbolically.
-pub fn verify(system: &System, options: &SymbolicOptions) -> Result<Report, VerifyError> {
+/// Verifies every property of `system` symbolically. Reads `options.symbolic`, the time
+/// limit and, for the explicit confirmation of deadlock candidates, the workers. Takes a
+/// progress callback as every method does, and never calls it: [`Progress`] counts the
+/// states of an exploration.
+pub(crate) fn verify(
+    system: &System,
+    options: &Options,
+    _progress: &(dyn Fn(&Progress) + Sync),
+) -> Result<Report, VerifyError> {
     // z3's context is per thread, and deep terms recurse: one thread with a large stack
     std::thread::scope(|scope| {
         std::thread::Builder::new()
@@ -96,13 +72,13 @@ pub fn verify(system: &System, options: &SymbolicOptions) -> Result<Report, Veri
 
 /// One property's outcome.
 struct Outcome {
-    verdict: Verdict,
+    verdict: PropertyVerdict,
     method: Method,
     note: Option<String>,
 }
 
 impl Outcome {
-    fn symbolic(verdict: Verdict, note: Option<String>) -> Outcome {
+    fn symbolic(verdict: PropertyVerdict, note: Option<String>) -> Outcome {
         Outcome {
             verdict,
             method: Method::Symbolic,
@@ -111,7 +87,7 @@ impl Outcome {
     }
 
     fn unknown(reason: String) -> Outcome {
-        Outcome::symbolic(Verdict::Inconclusive { reason }, None)
+        Outcome::symbolic(PropertyVerdict::Inconclusive { reason }, None)
     }
 }
 
@@ -120,7 +96,7 @@ fn after(trace: &Trace) -> String {
     format!("after {n} step{}", if n == 1 { "" } else { "s" })
 }
 
-fn run(system: &System, options: &SymbolicOptions) -> Report {
+fn run(system: &System, options: &Options) -> Report {
     let started = Instant::now();
     let mut p = Prover::new(system, options.clone());
     let invariant_seconds = started.elapsed().as_secs_f64();
@@ -137,15 +113,15 @@ fn run(system: &System, options: &SymbolicOptions) -> Report {
         let t0 = Instant::now();
         let (kind, outcome) = match &prop.kind {
             ModelKind::DeadlockFree { .. } => (
-                PropertyKind::DeadlockFree,
+                CheckKind::DeadlockFree,
                 deadlock(&mut p, prop, range_proved),
             ),
             ModelKind::Invariant(e) => (
-                PropertyKind::Invariant,
+                CheckKind::Invariant,
                 safety(&mut p, Goal::Invariant(e, &prop.name)),
             ),
             ModelKind::Reachable(e) => (
-                PropertyKind::Reachable,
+                CheckKind::Reachable,
                 safety(&mut p, Goal::Reach(e, &prop.name)),
             ),
         };
@@ -161,7 +137,7 @@ fn run(system: &System, options: &SymbolicOptions) -> Report {
     }
     properties.push(PropertyResult {
         name: RANGE_ERRORS.into(),
-        kind: PropertyKind::RangeErrors,
+        kind: CheckKind::RangeErrors,
         expr: String::new(),
         verdict: range.verdict,
         method: range.method,
@@ -175,11 +151,11 @@ fn run(system: &System, options: &SymbolicOptions) -> Report {
         model: system.name.clone(),
         method: Method::Symbolic,
         properties,
-        stats: Stats {
+        stats: RunStats {
             seconds,
             peak_memory_bytes: memory::peak_resident_bytes(),
             jobs: 1,
-            ..Stats::default()
+            ..RunStats::default()
         },
         stopped,
         symbolic: Some(SymbolicStats {
@@ -201,7 +177,7 @@ fn deadlock(p: &mut Prover<'_>, prop: &bip_model::Property, range_proved: bool) 
     use deadlock::Finding;
     match deadlock::deadlock_free(p, prop, range_proved) {
         Finding::Proved { candidates } => Outcome::symbolic(
-            Verdict::Holds { witness: None },
+            PropertyVerdict::Holds { witness: None },
             Some(if candidates == 0 {
                 "invariants ∧ deadlock predicate unsatisfiable".into()
             } else {
@@ -209,7 +185,7 @@ fn deadlock(p: &mut Prover<'_>, prop: &bip_model::Property, range_proved: bool) 
             }),
         ),
         Finding::Deadlock(trace) => Outcome::symbolic(
-            Verdict::Fails {
+            PropertyVerdict::Fails {
                 reason: format!("deadlock {} (confirmed by explicit search)", after(&trace)),
                 trace: Some(trace),
             },
@@ -237,27 +213,29 @@ fn safety(p: &mut Prover<'_>, goal: Goal<'_>) -> Outcome {
     let reach = matches!(goal, Goal::Reach(..));
     match induction::prove(p, goal) {
         Finding::Holds { how } if reach => Outcome::symbolic(
-            Verdict::Fails {
+            PropertyVerdict::Fails {
                 reason: format!("no reachable state satisfies it (proved: {how})"),
                 trace: None,
             },
             Some(how),
         ),
-        Finding::Holds { how } => Outcome::symbolic(Verdict::Holds { witness: None }, Some(how)),
+        Finding::Holds { how } => {
+            Outcome::symbolic(PropertyVerdict::Holds { witness: None }, Some(how))
+        }
         Finding::Bad(trace) => {
             let verdict = match &trace.verdict {
-                bip_model::Verdict::Witness(_) => Verdict::Holds {
+                bip_model::Verdict::Witness(_) => PropertyVerdict::Holds {
                     witness: Some(trace),
                 },
-                bip_model::Verdict::Violation(_) => Verdict::Fails {
+                bip_model::Verdict::Violation(_) => PropertyVerdict::Fails {
                     reason: format!("violated {}", after(&trace)),
                     trace: Some(trace),
                 },
-                bip_model::Verdict::RangeError(m) => Verdict::Fails {
+                bip_model::Verdict::RangeError(m) => PropertyVerdict::Fails {
                     reason: format!("range error: {m} {}", after(&trace)),
                     trace: Some(trace),
                 },
-                _ => Verdict::Inconclusive {
+                _ => PropertyVerdict::Inconclusive {
                     reason: "internal error: unexpected trace".into(),
                 },
             };

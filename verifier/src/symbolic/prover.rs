@@ -15,7 +15,7 @@ use super::semiflows::{self, Semiflow};
 use super::solver::{self, Answer, Budget, Calls};
 use super::term::{or, Sym};
 use super::traps;
-use super::SymbolicOptions;
+use crate::options::Options;
 
 /// Traps learned from one candidate at most.
 const TRAPS_PER_CANDIDATE: usize = 4096;
@@ -30,7 +30,7 @@ pub struct Prover<'s> {
     trap_set: HashSet<Vec<u32>>,
     pub budget: Budget,
     pub calls: Calls,
-    pub options: SymbolicOptions,
+    pub options: Options,
     /// Frames created so far (their names must differ).
     frames: u64,
 }
@@ -42,7 +42,7 @@ pub struct Placed {
 }
 
 impl<'s> Prover<'s> {
-    pub fn new(sys: &'s System, options: SymbolicOptions) -> Prover<'s> {
+    pub fn new(sys: &'s System, options: Options) -> Prover<'s> {
         let started = Instant::now();
         let enc = Encoding::new(sys);
         let ci = invariants::compute(&enc);
@@ -58,9 +58,9 @@ impl<'s> Prover<'s> {
             "invariants computed"
         );
         let budget = Budget {
-            per_call: options.solver_timeout,
+            per_call: options.symbolic.solver_timeout,
             deadline: options.timeout.map(|t| started + t),
-            rlimit: options.rlimit,
+            rlimit: options.symbolic.rlimit,
         };
         Prover {
             enc,

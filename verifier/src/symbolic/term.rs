@@ -870,16 +870,6 @@ impl Choice {
     pub fn below(&self, n: u64) -> Bool {
         lt_const(&self.bits, n)
     }
-
-    pub fn read(&self, model: &z3::Model) -> Option<u64> {
-        let mut v = 0u64;
-        for (k, b) in self.bits.iter().enumerate() {
-            if model.eval(b, true)?.as_bool()? {
-                v |= 1 << k;
-            }
-        }
-        Some(v)
-    }
 }
 
 /// The binary number `bits` (least significant first) is below `n`.

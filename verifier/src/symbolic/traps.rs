@@ -132,22 +132,6 @@ pub fn small_trap(net: &Net, seed: u32, within: &[bool]) -> Vec<u32> {
     list
 }
 
-/// Checks the trap condition (for tests and debugging).
-pub fn is_trap(net: &Net, set: &[bool]) -> bool {
-    net.members.iter().enumerate().all(|(m, member)| {
-        member.moves.iter().all(|&(f, t)| {
-            !set[f as usize]
-                || set[t as usize]
-                || net.others(m as u32).iter().any(|&o| {
-                    net.members[o as usize]
-                        .moves
-                        .iter()
-                        .all(|&(_, t)| set[t as usize])
-                })
-        })
-    })
-}
-
 /// The initially marked traps that are empty in a candidate state (given by the place
 /// each component occupies), as small traps; empty if there is none, which means the
 /// candidate is not excluded by any trap.

@@ -7,15 +7,18 @@
 //! whose firing fails, the same "no progress step", and the same value (or failure) of
 //! the properties' expressions.
 
+// the random models of the integration tests, one generator for both
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use std::collections::BTreeSet;
 
 use bip_lang::load_str;
 use bip_model::{PropertyKind, State, Steps, System};
-use bip_verifier::symbolic::encode::{Encoding, StepFilter, StepVars};
-use bip_verifier::symbolic::term::{err_formula, lit, not};
 use proptest::prelude::*;
+
+use super::encode::{Encoding, StepFilter, StepVars};
+use super::term::{err_formula, lit, not};
 use z3::ast::Bool;
 use z3::{SatResult, Solver};
 
