@@ -42,6 +42,7 @@ pub mod eval;
 pub mod expr;
 mod fast_path;
 mod fire_plan;
+mod gate;
 pub mod genom;
 mod incremental;
 #[cfg(feature = "std")]
@@ -70,6 +71,7 @@ pub use deadlock::{Liveness, LivenessChecker};
 #[cfg(feature = "std")]
 pub use diag::{LoadError, ModelError};
 pub use fire_plan::{FirePlans, PlanId};
+pub use gate::{CommitError, Committed, Gate, GateStep};
 #[cfg(feature = "std")]
 pub use genom::expand;
 pub use genom::GenomMap;
