@@ -20,8 +20,8 @@ use core::any::Any;
 use crate::prelude::*;
 
 use bip_model::{
-    CacheStats, EnabledSet, FirePlans, Label, Pick, PlanEffects, PlanId, RangeError, State,
-    StateCache, Step, System, Trace, Verdict,
+    CacheStats, CommitError, EnabledSet, Gate, Label, Pick, RangeError, State, Step, System, Trace,
+    Verdict,
 };
 
 use crate::bind::{InterKind, PortKind, RunStep, Tables};
@@ -239,19 +239,15 @@ impl EngineBuilder {
             .or(system.tick_ms.map(|ms| ms.saturating_mul(1000)))
             .unwrap_or(1000)
             .max(1);
-        let state = system.initial_state();
-        let enabled = EnabledSet::new(&system, &state).map_err(BuildError::Range)?;
-        let plans = system.fire_plans();
-        let plan_moves = plans
+        let gate = Gate::new(system, self.state_cache).map_err(BuildError::Range)?;
+        let pool = gate.enabled().pool();
+        let plan_moves = gate
+            .plans()
             .steps()
             .map(|(i, at, width)| {
-                let pool = enabled.pool();
                 t.step_moves_request(i, &pool[at as usize..(at + width) as usize])
             })
             .collect();
-        let effects = enabled.plan_effects(&system, &plans);
-        let mut cache = StateCache::new(&system, self.state_cache);
-        cache.enter(&enabled, &state);
         let ports = PortStore::new(core::mem::take(&mut t.ports));
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
         let activities = t.activities.len();
@@ -267,10 +263,7 @@ impl EngineBuilder {
         }
         let now = clock.now_us();
         Ok(Engine {
-            next: state.clone(),
-            step_slots: Vec::new(),
-            state,
-            enabled,
+            gate,
             bodies: out,
             t,
             ports,
@@ -292,10 +285,7 @@ impl EngineBuilder {
             }),
             candidates: Vec::with_capacity(16),
             chosen: Chosen::with_capacity(16),
-            plans,
             plan_moves,
-            effects,
-            cache,
             known_candidates: PerState::new(),
             known_held: PerState::new(),
             held_now: Vec::with_capacity(activities),
@@ -306,7 +296,6 @@ impl EngineBuilder {
             quiescent_dirty: true,
             stopped: None,
             codel_stamp: Vec::new(),
-            system,
             #[cfg(feature = "std")]
             workers,
             #[cfg(feature = "std")]
@@ -354,14 +343,9 @@ enum Verdict2 {
 
 /// The runtime engine (see the module documentation and docs/engine.md).
 pub struct Engine {
-    system: System,
+    /// The model's state and its enabled steps: every step is committed through it.
+    gate: Gate,
     t: Tables,
-    state: State,
-    /// Equal to `state` between steps: a step is fired onto it, and only the slots the
-    /// step wrote (`step_slots`) are compared and copied to `state`.
-    next: State,
-    step_slots: Vec<u32>,
-    enabled: EnabledSet,
     bodies: Vec<Body>,
     pub(crate) ports: PortStore,
     ids_buf: Vec<i64>,
@@ -380,14 +364,9 @@ pub struct Engine {
     candidates: Vec<Candidate>,
     /// The step being committed.
     chosen: Chosen,
-    /// The firings of the pooled steps, compiled, and per plan whether its step moves a
-    /// request (`Tables::step_moves_request`).
-    plans: FirePlans,
+    /// Per fire plan of the gate, whether its step moves a request
+    /// (`Tables::step_moves_request`).
     plan_moves: Vec<bool>,
-    /// What firing each plan does to the enabled set, known ahead of time.
-    effects: PlanEffects,
-    /// The states met so far, their enabled steps and the plans between them.
-    cache: StateCache,
     /// The progress candidates of the states in the cache.
     known_candidates: PerState<Candidate>,
     /// The codel each activity has held, per state in the cache, and in this one.
@@ -429,12 +408,12 @@ impl Engine {
     }
 
     pub fn system(&self) -> &System {
-        &self.system
+        self.gate.system()
     }
 
     /// The current state of the model.
     pub fn state(&self) -> &State {
-        &self.state
+        self.gate.state()
     }
 
     pub fn stats(&self) -> Stats {
@@ -444,12 +423,12 @@ impl Engine {
     /// What the state cache holds and how often it knew the step
     /// ([`EngineBuilder::state_cache`]).
     pub fn cache_stats(&self) -> CacheStats {
-        self.cache.stats()
+        self.gate.cache_stats()
     }
 
     /// The bytes the state cache and what the engine keeps per cached state hold.
     pub fn cache_bytes(&self) -> usize {
-        self.cache.bytes() + self.known_candidates.bytes() + self.known_held.bytes()
+        self.gate.cache_bytes() + self.known_candidates.bytes() + self.known_held.bytes()
     }
 
     /// The clock's time (microseconds since the engine started).
@@ -464,14 +443,14 @@ impl Engine {
 
     /// The enabled steps of the current state.
     pub fn enabled(&self) -> &EnabledSet {
-        &self.enabled
+        &self.gate.enabled()
     }
 
     /// The value of an ids field (`None` if there is no such module or field).
     pub fn ids(&self, module: &str, field: &str) -> Option<i64> {
-        let m = self.system.genom.as_ref()?.module(module)?;
+        let m = self.gate.system().genom.as_ref()?.module(module)?;
         let f = m.ids.iter().find(|f| f.name == field)?;
-        Some(self.state.slots()[f.slot as usize])
+        Some(self.gate.state().slots()[f.slot as usize])
     }
 
     /// The data last written on a port, if any and of type `T`.
@@ -541,9 +520,9 @@ impl Engine {
     /// builder asked to record).
     pub fn record(&self) -> Trace {
         match &self.recording {
-            Some(r) => r.to_trace(&self.system, Verdict::None),
+            Some(r) => r.to_trace(self.gate.system(), Verdict::None),
             None => Trace {
-                system: self.system.name.clone(),
+                system: self.gate.system().name.clone(),
                 verdict: Verdict::None,
                 steps: Vec::new(),
             },
@@ -628,7 +607,7 @@ impl Engine {
                 }),
                 Candidate::Step(label, k) => {
                     self.choose_kth(label, k);
-                    self.commit(label, Cause::Other)?;
+                    self.commit(Cause::Other)?;
                     Ok(Stepped::Other)
                 }
             };
@@ -707,8 +686,12 @@ impl Engine {
             return Err(EngineError::Stopped(e.clone()).into());
         }
         let allowed = match step.label {
-            Label::Interaction(i) => self.enabled.steps_of(i).any(|s| s.picks == step.picks),
-            Label::Internal { .. } => self.enabled.internal_steps().any(|s| s == step),
+            Label::Interaction(i) => self
+                .gate
+                .enabled()
+                .steps_of(i)
+                .any(|s| s.picks == step.picks),
+            Label::Internal { .. } => self.gate.enabled().internal_steps().any(|s| s == step),
         };
         if !allowed {
             return Err(StepAsError::NotAllowed);
@@ -719,24 +702,24 @@ impl Engine {
             Label::Interaction(i) => self.t.kind[i as usize],
             Label::Internal { .. } => InterKind::Progress,
         };
-        self.chosen.set_copied(step.picks);
+        self.chosen.set_copied(step);
         match kind {
             InterKind::Codel { codel, .. } => self.run_codel(codel, true),
             InterKind::Request { service } => {
                 let ticket = self.new_ticket();
-                self.accept_request(ticket, service, None, step.label)?;
+                self.accept_request(ticket, service, None)?;
                 Ok(Stepped::Request {
                     ticket,
                     accepted: true,
                 })
             }
             InterKind::Time => {
-                self.commit(step.label, Cause::Other)?;
+                self.commit(Cause::Other)?;
                 self.count_tick();
                 Ok(Stepped::Tick)
             }
             InterKind::Progress | InterKind::Environment => {
-                self.commit(step.label, Cause::Other)?;
+                self.commit(Cause::Other)?;
                 Ok(Stepped::Other)
             }
         }
@@ -756,12 +739,12 @@ impl Engine {
             .time
             .iter()
             .copied()
-            .find(|&i| self.enabled.is_enabled(i))
+            .find(|&i| self.gate.enabled().is_enabled(i))
     }
 
     fn fire_time(&mut self, i: u32) -> Result<(), EngineError> {
         self.take_step_of(i);
-        self.commit(Label::Interaction(i), Cause::Other)?;
+        self.commit(Cause::Other)?;
         self.count_tick();
         Ok(())
     }
@@ -774,7 +757,7 @@ impl Engine {
     fn collect_candidates(&mut self) {
         self.candidates.clear();
         // a state met before: its candidates are known
-        let here = self.cache.current();
+        let here = self.gate.cached_state();
         if let Some(known) = here.and_then(|s| self.known_candidates.get(s)) {
             self.candidates.extend_from_slice(known);
             return;
@@ -783,7 +766,7 @@ impl Engine {
             self.codel_stamp = vec![u64::MAX; self.t.codels.len()];
         }
         collect_progress(
-            &self.enabled,
+            &self.gate.enabled(),
             &self.t,
             &mut self.codel_stamp,
             self.stats.steps,
@@ -798,7 +781,7 @@ impl Engine {
         }
         let mut last = None;
         let mut k = 0;
-        for s in self.enabled.internal_steps() {
+        for s in self.gate.enabled().internal_steps() {
             if last != Some(s.label) {
                 last = Some(s.label);
                 k = 0;
@@ -811,14 +794,15 @@ impl Engine {
     /// Chooses the `k`-th enabled step with `label`.
     fn choose_kth(&mut self, label: Label, k: u32) {
         let step = match label {
-            Label::Interaction(i) => self.enabled.steps_of(i).nth(k as usize),
+            Label::Interaction(i) => self.gate.enabled().steps_of(i).nth(k as usize),
             Label::Internal { .. } => self
-                .enabled
+                .gate
+                .enabled()
                 .internal_steps()
                 .filter(|s| s.label == label)
                 .nth(k as usize),
         };
-        self.chosen.set(&self.enabled, step);
+        self.chosen.set(self.gate.enabled(), step);
     }
 
     /// Chooses one of the enabled steps of interaction `i` by the policy (none if it has
@@ -827,12 +811,12 @@ impl Engine {
         // one step from the pool (a tick): nothing to walk, and nothing to choose (a
         // chooser asked to choose among one answers 0 and draws nothing, so seeded runs
         // do not change)
-        if let Some((at, width, 1)) = self.enabled.pooled_steps(i) {
-            self.chosen.set_pooled(at, width);
+        if let Some((at, width, 1)) = self.gate.enabled().pooled_steps(i) {
+            self.chosen.set_pooled(i, at, width);
             return;
         }
-        let step = choose_step(&mut self.chooser, || self.enabled.steps_of(i));
-        self.chosen.set(&self.enabled, step);
+        let step = choose_step(&mut self.chooser, || self.gate.enabled().steps_of(i));
+        self.chosen.set(self.gate.enabled(), step);
     }
 
     // ---------------------------------------------------------------------------------
@@ -845,9 +829,9 @@ impl Engine {
         args: Option<Box<dyn Any + Send>>,
     ) -> Result<Stepped, EngineError> {
         let i = self.t.services[service as usize].request;
-        if self.enabled.is_enabled(i) {
+        if self.gate.enabled().is_enabled(i) {
             self.take_step_of(i);
-            self.accept_request(ticket, service, args, Label::Interaction(i))?;
+            self.accept_request(ticket, service, args)?;
             return Ok(Stepped::Request {
                 ticket,
                 accepted: true,
@@ -860,7 +844,7 @@ impl Engine {
             .enumerate()
         {
             if !c
-                .holds(&self.system, &self.state)
+                .holds(self.gate.system(), self.gate.state())
                 .map_err(EngineError::Range)?
             {
                 mask |= 1 << k;
@@ -892,7 +876,6 @@ impl Engine {
         ticket: Ticket,
         service: u32,
         args: Option<Box<dyn Any + Send>>,
-        label: Label,
     ) -> Result<(), EngineError> {
         self.stats.requests_accepted += 1;
         self.emit(Event::Reply {
@@ -900,14 +883,11 @@ impl Engine {
             service: ServiceId(service),
             reply: Reply::Accepted,
         });
-        self.commit(
-            label,
-            Cause::Request {
-                service,
-                ticket: Some(ticket),
-                args,
-            },
-        )?;
+        self.commit(Cause::Request {
+            service,
+            ticket: Some(ticket),
+            args,
+        })?;
         if self.t.services[service as usize].activity.is_none() {
             // a function or attribute runs at once
             self.emit(Event::Reply {
@@ -923,12 +903,12 @@ impl Engine {
     /// `Exclusive`, a codel held by `Requires`...), reported once per change.
     fn report_held(&mut self) -> Result<(), EngineError> {
         let n = self.t.activities.len();
-        let Some(here) = self.cache.current() else {
+        let Some(here) = self.gate.cached_state() else {
             for k in 0..n {
                 let w = &self.t.activities[k];
                 // most activities wait for their period at a quiescent point: nothing is
                 // held, and nothing was reported held before
-                if w.held.is_none() && w.rest.at_rest(self.state.slots()) {
+                if w.held.is_none() && w.rest.at_rest(self.gate.state().slots()) {
                     continue;
                 }
                 let held = self.held_codel(w.service as usize)?;
@@ -968,7 +948,7 @@ impl Engine {
         let Some(a) = &self.t.services[s].activity else {
             return;
         };
-        let loc = self.state.slots()[a.loc_slot as usize] as u32;
+        let loc = self.gate.state().slots()[a.loc_slot as usize] as u32;
         let ticket = if loc == a.ether { a.pending } else { a.current };
         let i = &self.t.codels[c as usize].info;
         tracing::info!(target: "bip_engine", module = i.module.as_str(),
@@ -1000,7 +980,7 @@ impl Engine {
         let mut out = Vec::new();
         for svc in &self.t.services {
             let Some(a) = &svc.activity else { continue };
-            let slots = self.state.slots();
+            let slots = self.gate.state().slots();
             let loc = slots[a.loc_slot as usize] as u32;
             if loc == a.ether && slots[a.req_slot as usize] == 0 {
                 continue;
@@ -1011,7 +991,7 @@ impl Engine {
             let mut mask = 0u64;
             for (k, h) in self.t.codels[c as usize].map.holds.iter().enumerate() {
                 if !h
-                    .holds(&self.system, &self.state)
+                    .holds(self.gate.system(), self.gate.state())
                     .map_err(EngineError::Range)?
                 {
                     mask |= 1 << k;
@@ -1027,7 +1007,7 @@ impl Engine {
         let Some(a) = &self.t.services[s].activity else {
             return Ok(None);
         };
-        let slots = self.state.slots();
+        let slots = self.gate.state().slots();
         if a.rest().at_rest(slots) {
             return Ok(None);
         }
@@ -1038,15 +1018,15 @@ impl Engine {
         let cm = &self.t.codels[c as usize].map;
         // codels are higher than the tick in every GenoM layer, so the set evaluates them
         // always (`None`, never evaluated, cannot happen here)
-        if self.enabled.has_steps_before_priorities(cm.run) != Some(false)
-            || self.enabled.has_steps_before_priorities(cm.fail) != Some(false)
+        if self.gate.enabled().has_steps_before_priorities(cm.run) != Some(false)
+            || self.gate.enabled().has_steps_before_priorities(cm.fail) != Some(false)
         {
             return Ok(None); // it can run; it may only wait for its turn
         }
         let mut mask = 0u64;
         for (k, h) in cm.holds.iter().enumerate() {
             if !h
-                .holds(&self.system, &self.state)
+                .holds(self.gate.system(), self.gate.state())
                 .map_err(EngineError::Range)?
             {
                 mask |= 1 << k;
@@ -1066,14 +1046,15 @@ impl Engine {
         // stage the module's ids
         self.ids_buf.clear();
         for f in &self.t.codels[ck].info.fields {
-            self.ids_buf.push(self.state.slots()[f.slot as usize]);
+            self.ids_buf
+                .push(self.gate.state().slots()[f.slot as usize]);
         }
         self.written = 0;
         self.ctx_fault = None;
         let starting = self.t.services[service]
             .activity
             .as_ref()
-            .is_some_and(|a| self.state.slots()[a.loc_slot as usize] == i64::from(a.ether));
+            .is_some_and(|a| self.gate.state().slots()[a.loc_slot as usize] == i64::from(a.ether));
         let t0 = self.clock.now_us();
         let verdict = match &self.bodies[ck] {
             Body::Default => self.default_verdict(ck, forced),
@@ -1084,12 +1065,12 @@ impl Engine {
         };
         let took = self.clock.now_us().saturating_sub(t0);
         let period_us = self.t.codels[ck].period_ticks.saturating_mul(self.tick_us);
-        // the step the outcome names, and the outcome of a run that failed
-        let (run, fail) = (self.t.codels[ck].map.run, self.t.codels[ck].map.fail);
-        let (label, error) = match verdict {
+        // the outcome of a run that failed; a normal one chose its run step
+        let fail = self.t.codels[ck].map.fail;
+        let error = match verdict {
             Verdict2::Normal { yield_k } => {
                 if self.take_run_step(ck, yield_k, forced) {
-                    (run, None)
+                    None
                 } else if forced {
                     return Err(StepAsError::Diverged);
                 } else {
@@ -1097,32 +1078,33 @@ impl Engine {
                         codel: CodelId(c),
                         kind: FaultKind::NotAllowed,
                     };
-                    (fail, Some(Outcome::Fault(fault)))
+                    Some(Outcome::Fault(fault))
                 }
             }
-            Verdict2::Error(o) => (fail, Some(o)),
+            Verdict2::Error(o) => Some(o),
         };
         if error.is_some() {
             if forced {
                 let same = self
-                    .enabled
+                    .gate
+                    .enabled()
                     .steps_of(fail)
                     .find(|s| s.picks == &self.forced[..]);
                 if same.is_none() {
                     return Err(StepAsError::Diverged);
                 }
-                self.chosen.set(&self.enabled, same);
+                self.chosen.set(self.gate.enabled(), same);
             } else {
                 self.take_step_of(fail);
             }
-            if self.chosen.picks(&self.enabled).is_empty() {
+            if self.chosen.picks(self.gate.enabled()).is_empty() {
                 // run and fail share their guard, so this cannot happen; report it
                 return Err(StepAsError::Engine(EngineError::Stopped(
                     self.internal_error(),
                 )));
             }
         }
-        if forced && self.chosen.picks(&self.enabled) != &self.forced[..] {
+        if forced && self.chosen.picks(self.gate.enabled()) != &self.forced[..] {
             return Err(StepAsError::Diverged);
         }
         self.stats.codels += 1;
@@ -1154,8 +1136,7 @@ impl Engine {
             // the codel's ids writes are part of the step: the module pick set them
             None => {}
         }
-        let label = Label::Interaction(label);
-        self.commit(label, Cause::Codel { error })?;
+        self.commit(Cause::Codel { error })?;
         Ok(Stepped::Codel {
             codel: CodelId(c),
             failed,
@@ -1336,7 +1317,8 @@ impl Engine {
 
     fn forced_is(&self, interaction: u32) -> bool {
         // the forced step is a step of `interaction` if it is enabled among its steps
-        self.enabled
+        self.gate
+            .enabled()
             .steps_of(interaction)
             .any(|s| s.picks == &self.forced[..])
     }
@@ -1350,11 +1332,11 @@ impl Engine {
         let pooled = if forced || !c.map.ids.is_empty() {
             None
         } else {
-            self.enabled.pooled_steps(c.map.run)
+            self.gate.enabled().pooled_steps(c.map.run)
         };
         if let (Some((entry, width, _)), Some(m)) = (pooled, c.run_step) {
             if m.entry == entry && m.yield_k as usize == yield_k {
-                self.chosen.set_pooled(m.step, width);
+                self.chosen.set_pooled(c.map.run, m.step, width);
                 return true;
             }
         }
@@ -1388,12 +1370,13 @@ impl Engine {
         let run = c.map.run;
         let mut remember = None;
         let step = if forced {
-            self.enabled
+            self.gate
+                .enabled()
                 .steps_of(run)
                 .find(|s| s.picks == &self.forced[..] && matches(s))
         } else {
             // as `choose_step`, keeping where the first match is among all the steps
-            let all = self.enabled.steps_of(run).enumerate();
+            let all = self.gate.enabled().steps_of(run).enumerate();
             let (n, first) = count_first(all.filter(|(_, s)| matches(s)));
             match first {
                 None => None,
@@ -1408,12 +1391,17 @@ impl Engine {
                         }
                         Some(first)
                     }
-                    k => self.enabled.steps_of(run).filter(|s| matches(s)).nth(k),
+                    k => self
+                        .gate
+                        .enabled()
+                        .steps_of(run)
+                        .filter(|s| matches(s))
+                        .nth(k),
                 },
             }
         };
         let found = step.is_some();
-        self.chosen.set(&self.enabled, step);
+        self.chosen.set(self.gate.enabled(), step);
         if remember.is_some() {
             self.t.codels[ck].run_step = remember;
         }
@@ -1423,130 +1411,54 @@ impl Engine {
     // ---------------------------------------------------------------------------------
     // Committing
 
-    /// Fires the chosen step, updates the enabled set, the replies and the
-    /// recording, and moves to the new state.
-    fn commit(&mut self, label: Label, cause: Cause) -> Result<(), EngineError> {
-        // a pooled step fires by its plan; any other as the relation says
-        let plan = match (label, self.chosen.pooled()) {
-            (Label::Interaction(i), Some((at, width))) => self.plans.plan_at(at, width, i),
-            _ => None,
-        };
-        #[cfg(debug_assertions)]
-        if let (Some(p), Label::Interaction(i)) = (plan, label) {
-            // the place named the plan of the very step chosen, and what it says of it
-            let (pi, at, width) = self.plans.step(p);
-            let picks = self.chosen.picks(&self.enabled);
-            debug_assert_eq!(pi, i);
-            debug_assert_eq!(
-                &self.enabled.pool()[at as usize..(at + width) as usize],
-                picks
-            );
-            debug_assert_eq!(
-                self.plan_moves[p.index()],
-                self.t.step_moves_request(i, picks)
-            );
-        }
-        // a step taken before from this state is looked up; any other is computed
-        let known = match plan {
-            Some(p) => self.cache.take_known(p, &mut self.enabled, &mut self.next),
-            None => {
-                self.cache.leave(&self.enabled);
-                false
+    /// Commits the chosen step through the gate, then replies and records.
+    fn commit(&mut self, cause: Cause) -> Result<(), EngineError> {
+        let label = self.chosen.label();
+        let (committed, unevaluated) = match self.gate.commit(self.chosen.step()) {
+            Ok(c) => (c, None),
+            Err(CommitError::Fire(e)) => {
+                self.stopped = Some(e.clone());
+                return Err(EngineError::Range(e));
             }
+            // the step was taken: it is replied to and recorded, then the engine stops
+            Err(CommitError::Evaluate { error, committed }) => (committed, Some(error)),
         };
-        let updated = if known {
-            Ok(())
-        } else {
-            self.fire_and_update(label, plan)?
-        };
-        let moves = match (label, plan) {
+        let moves = match (label, committed.plan) {
             (Label::Interaction(_), Some(p)) => self.plan_moves[p.index()],
             (Label::Interaction(i), None) => self
                 .t
-                .step_moves_request(i, self.chosen.picks(&self.enabled)),
+                .step_moves_request(i, self.chosen.picks(self.gate.enabled())),
             (Label::Internal { .. }, _) => false,
         };
+        #[cfg(debug_assertions)]
+        if let (Label::Interaction(i), Some(_)) = (label, committed.plan) {
+            let picks = self.chosen.picks(self.gate.enabled());
+            debug_assert_eq!(moves, self.t.step_moves_request(i, picks));
+        }
         if moves {
             self.track(cause);
         }
         if let Some(r) = &mut self.recording {
             r.push(Step {
                 label,
-                picks: self.chosen.picks(&self.enabled),
+                picks: self.chosen.picks(self.gate.enabled()),
             });
         }
         if tracing::enabled!(target: "bip_engine", tracing::Level::DEBUG) {
             self.trace_step(label);
         }
-        // the slots the step changed: the cache knows them, else the plan's or those
-        // `fire_in_place` listed
-        let written = match plan {
-            _ if known => self.cache.last_changed(),
-            Some(p) => self.plans.written(p),
-            None => &self.step_slots,
-        };
-        let (state, next) = (self.state.slots_mut(), self.next.slots());
-        for &s in written {
-            state[s as usize] = next[s as usize];
-        }
         self.stats.steps += 1;
         self.quiescent_dirty = true;
-        if let Err(e) = updated {
+        if let Some(e) = unevaluated {
             self.stopped = Some(e.clone());
             return Err(EngineError::Range(e));
         }
         Ok(())
     }
 
-    /// Fires the chosen step into `next` and brings the enabled set there (what the
-    /// state cache did not know); a range error of the firing stops the engine at once,
-    /// one of the update is returned.
-    fn fire_and_update(
-        &mut self,
-        label: Label,
-        plan: Option<PlanId>,
-    ) -> Result<Result<(), RangeError>, EngineError> {
-        let fired = match plan {
-            Some(p) => self.system.fire_planned(&self.plans, p, &mut self.next),
-            None => {
-                self.step_slots.clear();
-                let step = Step {
-                    label,
-                    picks: self.chosen.picks(&self.enabled),
-                };
-                self.system
-                    .fire_in_place(step, &mut self.next, &mut self.step_slots)
-            }
-        };
-        if let Err(e) = fired {
-            self.next.copy_from(&self.state);
-            self.stopped = Some(e.clone());
-            return Err(EngineError::Range(e));
-        }
-        let updated = match plan {
-            Some(p) => {
-                self.enabled
-                    .update_planned(&self.system, &self.effects, p, &self.state, &self.next)
-            }
-            None => {
-                self.enabled
-                    .update_written(&self.system, &self.state, &self.next, &self.step_slots)
-            }
-        };
-        if updated.is_ok() {
-            let written = match plan {
-                Some(p) => self.plans.written(p),
-                None => &self.step_slots,
-            };
-            let (enabled, state, next) = (&self.enabled, &self.state, &self.next);
-            self.cache.arrive(enabled, state, next, written);
-        }
-        Ok(updated)
-    }
-
     fn trace_step(&self, label: Label) {
         let name = match label {
-            Label::Interaction(i) => self.system.interactions[i as usize].name.as_str(),
+            Label::Interaction(i) => self.gate.system().interactions[i as usize].name.as_str(),
             Label::Internal { .. } => "internal",
         };
         let time_us = self.clock.now_us();
@@ -1557,7 +1469,7 @@ impl Engine {
                     "fail"
                 } else {
                     self.chosen
-                        .picks(&self.enabled)
+                        .picks(&self.gate.enabled())
                         .iter()
                         .find_map(|p| {
                             c.map.yield_of(p.transition).filter(|_| {
@@ -1590,8 +1502,8 @@ impl Engine {
             Cause::Codel { error, .. } => (None, None, None, error),
             Cause::Other => (None, None, None, None),
         };
-        for k in 0..self.chosen.picks(&self.enabled).len() {
-            let p = self.chosen.picks(&self.enabled)[k];
+        for k in 0..self.chosen.picks(self.gate.enabled()).len() {
+            let p = self.chosen.picks(self.gate.enabled())[k];
             // a tick, a codel that neither starts nor ends its activity, another component
             if !self.t.moves_request(p) {
                 continue;
@@ -1599,7 +1511,7 @@ impl Engine {
             let Some(svc) = self.t.activity_of[p.component as usize] else {
                 continue;
             };
-            let tr = &self.system.atom_of(p.component).transitions[p.transition as usize];
+            let tr = &self.gate.system().atom_of(p.component).transitions[p.transition as usize];
             let Some(port) = tr.port else { continue };
             let Some(a) = self.t.services[svc as usize].activity.as_mut() else {
                 continue;
@@ -1610,7 +1522,8 @@ impl Engine {
             };
             let from_ether = tr.from == a.ether;
             let to_ether = tr.to == a.ether;
-            let slots = self.state.slots();
+            // the step is committed: what held before it is in the state before
+            let slots = self.gate.previous().slots();
             let req_before = slots[a.req_slot as usize] != 0;
             let stopping_before = a.stopping_slot.is_some_and(|sl| slots[sl as usize] != 0);
             let mut replies: [Option<(Ticket, Outcome)>; 3] = [None, None, None];
