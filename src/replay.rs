@@ -81,7 +81,7 @@ pub fn run(args: &Args) -> u8 {
         let what = match done.stepped {
             Stepped::Tick => "tick".to_string(),
             Stepped::Codel { codel, failed } => {
-                let (m, s, c) = result.engine.codel_name(codel);
+                let (m, s, c) = result.engine.inspect().codel_name(codel);
                 let path = if failed { ", error path" } else { "" };
                 format!("codel {m}.{s}.{c} ran{path}")
             }

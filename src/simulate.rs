@@ -71,7 +71,7 @@ pub fn run(args: &Args) -> u8 {
         &mut steps,
         &mut checker,
     );
-    while stop.is_none() && engine.stats().steps < args.steps {
+    while stop.is_none() && engine.inspect().stats().steps < args.steps {
         // a request now and then, from the environment
         if rng.below(4) == 0 {
             if !services.is_empty() {
@@ -94,7 +94,7 @@ pub fn run(args: &Args) -> u8 {
                 continue;
             }
         }
-        let before = engine.stats().steps;
+        let before = engine.inspect().stats().steps;
         match engine.step() {
             Err(e) => stop = Some(Stop::RangeError(e.to_string())),
             Ok(Stepped::Idle { next_tick_us }) => match next_tick_us {
@@ -108,7 +108,7 @@ pub fn run(args: &Args) -> u8 {
             },
             Ok(_) => {}
         }
-        if stop.is_none() && engine.stats().steps != before {
+        if stop.is_none() && engine.inspect().stats().steps != before {
             stop = check(
                 &system,
                 &engine,
@@ -118,7 +118,7 @@ pub fn run(args: &Args) -> u8 {
             );
         }
     }
-    let stats = engine.stats();
+    let stats = engine.inspect().stats();
     let (verdict, code) = match &stop {
         None | Some(Stop::Stuck) => (Verdict::None, exit::OK),
         Some(Stop::Violation(p)) => (Verdict::Violation(p.clone()), exit::FAILED),
@@ -185,6 +185,7 @@ fn environment_step(
     rng: &mut Rng,
 ) -> Option<bip_model::OwnedStep> {
     let env: Vec<bip_model::OwnedStep> = engine
+        .inspect()
         .enabled()
         .steps()
         .filter(|s| system.role(s.label) == Role::Environment)
@@ -202,7 +203,7 @@ fn check(
     steps: &mut Steps,
     checker: &mut LivenessChecker,
 ) -> Option<Stop> {
-    let state = engine.state();
+    let state = engine.inspect().state();
     for p in &system.properties {
         if let PropertyKind::Invariant(e) = &p.kind {
             match system.holds(e, state, &p.name) {
@@ -213,7 +214,7 @@ fn check(
         }
     }
     let terminal = deadlock_free?;
-    engine.enabled().copy_to(steps);
+    engine.inspect().enabled().copy_to(steps);
     match system.liveness(state, steps, checker) {
         Ok(Liveness::Deadlock) => {
             let excused = match terminal {

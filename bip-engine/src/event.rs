@@ -44,6 +44,9 @@ impl Reasons {
     }
 }
 
+/// A callback for every event.
+pub type EventFn = Box<dyn FnMut(&Event) + Send>;
+
 /// Something the engine reports. Drain them with [`crate::Engine::events`], or receive
 /// them as they happen with [`crate::EngineBuilder::on_event`].
 #[derive(Clone, Debug, PartialEq)]

@@ -76,13 +76,11 @@ pub use clock::Clock;
 pub use clock::RealClock;
 #[cfg(target_has_atomic = "64")]
 pub use clock::VirtualClock;
-pub use codel::{CodelFn, Ctx, Next};
-pub use engine::{
-    Args, DefaultCodels, Engine, EngineBuilder, EventFn, Stats, Stepped, Until, DEFAULT_STATE_CACHE,
-};
+pub use codel::{Args, CodelFn, Ctx, DefaultCodels, Next};
+pub use engine::{Engine, EngineBuilder, Inspect, Stats, Stepped, Until, DEFAULT_STATE_CACHE};
 pub use error::{BuildError, EngineError, RequestError, StepAsError};
 pub use event::{
-    CodelId, Event, Fault, FaultKind, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket,
+    CodelId, Event, EventFn, Fault, FaultKind, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket,
 };
 #[cfg(feature = "std")]
 pub use handle::{Handle, PendingReply};
