@@ -67,6 +67,7 @@ mod policy;
 mod ports;
 mod record;
 pub mod replay;
+pub mod simulate;
 #[cfg(feature = "std")]
 mod threads;
 

@@ -16,7 +16,7 @@ impl Engine {
     /// whose outcome must lead to this very step (a default codel does what the step
     /// says); a request step is a request from the engine; a time step is a tick. For
     /// replaying a trace through the engine.
-    pub fn step_as(&mut self, step: Step<'_>) -> Result<Stepped, StepAsError> {
+    pub(crate) fn step_as(&mut self, step: Step<'_>) -> Result<Stepped, StepAsError> {
         if let Some(e) = &self.stopped {
             return Err(EngineError::Stopped(e.clone()).into());
         }
