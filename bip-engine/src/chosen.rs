@@ -4,7 +4,7 @@
 //! ([`EnabledSet::pooled_steps`]), where their picks stay for the system's lifetime: the
 //! engine keeps where they are rather than a copy, and the place also names the step's
 //! fire plan ([`bip_model::GateStep::Pooled`]) without comparing picks. Steps computed by
-//! the relation (or given to [`crate::Engine::step_as`]) are copied.
+//! the relation (or given to `Engine::step_as`) are copied.
 
 #[allow(unused_imports)]
 use crate::prelude::*;

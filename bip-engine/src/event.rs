@@ -11,11 +11,11 @@ use crate::prelude::*;
 pub struct Ticket(pub u64);
 
 /// A codel of the model: an index into the engine's codels, in the GenoM map's order
-/// (modules, services, codels as declared). [`crate::Engine::codel_name`] names it.
+/// (modules, services, codels as declared). [`crate::Inspect::codel_name`] names it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct CodelId(pub u32);
 
-/// A service of the model, in the GenoM map's order. [`crate::Engine::service_name`]
+/// A service of the model, in the GenoM map's order. [`crate::Inspect::service_name`]
 /// names it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ServiceId(pub u32);

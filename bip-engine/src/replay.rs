@@ -1,5 +1,5 @@
 //! Replaying a trace through the engine: each step must be one the engine allows at that
-//! moment ([`Engine::step_as`]: a codel step runs the codel, a request is served as a
+//! moment (`Engine::step_as`: a codel step runs the codel, a request is served as a
 //! request, a tick is a tick), and the trace's verdict is checked at its end: the deadlock
 //! is reached (with the codels held and why), the invariant fails, the witness holds.
 

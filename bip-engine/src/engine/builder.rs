@@ -103,7 +103,7 @@ impl EngineBuilder {
     /// Remembers up to `states` states of the model, with their enabled steps and the
     /// steps between them, so that a step taken before from the same state is looked up
     /// rather than computed (default [`DEFAULT_STATE_CACHE`]; 0: none). See
-    /// docs/engine.md, "The state cache", and [`Engine::cache_stats`].
+    /// docs/engine.md, "The state cache", and [`crate::Inspect::cache_stats`].
     pub fn state_cache(mut self, states: usize) -> Self {
         self.state_cache = states;
         self

@@ -70,7 +70,7 @@ impl Engine {
                     "fail"
                 } else {
                     self.chosen
-                        .picks(&self.gate.enabled())
+                        .picks(self.gate.enabled())
                         .iter()
                         .find_map(|p| {
                             c.map.yield_of(p.transition).filter(|_| {

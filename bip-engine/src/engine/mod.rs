@@ -81,7 +81,7 @@ pub struct Engine {
     plan_moves: Vec<bool>,
     /// The step being committed.
     chosen: Chosen,
-    /// Scratch: the step [`Engine::step_as`] was asked to take.
+    /// Scratch: the step `Engine::step_as` was asked to take.
     forced: Vec<Pick>,
     runner: Runner,
     time: Time,
@@ -178,7 +178,7 @@ impl Engine {
         }
     }
 
-    pub(crate) fn emit(&mut self, e: Event) {
+    pub(super) fn emit(&mut self, e: Event) {
         if let Some(f) = &mut self.events.on_event {
             f(&e);
         }

@@ -14,7 +14,7 @@ use crate::event::{Event, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket};
 
 impl Engine {
     /// Queues a request for `module.service` with arguments its codels can read
-    /// ([`Ctx::args`]). The engine serves it at its next quiescent point: the reply
+    /// ([`crate::Ctx::args`]). The engine serves it at its next quiescent point: the reply
     /// ([`Event::Reply`]) says whether the model accepted it, and later how the activity
     /// ended.
     pub fn request<A: Any + Send>(

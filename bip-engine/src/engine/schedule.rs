@@ -174,7 +174,7 @@ impl Engine {
             self.sched.codel_stamp = vec![u64::MAX; self.t.codels.len()];
         }
         collect_progress(
-            &self.gate.enabled(),
+            self.gate.enabled(),
             &self.t,
             &mut self.sched.codel_stamp,
             self.stats.steps,
