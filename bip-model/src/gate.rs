@@ -181,54 +181,75 @@ impl Gate {
     #[inline]
     pub fn commit(&mut self, step: GateStep<'_>) -> Result<Committed, CommitError> {
         self.catch_up();
-        let (label, plan) = match step {
+        let plan = match step {
             GateStep::Pooled {
                 interaction,
                 at,
                 width,
-            } => (
-                Label::Interaction(interaction),
-                self.plans.plan_at(at, width, interaction),
-            ),
-            GateStep::Given(s) => (s.label, None),
+            } => self.plans.plan_at(at, width, interaction),
+            GateStep::Given(_) => None,
         };
         #[cfg(debug_assertions)]
-        if let (Some(p), GateStep::Pooled { at, width, .. }) = (plan, step) {
+        if let (
+            Some(p),
+            GateStep::Pooled {
+                at,
+                width,
+                interaction,
+            },
+        ) = (plan, step)
+        {
             // the place named the plan of the very step chosen
             let (pi, p_at, p_width) = self.plans.step(p);
             let pool = self.enabled.pool();
-            debug_assert_eq!(Label::Interaction(pi), label);
+            debug_assert_eq!(pi, interaction);
             debug_assert_eq!(
                 &pool[p_at as usize..(p_at + p_width) as usize],
                 &pool[at as usize..(at + width) as usize]
             );
         }
-        let known = match plan {
-            Some(p) => self
-                .cache
-                .take_known(p, &mut self.enabled, &mut self.scratch),
-            None => {
-                self.cache.leave(&self.enabled);
-                false
+        // the steady state of a run is a step the cache knows: kept short, as it is most
+        // of an engine's steps
+        match plan {
+            Some(p) => {
+                if self
+                    .cache
+                    .take_known(p, &mut self.enabled, &mut self.scratch)
+                {
+                    self.stale = Last::Known;
+                    core::mem::swap(&mut self.state, &mut self.scratch);
+                    return Ok(Committed { plan, known: true });
+                }
             }
-        };
-        let committed = Committed { plan, known };
-        if known {
-            self.stale = Last::Known;
-            core::mem::swap(&mut self.state, &mut self.scratch);
-            return Ok(committed);
+            None => self.cache.leave(&self.enabled),
         }
+        self.fire_and_update(step, plan)
+    }
+
+    /// Fires a step the cache did not know onto the scratch state and brings the set
+    /// there.
+    #[inline(never)]
+    fn fire_and_update(
+        &mut self,
+        step: GateStep<'_>,
+        plan: Option<PlanId>,
+    ) -> Result<Committed, CommitError> {
+        let committed = Committed { plan, known: false };
         let fired = match (plan, step) {
             (Some(p), _) => self.system.fire_planned(&self.plans, p, &mut self.scratch),
             (None, step) => {
                 self.written.clear();
-                let picks = match step {
-                    GateStep::Pooled { at, width, .. } => {
-                        &self.enabled.pool()[at as usize..(at + width) as usize]
-                    }
-                    GateStep::Given(s) => s.picks,
+                let step = match step {
+                    GateStep::Pooled {
+                        interaction,
+                        at,
+                        width,
+                    } => Step {
+                        label: Label::Interaction(interaction),
+                        picks: &self.enabled.pool()[at as usize..(at + width) as usize],
+                    },
+                    GateStep::Given(s) => s,
                 };
-                let step = Step { label, picks };
                 self.system
                     .fire_in_place(step, &mut self.scratch, &mut self.written)
             }

@@ -141,13 +141,11 @@ impl Engine {
     }
 
     /// The first enabled time interaction.
+    #[inline]
     pub(super) fn enabled_time(&self) -> Option<u32> {
         // a model has one or two: asking each is cheaper than walking the enabled ones
-        self.t
-            .time
-            .iter()
-            .copied()
-            .find(|&i| self.gate.enabled().is_enabled(i))
+        let enabled = self.gate.enabled();
+        self.t.time.iter().copied().find(|&i| enabled.is_enabled(i))
     }
 
     pub(super) fn fire_time(&mut self, i: u32) -> Result<(), EngineError> {
