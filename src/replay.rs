@@ -12,7 +12,7 @@ use bip_engine::replay::{replay, End};
 use bip_engine::Stepped;
 use bip_model::TraceValue;
 
-use crate::{exit, report};
+use crate::{exit, load};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -23,12 +23,8 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let system = match bip_lang::load_file(&args.file) {
-        Ok(s) => s,
-        Err(e) => {
-            report::load_error(&e);
-            return exit::ERROR;
-        }
+    let Some(system) = load::system(&args.file) else {
+        return exit::ERROR;
     };
     let text = match std::fs::read_to_string(&args.trace) {
         Ok(t) => t,
@@ -81,7 +77,7 @@ pub fn run(args: &Args) -> u8 {
         let what = match done.stepped {
             Stepped::Tick => "tick".to_string(),
             Stepped::Codel { codel, failed } => {
-                let (m, s, c) = result.engine.codel_name(codel);
+                let (m, s, c) = result.engine.inspect().codel_name(codel);
                 let path = if failed { ", error path" } else { "" };
                 format!("codel {m}.{s}.{c} ran{path}")
             }

@@ -47,8 +47,42 @@ const CRATES: &[Layers] = &[
                     "fire_plan",
                     "incremental",
                     "state_cache",
+                    "gate",
                 ],
             ),
+        ],
+    },
+    Layers {
+        src: "bip-engine/src",
+        layers: &[
+            ("values", &["clock", "policy", "ports", "error"]),
+            (
+                "codels",
+                &["codel", "event", "bind", "chosen", "per_state", "record"],
+            ),
+            ("remote", &["handle", "threads"]),
+            ("engine", &["engine"]),
+            ("drivers", &["replay", "simulate"]),
+        ],
+    },
+    Layers {
+        src: "verifier/src",
+        layers: &[
+            (
+                "values",
+                &[
+                    "error",
+                    "options",
+                    "progress",
+                    "properties",
+                    "report",
+                    "memory",
+                ],
+            ),
+            ("stores", &["visited", "promela"]),
+            ("explicit", &["explore"]),
+            ("symbolic", &["symbolic"]),
+            ("auto", &["auto"]),
         ],
     },
     Layers {
@@ -191,6 +225,13 @@ fn check(files: &BTreeMap<String, String>, layers: &[(&str, &[&str])]) -> Vec<St
             .max_by_key(|(_, p)| p.len())
             .map(|(k, _)| k)
     };
+    for (_, mods) in layers {
+        for m in *mods {
+            if !code.contains_key(m) {
+                problems.push(format!("layer module `{m}` does not exist"));
+            }
+        }
+    }
     let mut edges: BTreeMap<&str, BTreeSet<String>> = BTreeMap::new();
     for (&m, text) in &code {
         if m.is_empty() {

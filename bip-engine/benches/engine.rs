@@ -84,7 +84,7 @@ fn running(system: &System, body: fn(), cache: usize) -> Engine {
 /// Runs `steps` steps (draining events as a controller would); the time and the codels
 /// run.
 fn timed(e: &mut Engine, steps: u64) -> (Duration, u64) {
-    let codels0 = e.stats().codels;
+    let codels0 = e.inspect().stats().codels;
     let t = Instant::now();
     let mut left = steps;
     while left > 0 {
@@ -93,7 +93,7 @@ fn timed(e: &mut Engine, steps: u64) -> (Duration, u64) {
         black_box(e.events().count());
         left -= n;
     }
-    (t.elapsed(), e.stats().codels - codels0)
+    (t.elapsed(), e.inspect().stats().codels - codels0)
 }
 
 fn empty() {}
@@ -122,7 +122,7 @@ fn varied(system: &System, cache: usize, steps: u64) -> (f64, CacheStats, usize)
         done += 64;
     }
     let rate = done as f64 / t.elapsed().as_secs_f64();
-    (rate, e.cache_stats(), e.cache_bytes())
+    (rate, e.inspect().cache_stats(), e.inspect().cache_bytes())
 }
 
 /// Iterations of `work`'s loop: calibrated so that a call takes about 2 µs.
@@ -227,7 +227,7 @@ fn main() {
         let (t, codels) = timed(&mut e, steps);
         rates.push(steps as f64 / t.as_secs_f64());
         codel_share = codels as f64 / steps as f64;
-        (cache, bytes) = (e.cache_stats(), e.cache_bytes());
+        (cache, bytes) = (e.inspect().cache_stats(), e.inspect().cache_bytes());
     }
     let rate = median(rates);
     println!(

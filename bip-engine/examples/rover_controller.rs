@@ -292,12 +292,12 @@ pub fn run(
             let t = engine.request(m, s, *arg)?;
             say(format!(
                 "[{:>5.1} s] supervisor: request #{} {m}.{s} {arg:?}",
-                engine.now_us() as f64 / 1e6,
+                engine.inspect().now_us() as f64 / 1e6,
                 t.0
             ));
         }
         engine.run_until(Until::Ticks(1))?;
-        let now = engine.now_us() as f64 / 1e6;
+        let now = engine.inspect().now_us() as f64 / 1e6;
         let events: Vec<Event> = engine.events().collect();
         for event in events {
             let held_before = report.held.len();
@@ -315,16 +315,16 @@ pub fn run(
                 ..
             } = event
             {
-                if engine.service_name(service) == ("battery", "Report") {
+                if engine.inspect().service_name(service) == ("battery", "Report") {
                     say(format!(
                         "[{now:>5.1} s] battery: charge {} of 3",
-                        system.value(engine.state(), pack, level)
+                        system.value(engine.inspect().state(), pack, level)
                     ));
                 }
             }
         }
     }
-    let stats = engine.stats();
+    let stats = engine.inspect().stats();
     let (x, sent) = {
         let w = world.lock().unwrap_or_else(|p| p.into_inner());
         (w.x, w.sent)
@@ -361,12 +361,13 @@ fn describe(engine: &Engine, event: &Event, report: &mut Report) -> String {
             service,
             reply,
         } => {
-            let (m, s) = engine.service_name(*service);
+            let (m, s) = engine.inspect().service_name(*service);
             let text = match reply {
                 Reply::Accepted => "accepted".to_string(),
                 Reply::Refused(Refusal::Conditions(r)) => format!(
                     "REFUSED: {}",
                     engine
+                        .inspect()
                         .refusal_texts(*service, *r)
                         .collect::<Vec<_>>()
                         .join("; ")
@@ -381,15 +382,15 @@ fn describe(engine: &Engine, event: &Event, report: &mut Report) -> String {
             format!("reply to #{} {m}.{s}: {text}", ticket.0)
         }
         Event::Held { codel, reasons, .. } => {
-            let (m, s, c) = engine.codel_name(*codel);
-            let why: Vec<String> = engine.hold_texts(*codel, *reasons).collect();
+            let (m, s, c) = engine.inspect().codel_name(*codel);
+            let why: Vec<String> = engine.inspect().hold_texts(*codel, *reasons).collect();
             let line = format!("held: {m}.{s} codel `{c}` waits for {}", why.join("; "));
             report.held.push((format!("{m}.{s}.{c}"), why));
             line
         }
         Event::Fault(f) => {
             report.faults += 1;
-            let (m, s, c) = engine.codel_name(f.codel);
+            let (m, s, c) = engine.inspect().codel_name(f.codel);
             format!("FAULT: {m}.{s}.{c} {}", f.kind)
         }
         Event::Overrun {
@@ -398,7 +399,7 @@ fn describe(engine: &Engine, event: &Event, report: &mut Report) -> String {
             period_us,
         } => {
             report.overruns += 1;
-            let (m, s, c) = engine.codel_name(*codel);
+            let (m, s, c) = engine.inspect().codel_name(*codel);
             format!(
                 "overrun: {m}.{s}.{c} took {} ms, its period is {} ms",
                 took_us / 1000,

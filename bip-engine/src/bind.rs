@@ -26,7 +26,7 @@ pub(crate) enum InterKind {
     /// Progress the model takes by itself (connectors of yours, model-owned requests).
     Progress,
     /// A stimulus from outside that is not a GenoM request: fired only when asked
-    /// ([`crate::Engine::step_as`]).
+    /// (`Engine::step_as`).
     Environment,
 }
 

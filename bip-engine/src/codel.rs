@@ -1,4 +1,5 @@
-//! Codels: what a codel returns ([`Next`]) and what it sees ([`Ctx`]).
+//! Codels: what a codel returns ([`Next`]), what it sees ([`Ctx`]), and how the engine
+//! runs one (bound, by default, or on its task's thread).
 
 use core::any::Any;
 
@@ -166,4 +167,48 @@ impl Ctx<'_> {
     pub fn tick(&self) -> u64 {
         self.tick
     }
+}
+
+/// What unbound codels do (for simulation and replay).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DefaultCodels {
+    /// Yield the first declared yield, write nothing.
+    FirstYield,
+    /// Yield or throw one of the declared outcomes at random (seeded), and write random
+    /// values in range into the ids the codel writes.
+    Random(u64),
+}
+
+/// Arguments of a request, for its activity's codels.
+pub type Args = Box<dyn Any + Send>;
+
+/// How a codel is run.
+pub(crate) enum Body {
+    Bound(CodelFn),
+    Default,
+    #[cfg(feature = "std")]
+    Thread {
+        worker: usize,
+        local: usize,
+    },
+}
+
+/// Calls a codel, catching a panic as a fault (its message).
+#[cfg(feature = "std")]
+pub(crate) fn call_guarded(f: &mut CodelFn, ctx: &mut Ctx<'_>) -> Result<Next, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(ctx))).map_err(|e| {
+        if let Some(s) = e.downcast_ref::<&str>() {
+            (*s).to_string()
+        } else if let Some(s) = e.downcast_ref::<String>() {
+            s.clone()
+        } else {
+            "a panic".to_string()
+        }
+    })
+}
+
+/// Without `std` a panic cannot be caught: it is the platform's panic handler's.
+#[cfg(not(feature = "std"))]
+pub(crate) fn call_guarded(f: &mut CodelFn, ctx: &mut Ctx<'_>) -> Result<Next, String> {
+    Ok(f(ctx))
 }

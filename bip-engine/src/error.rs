@@ -43,9 +43,9 @@ pub enum RequestError {
     OwnedByModel(String, String),
 }
 
-/// [`crate::Engine::step_as`] could not take the step.
+/// `Engine::step_as` (replay, simulation) could not take the step.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-pub enum StepAsError {
+pub(crate) enum StepAsError {
     #[error("the model does not allow this step now")]
     NotAllowed,
     #[error("the codel's outcome leads to another step than the one asked")]

@@ -11,11 +11,11 @@ use crate::prelude::*;
 pub struct Ticket(pub u64);
 
 /// A codel of the model: an index into the engine's codels, in the GenoM map's order
-/// (modules, services, codels as declared). [`crate::Engine::codel_name`] names it.
+/// (modules, services, codels as declared). [`crate::Inspect::codel_name`] names it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct CodelId(pub u32);
 
-/// A service of the model, in the GenoM map's order. [`crate::Engine::service_name`]
+/// A service of the model, in the GenoM map's order. [`crate::Inspect::service_name`]
 /// names it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ServiceId(pub u32);
@@ -43,6 +43,9 @@ impl Reasons {
         })
     }
 }
+
+/// A callback for every event.
+pub type EventFn = Box<dyn FnMut(&Event) + Send>;
 
 /// Something the engine reports. Drain them with [`crate::Engine::events`], or receive
 /// them as they happen with [`crate::EngineBuilder::on_event`].

@@ -2,18 +2,18 @@
 //! request gets its replies on a channel of its own.
 
 use std::any::Any;
-use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
+use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::engine::Engine;
 use crate::error::RequestError;
 use crate::event::{Event, Reply, Ticket};
 
-struct RemoteRequest {
-    service: u32,
-    args: Box<dyn Any + Send>,
-    reply: Sender<(Ticket, Reply)>,
+/// A request from a [`Handle`], with where its replies go.
+pub(crate) struct RemoteRequest {
+    pub service: u32,
+    pub args: Box<dyn Any + Send>,
+    pub reply: Sender<(Ticket, Reply)>,
 }
 
 /// The engine's side: requests to take in, and where to send replies.
@@ -24,6 +24,39 @@ pub(crate) struct Remote {
 }
 
 impl Remote {
+    pub(crate) fn new() -> Remote {
+        let (tx, rx) = channel();
+        Remote {
+            rx,
+            tx,
+            waiting: Vec::new(),
+        }
+    }
+
+    /// A handle sending to this engine; `services` are (module, service, owned by the
+    /// model) by service index.
+    pub(crate) fn handle(&self, services: Arc<Vec<(String, String, bool)>>) -> Handle {
+        Handle {
+            tx: self.tx.clone(),
+            services,
+        }
+    }
+
+    /// A request already sent, if any.
+    pub(crate) fn try_take(&self) -> Option<RemoteRequest> {
+        self.rx.try_recv().ok()
+    }
+
+    /// The next request, waiting at most `timeout`.
+    pub(crate) fn wait(&self, timeout: Duration) -> Option<RemoteRequest> {
+        self.rx.recv_timeout(timeout).ok()
+    }
+
+    /// Replies for `ticket` go to `reply`.
+    pub(crate) fn register(&mut self, ticket: Ticket, reply: Sender<(Ticket, Reply)>) {
+        self.waiting.push((ticket, reply));
+    }
+
     pub(crate) fn deliver(&mut self, e: &Event) {
         let Event::Reply { ticket, reply, .. } = e else {
             return;
@@ -89,71 +122,5 @@ impl Handle {
             reply,
         });
         Ok(PendingReply { rx })
-    }
-}
-
-impl Engine {
-    /// A handle for sending requests from other threads while this engine runs
-    /// ([`Engine::run_until`] takes them in between steps and while it waits).
-    pub fn handle(&mut self) -> Handle {
-        let services = Arc::new(
-            (0..)
-                .map_while(|k| {
-                    let id = crate::ServiceId(k);
-                    (k < self.service_count() as u32).then(|| {
-                        let (m, s) = self.service_name(id);
-                        let owned = self.request_target(m, s).is_err();
-                        (m.to_string(), s.to_string(), owned)
-                    })
-                })
-                .collect(),
-        );
-        let remote = self.remote.get_or_insert_with(|| {
-            let (tx, rx) = channel();
-            Remote {
-                rx,
-                tx,
-                waiting: Vec::new(),
-            }
-        });
-        Handle {
-            tx: remote.tx.clone(),
-            services,
-        }
-    }
-
-    pub(crate) fn drain_remote(&mut self) {
-        loop {
-            let Some(r) = &mut self.remote else { return };
-            let req = match r.rx.try_recv() {
-                Ok(req) => req,
-                Err(_) => return,
-            };
-            self.take_remote(req);
-        }
-    }
-
-    fn take_remote(&mut self, req: RemoteRequest) {
-        let ticket = self.new_ticket();
-        if let Some(r) = &mut self.remote {
-            r.waiting.push((ticket, req.reply));
-        }
-        self.enqueue(ticket, req.service, req.args);
-    }
-
-    /// Waits for a request until the clock reaches `t`.
-    pub(crate) fn wait_remote(&mut self, t: u64) {
-        let now = self.now_us();
-        if t > now {
-            let got = match &self.remote {
-                Some(r) => r.rx.recv_timeout(Duration::from_micros(t - now)),
-                None => Err(RecvTimeoutError::Disconnected),
-            };
-            if let Ok(req) = got {
-                self.take_remote(req);
-                return;
-            }
-        }
-        self.sleep_clock_until(t);
     }
 }

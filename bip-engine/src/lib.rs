@@ -22,14 +22,18 @@
 //! # Ok(()) }
 //! ```
 //!
-//! - The engine computes the enabled steps with bip-model's step relation, kept up to date
-//!   by [`bip_model::EnabledSet`]; it commits only steps of that set, so its run is a path
-//!   of the model ([`Engine::record`] writes it as a trace).
+//! - The engine gates every step through a [`bip_model::Gate`]: the model's state and its
+//!   enabled steps, kept up to date by bip-model's step relation; it commits only steps the
+//!   gate lists, so its run is a path of the model ([`Engine::record`] writes it as a
+//!   trace).
 //! - A codel ([`Ctx`] → [`Next`]) returns a yield or an exception; a panic, an undeclared
 //!   yield, an ids value out of range take the codel's error path (the model's `_fail`
 //!   step) and are reported ([`Event::Fault`]).
 //! - Requests are served when the functional layer is quiescent; the reply says whether
 //!   the model accepted them and, later, how the activity ended.
+//!
+//! - [`Engine::inspect`] is the read-only view: state, names, counters, the state cache's
+//!   figures, held codels. [`replay`] and [`simulate`] are `bip replay` and `bip simulate`.
 //!
 //! docs/engine.md describes the scheduling, requests, faults, time, threads and recording.
 //!
@@ -67,6 +71,7 @@ mod policy;
 mod ports;
 mod record;
 pub mod replay;
+pub mod simulate;
 #[cfg(feature = "std")]
 mod threads;
 
@@ -76,13 +81,11 @@ pub use clock::Clock;
 pub use clock::RealClock;
 #[cfg(target_has_atomic = "64")]
 pub use clock::VirtualClock;
-pub use codel::{CodelFn, Ctx, Next};
-pub use engine::{
-    Args, DefaultCodels, Engine, EngineBuilder, EventFn, Stats, Stepped, Until, DEFAULT_STATE_CACHE,
-};
-pub use error::{BuildError, EngineError, RequestError, StepAsError};
+pub use codel::{Args, CodelFn, Ctx, DefaultCodels, Next};
+pub use engine::{Engine, EngineBuilder, Inspect, Stats, Stepped, Until, DEFAULT_STATE_CACHE};
+pub use error::{BuildError, EngineError, RequestError};
 pub use event::{
-    CodelId, Event, Fault, FaultKind, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket,
+    CodelId, Event, EventFn, Fault, FaultKind, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket,
 };
 #[cfg(feature = "std")]
 pub use handle::{Handle, PendingReply};

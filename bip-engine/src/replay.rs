@@ -1,5 +1,5 @@
 //! Replaying a trace through the engine: each step must be one the engine allows at that
-//! moment ([`Engine::step_as`]: a codel step runs the codel, a request is served as a
+//! moment (`Engine::step_as`: a codel step runs the codel, a request is served as a
 //! request, a tick is a tick), and the trace's verdict is checked at its end: the deadlock
 //! is reached (with the codels held and why), the invariant fails, the witness holds.
 
@@ -8,7 +8,8 @@ use crate::prelude::*;
 
 use bip_model::{Liveness, LivenessChecker, PropertyKind, Steps, System, Trace, Verdict};
 
-use crate::engine::{DefaultCodels, Engine, Stepped};
+use crate::codel::DefaultCodels;
+use crate::engine::{Engine, Stepped};
 use crate::error::{BuildError, StepAsError};
 
 /// What the replay of one step did.
@@ -72,9 +73,11 @@ pub fn replay(system: System, trace: &Trace) -> Result<Replay, BuildError> {
         .build()?;
     let mut steps = Vec::with_capacity(path.len());
     for (k, (step, state)) in path.iter().enumerate() {
-        let name = engine.system().label_name(step.label);
+        let name = engine.inspect().system().label_name(step.label);
         match engine.step_as(step.as_step()) {
-            Ok(stepped) if engine.state() == state => steps.push(ReplayedStep { name, stepped }),
+            Ok(stepped) if engine.inspect().state() == state => {
+                steps.push(ReplayedStep { name, stepped })
+            }
             Ok(_) => {
                 return Ok(refused_at(
                     engine,
@@ -136,8 +139,8 @@ fn refused_at(
 /// Why the GenoM step named `name` is not allowed now: a request's failing refusals, a
 /// codel's failing holds.
 fn reasons_for(engine: &Engine, name: &str) -> Vec<String> {
-    let system = engine.system();
-    let state = engine.state();
+    let system = engine.inspect().system();
+    let state = engine.inspect().state();
     let Some(map) = &system.genom else {
         return Vec::new();
     };
@@ -165,8 +168,8 @@ fn reasons_for(engine: &Engine, name: &str) -> Vec<String> {
 }
 
 fn check_end(engine: &Engine, verdict: &Verdict) -> End {
-    let system = engine.system();
-    let state = engine.state();
+    let system = engine.inspect().system();
+    let state = engine.inspect().state();
     let not = |why: &str| End::NotConfirmed {
         verdict: format!("{verdict:?}"),
         why: why.into(),
@@ -182,12 +185,13 @@ fn check_end(engine: &Engine, verdict: &Verdict) -> End {
             match live {
                 Ok(Liveness::Deadlock) => {
                     let held = engine
+                        .inspect()
                         .outstanding()
                         .unwrap_or_default()
                         .into_iter()
                         .map(|(c, paused, r)| {
-                            let (m, s, st) = engine.codel_name(c);
-                            let why: Vec<String> = engine.hold_texts(c, r).collect();
+                            let (m, s, st) = engine.inspect().codel_name(c);
+                            let why: Vec<String> = engine.inspect().hold_texts(c, r).collect();
                             let wait = if paused {
                                 " (waits for its period)"
                             } else {

@@ -6,8 +6,7 @@ use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::thread::JoinHandle;
 
 use crate::bind::Tables;
-use crate::codel::{CodelFn, CodelInfo, Ctx, CtxFault, Next};
-use crate::engine::{call_guarded, Body};
+use crate::codel::{call_guarded, Body, CodelFn, CodelInfo, Ctx, CtxFault, Next};
 use crate::ports::PortStore;
 
 /// A codel run sent to a task thread, and sent back with its result. Everything moves

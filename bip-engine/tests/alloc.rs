@@ -66,7 +66,7 @@ fn steady_state_steps_allocate_nothing() {
     // warm up: every buffer grows to what the run needs
     e.run_until(Until::Steps(5_000)).expect("runs");
     let _ = e.events().count();
-    let steps0 = e.stats().steps;
+    let steps0 = e.inspect().stats().steps;
     let mut held = 0;
     let n = allocations_during(|| {
         for _ in 0..20 {
@@ -82,7 +82,7 @@ fn steady_state_steps_allocate_nothing() {
         held > 100,
         "the battery holds the motion now and then ({held})"
     );
-    let stats = e.stats();
+    let stats = e.inspect().stats();
     assert_eq!(stats.steps - steps0, 20_000);
     assert!(stats.codels > 5_000 && stats.ticks > 5_000, "{stats:?}");
     assert_eq!(n, 0, "{n} allocations in 20,000 steady-state steps");

@@ -64,9 +64,9 @@ fn assert_error_path_and_recovery(mut e: Engine, events: &[Event]) {
         matches!(outcomes.last(), Some(Outcome::Fault(_))),
         "{outcomes:?}"
     );
-    let sys = e.system().clone();
+    let sys = e.inspect().system().clone();
     let c = sys.component_index("m_S").expect("activity");
-    assert_eq!(sys.location_name(e.state(), c), "ether");
+    assert_eq!(sys.location_name(e.inspect().state(), c), "ether");
     let trace = e.record();
     let states = states_of(&sys, &trace);
     assert_invariants(&sys, &states);
@@ -74,8 +74,12 @@ fn assert_error_path_and_recovery(mut e: Engine, events: &[Event]) {
         trace.steps.iter().any(|s| s.step == "m_S_main_fail"),
         "the error path is a step of the model"
     );
-    assert_eq!(e.ids("m", "speed"), Some(1), "errors write no ids");
-    assert_eq!(e.ids("m", "on"), Some(0));
+    assert_eq!(
+        e.inspect().ids("m", "speed"),
+        Some(1),
+        "errors write no ids"
+    );
+    assert_eq!(e.inspect().ids("m", "on"), Some(0));
     // the engine goes on
     let t = e.request("m", "S", ()).expect("queued");
     e.run_until(Until::Ticks(4)).expect("runs");
@@ -89,7 +93,7 @@ fn assert_error_path_and_recovery(mut e: Engine, events: &[Event]) {
 }
 
 fn e_service(e: &Engine) -> ServiceId {
-    e.service_id("m", "S").expect("service")
+    e.inspect().service_id("m", "S").expect("service")
 }
 
 #[test]
@@ -221,9 +225,9 @@ fn ids_in_range_are_written_by_the_codels_step_and_ports_keep_their_data() {
     );
     assert!(faults(&events).is_empty(), "{events:?}");
     assert_eq!(done(&events).last(), Some(&Outcome::Ether));
-    assert_eq!(e.ids("m", "speed"), Some(2));
-    assert_eq!(e.ids("m", "on"), Some(1));
-    assert_eq!(e.port::<Vec<u32>>("m", "pose"), Some(&vec![2]));
+    assert_eq!(e.inspect().ids("m", "speed"), Some(2));
+    assert_eq!(e.inspect().ids("m", "on"), Some(1));
+    assert_eq!(e.inspect().port::<Vec<u32>>("m", "pose"), Some(&vec![2]));
     // each write is the module pick of the codel's step: the recorded trace shows it
     let trace = e.record();
     let steps: Vec<_> = trace
@@ -236,7 +240,7 @@ fn ids_in_range_are_written_by_the_codels_step_and_ports_keep_their_data() {
         .state
         .iter()
         .any(|(k, v)| k == "m.speed" && *v == bip_model::TraceValue::Int(1)));
-    states_of(e.system(), &trace);
+    states_of(e.inspect().system(), &trace);
 }
 
 #[test]
@@ -264,7 +268,7 @@ fn a_codel_longer_than_its_period_is_an_overrun() {
     assert!(overruns.iter().all(|&(t, p)| t == 25_000 && p == 20_000));
     assert!(faults(&events).is_empty(), "an overrun is not a fault");
     // the ticks it delayed are fired afterwards: none is dropped
-    assert!(e.stats().ticks >= 12);
-    let states = states_of(e.system(), &e.record());
-    assert_invariants(e.system(), &states);
+    assert!(e.inspect().stats().ticks >= 12);
+    let states = states_of(e.inspect().system(), &e.record());
+    assert_invariants(e.inspect().system(), &states);
 }

@@ -88,11 +88,11 @@ fn fingerprint(
             writeln!(log, "request {m}.{s} {t:?}").expect("writes");
         }
         let stepped = e.step().expect("steps");
-        writeln!(log, "{stepped:?} at {}", e.now_us()).expect("writes");
+        writeln!(log, "{stepped:?} at {}", e.inspect().now_us()).expect("writes");
         if let Stepped::Idle { next_tick_us } = stepped {
             match next_tick_us {
                 Some(t) => e.wait_until(t),
-                None if e.waiting_requests() == 0 && services.is_empty() => break,
+                None if e.inspect().waiting_requests() == 0 && services.is_empty() => break,
                 None => {}
             }
         }
@@ -101,10 +101,10 @@ fn fingerprint(
             writeln!(log, "{ev:?}").expect("writes");
         }
     }
-    writeln!(log, "{:?}", e.stats()).expect("writes");
-    writeln!(log, "{:?}", e.held().expect("evaluates")).expect("writes");
-    writeln!(log, "{:?}", e.outstanding().expect("evaluates")).expect("writes");
-    writeln!(log, "{:?}", e.state()).expect("writes");
+    writeln!(log, "{:?}", e.inspect().stats()).expect("writes");
+    writeln!(log, "{:?}", e.inspect().held().expect("evaluates")).expect("writes");
+    writeln!(log, "{:?}", e.inspect().outstanding().expect("evaluates")).expect("writes");
+    writeln!(log, "{:?}", e.inspect().state()).expect("writes");
     let trace = e.record();
     for s in &trace.steps {
         writeln!(log, "{}", s.step).expect("writes");

@@ -51,7 +51,7 @@ fn run(model: usize, seed: u64, cache: usize, half_tables: bool) -> Result<Run, 
     let services: Vec<(&str, &str)> = system.requestable().collect();
     let mut done: HashMap<Ticket, usize> = HashMap::new();
     let mut events = Vec::new();
-    while engine.stats().steps < 600 {
+    while engine.inspect().stats().steps < 600 {
         let (request, chunk) = {
             let mut r = rng.lock().unwrap_or_else(|e| e.into_inner());
             let request = (!services.is_empty() && r.below(3) == 0)
@@ -81,8 +81,8 @@ fn run(model: usize, seed: u64, cache: usize, half_tables: bool) -> Result<Run, 
     prop_assert!(done.values().all(|&n| n == 1), "a request ended twice");
     Ok(Run {
         trace: engine.record(),
-        state: engine.state().clone(),
-        cache: engine.cache_stats(),
+        state: engine.inspect().state().clone(),
+        cache: engine.inspect().cache_stats(),
         system,
         events,
     })

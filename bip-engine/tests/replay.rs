@@ -63,11 +63,11 @@ fn an_engine_recording_replays_step_by_step() {
         e.run_until(Until::Ticks(3)).expect("runs");
     }
     let trace = e.record();
-    let r = replay(e.system().clone(), &trace).expect("builds");
+    let r = replay(e.inspect().system().clone(), &trace).expect("builds");
     assert!(r.refused.is_none(), "{:?}", r.refused);
     assert_eq!(r.steps.len(), trace.steps.len());
     assert_eq!(r.end, Some(End::Recording));
-    assert_eq!(r.engine.state(), e.state());
+    assert_eq!(r.engine.inspect().state(), e.inspect().state());
     // replayed codel steps ran as codels, requests as requests, ticks as ticks
     for (s, t) in r.steps.iter().zip(&trace.steps) {
         match s.stepped {

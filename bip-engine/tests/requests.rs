@@ -32,8 +32,11 @@ fn a_request_before_its_after_is_refused_with_the_reason() {
         panic!("{got:?}");
     };
     assert_eq!(*ticket, t);
-    let s = e.service_id("rflex", "TrackSpeed").expect("service");
-    let map = e.system().genom.as_ref().expect("layer");
+    let s = e
+        .inspect()
+        .service_id("rflex", "TrackSpeed")
+        .expect("service");
+    let map = e.inspect().system().genom.as_ref().expect("layer");
     let refusals = map
         .service("rflex", "TrackSpeed")
         .expect("service")
@@ -47,6 +50,7 @@ fn a_request_before_its_after_is_refused_with_the_reason() {
         }]
     );
     assert!(e
+        .inspect()
         .refusal_texts(s, *r)
         .all(|t| t.contains("after rflex.Init")));
     // after Init the same request is accepted
@@ -72,7 +76,7 @@ fn a_request_before_its_after_is_refused_with_the_reason() {
             .collect::<Vec<_>>(),
         [&Reason::AlreadyRequested]
     );
-    states_of(e.system(), &e.record());
+    states_of(e.inspect().system(), &e.record());
 }
 
 #[test]
@@ -92,7 +96,11 @@ fn unknown_and_model_owned_services_are_errors_not_replies() {
     ));
     // the sequencer sends those requests itself, as steps of the model
     sat.run_until(Until::Ticks(30)).expect("runs");
-    assert!(sat.stats().codels > 10, "{:?}", sat.stats());
+    assert!(
+        sat.inspect().stats().codels > 10,
+        "{:?}",
+        sat.inspect().stats()
+    );
 }
 
 #[test]
@@ -106,10 +114,14 @@ fn an_exclusive_start_is_held_with_the_constraint_then_runs_when_it_is_free() {
     let events: Vec<Event> = e.events().collect();
     assert!(events.contains(&Event::Reply {
         ticket: talk,
-        service: e.service_id("antenna", "Communicate").expect("service"),
+        service: e
+            .inspect()
+            .service_id("antenna", "Communicate")
+            .expect("service"),
         reply: Reply::Accepted
     }));
     let start = e
+        .inspect()
         .codel_id("antenna", "Communicate", "start")
         .expect("codel");
     let held = events
@@ -124,11 +136,15 @@ fn an_exclusive_start_is_held_with_the_constraint_then_runs_when_it_is_free() {
         })
         .expect("the start is held");
     assert_eq!(held.0, Some(talk));
-    let texts: Vec<String> = e.hold_texts(start, held.1).collect();
+    let texts: Vec<String> = e.inspect().hold_texts(start, held.1).collect();
     assert!(texts.iter().any(|t| t.contains("Exclusive")), "{texts:?}");
     let active = |e: &Engine, comp: &str| {
-        let c = e.system().component_index(comp).expect("component");
-        e.system().location_name(e.state(), c) != "ether"
+        let c = e
+            .inspect()
+            .system()
+            .component_index(comp)
+            .expect("component");
+        e.inspect().system().location_name(e.inspect().state(), c) != "ether"
     };
     assert!(active(&e, "rflex_TrackSpeed") && !active(&e, "antenna_Communicate"));
     // stopping the motion frees the antenna: TrackSpeed is interrupted, Communicate runs
@@ -140,8 +156,8 @@ fn an_exclusive_start_is_held_with_the_constraint_then_runs_when_it_is_free() {
         "{got:?}"
     );
     assert!(!active(&e, "rflex_TrackSpeed") && active(&e, "antenna_Communicate"));
-    let states = states_of(e.system(), &e.record());
-    assert_invariants(e.system(), &states);
+    let states = states_of(e.inspect().system(), &e.record());
+    assert_invariants(e.inspect().system(), &states);
 }
 
 #[test]
@@ -199,8 +215,8 @@ fn replies_carry_the_outcome_ether_exception_interrupted_and_bad_transition() {
         got.contains(&(second, Reply::Done(Outcome::Ether))),
         "{got:?}"
     );
-    let states = states_of(e.system(), &e.record());
-    assert_invariants(e.system(), &states);
+    let states = states_of(e.inspect().system(), &e.record());
+    assert_invariants(e.inspect().system(), &states);
 }
 
 #[test]
@@ -262,8 +278,8 @@ fn a_core_model_runs_its_own_steps() {
         .build()
         .expect("builds");
     e.run_until(Until::Steps(60)).expect("runs");
-    assert_eq!(e.stats().steps, 60);
-    states_of(e.system(), &e.record());
+    assert_eq!(e.inspect().stats().steps, 60);
+    states_of(e.inspect().system(), &e.record());
 }
 
 #[test]
@@ -291,7 +307,7 @@ fn a_function_named_by_a_constraint_is_refused_with_the_constraint() {
     .record(1000)
     .build()
     .expect("builds");
-    let s = e.service_id("m", "Snapshot").expect("service");
+    let s = e.inspect().service_id("m", "Snapshot").expect("service");
     let early = e.request("m", "Snapshot", ()).expect("queued");
     e.run_until(Until::Quiescent).expect("runs");
     let got = replies(&mut e);
@@ -300,6 +316,7 @@ fn a_function_named_by_a_constraint_is_refused_with_the_constraint() {
     };
     assert_eq!(*t, early);
     let refusals = &e
+        .inspect()
         .system()
         .genom
         .as_ref()
@@ -314,7 +331,7 @@ fn a_function_named_by_a_constraint_is_refused_with_the_constraint() {
             kind: "Requires".into()
         }]
     );
-    let texts: Vec<String> = e.refusal_texts(s, *r).collect();
+    let texts: Vec<String> = e.inspect().refusal_texts(s, *r).collect();
     assert_eq!(texts.len(), 1);
     assert!(
         texts[0].starts_with("constraint #0 (Requires)"),
@@ -331,5 +348,5 @@ fn a_function_named_by_a_constraint_is_refused_with_the_constraint() {
         got.contains(&(later, Reply::Done(Outcome::Ether))),
         "{got:?}"
     );
-    states_of(e.system(), &e.record());
+    states_of(e.inspect().system(), &e.record());
 }

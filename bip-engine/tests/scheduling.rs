@@ -110,14 +110,14 @@ fn rolls(policy: Policy) -> Vec<i64> {
         .policy(policy)
         .build()
         .expect("builds");
-    let main = e.codel_id("m", "S", "main").expect("main");
+    let main = e.inspect().codel_id("m", "S", "main").expect("main");
     e.request("m", "S", ()).expect("queued");
     let mut out = Vec::new();
     while out.len() < 8 {
         match e.step().expect("steps") {
             Stepped::Codel { codel, failed } if codel == main => {
                 assert!(!failed);
-                out.push(system.value(e.state(), dice, x));
+                out.push(system.value(e.inspect().state(), dice, x));
             }
             Stepped::Idle {
                 next_tick_us: Some(t),
@@ -169,7 +169,7 @@ fn ticks(policy: Policy) -> Vec<i64> {
     let mut out = Vec::new();
     while out.len() < 4 {
         match e.step().expect("steps") {
-            Stepped::Tick => out.push(system.value(e.state(), coin, x)),
+            Stepped::Tick => out.push(system.value(e.inspect().state(), coin, x)),
             Stepped::Idle {
                 next_tick_us: Some(t),
             } => e.wait_until(t),

@@ -100,7 +100,7 @@ fn task_threads_under_load_record_a_valid_trace() {
     engine.run_until(Until::TimeUs(400_000)).expect("runs");
     let accepted: usize = clients.into_iter().map(|c| c.join().expect("client")).sum();
     assert!(accepted > 10, "only {accepted} requests accepted");
-    let stats = engine.stats();
+    let stats = engine.inspect().stats();
     assert!(stats.codels > 50 && stats.ticks > 50, "{stats:?}");
     // each task's codels ran on that task's thread only
     let seen = seen.lock().expect("lock");
@@ -111,6 +111,6 @@ fn task_threads_under_load_record_a_valid_trace() {
     }
     let trace = engine.record();
     let states = states_of(&system, &trace);
-    assert_eq!(states.last(), Some(engine.state()));
+    assert_eq!(states.last(), Some(engine.inspect().state()));
     assert_invariants(&system, &states);
 }

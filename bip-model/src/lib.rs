@@ -32,6 +32,7 @@ pub mod eval;
 mod fast_path;
 mod fire_plan;
 mod found;
+mod gate;
 pub mod genom;
 mod incremental;
 mod model;
@@ -53,6 +54,7 @@ mod watches;
 pub use assemble::SystemParts;
 pub use deadlock::{Liveness, LivenessChecker};
 pub use fire_plan::{FirePlans, PlanId};
+pub use gate::{CommitError, Committed, Gate, GateStep};
 pub use genom::GenomMap;
 pub use incremental::{Enabled, EnabledSet};
 pub use model::{

@@ -7,6 +7,7 @@
 //! - `state_cache`: the state cache against the relation;
 //! - `trace`: the trace format and replay.
 
+mod gate;
 mod incremental;
 mod reference;
 mod semantics;

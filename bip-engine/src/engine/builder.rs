@@ -1,0 +1,256 @@
+//! Building an engine: binding codels, choosing a clock, a policy, recording, the cache.
+
+use alloc::collections::VecDeque;
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use bip_model::{Gate, System};
+
+use super::{Engine, EventQueue, HeldReports, Inbox, Runner, Schedule, Stats, Time};
+use crate::bind::Tables;
+use crate::chosen::Chosen;
+use crate::clock::Clock;
+use crate::codel::{Body, CodelFn, Ctx, DefaultCodels, Next};
+use crate::error::BuildError;
+use crate::event::{Event, EventFn};
+use crate::per_state::PerState;
+use crate::policy::{Chooser, Policy, Rng};
+use crate::ports::PortStore;
+use crate::record::Recording;
+
+/// How many states [`EngineBuilder::state_cache`] remembers by default: about 1.5 MiB
+/// for a model the size of robots/rover.ron, at the 1.5 KiB per state measured there
+/// (docs/engine.md, "The state cache").
+pub const DEFAULT_STATE_CACHE: usize = 1024;
+
+/// Builds an [`Engine`]: bind codels, choose a clock, a policy, recording.
+pub struct EngineBuilder {
+    system: System,
+    bindings: Vec<((String, String, String), CodelFn)>,
+    defaults: Option<DefaultCodels>,
+    clock: Option<Box<dyn Clock>>,
+    policy: Policy,
+    tick_us: Option<u64>,
+    record: Option<usize>,
+    event_capacity: usize,
+    on_event: Option<EventFn>,
+    threads: bool,
+    state_cache: usize,
+}
+
+impl EngineBuilder {
+    /// Binds codel `state` of service `service` of module `module`.
+    pub fn codel(
+        mut self,
+        (module, service, state): (&str, &str, &str),
+        f: impl FnMut(&mut Ctx<'_>) -> Next + Send + 'static,
+    ) -> Self {
+        self.bindings
+            .push(((module.into(), service.into(), state.into()), Box::new(f)));
+        self
+    }
+
+    /// Runs unbound codels with a default instead of refusing to build.
+    pub fn default_codels(mut self, d: DefaultCodels) -> Self {
+        self.defaults = Some(d);
+        self
+    }
+
+    /// The clock (default: a [`crate::VirtualClock`]).
+    pub fn clock(mut self, c: impl Clock + 'static) -> Self {
+        self.clock = Some(Box::new(c));
+        self
+    }
+
+    pub fn policy(mut self, p: Policy) -> Self {
+        self.policy = p;
+        self
+    }
+
+    /// The length of a tick (default: the model's `tick_ms`, else 1 ms).
+    pub fn tick_us(mut self, us: u64) -> Self {
+        self.tick_us = Some(us.max(1));
+        self
+    }
+
+    /// Records the steps for [`Engine::record`], with room for `capacity` steps before
+    /// the recording allocates.
+    pub fn record(mut self, capacity: usize) -> Self {
+        self.record = Some(capacity);
+        self
+    }
+
+    /// How many events the engine keeps for [`Engine::events`] (default 1024; the oldest
+    /// are dropped and counted in [`Stats::events_dropped`]).
+    pub fn event_capacity(mut self, n: usize) -> Self {
+        self.event_capacity = n;
+        self
+    }
+
+    /// Calls `f` with every event as it happens (besides queueing it).
+    pub fn on_event(mut self, f: impl FnMut(&Event) + Send + 'static) -> Self {
+        self.on_event = Some(Box::new(f));
+        self
+    }
+
+    /// Runs the codels of each task on a thread of their own (docs/engine.md, "Threads").
+    pub fn threads(mut self, on: bool) -> Self {
+        self.threads = on;
+        self
+    }
+
+    /// Remembers up to `states` states of the model, with their enabled steps and the
+    /// steps between them, so that a step taken before from the same state is looked up
+    /// rather than computed (default [`DEFAULT_STATE_CACHE`]; 0: none). See
+    /// docs/engine.md, "The state cache", and [`crate::Inspect::cache_stats`].
+    pub fn state_cache(mut self, states: usize) -> Self {
+        self.state_cache = states;
+        self
+    }
+
+    pub fn build(self) -> Result<Engine, BuildError> {
+        let system = self.system;
+        let mut t = Tables::new(&system)?;
+        if !self.bindings.is_empty() && system.genom.is_none() {
+            return Err(BuildError::NoGenomLayer);
+        }
+        let mut bodies: Vec<Option<Body>> = t.codels.iter().map(|_| None).collect();
+        for ((m, s, c), f) in self.bindings {
+            let Some(k) = t.codel_index(&m, &s, &c) else {
+                return Err(BuildError::UnknownCodel(m, s, c));
+            };
+            if bodies[k].is_some() {
+                return Err(BuildError::BoundTwice(m, s, c));
+            }
+            bodies[k] = Some(Body::Bound(f));
+        }
+        let mut out = Vec::with_capacity(bodies.len());
+        for (k, b) in bodies.into_iter().enumerate() {
+            match (b, self.defaults) {
+                (Some(b), _) => out.push(b),
+                (None, Some(_)) => out.push(Body::Default),
+                (None, None) => {
+                    let i = &t.codels[k].info;
+                    return Err(BuildError::Unbound(
+                        i.module.clone(),
+                        i.service.clone(),
+                        i.state.clone(),
+                    ));
+                }
+            }
+        }
+        let clock = match self.clock {
+            Some(c) => c,
+            None => default_clock()?,
+        };
+        let tick_us = self
+            .tick_us
+            .or(system.tick_ms.map(|ms| ms.saturating_mul(1000)))
+            .unwrap_or(1000)
+            .max(1);
+        let gate = Gate::new(system, self.state_cache).map_err(BuildError::Range)?;
+        let pool = gate.enabled().pool();
+        let plan_moves = gate
+            .plans()
+            .steps()
+            .map(|(i, at, width)| {
+                t.step_moves_request(i, &pool[at as usize..(at + width) as usize])
+            })
+            .collect();
+        let ports = PortStore::new(core::mem::take(&mut t.ports));
+        let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
+        let activities = t.activities.len();
+        #[cfg(feature = "std")]
+        let workers = if self.threads {
+            Some(crate::threads::Workers::spawn(&t, &mut out))
+        } else {
+            None
+        };
+        #[cfg(not(feature = "std"))]
+        if self.threads {
+            return Err(BuildError::NoThreads);
+        }
+        let now = clock.now_us();
+        Ok(Engine {
+            gate,
+            t,
+            plan_moves,
+            chosen: Chosen::with_capacity(16),
+            forced: Vec::with_capacity(16),
+            runner: Runner {
+                bodies: out,
+                ports,
+                ids: Vec::with_capacity(max_fields.unwrap_or(0)),
+                written: 0,
+                fault: None,
+                defaults: self.defaults.unwrap_or(DefaultCodels::FirstYield),
+                rng: Rng::new(match self.defaults {
+                    Some(DefaultCodels::Random(s)) => s,
+                    _ => 0,
+                }),
+                #[cfg(feature = "std")]
+                workers,
+            },
+            time: Time {
+                clock,
+                tick_us,
+                next_tick_us: now + tick_us,
+            },
+            sched: Schedule {
+                chooser: Chooser::new(self.policy),
+                candidates: Vec::with_capacity(16),
+                known_candidates: PerState::new(),
+                codel_stamp: Vec::new(),
+            },
+            held: HeldReports {
+                known: PerState::new(),
+                now: Vec::with_capacity(activities),
+                dirty: true,
+            },
+            requests: Inbox {
+                inbox: VecDeque::with_capacity(16),
+                next_ticket: 0,
+            },
+            events: EventQueue {
+                queue: VecDeque::with_capacity(self.event_capacity.min(4096)),
+                capacity: self.event_capacity,
+                on_event: self.on_event,
+            },
+            recording: self.record.map(Recording::with_capacity),
+            stats: Stats::default(),
+            stopped: None,
+            #[cfg(feature = "std")]
+            remote: None,
+        })
+    }
+}
+
+#[cfg(target_has_atomic = "64")]
+fn default_clock() -> Result<Box<dyn Clock>, BuildError> {
+    Ok(Box::new(crate::clock::VirtualClock::new()))
+}
+
+#[cfg(not(target_has_atomic = "64"))]
+fn default_clock() -> Result<Box<dyn Clock>, BuildError> {
+    Err(BuildError::NoClock)
+}
+
+impl Engine {
+    /// Starts building an engine for `system`.
+    pub fn builder(system: System) -> EngineBuilder {
+        EngineBuilder {
+            system,
+            bindings: Vec::new(),
+            defaults: None,
+            clock: None,
+            policy: Policy::default(),
+            tick_us: None,
+            record: None,
+            event_capacity: 1024,
+            on_event: None,
+            threads: false,
+            state_cache: DEFAULT_STATE_CACHE,
+        }
+    }
+}

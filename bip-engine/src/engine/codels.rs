@@ -1,0 +1,394 @@
+//! Running a codel: staging its module's ids, calling it (here or on its task's thread),
+//! judging its outcome (a fault takes the error path), and choosing the step the outcome
+//! names (docs/engine.md, "Faults").
+
+use alloc::sync::Arc;
+use core::any::Any;
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use bip_model::Step;
+
+use super::replies::Cause;
+use super::schedule::count_first;
+use super::{Engine, Stepped};
+use crate::bind::RunStep;
+use crate::codel::{call_guarded, Body, Ctx, CtxFault, DefaultCodels, Next};
+use crate::error::{EngineError, StepAsError};
+use crate::event::{CodelId, Event, Fault, FaultKind, Outcome};
+
+/// How a codel run ended, before its step is chosen.
+pub(super) enum CodelEnd {
+    /// It yielded its `yield_k`-th declared yield and broke no rule.
+    Yielded { yield_k: usize },
+    /// It threw, or faulted: the error path, with this outcome.
+    Failed(Outcome),
+}
+
+impl Engine {
+    /// Runs codel `c` and commits the step its outcome names. With `forced`, the step
+    /// must be the one in `self.forced`.
+    pub(super) fn run_codel(&mut self, c: u32, forced: bool) -> Result<Stepped, StepAsError> {
+        let ck = c as usize;
+        let service = self.t.codels[ck].service as usize;
+        // stage the module's ids
+        self.runner.ids.clear();
+        for f in &self.t.codels[ck].info.fields {
+            self.runner
+                .ids
+                .push(self.gate.state().slots()[f.slot as usize]);
+        }
+        self.runner.written = 0;
+        self.runner.fault = None;
+        let starting = self.t.services[service]
+            .activity
+            .as_ref()
+            .is_some_and(|a| self.gate.state().slots()[a.loc_slot as usize] == i64::from(a.ether));
+        let t0 = self.time.clock.now_us();
+        let end = match &self.runner.bodies[ck] {
+            Body::Default => self.default_end(ck, forced),
+            _ => {
+                let result = self.call_codel(ck, service, starting, t0);
+                self.classify(ck, result)
+            }
+        };
+        let took = self.time.clock.now_us().saturating_sub(t0);
+        let period_us = self.t.codels[ck]
+            .period_ticks
+            .saturating_mul(self.time.tick_us);
+        // the outcome of a run that failed; a normal one chose its run step
+        let fail = self.t.codels[ck].map.fail;
+        let error = match end {
+            CodelEnd::Yielded { yield_k } => {
+                if self.take_run_step(ck, yield_k, forced) {
+                    None
+                } else if forced {
+                    return Err(StepAsError::Diverged);
+                } else {
+                    let fault = Fault {
+                        codel: CodelId(c),
+                        kind: FaultKind::NotAllowed,
+                    };
+                    Some(Outcome::Fault(fault))
+                }
+            }
+            CodelEnd::Failed(o) => Some(o),
+        };
+        if error.is_some() {
+            if forced {
+                let same = self
+                    .gate
+                    .enabled()
+                    .steps_of(fail)
+                    .find(|s| s.picks == &self.forced[..]);
+                if same.is_none() {
+                    return Err(StepAsError::Diverged);
+                }
+                self.chosen.set(self.gate.enabled(), same);
+            } else {
+                self.take_step_of(fail);
+            }
+            if self.chosen.picks(self.gate.enabled()).is_empty() {
+                // run and fail share their guard, so this cannot happen; report it
+                return Err(StepAsError::Engine(EngineError::Stopped(
+                    self.internal_error(),
+                )));
+            }
+        }
+        if forced && self.chosen.picks(self.gate.enabled()) != &self.forced[..] {
+            return Err(StepAsError::Diverged);
+        }
+        self.stats.codels += 1;
+        if took > period_us {
+            self.stats.overruns += 1;
+            let i = &self.t.codels[ck].info;
+            tracing::warn!(target: "bip_engine", module = i.module.as_str(),
+                service = i.service.as_str(), codel = i.state.as_str(), took_us = took,
+                period_us, "codel overran its task's period");
+            self.emit(Event::Overrun {
+                codel: CodelId(c),
+                took_us: took,
+                period_us,
+            });
+        }
+        let failed = error.is_some();
+        match &error {
+            // a replayed error path is what the trace says, not a fault seen now
+            Some(Outcome::Fault(f)) if f.kind == FaultKind::Replayed => {}
+            Some(Outcome::Fault(f)) => {
+                self.stats.faults += 1;
+                let i = &self.t.codels[ck].info;
+                tracing::warn!(target: "bip_engine", module = i.module.as_str(),
+                    service = i.service.as_str(), codel = i.state.as_str(),
+                    fault = %f.kind, "codel fault: its error path is taken");
+                self.emit(Event::Fault(f.clone()));
+            }
+            Some(_) => self.stats.exceptions += 1,
+            // the codel's ids writes are part of the step: the module pick set them
+            None => {}
+        }
+        self.commit(Cause::Codel { error })?;
+        Ok(Stepped::Codel {
+            codel: CodelId(c),
+            failed,
+        })
+    }
+
+    /// Calls a bound codel (here or on its task's thread).
+    pub(super) fn call_codel(
+        &mut self,
+        ck: usize,
+        service: usize,
+        starting: bool,
+        now_us: u64,
+    ) -> Result<Next, String> {
+        let tick = self.stats.ticks;
+        let activity = self.t.services[service].activity.as_mut();
+        #[cfg(feature = "std")]
+        if let Body::Thread { worker, local } = self.runner.bodies[ck] {
+            let mut args_slot = activity.map(|a| {
+                if starting {
+                    &mut a.pending_args
+                } else {
+                    &mut a.current_args
+                }
+            });
+            let Some(workers) = self.runner.workers.as_mut() else {
+                return Err("no task threads".into());
+            };
+            let taken = args_slot.as_mut().and_then(|s| s.take());
+            let job = crate::threads::Job {
+                local,
+                ids: core::mem::take(&mut self.runner.ids),
+                written: 0,
+                fault: None,
+                ports: core::mem::take(&mut self.runner.ports),
+                args: taken,
+                now_us,
+                tick,
+                result: None,
+            };
+            let job = workers.run(worker, job);
+            let Some(mut job) = job else {
+                return Err("the task's thread is gone".into());
+            };
+            self.runner.ids = core::mem::take(&mut job.ids);
+            self.runner.ports = core::mem::take(&mut job.ports);
+            self.runner.written = job.written;
+            self.runner.fault = job.fault.take();
+            if let Some(s) = args_slot {
+                *s = job.args.take();
+            }
+            return job.result.unwrap_or_else(|| Err("no result".into()));
+        }
+        let args: Option<&(dyn Any + Send)> = activity.and_then(|a| {
+            if starting {
+                a.pending_args.as_deref()
+            } else {
+                a.current_args.as_deref()
+            }
+        });
+        let Body::Bound(f) = &mut self.runner.bodies[ck] else {
+            return Err("not a bound codel".into());
+        };
+        let mut ctx = Ctx {
+            info: &self.t.codels[ck].info,
+            ids: &mut self.runner.ids,
+            written: &mut self.runner.written,
+            fault: &mut self.runner.fault,
+            ports: &mut self.runner.ports,
+            args,
+            now_us,
+            tick,
+        };
+        call_guarded(f, &mut ctx)
+    }
+
+    pub(super) fn classify(&mut self, ck: usize, result: Result<Next, String>) -> CodelEnd {
+        let c = &mut self.t.codels[ck];
+        let fault = |kind| {
+            CodelEnd::Failed(Outcome::Fault(Fault {
+                codel: CodelId(ck as u32),
+                kind,
+            }))
+        };
+        let next = match result {
+            Err(msg) => return fault(FaultKind::Panic(msg)),
+            Ok(n) => n,
+        };
+        if let Some(f) = self.runner.fault.take() {
+            return fault(match f {
+                CtxFault::IdsWrite(x) => FaultKind::UndeclaredIdsWrite(x),
+                CtxFault::PortWrite(p) => FaultKind::PortWrite(p),
+            });
+        }
+        match next {
+            Next::Yield(y) => match c.yield_index(y) {
+                None => fault(FaultKind::BadTransition(y)),
+                Some(k) => {
+                    for (j, f) in c.info.fields.iter().enumerate() {
+                        let v = self.runner.ids[j];
+                        if self.runner.written >> j & 1 == 1 && (v < f.lo || v > f.hi) {
+                            return fault(FaultKind::IdsOutOfRange {
+                                field: f.name.clone(),
+                                value: v,
+                            });
+                        }
+                    }
+                    CodelEnd::Yielded { yield_k: k }
+                }
+            },
+            Next::Throw(e) => match c.throws.iter().find(|x| &***x == e) {
+                Some(x) => CodelEnd::Failed(Outcome::Exception(Arc::clone(x))),
+                None => fault(FaultKind::UndeclaredException(e)),
+            },
+        }
+    }
+
+    /// A default codel's outcome: what the forced step says, the first yield, or a
+    /// random outcome.
+    pub(super) fn default_end(&mut self, ck: usize, forced: bool) -> CodelEnd {
+        let c = &self.t.codels[ck];
+        if forced {
+            if self.forced_is(c.map.fail) {
+                return CodelEnd::Failed(Outcome::Fault(Fault {
+                    codel: CodelId(ck as u32),
+                    kind: FaultKind::Replayed,
+                }));
+            }
+            // the yield the activity pick takes, the ids values the module pick writes
+            let mut yield_k = 0;
+            for p in &self.forced {
+                if let Some(y) = c
+                    .map
+                    .yields
+                    .iter()
+                    .position(|y| y.transitions.contains(&p.transition))
+                {
+                    if self.t.services[c.service as usize]
+                        .activity
+                        .as_ref()
+                        .is_some_and(|a| a.component == p.component)
+                    {
+                        yield_k = y;
+                    }
+                }
+                if p.component == c.module_component
+                    && c.map.ids_transitions.contains(&p.transition)
+                {
+                    let mut rest = p.transition - c.map.ids_transitions.start;
+                    for (j, f) in c.map.ids.iter().enumerate() {
+                        let digit = rest / f.stride;
+                        rest %= f.stride;
+                        self.runner.ids[c.ids_field[j]] = f.lo + i64::from(digit);
+                    }
+                }
+            }
+            return CodelEnd::Yielded { yield_k };
+        }
+        match self.runner.defaults {
+            DefaultCodels::FirstYield => CodelEnd::Yielded { yield_k: 0 },
+            DefaultCodels::Random(_) => {
+                let outcomes = c.map.yields.len() + c.throws.len();
+                let k = self.runner.rng.below(outcomes);
+                for (j, f) in c.map.ids.iter().enumerate() {
+                    let span = (f.hi - f.lo + 1) as usize;
+                    self.runner.ids[c.ids_field[j]] = f.lo + self.runner.rng.below(span) as i64;
+                }
+                if k < c.map.yields.len() {
+                    CodelEnd::Yielded { yield_k: k }
+                } else {
+                    CodelEnd::Failed(Outcome::Exception(Arc::clone(
+                        &c.throws[k - c.map.yields.len()],
+                    )))
+                }
+            }
+        }
+    }
+
+    /// Chooses a step of the codel's run interaction that takes
+    /// yield `yield_k` and writes the staged ids, chosen by the policy if several (with
+    /// `forced`, the forced step if it is one); false if there is none.
+    pub(super) fn take_run_step(&mut self, ck: usize, yield_k: usize, forced: bool) -> bool {
+        let c = &self.t.codels[ck];
+        // steps from a table entry, and no ids to match: the step may be the one found last
+        let pooled = if forced || !c.map.ids.is_empty() {
+            None
+        } else {
+            self.gate.enabled().pooled_steps(c.map.run)
+        };
+        if let (Some((entry, width, _)), Some(m)) = (pooled, c.run_step) {
+            if m.entry == entry && m.yield_k as usize == yield_k {
+                self.chosen.set_pooled(c.map.run, m.step, width);
+                return true;
+            }
+        }
+        let Some(activity) = self.t.services[c.service as usize].activity.as_ref() else {
+            return false;
+        };
+        let comp = activity.component;
+        let want_ids = if c.map.ids.is_empty() {
+            None
+        } else {
+            let ids = &self.runner.ids;
+            match c.map.ids_transition(|j| ids[c.ids_field[j]]) {
+                Some(t) => Some(t),
+                None => return false,
+            }
+        };
+        let yields = &c.map.yields[yield_k].transitions;
+        // one or two transitions: a plain loop, not `contains`'s wide search
+        #[allow(clippy::manual_contains)]
+        let takes_yield = |t: u32| yields.iter().any(|&y| y == t);
+        let matches = |s: &Step<'_>| {
+            s.picks
+                .iter()
+                .any(|p| p.component == comp && takes_yield(p.transition))
+                && want_ids.is_none_or(|t| {
+                    s.picks
+                        .iter()
+                        .any(|p| p.component == c.module_component && p.transition == t)
+                })
+        };
+        let run = c.map.run;
+        let mut remember = None;
+        let step = if forced {
+            self.gate
+                .enabled()
+                .steps_of(run)
+                .find(|s| s.picks == &self.forced[..] && matches(s))
+        } else {
+            // as `choose_step`, keeping where the first match is among all the steps
+            let all = self.gate.enabled().steps_of(run).enumerate();
+            let (n, first) = count_first(all.filter(|(_, s)| matches(s)));
+            match first {
+                None => None,
+                Some((k, first)) => match self.sched.chooser.choose(n) {
+                    0 => {
+                        if let (1, Some((entry, width, _))) = (n, pooled) {
+                            remember = Some(RunStep {
+                                entry,
+                                yield_k: yield_k as u32,
+                                step: entry + k as u32 * width,
+                            });
+                        }
+                        Some(first)
+                    }
+                    k => self
+                        .gate
+                        .enabled()
+                        .steps_of(run)
+                        .filter(|s| matches(s))
+                        .nth(k),
+                },
+            }
+        };
+        let found = step.is_some();
+        self.chosen.set(self.gate.enabled(), step);
+        if remember.is_some() {
+            self.t.codels[ck].run_step = remember;
+        }
+        found
+    }
+}

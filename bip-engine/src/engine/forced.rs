@@ -1,0 +1,70 @@
+//! Taking a given step, if the model allows it now: for replaying a trace through the
+//! engine (`crate::replay`).
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use bip_model::{Label, Step};
+
+use super::replies::Cause;
+use super::{Engine, Stepped};
+use crate::bind::InterKind;
+use crate::error::{EngineError, StepAsError};
+
+impl Engine {
+    /// Takes exactly `step`, if the model allows it now: a codel step runs the codel,
+    /// whose outcome must lead to this very step (a default codel does what the step
+    /// says); a request step is a request from the engine; a time step is a tick. For
+    /// replaying a trace through the engine.
+    pub(crate) fn step_as(&mut self, step: Step<'_>) -> Result<Stepped, StepAsError> {
+        if let Some(e) = &self.stopped {
+            return Err(EngineError::Stopped(e.clone()).into());
+        }
+        let allowed = match step.label {
+            Label::Interaction(i) => self
+                .gate
+                .enabled()
+                .steps_of(i)
+                .any(|s| s.picks == step.picks),
+            Label::Internal { .. } => self.gate.enabled().internal_steps().any(|s| s == step),
+        };
+        if !allowed {
+            return Err(StepAsError::NotAllowed);
+        }
+        self.forced.clear();
+        self.forced.extend_from_slice(step.picks);
+        let kind = match step.label {
+            Label::Interaction(i) => self.t.kind[i as usize],
+            Label::Internal { .. } => InterKind::Progress,
+        };
+        self.chosen.set_copied(step);
+        match kind {
+            InterKind::Codel { codel, .. } => self.run_codel(codel, true),
+            InterKind::Request { service } => {
+                let ticket = self.new_ticket();
+                self.accept_request(ticket, service, None)?;
+                Ok(Stepped::Request {
+                    ticket,
+                    accepted: true,
+                })
+            }
+            InterKind::Time => {
+                self.commit(Cause::Other)?;
+                self.count_tick();
+                Ok(Stepped::Tick)
+            }
+            InterKind::Progress | InterKind::Environment => {
+                self.commit(Cause::Other)?;
+                Ok(Stepped::Other)
+            }
+        }
+    }
+
+    pub(super) fn forced_is(&self, interaction: u32) -> bool {
+        // the forced step is a step of `interaction` if it is enabled among its steps
+        self.gate
+            .enabled()
+            .steps_of(interaction)
+            .any(|s| s.picks == &self.forced[..])
+    }
+}

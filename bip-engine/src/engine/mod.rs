@@ -1,0 +1,206 @@
+//! The engine: gates every step on the model, runs codels, serves requests, keeps time.
+//!
+//! One step of [`Engine::step`] (docs/engine.md, "Scheduling"):
+//! 1. a tick that is due (by the clock) and enabled in the model is fired;
+//! 2. otherwise one enabled progress step is taken, chosen by the [`crate::Policy`]: a
+//!    codel (run, then the step its outcome names is committed), or a step of a connector
+//!    of yours or an internal transition;
+//! 3. otherwise (the layer is quiescent) the oldest request is served: fired if its
+//!    request interaction is enabled, refused with the failing conditions if not;
+//! 4. otherwise the engine is idle until the next tick.
+//!
+//! Every step committed goes through the engine's [`bip_model::Gate`], which commits only
+//! steps it lists as enabled in the current state: the engine's run is a path of the
+//! model.
+//!
+//! The engine is one struct whose methods live by concern in this module's files:
+//! `builder.rs` (building), `schedule.rs` (the step loop and the policy's choices),
+//! `requests.rs`, `codels.rs` (running a codel and judging its outcome), `commit.rs`,
+//! `replies.rs` (following the activities to reply), `held.rs` (held codels),
+//! `forced.rs` (taking a given step, for replay), `inspect.rs` (the inspection view) and
+//! `remote.rs` (requests from other threads). They see each other only through
+//! [`Engine`] and the types of this file.
+
+use alloc::collections::VecDeque;
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use bip_model::{Gate, Label, Pick, RangeError, Trace, Verdict};
+
+use crate::bind::Tables;
+use crate::chosen::Chosen;
+use crate::clock::Clock;
+use crate::codel::{Args, Body, CtxFault, DefaultCodels};
+use crate::event::{Event, EventFn, Reasons, Ticket};
+use crate::per_state::PerState;
+use crate::policy::{Chooser, Rng};
+use crate::ports::PortStore;
+use crate::record::Recording;
+
+mod builder;
+mod codels;
+mod commit;
+mod forced;
+mod held;
+mod inspect;
+#[cfg(feature = "std")]
+mod remote;
+mod replies;
+mod requests;
+mod schedule;
+
+pub use builder::{EngineBuilder, DEFAULT_STATE_CACHE};
+pub use inspect::Inspect;
+pub use schedule::{Stepped, Until};
+
+/// Counters since the engine started.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Steps committed (ticks, codels, requests, others).
+    pub steps: u64,
+    pub ticks: u64,
+    pub codels: u64,
+    pub exceptions: u64,
+    pub faults: u64,
+    pub overruns: u64,
+    pub requests_accepted: u64,
+    pub requests_refused: u64,
+    /// Events dropped because nobody drained the queue.
+    pub events_dropped: u64,
+}
+
+/// The runtime engine (see the module documentation and docs/engine.md).
+pub struct Engine {
+    /// The model's state and its enabled steps: every step is committed through it.
+    gate: Gate,
+    /// The GenoM map's tables, and the activities' requests and holds as they go.
+    t: Tables,
+    /// Per fire plan of the gate, whether its step moves a request
+    /// (`Tables::step_moves_request`).
+    plan_moves: Vec<bool>,
+    /// The step being committed.
+    chosen: Chosen,
+    /// Scratch: the step `Engine::step_as` was asked to take.
+    forced: Vec<Pick>,
+    runner: Runner,
+    time: Time,
+    sched: Schedule,
+    held: HeldReports,
+    requests: Inbox,
+    events: EventQueue,
+    recording: Option<Recording>,
+    stats: Stats,
+    /// The range error that stopped the engine.
+    stopped: Option<RangeError>,
+    #[cfg(feature = "std")]
+    remote: Option<crate::handle::Remote>,
+}
+
+/// How the codels run, and what a run leaves behind for its step.
+struct Runner {
+    bodies: Vec<Body>,
+    /// The ports' data, which codels read and write.
+    ports: PortStore,
+    /// The module's ids fields a codel sees, staged: written into the state only by its
+    /// step.
+    ids: Vec<i64>,
+    /// The ids fields the codel wrote (bit per field) and what it did wrong.
+    written: u64,
+    fault: Option<CtxFault>,
+    defaults: DefaultCodels,
+    rng: Rng,
+    #[cfg(feature = "std")]
+    workers: Option<crate::threads::Workers>,
+}
+
+struct Time {
+    clock: Box<dyn Clock>,
+    tick_us: u64,
+    next_tick_us: u64,
+}
+
+/// The choice among the progress steps.
+struct Schedule {
+    chooser: Chooser,
+    candidates: Vec<Candidate>,
+    /// The progress candidates of the states in the gate's cache.
+    known_candidates: PerState<Candidate>,
+    /// Scratch for deduplicating codel candidates: per codel, the step count at which it
+    /// was last collected (64 bits: the count does not come back to a stamp).
+    codel_stamp: Vec<u64>,
+}
+
+/// What is held, as last reported.
+struct HeldReports {
+    /// The codel each activity has held, per state in the gate's cache, and in this one.
+    known: PerState<Option<(u32, Reasons)>>,
+    now: Vec<Option<(u32, Reasons)>>,
+    /// Something moved since the held codels were last looked at.
+    dirty: bool,
+}
+
+struct Inbox {
+    inbox: VecDeque<(Ticket, u32, Option<Args>)>,
+    next_ticket: u64,
+}
+
+struct EventQueue {
+    queue: VecDeque<Event>,
+    capacity: usize,
+    on_event: Option<EventFn>,
+}
+
+/// A progress step the policy may choose.
+#[derive(Clone, Copy, Debug)]
+enum Candidate {
+    Codel(u32),
+    /// The `k`-th enabled step with this label.
+    Step(Label, u32),
+}
+
+impl Engine {
+    /// Drains the events reported since the last call.
+    pub fn events(&mut self) -> impl Iterator<Item = Event> + '_ {
+        self.events.queue.drain(..)
+    }
+
+    /// The steps committed so far, as a trace in the shared format (empty unless the
+    /// builder asked to record).
+    pub fn record(&self) -> Trace {
+        match &self.recording {
+            Some(r) => r.to_trace(self.gate.system(), Verdict::None),
+            None => Trace {
+                system: self.gate.system().name.clone(),
+                verdict: Verdict::None,
+                steps: Vec::new(),
+            },
+        }
+    }
+
+    pub(super) fn emit(&mut self, e: Event) {
+        if let Some(f) = &mut self.events.on_event {
+            f(&e);
+        }
+        #[cfg(feature = "std")]
+        if let Some(r) = &mut self.remote {
+            r.deliver(&e);
+        }
+        if self.events.capacity == 0 {
+            self.stats.events_dropped += 1;
+            return;
+        }
+        if self.events.queue.len() >= self.events.capacity {
+            self.events.queue.pop_front();
+            self.stats.events_dropped += 1;
+        }
+        self.events.queue.push_back(e);
+    }
+
+    pub(super) fn internal_error(&self) -> RangeError {
+        RangeError {
+            context: "the engine (please report)".into(),
+            kind: bip_model::RangeErrorKind::Overflow,
+        }
+    }
+}

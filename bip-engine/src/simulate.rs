@@ -1,0 +1,194 @@
+//! Simulation: the engine on a model with default codels (random declared outcomes and
+//! ids values) and random requests from the environment, on a virtual clock, checking
+//! every invariant (and deadlock freedom, if the model asks for it) after every step
+//! (docs/engine.md, "`bip simulate` and `bip replay`"). A run is the same for a seed.
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use bip_model::eval::Expr;
+use bip_model::{
+    Label, Liveness, LivenessChecker, OwnedStep, PropertyKind, Rng, Role, Steps, System, Trace,
+    Verdict,
+};
+
+use crate::codel::DefaultCodels;
+use crate::engine::{Engine, Stats, Stepped};
+use crate::error::BuildError;
+use crate::policy::Policy;
+
+/// What to simulate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SimulationOptions {
+    /// Steps to take (ticks, codels, requests, other steps).
+    pub steps: u64,
+    /// Seed of the random requests, codel outcomes and choices.
+    pub seed: u64,
+}
+
+/// How a simulation ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SimulationEnd {
+    /// Every check held for all the steps asked.
+    Completed,
+    /// No step is possible and nothing can arrive; every check held until then.
+    Stuck,
+    /// This invariant fails in the last state.
+    Violation(String),
+    /// The last state is a deadlock the model does not excuse.
+    Deadlock,
+    /// A range error, in a step or in a check.
+    RangeError(String),
+}
+
+impl SimulationEnd {
+    /// True if a check failed.
+    pub fn fails(&self) -> bool {
+        !matches!(self, SimulationEnd::Completed | SimulationEnd::Stuck)
+    }
+}
+
+/// What a simulation did.
+#[derive(Clone, Debug)]
+pub struct Simulation {
+    pub end: SimulationEnd,
+    /// The engine's counters at the end.
+    pub stats: Stats,
+    /// Requests sent by the environment (the engine accepted or refused them).
+    pub requests_sent: u64,
+    /// How many invariants were checked at every step, and whether deadlock freedom was.
+    pub invariants: usize,
+    pub deadlock_checked: bool,
+    /// The run as a trace, whose verdict is the failure (if any).
+    pub trace: Trace,
+}
+
+/// Simulates `system` (see the module documentation).
+pub fn simulate(system: System, options: SimulationOptions) -> Result<Simulation, BuildError> {
+    let services: Vec<(String, String)> = system
+        .requestable()
+        .map(|(m, s)| (m.to_string(), s.to_string()))
+        .collect();
+    let deadlock_free = system.properties.iter().find_map(|p| match &p.kind {
+        PropertyKind::DeadlockFree { terminal } => Some(terminal.clone()),
+        _ => None,
+    });
+    let invariants = system
+        .properties
+        .iter()
+        .filter(|p| matches!(p.kind, PropertyKind::Invariant(_)))
+        .count();
+    let mut engine = Engine::builder(system)
+        .default_codels(DefaultCodels::Random(options.seed))
+        .policy(Policy::Seeded(options.seed))
+        .record(options.steps.min(1 << 20) as usize)
+        .event_capacity(0)
+        .build()?;
+    let mut checks = Checks {
+        deadlock_free,
+        steps: Steps::new(),
+        checker: LivenessChecker::default(),
+    };
+    let mut rng = Rng(options.seed ^ 0x5eed);
+    let mut requests_sent = 0u64;
+    let mut end = checks.check(&engine);
+    while end.is_none() && engine.inspect().stats().steps < options.steps {
+        // a request now and then, from the environment
+        if rng.below(4) == 0 {
+            if !services.is_empty() {
+                let (m, s) = &services[rng.below(services.len())];
+                if engine.request(m, s, ()).is_ok() {
+                    requests_sent += 1;
+                }
+            } else if let Some(step) = environment_step(&engine, &mut rng) {
+                end = match engine.step_as(step.as_step()) {
+                    Err(e) => Some(SimulationEnd::RangeError(e.to_string())),
+                    Ok(_) => checks.check(&engine),
+                };
+                continue;
+            }
+        }
+        let before = engine.inspect().stats().steps;
+        match engine.step() {
+            Err(e) => end = Some(SimulationEnd::RangeError(e.to_string())),
+            Ok(Stepped::Idle { next_tick_us }) => match next_tick_us {
+                Some(t) => engine.wait_until(t),
+                None if services.is_empty() && environment_step(&engine, &mut rng).is_none() => {
+                    end = Some(SimulationEnd::Stuck)
+                }
+                None => {}
+            },
+            Ok(_) => {}
+        }
+        if end.is_none() && engine.inspect().stats().steps != before {
+            end = checks.check(&engine);
+        }
+    }
+    let end = end.unwrap_or(SimulationEnd::Completed);
+    let mut trace = engine.record();
+    trace.verdict = match &end {
+        SimulationEnd::Completed | SimulationEnd::Stuck => Verdict::None,
+        SimulationEnd::Violation(p) => Verdict::Violation(p.clone()),
+        SimulationEnd::Deadlock => Verdict::Deadlock,
+        SimulationEnd::RangeError(m) => Verdict::RangeError(m.clone()),
+    };
+    Ok(Simulation {
+        end,
+        stats: engine.inspect().stats(),
+        requests_sent,
+        invariants,
+        deadlock_checked: checks.deadlock_free.is_some(),
+        trace,
+    })
+}
+
+/// A random enabled environment step of a model without a GenoM layer.
+fn environment_step(engine: &Engine, rng: &mut Rng) -> Option<OwnedStep> {
+    let view = engine.inspect();
+    let env: Vec<OwnedStep> = view
+        .enabled()
+        .steps()
+        .filter(|s| view.system().role(s.label) == Role::Environment)
+        .filter(|s| matches!(s.label, Label::Interaction(_)))
+        .map(|s| s.to_owned())
+        .collect();
+    (!env.is_empty()).then(|| env[rng.below(env.len())].clone())
+}
+
+/// The checks after each step, with their scratch.
+struct Checks {
+    /// The model's `DeadlockFree` property (its `terminal` condition), if it has one.
+    deadlock_free: Option<Option<Expr>>,
+    steps: Steps,
+    checker: LivenessChecker,
+}
+
+impl Checks {
+    /// Every invariant, and deadlock freedom if asked, in the engine's state.
+    fn check(&mut self, engine: &Engine) -> Option<SimulationEnd> {
+        let view = engine.inspect();
+        let (system, state) = (view.system(), view.state());
+        for p in &system.properties {
+            if let PropertyKind::Invariant(e) = &p.kind {
+                match system.holds(e, state, &p.name) {
+                    Ok(true) => {}
+                    Ok(false) => return Some(SimulationEnd::Violation(p.name.clone())),
+                    Err(e) => return Some(SimulationEnd::RangeError(e.to_string())),
+                }
+            }
+        }
+        let terminal = self.deadlock_free.as_ref()?;
+        view.enabled().copy_to(&mut self.steps);
+        match system.liveness(state, &self.steps, &mut self.checker) {
+            Ok(Liveness::Deadlock) => {
+                let excused = match terminal {
+                    Some(t) => system.holds(t, state, "terminal").unwrap_or(false),
+                    None => false,
+                };
+                (!excused).then_some(SimulationEnd::Deadlock)
+            }
+            Ok(_) => None,
+            Err(e) => Some(SimulationEnd::RangeError(e.to_string())),
+        }
+    }
+}
