@@ -2,6 +2,7 @@
 //! allocations of this thread while the engine runs the rover with bound (empty) codels,
 //! several activities running, ticks, held codels (the battery), requests being refused.
 
+#[path = "suite/common/mod.rs"]
 mod common;
 
 use std::alloc::{GlobalAlloc, Layout, System};

@@ -3,6 +3,7 @@
 //! recorded trace is a path of the model and keeps its invariants. Bounded in time (about
 //! half a second).
 
+#[path = "suite/common/mod.rs"]
 mod common;
 
 use std::collections::{BTreeMap, BTreeSet};

@@ -3,6 +3,7 @@
 //! without a subscriber could make these events look disabled to this test's
 //! thread-local subscriber.
 
+#[path = "suite/common/mod.rs"]
 mod common;
 
 use bip_engine::*;

@@ -645,7 +645,7 @@ impl EnabledSet {
     }
 
     /// True if interaction `i` has enabled steps (after priorities).
-    #[inline]
+    #[inline(always)]
     pub fn is_enabled(&self, i: u32) -> bool {
         bit(&self.pre, i) && !self.is_suppressed(i)
     }

@@ -1,7 +1,7 @@
 //! The GenoM layer from the outside: bad input gets an error at the offending text, the
 //! expanded model reloads with the same behaviour, and the engine's map fits the system.
 
-mod support;
+use crate::support;
 use support::errors::{assert_error, first_error};
 
 use std::collections::HashSet;
@@ -306,7 +306,7 @@ fn generated_names_are_reserved() {
 #[test]
 fn bad_input_never_panics() {
     // cut the model at many places and drop single characters: errors, never a panic
-    let rover = include_str!("../../robots/rover.ron");
+    let rover = include_str!("../../../robots/rover.ron");
     for cut in (0..rover.len()).step_by(97) {
         if rover.is_char_boundary(cut) {
             let _ = load_str("cut.ron", &rover[..cut]);
@@ -337,7 +337,7 @@ fn the_expanded_model_reloads_with_the_same_behaviour() {
         ("good", GOOD.to_string()),
         (
             "mini",
-            include_str!("../../robots/tests/mini.ron").to_string(),
+            include_str!("../../../robots/tests/mini.ron").to_string(),
         ),
     ] {
         let sys = load_str(name, &text).unwrap_or_else(|e| panic!("{}", e.summary()));
@@ -530,7 +530,7 @@ fn after_steps(sys: &System, names: &[&str]) -> State {
 
 #[test]
 fn a_stuck_codel_names_the_constraints_that_hold_it() {
-    let text = include_str!("../../robots/rover-deadlock.ron");
+    let text = include_str!("../../../robots/rover-deadlock.ron");
     let sys = load_str("rover-deadlock.ron", text).expect("the model loads");
     let genom = sys.genom.as_ref().expect("a GenoM model");
     // at rest nothing waits, so nothing is stuck

@@ -1,7 +1,7 @@
 //! What the engine takes by itself: internal transitions are progress steps, like the
 //! connectors of a model without a GenoM layer.
 
-mod common;
+use crate::common;
 
 use bip_engine::*;
 use common::*;

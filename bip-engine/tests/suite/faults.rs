@@ -4,7 +4,7 @@
 //! state stays a model state. A codel that runs longer than its task's period is reported
 //! as an overrun.
 
-mod common;
+use crate::common;
 
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;

@@ -2,7 +2,7 @@
 //! deadlock (the navigation's start held by `Requires`), an engine's own recording replays
 //! step by step, and a step the model does not allow is refused with the reason.
 
-mod common;
+use crate::common;
 
 use bip_engine::replay::{replay, End};
 use bip_engine::*;

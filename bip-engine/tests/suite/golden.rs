@@ -15,7 +15,7 @@
 //! fingerprints with `BIP_GOLDEN_PRINT=1 cargo test -p bip-engine --test golden --
 //! --nocapture` and say why in the commit.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;

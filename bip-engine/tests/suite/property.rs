@@ -5,7 +5,7 @@
 //! invariants checked are those `bip verify` proves on these models (tests/genom.rs and
 //! tests/verify.rs at the root run it).
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};

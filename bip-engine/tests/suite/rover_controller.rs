@@ -4,7 +4,7 @@
 //! fails otherwise).
 
 #[allow(dead_code)]
-#[path = "../examples/rover_controller.rs"]
+#[path = "../../examples/rover_controller.rs"]
 mod controller;
 
 fn reply_texts<'a>(r: &'a controller::Report, service: &str) -> Vec<&'a str> {

@@ -3,7 +3,7 @@
 //! trace replays through the engine, and the deadlocks of rover-deadlock.ron and of the
 //! philosophers (a model without a GenoM layer, moved by its environment steps) are found.
 
-mod common;
+use crate::common;
 
 use bip_engine::replay::{replay, End};
 use bip_engine::simulate::{simulate, SimulationEnd, SimulationOptions};

@@ -1,7 +1,7 @@
 //! Requests and replies: refusals with the model's reasons, starts held by a constraint,
 //! and the outcome of each activity (ether, exception, interrupted, bad transition).
 
-mod common;
+use crate::common;
 
 use bip_engine::*;
 use bip_model::genom::Reason;

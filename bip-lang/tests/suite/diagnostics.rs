@@ -1,6 +1,6 @@
 //! Bad input: every case gets an error that points at the offending text, never a panic.
 
-mod support;
+use crate::support;
 use support::errors::{assert_error, first_error};
 
 use bip_lang::{load_file, load_str, LoadError};

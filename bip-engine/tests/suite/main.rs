@@ -1,0 +1,14 @@
+//! bip-engine's integration tests, in one binary (the tests of process-wide state, the
+//! allocator, the tracing subscriber and threads, are binaries of their own): scheduling,
+//! requests, faults, replay, simulation, golden traces, the example controller, and the
+//! differential property test.
+
+mod common;
+mod faults;
+mod golden;
+mod property;
+mod replay;
+mod requests;
+mod rover_controller;
+mod scheduling;
+mod simulate;
