@@ -6,7 +6,7 @@
 //! [`bip_model::System`]. Every error on the way is a [`ModelError`] with a span in the
 //! user's file, reported together as a [`LoadError`] ([`diag`]).
 //!
-//! Modules import down these layers only (`tests/layering.rs` checks it), lowest first:
+//! Modules import down these layers only (`tests/suite/layering.rs` checks it), lowest first:
 //! positions (`source`, `diag`); the file format (`syntax`, `expr`, `genom::syntax`);
 //! `compile`, which knows only BIP core; `genom`, whose expansion evaluates constants and
 //! compiles its result through `compile`; files (`load`, which chooses between compiling a

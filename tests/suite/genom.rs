@@ -2,7 +2,7 @@
 //! that `bip check` reads back with the same sizes, and bad GenoM input gets a diagnostic
 //! with its position and exit code 2.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Output};
