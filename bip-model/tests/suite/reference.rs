@@ -14,7 +14,7 @@ use bip_lang::load_str;
 use bip_model::{State, Steps, System};
 use proptest::prelude::*;
 
-use crate::support::random_system::*;
+use bip_random_systems::*;
 
 // --------------------------------------------------------------------------------------
 // The reference interpreter.
@@ -25,7 +25,17 @@ type RState = Vec<(usize, Vec<i64>)>;
 #[derive(Debug)]
 struct Failure;
 
-impl Gen {
+/// The interpreter reads the generated data itself.
+struct Reference<'g>(&'g Gen);
+
+impl std::ops::Deref for Reference<'_> {
+    type Target = Gen;
+    fn deref(&self) -> &Gen {
+        self.0
+    }
+}
+
+impl Reference<'_> {
     fn initial(&self) -> RState {
         (0..self.component_count())
             .map(|c| {
@@ -71,6 +81,7 @@ impl Gen {
                     "<=" => (x <= y) as i64,
                     "==" => (x == y) as i64,
                     "!=" => (x != y) as i64,
+                    ">" => (x > y) as i64,
                     "&&" | "||" | "=>" => (y != 0) as i64,
                     other => unreachable!("operator {other}"),
                 }
@@ -306,7 +317,7 @@ fn compiled_successors(
     Ok(out)
 }
 
-fn reference_successors(g: &Gen, s: &RState) -> Result<Vec<(String, Option<RState>)>, Failure> {
+fn reference_successors(g: &Reference, s: &RState) -> Result<Vec<(String, Option<RState>)>, Failure> {
     let mut out: Vec<(String, Option<RState>)> = g
         .steps(s)?
         .into_iter()
@@ -318,7 +329,8 @@ fn reference_successors(g: &Gen, s: &RState) -> Result<Vec<(String, Option<RStat
 
 /// Runs random walks on one generated system; returns the number of states compared.
 fn check_system(seed: u64) -> Result<usize, TestCaseError> {
-    let g = generate(seed);
+    let gen = generate(seed);
+    let g = Reference(&gen);
     let text = g.to_ron();
     let mut sys = load_str("generated.ron", &text).map_err(|e| {
         TestCaseError::fail(format!(
