@@ -20,7 +20,8 @@ pub use bip_model::Rng;
 pub struct Options {
     /// Connectors may have the Time or Environment role.
     pub roles: bool,
-    /// Atom and connector guards may divide, and so fail.
+    /// Atom and connector guards may divide, and so fail; and wherever expressions may
+    /// divide, they divide more often ([`FAILING_OPS`]).
     pub failing_guards: bool,
     /// A deadlock-freedom (sometimes with a terminal condition), an invariant and a
     /// reachability property over the components' values; their expressions may divide.
@@ -210,6 +211,9 @@ pub fn gen_bool(
 /// must not fail); actions may divide and leave ranges: those range errors must agree.
 pub const GUARD_OPS: &[&str] = &["+", "-", "*"];
 pub const ACTION_OPS: &[&str] = &["+", "-", "*", "/", "%"];
+/// Where failures are the point (the verifier's encoding must mirror each one), division
+/// and remainder come twice as often.
+pub const FAILING_OPS: &[&str] = &["+", "-", "*", "/", "%", "/", "%"];
 
 /// A random system with the default [`Options`].
 pub fn generate(seed: u64) -> Gen {
@@ -222,9 +226,17 @@ const FAILING_GUARD_CHANCE: u64 = 50;
 
 fn guard_ops(r: &mut Rng, opts: &Options) -> &'static [&'static str] {
     if opts.failing_guards && r.chance(FAILING_GUARD_CHANCE) {
-        ACTION_OPS
+        FAILING_OPS
     } else {
         GUARD_OPS
+    }
+}
+
+fn action_ops(opts: &Options) -> &'static [&'static str] {
+    if opts.failing_guards {
+        FAILING_OPS
+    } else {
+        ACTION_OPS
     }
 }
 
@@ -285,9 +297,9 @@ pub fn generate_with(seed: u64, opts: &Options) -> Gen {
             for (v, var) in vars.iter().enumerate() {
                 if r.chance(40) {
                     let e = if var.is_bool {
-                        gen_bool(&mut r, 2, &mut leaf, ACTION_OPS)
+                        gen_bool(&mut r, 2, &mut leaf, action_ops(opts))
                     } else {
-                        gen_int(&mut r, 2, &mut leaf, ACTION_OPS)
+                        gen_int(&mut r, 2, &mut leaf, action_ops(opts))
                     };
                     action.push((v, e));
                 }
@@ -374,9 +386,9 @@ pub fn generate_with(seed: u64, opts: &Options) -> Gen {
             if !atom.vars.is_empty() {
                 let v = r.below(atom.vars.len());
                 let e = if atom.vars[v].is_bool {
-                    gen_bool(&mut r, 2, &mut leaf, ACTION_OPS)
+                    gen_bool(&mut r, 2, &mut leaf, action_ops(opts))
                 } else {
-                    gen_int(&mut r, 2, &mut leaf, ACTION_OPS)
+                    gen_int(&mut r, 2, &mut leaf, action_ops(opts))
                 };
                 action.push((f, idx, v, e));
             }
@@ -450,7 +462,7 @@ pub fn generate_with(seed: u64, opts: &Options) -> Gen {
     if opts.properties {
         let (atoms, families) = (&gen.atoms, &gen.families);
         let mut leaf = |r: &mut Rng, want_bool: bool| global_leaf(r, atoms, families, want_bool);
-        let ops = if r.chance(30) { ACTION_OPS } else { GUARD_OPS };
+        let ops = if r.chance(30) { FAILING_OPS } else { GUARD_OPS };
         let invariant = gen_bool(&mut r, 2, &mut leaf, ops);
         let reachable = gen_bool(&mut r, 2, &mut leaf, ops);
         let terminal = r
