@@ -317,7 +317,10 @@ fn compiled_successors(
     Ok(out)
 }
 
-fn reference_successors(g: &Reference, s: &RState) -> Result<Vec<(String, Option<RState>)>, Failure> {
+fn reference_successors(
+    g: &Reference,
+    s: &RState,
+) -> Result<Vec<(String, Option<RState>)>, Failure> {
     let mut out: Vec<(String, Option<RState>)> = g
         .steps(s)?
         .into_iter()

@@ -465,9 +465,7 @@ pub fn generate_with(seed: u64, opts: &Options) -> Gen {
         let ops = if r.chance(30) { FAILING_OPS } else { GUARD_OPS };
         let invariant = gen_bool(&mut r, 2, &mut leaf, ops);
         let reachable = gen_bool(&mut r, 2, &mut leaf, ops);
-        let terminal = r
-            .chance(30)
-            .then(|| gen_bool(&mut r, 1, &mut leaf, ops));
+        let terminal = r.chance(30).then(|| gen_bool(&mut r, 1, &mut leaf, ops));
         gen.props = Some(Props {
             terminal,
             invariant,
