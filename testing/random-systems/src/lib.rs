@@ -207,8 +207,9 @@ pub fn gen_bool(
     }
 }
 
-/// Guards use no division (their evaluation order is an implementation choice, so they
-/// must not fail); actions may divide and leave ranges: those range errors must agree.
+/// By default guards use no division (their evaluation order is an implementation choice,
+/// so they must not fail); actions may divide and leave ranges: those range errors must
+/// agree.
 pub const GUARD_OPS: &[&str] = &["+", "-", "*"];
 pub const ACTION_OPS: &[&str] = &["+", "-", "*", "/", "%"];
 /// Where failures are the point (the verifier's encoding must mirror each one), division
