@@ -3,8 +3,6 @@
 //! real run (it replays, and the explicit method fails the property too), and every
 //! symbolic trace ends where its verdict says.
 
-mod common;
-
 use bip_lang::load_str;
 use bip_model::{System, Verdict as TraceVerdict};
 use bip_verifier::{verify, CheckKind, Method, Options, Report, SymbolicOptions};
@@ -83,7 +81,7 @@ fn compare(sys: &System, text: &str, explicit: &Report, sym: &Report) -> Result<
 }
 
 fn check(seed: u64, with_roles: bool) -> Result<(), TestCaseError> {
-    let text = common::model(seed, with_roles);
+    let text = bip_random_systems::model(seed, with_roles);
     let sys = load_str("random.ron", &text)
         .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e.summary())))?;
     let explicit = verify(

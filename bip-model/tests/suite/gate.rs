@@ -9,7 +9,7 @@
 use bip_lang::load_str;
 use bip_model::{Gate, GateStep, Label, OwnedStep, State, Steps, System};
 
-use crate::support::random_system::*;
+use bip_random_systems::*;
 
 fn full(sys: &System, s: &State, buf: &mut Steps) -> Option<Vec<OwnedStep>> {
     sys.enabled_steps(s, buf).ok()?;

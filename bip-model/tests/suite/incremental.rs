@@ -15,7 +15,7 @@ use bip_model::{
 };
 use proptest::prelude::*;
 
-use crate::support::random_system::*;
+use bip_random_systems::*;
 
 fn full(sys: &System, s: &State, buf: &mut Steps) -> Result<Vec<OwnedStep>, ()> {
     sys.enabled_steps(s, buf).map_err(|_| ())?;

@@ -12,5 +12,4 @@ mod incremental;
 mod reference;
 mod semantics;
 mod state_cache;
-mod support;
 mod trace;

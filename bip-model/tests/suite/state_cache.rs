@@ -10,7 +10,7 @@ use bip_model::{
     EnabledSet, FirePlans, Label, OwnedStep, PlanId, State, StateCache, Steps, System,
 };
 
-use crate::support::random_system::*;
+use bip_random_systems::*;
 
 fn full(sys: &System, s: &State, buf: &mut Steps) -> Option<Vec<OwnedStep>> {
     sys.enabled_steps(s, buf).ok()?;

@@ -7,10 +7,6 @@
 //! whose firing fails, the same "no progress step", and the same value (or failure) of
 //! the properties' expressions.
 
-// the random models of the integration tests, one generator for both
-#[path = "../../tests/common/mod.rs"]
-mod common;
-
 use std::collections::BTreeSet;
 
 use bip_lang::load_str;
@@ -158,11 +154,11 @@ fn check_state(sys: &System, enc: &Encoding<'_>, s: &State) -> Result<(), String
 }
 
 fn check_system(seed: u64) -> Result<usize, TestCaseError> {
-    let text = common::model(seed, true);
+    let text = bip_random_systems::model(seed, true);
     let sys = load_str("random.ron", &text)
         .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e.summary())))?;
     let enc = Encoding::new(&sys);
-    let mut rng = common::Rng(seed ^ 0x5eed);
+    let mut rng = bip_random_systems::Rng(seed ^ 0x5eed);
     let mut states = vec![sys.initial_state()];
     // a random walk
     let mut s = sys.initial_state();
@@ -204,7 +200,7 @@ proptest! {
 fn the_generator_covers_every_feature() {
     let mut seen = [false; 8];
     for seed in 0..300u64 {
-        let text = common::model(seed, true);
+        let text = bip_random_systems::model(seed, true);
         let Ok(sys) = load_str("random.ron", &text) else {
             continue;
         };

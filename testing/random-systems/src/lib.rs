@@ -1,17 +1,49 @@
-//! Random small systems, generated as plain Rust data and written out as RON models: the
-//! shared generator of the property tests that compare the step relation with a reference
-//! interpreter (`reference.rs`) and the incremental enabled set with the full relation
-//! (`incremental.rs`).
+//! Random small systems for the property tests, generated as plain Rust data (which
+//! bip-model's reference interpreter reads) and written out as model files (which go
+//! through the loader like any user's model).
+//!
+//! One generator serves every suite: the step relation against the reference interpreter,
+//! the incremental enabled set, the state cache and the gate (bip-model), and the symbolic
+//! encoding and verdicts against the explicit ones (bip-verifier). What only some suites
+//! can take (roles, guards that fail, properties) is behind [`Options`].
 
-#![allow(dead_code)]
-
-// --------------------------------------------------------------------------------------
-// A tiny deterministic random source, so that one `u64` seed describes a whole system.
+mod ron;
 
 pub use bip_model::Rng;
 
-// --------------------------------------------------------------------------------------
-// The generated system.
+/// What the generator may produce beyond the plain step relation.
+///
+/// The default is what bip-model's reference interpreter checks: its guards must not fail,
+/// since which guard is evaluated first is an implementation choice, and it has no notion
+/// of roles or properties.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Options {
+    /// Connectors may have the Time or Environment role.
+    pub roles: bool,
+    /// Atom and connector guards may divide, and so fail; and wherever expressions may
+    /// divide, they divide more often ([`FAILING_OPS`]).
+    pub failing_guards: bool,
+    /// A deadlock-freedom (sometimes with a terminal condition), an invariant and a
+    /// reachability property over the components' values; their expressions may divide.
+    pub properties: bool,
+}
+
+impl Options {
+    /// Everything the verifier must handle: the encoding mirrors failures exactly, and
+    /// roles change which states are deadlocks.
+    pub fn verifier(roles: bool) -> Options {
+        Options {
+            roles,
+            failing_guards: true,
+            properties: true,
+        }
+    }
+}
+
+/// A random model file with everything the verifier must handle (see [`Options::verifier`]).
+pub fn model(seed: u64, with_roles: bool) -> String {
+    generate_with(seed, &Options::verifier(with_roles)).to_ron()
+}
 
 #[derive(Clone, Debug)]
 pub enum Ex {
@@ -68,6 +100,12 @@ pub struct Family {
     pub count: Option<usize>,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    Time,
+    Environment,
+}
+
 #[derive(Clone, Debug)]
 pub struct Conn {
     /// `forall i in 0..n`
@@ -79,6 +117,7 @@ pub struct Conn {
     pub guard: Option<Ex>,
     /// (family, index, variable) = value
     pub action: Vec<(usize, Idx, usize, Ex)>,
+    pub role: Option<Role>,
 }
 
 #[derive(Clone, Debug)]
@@ -94,6 +133,17 @@ pub struct Gen {
     pub families: Vec<Family>,
     pub conns: Vec<Conn>,
     pub prios: Vec<Prio>,
+    /// With [`Options::properties`].
+    pub props: Option<Props>,
+}
+
+/// Properties over fixed components (no connector index in scope).
+#[derive(Clone, Debug)]
+pub struct Props {
+    /// `DeadlockFree`, with this terminal condition if any.
+    pub terminal: Option<Ex>,
+    pub invariant: Ex,
+    pub reachable: Ex,
 }
 
 pub fn gen_int(
@@ -143,7 +193,7 @@ pub fn gen_bool(
     match r.below(5) {
         0 => Ex::Not(Box::new(gen_bool(r, depth - 1, leaf, arith))),
         1 | 2 => {
-            let op = ["<", "<=", "==", "!="][r.below(4)];
+            let op = ["<", "<=", "==", "!=", ">"][r.below(5)];
             let a = gen_int(r, depth - 1, leaf, arith);
             let b = gen_int(r, depth - 1, leaf, arith);
             Ex::Bin(op, Box::new(a), Box::new(b))
@@ -157,12 +207,57 @@ pub fn gen_bool(
     }
 }
 
-/// Guards use no division (their evaluation order is an implementation choice, so they
-/// must not fail); actions may divide and leave ranges: those range errors must agree.
+/// By default guards use no division (their evaluation order is an implementation choice,
+/// so they must not fail); actions may divide and leave ranges: those range errors must
+/// agree.
 pub const GUARD_OPS: &[&str] = &["+", "-", "*"];
 pub const ACTION_OPS: &[&str] = &["+", "-", "*", "/", "%"];
+/// Where failures are the point (the verifier's encoding must mirror each one), division
+/// and remainder come twice as often.
+pub const FAILING_OPS: &[&str] = &["+", "-", "*", "/", "%", "/", "%"];
 
+/// A random system with the default [`Options`].
 pub fn generate(seed: u64) -> Gen {
+    generate_with(seed, &Options::default())
+}
+
+/// Guards divide, when they may, in this many percent of the cases, so that most guards
+/// still succeed and the steps behind them get exercised.
+const FAILING_GUARD_CHANCE: u64 = 50;
+
+fn guard_ops(r: &mut Rng, opts: &Options) -> &'static [&'static str] {
+    if opts.failing_guards && r.chance(FAILING_GUARD_CHANCE) {
+        FAILING_OPS
+    } else {
+        GUARD_OPS
+    }
+}
+
+fn action_ops(opts: &Options) -> &'static [&'static str] {
+    if opts.failing_guards {
+        FAILING_OPS
+    } else {
+        ACTION_OPS
+    }
+}
+
+/// A leaf reading a fixed member of any family: what priorities and properties can read.
+fn global_leaf(r: &mut Rng, atoms: &[Atom], families: &[Family], want_bool: bool) -> Option<Ex> {
+    let f = r.below(families.len());
+    let idx = families[f]
+        .count
+        .map_or(Idx::Single, |c| Idx::Const(r.below(c)));
+    let atom = &atoms[families[f].atom];
+    if want_bool && r.chance(40) {
+        return Some(Ex::At(f, idx, r.below(atom.locs)));
+    }
+    let c: Vec<usize> = (0..atom.vars.len())
+        .filter(|&v| atom.vars[v].is_bool == want_bool)
+        .collect();
+    (!c.is_empty()).then(|| Ex::Var(f, idx, c[r.below(c.len())]))
+}
+
+pub fn generate_with(seed: u64, opts: &Options) -> Gen {
     let mut r = Rng(seed);
     let mut atoms = Vec::new();
     for _ in 0..1 + r.below(3) {
@@ -197,16 +292,15 @@ pub fn generate(seed: u64) -> Gen {
                     .collect();
                 (!candidates.is_empty()).then(|| Ex::Local(candidates[r.below(candidates.len())]))
             };
-            let guard = r
-                .chance(50)
-                .then(|| gen_bool(&mut r, 2, &mut leaf, GUARD_OPS));
+            let ops = guard_ops(&mut r, opts);
+            let guard = r.chance(50).then(|| gen_bool(&mut r, 2, &mut leaf, ops));
             let mut action = Vec::new();
             for (v, var) in vars.iter().enumerate() {
                 if r.chance(40) {
                     let e = if var.is_bool {
-                        gen_bool(&mut r, 2, &mut leaf, ACTION_OPS)
+                        gen_bool(&mut r, 2, &mut leaf, action_ops(opts))
                     } else {
-                        gen_int(&mut r, 2, &mut leaf, ACTION_OPS)
+                        gen_int(&mut r, 2, &mut leaf, action_ops(opts))
                     };
                     action.push((v, e));
                 }
@@ -284,9 +378,8 @@ pub fn generate(seed: u64) -> Gen {
                 .collect();
             (!c.is_empty()).then(|| Ex::Var(f, idx, c[r.below(c.len())]))
         };
-        let guard = r
-            .chance(40)
-            .then(|| gen_bool(&mut r, 2, &mut leaf, GUARD_OPS));
+        let ops = guard_ops(&mut r, opts);
+        let guard = r.chance(40).then(|| gen_bool(&mut r, 2, &mut leaf, ops));
         let mut action = Vec::new();
         if r.chance(40) {
             let (f, idx, _) = ports[r.below(ports.len())];
@@ -294,19 +387,29 @@ pub fn generate(seed: u64) -> Gen {
             if !atom.vars.is_empty() {
                 let v = r.below(atom.vars.len());
                 let e = if atom.vars[v].is_bool {
-                    gen_bool(&mut r, 2, &mut leaf, ACTION_OPS)
+                    gen_bool(&mut r, 2, &mut leaf, action_ops(opts))
                 } else {
-                    gen_int(&mut r, 2, &mut leaf, ACTION_OPS)
+                    gen_int(&mut r, 2, &mut leaf, action_ops(opts))
                 };
                 action.push((f, idx, v, e));
             }
         }
+        let role = if opts.roles {
+            match r.below(10) {
+                0 => Some(Role::Time),
+                1 => Some(Role::Environment),
+                _ => None,
+            }
+        } else {
+            None
+        };
         conns.push(Conn {
             forall,
             ports,
             trigger,
             guard,
             action,
+            role,
         });
     }
     // a component may take part once per connector instance: drop connectors that break it
@@ -315,6 +418,7 @@ pub fn generate(seed: u64) -> Gen {
         families,
         conns,
         prios: Vec::new(),
+        props: None,
     };
     let conns: Vec<Conn> = gen
         .conns
@@ -349,26 +453,25 @@ pub fn generate(seed: u64) -> Gen {
         };
         let low = pick(&mut r, a);
         let high = pick(&mut r, b);
-        let families = gen.families.clone();
-        let atoms = gen.atoms.clone();
-        let mut leaf = |r: &mut Rng, want_bool: bool| -> Option<Ex> {
-            let f = r.below(families.len());
-            let idx = families[f]
-                .count
-                .map_or(Idx::Single, |c| Idx::Const(r.below(c)));
-            let atom = &atoms[families[f].atom];
-            if want_bool && r.chance(40) {
-                return Some(Ex::At(f, idx, r.below(atom.locs)));
-            }
-            let c: Vec<usize> = (0..atom.vars.len())
-                .filter(|&v| atom.vars[v].is_bool == want_bool)
-                .collect();
-            (!c.is_empty()).then(|| Ex::Var(f, idx, c[r.below(c.len())]))
-        };
+        let (atoms, families) = (&gen.atoms, &gen.families);
+        let mut leaf = |r: &mut Rng, want_bool: bool| global_leaf(r, atoms, families, want_bool);
         let when = r
             .chance(50)
             .then(|| gen_bool(&mut r, 1, &mut leaf, GUARD_OPS));
         gen.prios.push(Prio { low, high, when });
+    }
+    if opts.properties {
+        let (atoms, families) = (&gen.atoms, &gen.families);
+        let mut leaf = |r: &mut Rng, want_bool: bool| global_leaf(r, atoms, families, want_bool);
+        let ops = if r.chance(30) { FAILING_OPS } else { GUARD_OPS };
+        let invariant = gen_bool(&mut r, 2, &mut leaf, ops);
+        let reachable = gen_bool(&mut r, 2, &mut leaf, ops);
+        let terminal = r.chance(30).then(|| gen_bool(&mut r, 1, &mut leaf, ops));
+        gen.props = Some(Props {
+            terminal,
+            invariant,
+            reachable,
+        });
     }
     gen
 }
@@ -425,146 +528,5 @@ impl Gen {
             k -= n;
         }
         unreachable!()
-    }
-
-    // ----------------------------------------------------------------------------------
-    // Writing the system as a model file.
-
-    pub fn to_ron(&self) -> String {
-        let mut s = String::from("System(\n  name: \"generated\",\n  atoms: {\n");
-        for (ai, a) in self.atoms.iter().enumerate() {
-            let locs: Vec<String> = (0..a.locs).map(|l| format!("\"l{l}\"")).collect();
-            let ports: Vec<String> = (0..a.ports).map(|p| format!("\"p{p}\"")).collect();
-            s += &format!(
-                "    \"A{ai}\": Atom(locations: [{}], initial: \"l{}\", ports: [{}],\n      vars: [",
-                locs.join(", "),
-                a.initial,
-                ports.join(", ")
-            );
-            for (vi, v) in a.vars.iter().enumerate() {
-                if v.is_bool {
-                    s += &format!("(name: \"v{vi}\", ty: Bool, init: {}), ", v.init == 1);
-                } else {
-                    s += &format!(
-                        "(name: \"v{vi}\", ty: Int({}, {}), init: {}), ",
-                        v.lo, v.hi, v.init
-                    );
-                }
-            }
-            s += "],\n      transitions: [\n";
-            for t in &a.trans {
-                s += &format!("        (from: \"l{}\", to: \"l{}\"", t.from, t.to);
-                if let Some(p) = t.port {
-                    s += &format!(", port: \"p{p}\"");
-                }
-                if let Some(g) = &t.guard {
-                    s += &format!(", guard: \"{}\"", self.show(g, None));
-                }
-                if !t.action.is_empty() {
-                    let act: Vec<String> = t
-                        .action
-                        .iter()
-                        .map(|(v, e)| format!("v{v} = {}", self.show(e, None)))
-                        .collect();
-                    s += &format!(", action: \"{}\"", act.join("; "));
-                }
-                s += "),\n";
-            }
-            s += "      ]),\n";
-        }
-        s += "  },\n  components: [\n";
-        for (fi, f) in self.families.iter().enumerate() {
-            s += &format!("    (name: \"f{fi}\", atom: \"A{}\"", f.atom);
-            if let Some(c) = f.count {
-                s += &format!(", count: {c}");
-            }
-            s += "),\n";
-        }
-        s += "  ],\n  connectors: [\n";
-        for (ci, c) in self.conns.iter().enumerate() {
-            let ports: Vec<String> = c
-                .ports
-                .iter()
-                .map(|&(f, idx, p)| {
-                    format!("\"{}.p{p}\"", self.show_comp(f, idx, c.forall.is_some()))
-                })
-                .collect();
-            s += &format!("    (name: \"c{ci}\", ports: [{}]", ports.join(", "));
-            if let Some(n) = c.forall {
-                s += &format!(", forall: \"i in 0..{n}\"");
-            }
-            if let Some(t) = c.trigger {
-                let (f, idx, p) = c.ports[t];
-                s += &format!(
-                    ", kind: Broadcast(trigger: \"{}.p{p}\")",
-                    self.show_comp(f, idx, c.forall.is_some())
-                );
-            }
-            if let Some(g) = &c.guard {
-                s += &format!(", guard: \"{}\"", self.show(g, Some(c.forall.is_some())));
-            }
-            if !c.action.is_empty() {
-                let act: Vec<String> = c
-                    .action
-                    .iter()
-                    .map(|(f, idx, v, e)| {
-                        format!(
-                            "{}.v{v} = {}",
-                            self.show_comp(*f, *idx, c.forall.is_some()),
-                            self.show(e, Some(c.forall.is_some()))
-                        )
-                    })
-                    .collect();
-                s += &format!(", action: \"{}\"", act.join("; "));
-            }
-            s += "),\n";
-        }
-        s += "  ],\n  priorities: [\n";
-        for p in &self.prios {
-            let name = |(c, i): (usize, Option<usize>)| match i {
-                None => format!("c{c}"),
-                Some(k) => format!("c{c}[{k}]"),
-            };
-            s += &format!("    (low: \"{}\", high: \"{}\"", name(p.low), name(p.high));
-            if let Some(w) = &p.when {
-                s += &format!(", when: \"{}\"", self.show(w, Some(false)));
-            }
-            s += "),\n";
-        }
-        s += "  ],\n)\n";
-        s
-    }
-
-    pub fn show_comp(&self, f: usize, idx: Idx, in_forall: bool) -> String {
-        match (idx, self.families[f].count) {
-            (Idx::Single, _) | (_, None) => format!("f{f}"),
-            (Idx::Const(k), _) => format!("f{f}[{k}]"),
-            (Idx::Shift(k), Some(c)) if in_forall => format!("f{f}[(i + {k}) % {c}]"),
-            (Idx::Shift(k), Some(_)) => format!("f{f}[{k}]"),
-        }
-    }
-
-    /// Fully parenthesised, so the printer never relies on precedence.
-    pub fn show(&self, e: &Ex, global: Option<bool>) -> String {
-        match e {
-            Ex::Int(i) if *i < 0 => format!("({i})"),
-            Ex::Int(i) => i.to_string(),
-            Ex::Bool(b) => b.to_string(),
-            Ex::Local(v) => format!("v{v}"),
-            Ex::Var(f, idx, v) => {
-                format!("{}.v{v}", self.show_comp(*f, *idx, global == Some(true)))
-            }
-            Ex::At(f, idx, l) => format!("{}@l{l}", self.show_comp(*f, *idx, global == Some(true))),
-            Ex::Not(a) => format!("!({})", self.show(a, global)),
-            Ex::Bin(op, a, b) => {
-                format!("({} {op} {})", self.show(a, global), self.show(b, global))
-            }
-            Ex::Ite(c, a, b) => format!(
-                "({} ? {} : {})",
-                self.show(c, global),
-                self.show(a, global),
-                self.show(b, global)
-            ),
-        }
     }
 }
