@@ -9,6 +9,7 @@ mod check;
 mod exit;
 mod expand;
 mod export;
+mod interrupt;
 mod load;
 mod replay;
 mod report;
