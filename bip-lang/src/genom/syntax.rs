@@ -1,4 +1,4 @@
-//! The GenoM layer of the file format (MODEL.md section 4): modules and constraints, as
+//! The GenoM layer of the file format (docs/model.md, "The GenoM layer"): modules and constraints, as
 //! written. `genom::check` validates them; `genom::build` expands them into BIP core.
 
 use crate::source::{ConstExpr, Text};

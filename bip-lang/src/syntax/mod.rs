@@ -1,4 +1,4 @@
-//! The model file format: what a user writes in a `.ron` file (MODEL.md), as serde types.
+//! The model file format: what a user writes in a `.ron` file (docs/model.md), as serde types.
 //!
 //! These types hold the text as written (names and expressions are strings with their
 //! positions); `compile` resolves them into a [`bip_model::System`]. They also serialize back
@@ -45,7 +45,7 @@ pub struct SystemDef {
     pub connectors: Vec<ConnectorDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub priorities: Vec<PriorityDef>,
-    /// The GenoM layer (MODEL.md section 4), expanded into the core before compilation.
+    /// The GenoM layer (docs/model.md, "The GenoM layer"), expanded into the core before compilation.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub modules: Vec<ModuleDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -72,7 +72,7 @@ impl SystemDef {
     }
 }
 
-/// Writes printed RON the way MODEL.md does: the inner structs without their type names
+/// Writes printed RON the way docs/model.md does: the inner structs without their type names
 /// (`(from: …)`, not `TransitionDef(from: …)`), and lists of plain values on one line.
 fn tidy_ron(text: &str) -> String {
     const INNER: [&str; 5] = [
