@@ -86,6 +86,15 @@ const CRATES: &[Layers] = &[
         ],
     },
     Layers {
+        src: "sched/src",
+        layers: &[
+            ("values", &["error", "task"]),
+            ("analysis", &["rta"]),
+            ("schedules", &["analysis", "simulate"]),
+            ("pictures", &["svg"]),
+        ],
+    },
+    Layers {
         src: "bip-lang/src",
         layers: &[
             ("positions", &["source", "diag"]),
