@@ -35,6 +35,10 @@ pub struct SystemDef {
     /// Real-time length of one model tick in milliseconds (used by the engine's clock).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tick_ms: Option<ConstExpr>,
+    /// The CPUs the GenoM layer's tasks run on, for the scheduling analysis
+    /// (docs/model.md, "Time budgets"); none declared: one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cpus: Vec<Text>,
     #[serde(default, skip_serializing_if = "OrderedMap::is_empty")]
     pub constants: OrderedMap<Text, ConstExpr>,
     #[serde(default, skip_serializing_if = "OrderedMap::is_empty")]
