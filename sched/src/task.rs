@@ -46,9 +46,8 @@ pub enum Assignment {
 
 impl TaskSet {
     /// Checks what the analysis relies on: positive periods and deadlines, a CPU that
-    /// exists, a demand no larger than the period it must fit in (a task that cannot
-    /// fit even alone is a modelling error, not a scheduling verdict), and per CPU either
-    /// every task's priority or none.
+    /// exists, and per CPU either every task's priority or none. (A demand above the
+    /// period is a verdict, not an error: the task's jobs queue without bound.)
     pub fn validate(&self) -> Result<(), SchedError> {
         for task in &self.tasks {
             let bad = |what: String| SchedError::Task {
@@ -66,12 +65,6 @@ impl TaskSet {
                     "it runs on CPU #{} of {}",
                     task.cpu,
                     self.cpus.len()
-                )));
-            }
-            if task.demand > task.period {
-                return Err(bad(format!(
-                    "its work per period ({} µs) exceeds its period ({} µs)",
-                    task.demand, task.period
                 )));
             }
         }

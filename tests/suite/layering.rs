@@ -82,6 +82,7 @@ const CRATES: &[Layers] = &[
             ("stores", &["visited", "promela"]),
             ("explicit", &["explore"]),
             ("symbolic", &["symbolic"]),
+            ("schedulability", &["schedulability"]),
             ("auto", &["auto"]),
         ],
     },
