@@ -51,8 +51,7 @@ pub fn schedule_svg(
         if previous_cpu != Some(cpu) {
             let _ = writeln!(
                 s,
-                r##"<line x1="10" y1="{top}" x2="{}" y2="{top}" stroke="#999"/><text x="{}" y="{}" fill="#666" text-anchor="end">{}</text>"##,
-                LEFT + WIDTH,
+                r##"<line x1="10" y1="{top}" x2="{}" y2="{top}" stroke="#999"/><text class="cpu" x="10" y="{}" fill="#666" font-size="10" font-weight="bold">CPU {}</text>"##,
                 LEFT + WIDTH,
                 top + 11.0,
                 escape(&set.cpus[cpu])
