@@ -6,7 +6,9 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use bip_sched::{hyperperiod, schedule_svg, simulate, Assignment, ResponseTime};
+use bip_sched::{
+    hyperperiod, schedule_svg, show_micros as show, simulate, Assignment, ResponseTime,
+};
 use bip_verifier::{schedulability, DemandChoice, DemandMethod, Options, Schedulability};
 
 use crate::verify::{parse_seconds, parse_size, Format};
@@ -113,22 +115,6 @@ pub fn run(args: &Args) -> u8 {
     } else {
         exit::FAILED
     }
-}
-
-/// A duration in the unit that writes it shortest.
-fn show(us: u64) -> String {
-    if us >= 1_000_000 && us % 1000 == 0 {
-        format!("{} s", trim(us as f64 / 1e6))
-    } else if us >= 1000 {
-        format!("{} ms", trim(us as f64 / 1e3))
-    } else {
-        format!("{us} µs")
-    }
-}
-
-fn trim(x: f64) -> String {
-    let s = format!("{x:.3}");
-    s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
 fn demand_line(sched: &Schedulability) -> String {

@@ -23,4 +23,4 @@ pub use error::SchedError;
 pub use rta::ResponseTime;
 pub use simulate::{hyperperiod, simulate, Job, Run, Schedule, TaskSchedule};
 pub use svg::schedule_svg;
-pub use task::{Assignment, Micros, Task, TaskSet};
+pub use task::{show_micros, Assignment, Micros, Task, TaskSet};

@@ -6,6 +6,22 @@ use crate::error::SchedError;
 /// Time in microseconds.
 pub type Micros = u64;
 
+/// A time for people: in seconds from 1 s, in milliseconds from 1 ms (up to three
+/// decimals, as needed), else in microseconds.
+pub fn show_micros(us: Micros) -> String {
+    let decimal = |x: f64| {
+        let s = format!("{x:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    };
+    if us >= 1_000_000 {
+        format!("{} s", decimal(us as f64 / 1e6))
+    } else if us >= 1000 {
+        format!("{} ms", decimal(us as f64 / 1e3))
+    } else {
+        format!("{us} µs")
+    }
+}
+
 /// A periodic task: released every `period`, it must finish `demand` of work (its worst
 /// case per period) within `deadline` of its release, on its CPU, preempted by every task
 /// of higher priority there.
