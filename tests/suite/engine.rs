@@ -148,7 +148,10 @@ fn replay_refuses_a_trace_the_model_does_not_allow_with_the_reason() {
     assert_eq!(out.status.code(), Some(2), "{text}");
     assert!(text.contains("3  ndd_GoTo_start"), "{text}");
     assert!(text.contains("NOT ALLOWED"), "{text}");
-    assert!(text.contains("because: constraint #1 (Requires)"), "{text}");
+    assert!(
+        text.contains("because: navigate_with_laser (line 145): Requires("),
+        "{text}"
+    );
 }
 
 #[test]

@@ -219,7 +219,7 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
     // the report says which constraint holds the navigation back
     assert!(
         stdout.contains(
-            "ndd.GoTo codel start is ready after 1 tick but held by\n      constraint #1 (Requires): "
+            "ndd.GoTo codel start is ready after 1 tick but held by\n      navigate_with_laser (line 145): Requires(service: \"ndd.GoTo\", active: [\"sick.Scan\"])\n      fresh_pose (line 146): Fresh("
         ),
         "{stdout}"
     );

@@ -36,15 +36,21 @@ fn the_rover_controller_plays_its_script_within_the_model() {
             .any(|(c, why)| c == codel && why.iter().any(|w| w.starts_with(constraint)))
     };
     assert!(
-        held_by("antenna.Communicate.start", "constraint #0 (Exclusive)"),
+        held_by(
+            "antenna.Communicate.start",
+            "mast_still (line 140): Exclusive("
+        ),
         "{log}"
     );
     assert!(
-        held_by("camera.Shoot.start", "constraint #4 (AtMost)"),
+        held_by("camera.Shoot.start", "power_budget (line 147): AtMost("),
         "{log}"
     );
     assert!(
-        held_by("rflex.TrackSpeed.track", "constraint #3 (Guard)"),
+        held_by(
+            "rflex.TrackSpeed.track",
+            "battery_reserve (line 145): Guard("
+        ),
         "{log}"
     );
     // navigation: aborted without the laser, arrives, then blocked by the rock

@@ -1,8 +1,9 @@
 //! bip-lang's integration tests, in one binary: every kind of bad input with its message and
-//! position (`diagnostics`, `genom`), and the GenoM expansion on random layers
-//! (`genom_random`).
+//! position (`diagnostics`, `genom`, `genom_terms`), and the GenoM expansion on random
+//! layers (`genom_random`).
 
 mod diagnostics;
 mod genom;
 mod genom_random;
+mod genom_terms;
 mod support;
