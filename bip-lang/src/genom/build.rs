@@ -1320,7 +1320,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 .iter()
                 .flat_map(|m| m.services.iter())
                 .filter_map(|s| s.component.as_deref());
-            all(activities.flat_map(|c| [at(c, ETHER), not(member(c, REQ))]))
+            all(activities.map(|c| and(at(c, ETHER), not(member(c, REQ)))))
                 .unwrap_or_else(|| boolean(true))
         });
         self.recipe.idle = idle.clone();

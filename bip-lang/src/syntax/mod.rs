@@ -1,8 +1,9 @@
 //! The model file format: what a user writes in a `.ron` file (MODEL.md), as serde types.
 //!
-//! These types hold the text as written (names and expressions are strings with their
-//! positions); `compile` resolves them into a [`bip_model::System`]. They also serialize back
-//! to RON, which is how `bip expand` prints an expanded model.
+//! These types hold the text as written (names are strings with their positions;
+//! expressions and actions are [`ExprDef`]/[`ActionDef`]: a text as written, or a tree the
+//! GenoM expansion built); `compile` resolves them into a [`bip_model::System`]. They also
+//! serialize back to RON, which is how `bip expand` prints an expanded model.
 
 mod code;
 mod var;

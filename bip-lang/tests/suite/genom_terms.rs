@@ -179,19 +179,39 @@ constraints: [AtMost(max: 2, services: [{}])],
     )
 }
 
+/// An activity that comes `after` `n` functions of its module.
+fn long_after(n: usize) -> String {
+    let functions: Vec<String> = (0..n)
+        .map(|k| format!(r#"(name: "F{k}", kind: Function)"#))
+        .collect();
+    let after: Vec<String> = (0..n).map(|k| format!("\"F{k}\"")).collect();
+    format!(
+        r#"System(name: "after", modules: [(name: "m", tasks: [(name: "t", period: 1)], services: [
+{},
+(name: "S", kind: Activity, task: "t", after: [{}], codels: [(state: "start", yields: ["ether"])])
+])],
+properties: [DeadlockFree],
+)"#,
+        functions.join(",\n"),
+        after.join(", ")
+    )
+}
+
 #[test]
 fn long_generated_guards_load_and_reload() {
-    // the idle excuse conjoins 220 terms: generated chains are built shallow, so neither
-    // the compiler nor the reader of the expanded model refuses them
-    let text = many_activities(110);
-    let sys = load_str("wide.ron", &text).unwrap_or_else(|e| panic!("{}", e.summary()));
-    assert_eq!(
-        sys.genom.as_ref().map(|g| g.modules[0].services.len()),
-        Some(110)
-    );
-    let expanded = expand_str("wide.ron", &text).expect("expands");
+    // the request of `S` is guarded by 250 `done` flags: generated chains are built
+    // shallow, so neither the compiler nor the reader of the expanded model refuses them
+    let text = long_after(250);
+    let sys = load_str("after.ron", &text).unwrap_or_else(|e| panic!("{}", e.summary()));
+    let refusals = sys
+        .genom
+        .as_ref()
+        .and_then(|g| g.service("m", "S"))
+        .map(|s| s.refusals.len());
+    assert_eq!(refusals, Some(251), "250 `after`s and `already requested`");
+    let expanded = expand_str("after.ron", &text).expect("expands");
     let printed = expanded.to_ron().expect("prints");
-    let again = load_str("wide-core.ron", &printed).unwrap_or_else(|e| panic!("{}", e.summary()));
+    let again = load_str("after-core.ron", &printed).unwrap_or_else(|e| panic!("{}", e.summary()));
     assert_eq!(again.slot_ranges(), sys.slot_ranges());
     assert_eq!(again.interactions.len(), sys.interactions.len());
 }
