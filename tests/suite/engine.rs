@@ -99,7 +99,8 @@ fn simulate_finds_the_rovers_deadlock_and_replay_shows_it() {
     assert_eq!(out.status.code(), Some(1), "{text}");
     assert!(text.contains("deadlock reached after"), "{text}");
     assert!(
-        text.contains("waiting: ndd.GoTo codel `start`") && text.contains("(Requires)"),
+        text.contains("waiting: ndd.GoTo codel `start`")
+            && text.contains("held by navigate_with_laser (line 145): Requires("),
         "{text}"
     );
     assert!(text.contains("result: DeadlockFree fails"), "{text}");

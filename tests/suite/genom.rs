@@ -267,7 +267,8 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
     assert!(text.contains("allowed: request accepted"), "{text}");
     assert!(text.contains("deadlock reached after"), "{text}");
     assert!(
-        text.contains("waiting: ndd.GoTo codel `start`") && text.contains("(Requires)"),
+        text.contains("waiting: ndd.GoTo codel `start`")
+            && text.contains("held by navigate_with_laser (line 145): Requires("),
         "{text}"
     );
 }
