@@ -9,6 +9,7 @@ use super::check::{ConstraintKind, Layer, Module, PortRef, Service, ServiceRef, 
 use super::names::*;
 use super::recipe::{Recipe, RecipeCodel, RecipeCondition, RecipeModule, RecipeService};
 use super::tree::{all, and, assign, at, binary, boolean, chain, cond, int, member, name, not, or};
+use crate::compile::one_of;
 use crate::diag::{Errors, ModelError};
 use crate::expr::{Assign, BinOp, Expr, ExprKind};
 use crate::source::{ConstExpr, ConstValue, OrderedMap, Span, Spanned};
@@ -1133,6 +1134,9 @@ impl<'a, 'd> Builder<'a, 'd> {
             if is_tick && p.to_string() == trigger {
                 continue;
             }
+            if let Some(e) = self.unknown_generated_port(p) {
+                self.errors.push(e);
+            }
             g.ports.push(p.clone());
         }
         let role_ok = match g.role {
@@ -1199,6 +1203,10 @@ impl<'a, 'd> Builder<'a, 'd> {
             texts.push(trigger);
         }
         for p in texts {
+            if let Some(e) = self.unknown_generated_port(p) {
+                self.errors.push(e);
+                continue;
+            }
             let Ok(e) = p.tree() else { continue };
             let ExprKind::Member(base, port) = &e.kind else {
                 continue;
@@ -1234,6 +1242,29 @@ impl<'a, 'd> Builder<'a, 'd> {
                 );
             }
         }
+    }
+
+    /// A user's port `c.p` on a generated component `c` that has no port `p`, said of the
+    /// module or activity `c` stands for (the compiler would name the generated atom).
+    fn unknown_generated_port(&self, p: &ExprDef) -> Option<ModelError> {
+        let e = p.tree().ok()?;
+        let ExprKind::Member(base, port) = &e.kind else {
+            return None;
+        };
+        let ExprKind::Name(comp) = &base.kind else {
+            return None;
+        };
+        let c = self.components.iter().find(|c| c.name.as_str() == comp)?;
+        let (_, atom) = self.atoms.iter().find(|(n, _)| *n == c.atom)?;
+        if atom.ports.iter().any(|q| q.as_str() == port.name) {
+            return None;
+        }
+        let (_, what) = self.names.get(comp.as_str())?;
+        Some(
+            ModelError::new(format!("{what} has no port `{}`", port.name), port.span).with_help(
+                one_of("its ports are", atom.ports.iter().map(|q| q.as_str())),
+            ),
+        )
     }
 
     /// The generated connector that uses port `comp.port`, for help texts: connectors are

@@ -279,3 +279,29 @@ fn constraints_show_with_their_names_as_written() {
     assert_eq!(covered, "charged");
     assert_eq!(pos.0, 22);
 }
+
+#[test]
+fn an_unknown_port_of_a_generated_component_is_named_by_its_activity() {
+    // a connector that joins the tick with a misspelt port of the activity's component
+    let text = with(
+        "properties: [DeadlockFree]",
+        r#"connectors: [(name: "tick", ports: ["arm_Move.tck"])],
+    properties: [DeadlockFree]"#,
+    );
+    let (msg, covered, _) = first_error(&text);
+    assert_eq!(msg, "activity `arm.Move` has no port `tck`");
+    assert_eq!(covered, "tck");
+    let err = load_str("bad.ron", &text).expect_err("rejected");
+    let help = err.errors()[0].help.clone().unwrap_or_default();
+    assert!(
+        help.starts_with("its ports are: request, interrupt, abort, tick"),
+        "{help}"
+    );
+    // and on a connector of its own
+    let text = with(
+        "properties: [DeadlockFree]",
+        r#"connectors: [(name: "halt", ports: ["arm_Move.abrt"])],
+    properties: [DeadlockFree]"#,
+    );
+    assert_error(&text, "activity `arm.Move` has no port `abrt`", "abrt");
+}
