@@ -35,20 +35,11 @@ pub(super) struct UserExpr<T> {
     pub rewritten: bool,
 }
 
-impl UserExpr<Expr> {
-    fn def(&self, written: &ExprDef) -> ExprDef {
+impl<T: Clone> UserExpr<T> {
+    /// What the core holds: the text as written, or the rewritten tree.
+    fn def<D: Clone + From<T>>(&self, written: &D) -> D {
         if self.rewritten {
-            ExprDef::Built(self.tree.clone())
-        } else {
-            written.clone()
-        }
-    }
-}
-
-impl UserExpr<Vec<Assign>> {
-    fn def(&self, written: &ActionDef) -> ActionDef {
-        if self.rewritten {
-            ActionDef::Built(self.tree.clone())
+            D::from(self.tree.clone())
         } else {
             written.clone()
         }

@@ -104,6 +104,12 @@ impl From<Expr> for ExprDef {
     }
 }
 
+impl From<Vec<Assign>> for ActionDef {
+    fn from(list: Vec<Assign>) -> Self {
+        ActionDef::Built(list)
+    }
+}
+
 impl Serialize for ExprDef {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         match self {
