@@ -402,7 +402,7 @@ fn write_why_stuck(s: &mut String, system: &System, trace: &bip_model::Trace) {
             for st in stuck {
                 let _ = writeln!(s, "    {st} but held by");
                 for c in &st.held_by {
-                    let _ = writeln!(s, "      {}: {}", c.reason, c.text);
+                    let _ = writeln!(s, "      {c}");
                 }
             }
         }

@@ -99,7 +99,8 @@ fn simulate_finds_the_rovers_deadlock_and_replay_shows_it() {
     assert_eq!(out.status.code(), Some(1), "{text}");
     assert!(text.contains("deadlock reached after"), "{text}");
     assert!(
-        text.contains("waiting: ndd.GoTo codel `start`") && text.contains("(Requires)"),
+        text.contains("waiting: ndd.GoTo codel `start`")
+            && text.contains("held by navigate_with_laser (line 145): Requires("),
         "{text}"
     );
     assert!(text.contains("result: DeadlockFree fails"), "{text}");
@@ -148,7 +149,10 @@ fn replay_refuses_a_trace_the_model_does_not_allow_with_the_reason() {
     assert_eq!(out.status.code(), Some(2), "{text}");
     assert!(text.contains("3  ndd_GoTo_start"), "{text}");
     assert!(text.contains("NOT ALLOWED"), "{text}");
-    assert!(text.contains("because: constraint #1 (Requires)"), "{text}");
+    assert!(
+        text.contains("because: navigate_with_laser (line 145): Requires("),
+        "{text}"
+    );
 }
 
 #[test]

@@ -117,7 +117,7 @@ fn bad_genom_input_gets_positions_and_exit_2() {
         ),
         &[
             "yields to `mvoe`, which is not a codel state of `GoTo`",
-            "yield.ron:71:49]",
+            "yield.ron:74:49]",
             "undeclared state",
         ],
     );
@@ -142,7 +142,10 @@ fn bad_genom_input_gets_positions_and_exit_2() {
     );
     expand_bad(
         "period",
-        (r#"(name: "nav", period: 1)"#, r#"(name: "nav", period: 0)"#),
+        (
+            r#"(name: "nav", period: 1, cpu"#,
+            r#"(name: "nav", period: 0, cpu"#,
+        ),
         &["task `nav` has period 0", "a period is at least 1 tick"],
     );
     expand_bad(
@@ -219,7 +222,7 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
     // the report says which constraint holds the navigation back
     assert!(
         stdout.contains(
-            "ndd.GoTo codel start is ready after 1 tick but held by\n      constraint #1 (Requires): "
+            "ndd.GoTo codel start is ready after 1 tick but held by\n      navigate_with_laser (line 145): Requires(service: \"ndd.GoTo\", active: [\"sick.Scan\"])\n      fresh_pose (line 146): Fresh("
         ),
         "{stdout}"
     );
@@ -267,7 +270,8 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
     assert!(text.contains("allowed: request accepted"), "{text}");
     assert!(text.contains("deadlock reached after"), "{text}");
     assert!(
-        text.contains("waiting: ndd.GoTo codel `start`") && text.contains("(Requires)"),
+        text.contains("waiting: ndd.GoTo codel `start`")
+            && text.contains("held by navigate_with_laser (line 145): Requires("),
         "{text}"
     );
 }
