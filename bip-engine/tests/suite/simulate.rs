@@ -58,7 +58,9 @@ fn the_rover_keeps_its_invariants_and_a_run_is_the_same_for_a_seed() {
     let (_, other) = streamed(load("rover.ron"), SimulationOptions { seed: 2, ..options });
     assert_ne!(other, trace);
     // without a stream, the same run keeps only its last steps, which are its streamed end
-    let kept = simulate(load("rover.ron"), options).expect("builds").last_steps;
+    let kept = simulate(load("rover.ron"), options)
+        .expect("builds")
+        .last_steps;
     let n = kept.trace.steps.len();
     assert!((SEGMENT..2 * SEGMENT).contains(&n), "{n}");
     assert_eq!(kept.skipped + n as u64, 3000);

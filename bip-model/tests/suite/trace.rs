@@ -155,8 +155,9 @@ fn a_value_changed_in_a_trace_is_named() {
     let err = trace.replay(&sys).expect_err("tampered");
     assert_eq!(err.step, 2);
     assert!(
-        err.message
-            .ends_with("does not lead to the recorded state: `buf.items` recorded 2, the step gives 1"),
+        err.message.ends_with(
+            "does not lead to the recorded state: `buf.items` recorded 2, the step gives 1"
+        ),
         "{err}"
     );
 }
@@ -170,13 +171,20 @@ fn bookkeeping_variables_are_shown_on_request() {
         .successors(&init)
         .expect("no range error")
         .into_iter()
-        .find(|(_, next)| sys.diff(&init, next).iter().any(|(k, _)| k.ends_with(".req")))
+        .find(|(_, next)| {
+            sys.diff(&init, next)
+                .iter()
+                .any(|(k, _)| k.ends_with(".req"))
+        })
         .expect("a request to an activity is enabled");
     let trace = Trace::from_path(&sys, Verdict::None, &[request]);
     let all = trace.display(Some(&sys)).all_variables(true).to_string();
     assert!(all.contains(".req: false → true"), "{all}");
     let short = trace.display(Some(&sys)).to_string();
-    assert!(!short.contains(".req") && !short.contains(".paused"), "{short}");
+    assert!(
+        !short.contains(".req") && !short.contains(".paused"),
+        "{short}"
+    );
     assert!(short.starts_with("recording after 1 step\n"), "{short}");
 }
 
@@ -193,7 +201,10 @@ fn a_window_of_a_run_shows_and_replays_from_its_start() {
         shown.starts_with("recording after 4 steps (the last 2 shown)\n"),
         "{shown}"
     );
-    assert!(shown.contains("3  release[0]  phil[0]: eating → thinking"), "{shown}");
+    assert!(
+        shown.contains("3  release[0]  phil[0]: eating → thinking"),
+        "{shown}"
+    );
     let replayed = window.replay_from(&sys, start.clone()).expect("replays");
     assert_eq!(replayed.last().map(|(_, s)| s), p.last().map(|(_, s)| s));
     assert!(window.replay(&sys).is_err(), "not from the initial state");
