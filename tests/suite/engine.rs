@@ -253,7 +253,7 @@ fn ctrl_c_ends_a_simulation_with_its_report_and_trace() {
     let dir = tempfile::tempdir().expect("temp dir");
     let trace = dir.path().join("run.ron");
     let trace = trace.to_str().expect("utf-8");
-    let mut child = capped(
+    let child = capped(
         400_000,
         &format!("simulate robots/rover.ron --steps 18446744073709551615 --trace {trace}"),
     )

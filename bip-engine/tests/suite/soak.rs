@@ -90,11 +90,13 @@ fn ten_million_random_steps_keep_every_invariant_in_flat_memory() {
         let view = engine.inspect();
         for (name, e) in &invariants {
             assert!(
-                view.system().holds(e, view.state(), name).expect("evaluates"),
+                view.system()
+                    .holds(e, view.state(), name)
+                    .expect("evaluates"),
                 "invariant {name} fails after step {steps}"
             );
         }
-        if steps % CHECK_EVERY == 0 {
+        if steps.is_multiple_of(CHECK_EVERY) {
             // the recording's last steps are steps of the model, ending in the engine's state
             let window = engine.record_window();
             let path = window
