@@ -331,8 +331,7 @@ fn the_satellite_verifies() {
 /// models (an independent check of the expansion's step relation through the exporter).
 #[test]
 fn spin_counts_the_same_states_on_expanded_models() {
-    if !common::have("spin") || !common::have("gcc") {
-        println!("note: spin or gcc is not on PATH; the SPIN cross-check was NOT run (apt-get install spin)");
+    if !common::spin_available("spin_counts_the_same_states_on_expanded_models") {
         return;
     }
     for model in ["robots/satellite.ron", "robots/tests/mini.ron"] {
@@ -345,28 +344,7 @@ fn spin_counts_the_same_states_on_expanded_models() {
             "{}",
             String::from_utf8_lossy(&o.stderr)
         );
-        let run = |cmd: &str| {
-            let o = Command::new("sh")
-                .arg("-c")
-                .arg(cmd)
-                .current_dir(dir.path())
-                .output()
-                .expect("sh runs");
-            assert!(
-                o.status.success(),
-                "{cmd}: {}",
-                String::from_utf8_lossy(&o.stderr)
-            );
-            String::from_utf8_lossy(&o.stdout).into_owned()
-        };
-        run("spin -o2 -a model.pml && gcc -O1 -DSAFETY -DNOREDUCE -o pan pan.c");
-        let pan = run("./pan -c0");
-        let stored: u64 = pan
-            .lines()
-            .find(|l| l.trim_end().ends_with("states, stored"))
-            .and_then(|l| l.split_whitespace().next())
-            .and_then(|n| n.parse().ok())
-            .expect("pan reports the states stored");
+        let (stored, _) = common::spin(dir.path(), "model.pml", &[]);
         let ours = bip(&["verify", model, "-q", "--format", "json"]);
         let doc: serde_json::Value =
             serde_json::from_slice(&ours.stdout).expect("one JSON document");
