@@ -87,6 +87,8 @@ pub struct Report {
     /// Each held codel (`module.Service.codel`) with the conditions that hold it.
     pub held: Vec<(String, Vec<String>)>,
     pub overruns: usize,
+    /// Codel runs past their WCET, and task periods past their deadline.
+    pub over_budget: usize,
     pub faults: usize,
 }
 
@@ -284,6 +286,7 @@ pub fn run(
         replies: Vec::new(),
         held: Vec::new(),
         overruns: 0,
+        over_budget: 0,
         faults: 0,
     };
     let mut script = SCRIPT.iter().peekable();
@@ -404,6 +407,26 @@ fn describe(engine: &Engine, event: &Event, report: &mut Report) -> String {
                 "overrun: {m}.{s}.{c} took {} ms, its period is {} ms",
                 took_us / 1000,
                 period_us / 1000
+            )
+        }
+        Event::WcetExceeded {
+            codel,
+            took_us,
+            wcet_us,
+        } => {
+            report.over_budget += 1;
+            let (m, s, c) = engine.inspect().codel_name(*codel);
+            format!("over budget: {m}.{s}.{c} took {took_us} µs, its WCET is {wcet_us} µs")
+        }
+        Event::DeadlineMissed {
+            codel,
+            elapsed_us,
+            deadline_us,
+        } => {
+            report.over_budget += 1;
+            let (m, s, _) = engine.inspect().codel_name(*codel);
+            format!(
+                "deadline missed: {m}.{s}'s task ended its period's work {elapsed_us} µs after its release, past {deadline_us} µs"
             )
         }
     }

@@ -53,6 +53,8 @@ pub(crate) struct CodelTable {
     pub ids_field: Vec<usize>,
     /// Its task's period in ticks.
     pub period_ticks: u64,
+    /// Its task, an index into [`Tables::tasks`].
+    pub task: Option<u32>,
     /// The last yield it returned, and its index in `map.yields`. A codel returns the
     /// same literals again and again, and the text at a `&'static str`'s address never
     /// changes (it is never freed), so the same address and length are the same yield
@@ -169,6 +171,8 @@ pub(crate) struct Tables {
     /// One bit per interaction that can be a progress candidate (a codel's run or error
     /// path, a progress connector): requests and ticks are looked at elsewhere.
     pub progress_mask: Vec<u64>,
+    /// The modules' tasks, in order: each one's period in ticks and declared deadline.
+    pub tasks: Vec<(u64, Option<u64>)>,
 }
 
 impl Tables {
@@ -195,6 +199,7 @@ impl Tables {
             has_internal: system.summary().internal_transitions > 0,
             time: Vec::new(),
             progress_mask: Vec::new(),
+            tasks: Vec::new(),
         };
         let Some(map) = &system.genom else {
             return Ok(t.finish(system, kind));
@@ -217,6 +222,9 @@ impl Tables {
                 ));
             }
             let port_base = t.ports.len();
+            let task_base = t.tasks.len() as u32;
+            t.tasks
+                .extend(m.tasks.iter().map(|k| (u64::from(k.period), k.deadline_us)));
             for p in &m.ports {
                 t.ports.push((m.name.clone(), p.name.clone()));
             }
@@ -295,6 +303,7 @@ impl Tables {
                         },
                         ids_field,
                         period_ticks,
+                        task: s.task.map(|k| task_base + k as u32),
                         last_yield: None,
                         run_step: None,
                     });

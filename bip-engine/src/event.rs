@@ -75,6 +75,21 @@ pub enum Event {
         took_us: u64,
         period_us: u64,
     },
+    /// A codel ran longer than its declared WCET (docs/model.md, "Time budgets"); its
+    /// result was committed.
+    WcetExceeded {
+        codel: CodelId,
+        took_us: u64,
+        wcet_us: u64,
+    },
+    /// A codel of a task ended `elapsed_us` after the task's release, past its deadline
+    /// (the period, unless the model gives one): the task's work of this period is late.
+    /// Reported once per period.
+    DeadlineMissed {
+        codel: CodelId,
+        elapsed_us: u64,
+        deadline_us: u64,
+    },
 }
 
 /// A reply to a request.

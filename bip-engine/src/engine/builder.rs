@@ -7,8 +7,9 @@ use crate::prelude::*;
 
 use bip_model::{Gate, System};
 
-use super::{Engine, EventQueue, HeldReports, Inbox, Runner, Schedule, Stats, Time};
+use super::{Budgets, Engine, EventQueue, HeldReports, Inbox, Runner, Schedule, Stats, Time};
 use crate::bind::Tables;
+use crate::budgets::{CodelTimes, TaskClock};
 use crate::chosen::Chosen;
 use crate::clock::Clock;
 use crate::codel::{Body, CodelFn, Ctx, DefaultCodels, Next};
@@ -179,6 +180,18 @@ impl EngineBuilder {
             return Err(BuildError::NoThreads);
         }
         let now = clock.now_us();
+        let budgets = Budgets {
+            times: vec![CodelTimes::default(); t.codels.len()],
+            tasks: t
+                .tasks
+                .iter()
+                .map(|&(period_ticks, deadline)| {
+                    let deadline_us =
+                        deadline.unwrap_or_else(|| period_ticks.saturating_mul(tick_us));
+                    TaskClock::new(period_ticks, deadline_us, now)
+                })
+                .collect(),
+        };
         Ok(Engine {
             gate,
             t,
@@ -226,6 +239,7 @@ impl EngineBuilder {
             },
             recording: self.record,
             stats: Stats::default(),
+            budgets,
             stopped: None,
             #[cfg(feature = "std")]
             remote: None,

@@ -100,6 +100,7 @@ impl Engine {
             return Err(StepAsError::Diverged);
         }
         self.stats.codels += 1;
+        self.check_budgets(ck, t0, took);
         if took > period_us {
             self.stats.overruns += 1;
             let i = &self.t.codels[ck].info;
@@ -390,5 +391,56 @@ impl Engine {
             self.t.codels[ck].run_step = remember;
         }
         found
+    }
+}
+
+impl Engine {
+    /// Records codel `ck`'s run of `took` µs from `t0`, and reports a run past its WCET
+    /// and a period's work past its task's deadline (the reports are cold, out of line).
+    #[inline]
+    fn check_budgets(&mut self, ck: usize, t0: u64, took: u64) {
+        let times = &mut self.budgets.times[ck];
+        times.record(took);
+        let (wcet, task) = (self.t.codels[ck].map.wcet_us, self.t.codels[ck].task);
+        if let Some(wcet_us) = wcet.filter(|&w| took > w) {
+            times.over_wcet += 1;
+            self.report_over_wcet(ck, took, wcet_us);
+        }
+        let task = task.and_then(|k| self.budgets.tasks.get_mut(k as usize));
+        if let Some((elapsed_us, deadline_us)) =
+            task.and_then(|t| Some((t.ended(t0.saturating_add(took))?, t.deadline_us)))
+        {
+            self.report_deadline_missed(ck, elapsed_us, deadline_us);
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn report_over_wcet(&mut self, ck: usize, took_us: u64, wcet_us: u64) {
+        self.stats.wcet_exceeded += 1;
+        let i = &self.t.codels[ck].info;
+        tracing::warn!(target: "bip_engine", module = i.module.as_str(),
+            service = i.service.as_str(), codel = i.state.as_str(), took_us, wcet_us,
+            "codel ran past its WCET");
+        self.emit(Event::WcetExceeded {
+            codel: CodelId(ck as u32),
+            took_us,
+            wcet_us,
+        });
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn report_deadline_missed(&mut self, ck: usize, elapsed_us: u64, deadline_us: u64) {
+        self.stats.deadlines_missed += 1;
+        let i = &self.t.codels[ck].info;
+        tracing::warn!(target: "bip_engine", module = i.module.as_str(),
+            service = i.service.as_str(), codel = i.state.as_str(), elapsed_us, deadline_us,
+            "task's period work ended past its deadline");
+        self.emit(Event::DeadlineMissed {
+            codel: CodelId(ck as u32),
+            elapsed_us,
+            deadline_us,
+        });
     }
 }

@@ -1,6 +1,7 @@
 //! The inspection view: what an engine's user, a supervisor, a test or the command line
 //! may look at without changing anything ([`Engine::inspect`]).
 
+use crate::budgets::CodelTimes;
 use core::any::Any;
 
 #[allow(unused_imports)]
@@ -45,6 +46,12 @@ impl<'a> Inspect<'a> {
     /// Counters since the engine started.
     pub fn stats(self) -> Stats {
         self.engine.stats
+    }
+
+    /// How long codel `c`'s runs took, by the engine's clock, and how many exceeded its
+    /// WCET.
+    pub fn codel_times(self, c: CodelId) -> CodelTimes {
+        self.engine.budgets.times[c.0 as usize]
     }
 
     /// What the state cache holds and how often it knew the step

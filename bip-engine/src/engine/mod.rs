@@ -29,6 +29,7 @@ use crate::prelude::*;
 use bip_model::{Gate, Label, Pick, RangeError, Trace, Verdict};
 
 use crate::bind::Tables;
+use crate::budgets::{CodelTimes, TaskClock};
 use crate::chosen::Chosen;
 use crate::clock::Clock;
 use crate::codel::{Args, Body, CtxFault, DefaultCodels};
@@ -64,6 +65,10 @@ pub struct Stats {
     pub exceptions: u64,
     pub faults: u64,
     pub overruns: u64,
+    /// Codel runs longer than their WCET.
+    pub wcet_exceeded: u64,
+    /// Task periods whose work ended past the deadline.
+    pub deadlines_missed: u64,
     pub requests_accepted: u64,
     pub requests_refused: u64,
     /// Events dropped because nobody drained the queue.
@@ -91,6 +96,8 @@ pub struct Engine {
     events: EventQueue,
     recording: Option<Recording>,
     stats: Stats,
+    /// The codels' run times, and each task's period as it goes.
+    budgets: Budgets,
     /// The range error that stopped the engine.
     stopped: Option<RangeError>,
     #[cfg(feature = "std")]
@@ -118,6 +125,14 @@ struct Time {
     clock: Box<dyn Clock>,
     tick_us: u64,
     next_tick_us: u64,
+}
+
+/// Time budgets as the engine lives them (`budgets.rs`).
+struct Budgets {
+    /// Per codel.
+    times: Vec<CodelTimes>,
+    /// Per task of [`Tables::tasks`].
+    tasks: Vec<TaskClock>,
 }
 
 /// The choice among the progress steps.

@@ -157,6 +157,11 @@ impl Engine {
 
     pub(super) fn count_tick(&mut self) {
         self.stats.ticks += 1;
+        // a period begins when its tick was due
+        let due = self.time.next_tick_us;
+        for task in &mut self.budgets.tasks {
+            task.tick(due);
+        }
         self.time.next_tick_us = self.time.next_tick_us.saturating_add(self.time.tick_us);
     }
 

@@ -194,5 +194,7 @@ pub fn event_kind(e: &Event) -> &'static str {
         },
         Event::Held { .. } => "held",
         Event::Overrun { .. } => "overrun",
+        Event::WcetExceeded { .. } => "over its WCET",
+        Event::DeadlineMissed { .. } => "deadline missed",
     }
 }
