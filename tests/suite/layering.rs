@@ -55,7 +55,7 @@ const CRATES: &[Layers] = &[
     Layers {
         src: "bip-engine/src",
         layers: &[
-            ("values", &["clock", "policy", "ports", "error"]),
+            ("values", &["clock", "policy", "ports", "error", "budgets"]),
             (
                 "codels",
                 &["codel", "event", "bind", "chosen", "per_state", "record"],
