@@ -15,7 +15,7 @@ use crate::syntax::{
 };
 use bip_model::eval;
 use bip_model::{
-    Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule, Property,
+    Assign, Atom, Component, Connector, Family, Interaction, PortRef, Priority, Property,
     PropertyKind, System, SystemParts, Target, Transition, Var, VarType,
 };
 
@@ -67,7 +67,6 @@ pub(crate) fn compile_core(
         connectors: c.connectors,
         interactions: c.interactions,
         priorities,
-        declared_priorities: def.priorities.len(),
         properties,
         initial: c.initial,
         slot_ranges: c.slot_ranges,
@@ -851,7 +850,7 @@ impl Compiler {
         })
     }
 
-    fn priorities(&mut self, def: &SystemDef) -> Vec<PriorityRule> {
+    fn priorities(&mut self, def: &SystemDef) -> Vec<Priority> {
         let mut declared = Vec::new();
         for p in &def.priorities {
             let low = self.priority_target(&p.low);
@@ -862,15 +861,17 @@ impl Compiler {
             };
             if let (Some(low), Some(high), Some(when)) = (low, high, when) {
                 declared.push(priority::Declared {
-                    low,
-                    high,
-                    when,
-                    text: format!("{} < {}", p.low, p.high),
+                    priority: Priority {
+                        low,
+                        high,
+                        when,
+                        text: format!("{} < {}", p.low, p.high),
+                    },
                     span: p.low.span,
                 });
             }
         }
-        match priority::close(&declared) {
+        match priority::check(declared) {
             Ok(r) => r,
             Err(e) => {
                 self.errors.push(e);

@@ -208,7 +208,7 @@ fn the_generator_covers_every_feature() {
         seen[1] |= sys.interactions.iter().any(|i| i.guard.is_some());
         seen[2] |= sys.interactions.iter().any(|i| !i.action.is_empty());
         seen[3] |= !sys.priorities.is_empty();
-        seen[4] |= sys.priorities.iter().any(|p| !p.when.is_empty());
+        seen[4] |= sys.priorities.iter().any(|p| p.when.is_some());
         seen[5] |= sys.has_time();
         seen[6] |= sys
             .atoms

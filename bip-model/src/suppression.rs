@@ -1,0 +1,245 @@
+//! Which interactions priorities suppress, for those the masks leave to a search: the
+//! interactions below a `when`, and those whose closure did not fit the masks' budget.
+//!
+//! An enabled interaction is suppressed when a path of priorities whose `when`s hold leads
+//! up from it to an enabled interaction (docs/model.md, "Priorities"). The search walks the
+//! priority graph up from the state's enabled searched interactions, once per state for
+//! all of them: first the groups they reach through priorities whose `when`s hold,
+//! evaluating each `when` met on the way once, and only if its priority leads to an enabled
+//! interaction at all; then, for each, whether such a path ends at an enabled interaction.
+//! Groups with a mask end the walk: their mask answers for everything above them, and no
+//! `when` lies there. So a priority's `when` is evaluated in a state exactly when an
+//! enabled interaction leads to its low side through priorities whose `when`s hold, and its
+//! high side leads to an enabled interaction through any priorities; which ones that are
+//! does not depend on the order of the walk, and the verifier's encoding evaluates the same.
+
+#[allow(unused_imports)]
+use crate::prelude::*;
+
+use crate::eval::Env;
+use crate::model::RangeError;
+use crate::priority_masks::set_bit;
+use crate::state::State;
+use crate::steps::{Memo, PrioritySearch};
+use crate::system::System;
+
+/// A frame's priority has not been started.
+const UNSTARTED: u32 = u32::MAX;
+
+impl PrioritySearch {
+    /// A new epoch for a new state, sized for `groups` groups and `priorities` priorities.
+    fn begin(&mut self, groups: u32, priorities: usize) {
+        let groups = groups as usize;
+        if self.reached.len() != groups || self.when.len() != priorities {
+            self.reached = vec![0; groups];
+            self.live = vec![(0, Memo::Open); groups];
+            self.active = vec![(0, Memo::Open); groups];
+            self.when = vec![(0, false); priorities];
+            self.epoch = 0;
+        }
+        self.epoch = self.epoch.wrapping_add(1);
+        if self.epoch == 0 {
+            self.reached.fill(0);
+            self.live.fill((0, Memo::Open));
+            self.active.fill((0, Memo::Open));
+            self.when.fill((0, false));
+            self.epoch = 1;
+        }
+        self.stack.clear();
+        self.frames.clear();
+    }
+}
+
+impl System {
+    /// For every interaction in `enabled` (those enabled in `state` before priorities)
+    /// whose suppression the masks leave to a search, sets its bit in `out` if it is
+    /// suppressed and clears it if not. A `when` that cannot be evaluated is a range error
+    /// of the state.
+    pub(crate) fn search_suppressed(
+        &self,
+        state: &State,
+        enabled: &[u64],
+        s: &mut PrioritySearch,
+        out: &mut [u64],
+    ) -> Result<(), RangeError> {
+        let graph = &self.priority_graph;
+        let masks = &self.priority_masks;
+        s.begin(graph.groups(), self.priorities.len());
+        let starts = || {
+            enabled
+                .iter()
+                .zip(&masks.searched)
+                .enumerate()
+                .flat_map(|(w, (&e, &m))| Bits(e & m).map(move |b| (w * 64) as u32 + b))
+        };
+        for i in starts() {
+            if let Some(g) = graph.group_of(i) {
+                if s.reached[g as usize] != s.epoch {
+                    s.reached[g as usize] = s.epoch;
+                    s.stack.push(g);
+                }
+            }
+        }
+        while let Some(g) = s.stack.pop() {
+            for &p in graph.below(g) {
+                if !self.passes(state, p, enabled, s)? {
+                    continue;
+                }
+                for z in graph.high_groups(p) {
+                    // a masked group leads to no `when`
+                    if masks.group_span(z).is_none() && s.reached[z as usize] != s.epoch {
+                        s.reached[z as usize] = s.epoch;
+                        s.stack.push(z);
+                    }
+                }
+            }
+        }
+        for i in starts() {
+            let up = match graph.group_of(i) {
+                Some(g) => self.leads_up(g, true, enabled, s),
+                None => false,
+            };
+            set_bit(out, i, up);
+        }
+        Ok(())
+    }
+
+    /// True if priority `p` carries suppression in this state: it has no `when`, or its
+    /// `when` holds and its high side leads to an enabled interaction (the `when` is
+    /// evaluated only then, once per state).
+    fn passes(
+        &self,
+        state: &State,
+        p: u32,
+        enabled: &[u64],
+        s: &mut PrioritySearch,
+    ) -> Result<bool, RangeError> {
+        let prio = &self.priorities[p as usize];
+        let Some(w) = &prio.when else {
+            return Ok(true);
+        };
+        let (stamp, holds) = s.when[p as usize];
+        if stamp == s.epoch {
+            return Ok(holds);
+        }
+        let mut live = false;
+        for z in self.priority_graph.high_groups(p) {
+            live = match self.look(z, false, enabled, s) {
+                Some(yes) => yes,
+                None => self.leads_up(z, false, enabled, s),
+            };
+            if live {
+                break;
+            }
+        }
+        let holds = live
+            && w.holds(&mut Env::new(state.slots(), 0))
+                .map_err(|e| self.range_error(e, &format!("priority {}", prio.text)))?;
+        s.when[p as usize] = (s.epoch, holds);
+        Ok(holds)
+    }
+
+    /// What is known without a walk of whether group `z` is or leads to an enabled
+    /// interaction (through priorities whose `when`s hold if `active`, through any if not).
+    #[inline]
+    fn look(&self, z: u32, active: bool, enabled: &[u64], s: &PrioritySearch) -> Option<bool> {
+        if crate::step::any_bit(enabled, self.priority_graph.interactions(z)) {
+            return Some(true);
+        }
+        if let Some(span) = self.priority_masks.group_span(z) {
+            return Some(self.priority_masks.span_blocked(span, enabled));
+        }
+        let (stamp, memo) = if active {
+            s.active[z as usize]
+        } else {
+            s.live[z as usize]
+        };
+        // (open in this epoch: on the walk's path, which a cycle would come back to)
+        (stamp == s.epoch).then_some(memo == Memo::Yes)
+    }
+
+    /// True if a path of priorities leads up from group `g` to an enabled interaction:
+    /// through priorities whose `when` was found to hold if `active`, through any if not.
+    /// A walk with a memo per group, without recursion (chains may be long).
+    fn leads_up(&self, g: u32, active: bool, enabled: &[u64], s: &mut PrioritySearch) -> bool {
+        let graph = &self.priority_graph;
+        let epoch = s.epoch;
+        let memo = |s: &mut PrioritySearch, z: u32, m: Memo| {
+            let slot = if active {
+                &mut s.active[z as usize]
+            } else {
+                &mut s.live[z as usize]
+            };
+            *slot = (epoch, m);
+        };
+        let known = if active {
+            s.active[g as usize]
+        } else {
+            s.live[g as usize]
+        };
+        if known.0 == epoch {
+            return known.1 == Memo::Yes;
+        }
+        memo(s, g, Memo::Open);
+        s.frames.clear();
+        s.frames.push((g, 0, UNSTARTED));
+        while let Some(&(g, k, z)) = s.frames.last() {
+            let below = graph.below(g);
+            let Some(&p) = below.get(k as usize) else {
+                memo(s, g, Memo::No);
+                s.frames.pop();
+                continue;
+            };
+            let highs = graph.high_groups(p);
+            let z = if z != UNSTARTED {
+                z
+            } else if active
+                && self.priorities[p as usize].when.is_some()
+                && s.when[p as usize] != (epoch, true)
+            {
+                highs.end
+            } else {
+                highs.start
+            };
+            let top = s.frames.len() - 1;
+            if z >= highs.end {
+                s.frames[top] = (g, k + 1, UNSTARTED);
+                continue;
+            }
+            s.frames[top] = (g, k, z + 1);
+            match self.look(z, active, enabled, s) {
+                Some(true) => {
+                    // every group on the path leads there
+                    for f in 0..s.frames.len() {
+                        let on = s.frames[f].0;
+                        memo(s, on, Memo::Yes);
+                    }
+                    s.frames.clear();
+                    return true;
+                }
+                Some(false) => {}
+                None => {
+                    memo(s, z, Memo::Open);
+                    s.frames.push((z, 0, UNSTARTED));
+                }
+            }
+        }
+        false
+    }
+}
+
+/// The set bits of a word, lowest first.
+struct Bits(u64);
+
+impl Iterator for Bits {
+    type Item = u32;
+
+    #[inline]
+    fn next(&mut self) -> Option<u32> {
+        (self.0 != 0).then(|| {
+            let b = self.0.trailing_zeros();
+            self.0 &= self.0 - 1;
+            b
+        })
+    }
+}
