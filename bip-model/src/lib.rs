@@ -26,6 +26,7 @@ mod prelude {
 }
 
 mod assemble;
+pub mod choices;
 mod deadlock;
 mod enable_index;
 pub mod eval;

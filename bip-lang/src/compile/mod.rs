@@ -2,6 +2,7 @@
 //! component families, `forall` connectors, priorities and properties, with every name
 //! resolved and every expression type-checked. All errors are collected with positions.
 
+mod choices;
 mod priority;
 mod resolve;
 
@@ -39,6 +40,9 @@ pub(crate) fn compile_core(
     c.atoms(def);
     c.components(def);
     c.connectors(def);
+    for e in choices::check(def, &c.atoms, &c.components, &c.connectors, &c.interactions) {
+        c.errors.push(e);
+    }
     let priorities = c.priorities(def);
     let properties = c.properties(def);
     let extra: Vec<eval::Expr> = extra.iter().filter_map(|t| c.global_bool(t)).collect();
