@@ -53,9 +53,17 @@ pub fn most_enabled(atom: &Atom) -> Vec<u32> {
             }
         }
     }
+    // the cells to try: several transitions on a port from one location
+    let cells: Vec<(u32, core::ops::Range<u32>)> = (0..ports)
+        .flat_map(|p| (0..locations).map(move |l| (p, cell(l, p))))
+        .filter(|(_, r)| r.end - r.start > 1)
+        .collect();
     let (Some(states), Some(sizes)) = (states, sizes) else {
         return most;
     };
+    if cells.is_empty() {
+        return most;
+    }
     // slot 0 stands for the location (guards do not read it), then the variables
     let mut slots = vec![0i64; 1 + atom.vars.len()];
     for k in 0..states {
@@ -65,21 +73,16 @@ pub fn most_enabled(atom: &Atom) -> Vec<u32> {
             slots[1 + v] = lo + (rest % n) as i64;
             rest /= n;
         }
-        for p in 0..ports {
-            for l in 0..locations {
-                let r = cell(l, p);
-                if r.end - r.start <= 1 {
-                    continue;
-                }
-                // a guard that cannot be evaluated counts as holding
-                let together = r
-                    .filter(|&t| match &atom.transitions[t as usize].guard {
-                        None => true,
-                        Some(g) => g.holds(&mut Env::new(&slots, 1)).unwrap_or(true),
-                    })
-                    .count() as u32;
-                most[p as usize] = most[p as usize].max(together);
-            }
+        for (p, r) in &cells {
+            // a guard that cannot be evaluated counts as holding
+            let together = r
+                .clone()
+                .filter(|&t| match &atom.transitions[t as usize].guard {
+                    None => true,
+                    Some(g) => g.holds(&mut Env::new(&slots, 1)).unwrap_or(true),
+                })
+                .count() as u32;
+            most[*p as usize] = most[*p as usize].max(together);
         }
     }
     most

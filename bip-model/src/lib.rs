@@ -1,8 +1,8 @@
 //! `bip-model`: a compiled bip model and its one semantics, `no_std` + `alloc`.
 //!
 //! - [`System`] is the compiled model: dense indices, compiled expressions, priorities
-//!   closed transitively (as a graph, [`PriorityGraph`]); [`System::new`] builds one from [`SystemParts`] (the front end,
-//!   `bip-lang`, reads and compiles model files into them);
+//!   closed transitively (as a graph, [`PriorityGraph`]); [`System::new`] builds one from
+//!   [`SystemParts`] (the front end, `bip-lang`, reads and compiles model files into them);
 //! - [`System::enabled_steps`] and [`System::fire`] are the step relation, shared by the
 //!   verifier, the simulator and the engine; [`EnabledSet`] keeps a state's enabled steps
 //!   up to date as the state moves, re-evaluating only what a step can have changed;

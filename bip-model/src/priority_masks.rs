@@ -76,7 +76,7 @@ impl Pool {
         ranges: impl Iterator<Item = core::ops::Range<u32>> + Clone,
     ) -> Option<(u32, u32)> {
         let words =
-            |r: core::ops::Range<u32>| (u64::from(r.end) + 63) / 64 - u64::from(r.start) / 64;
+            |r: core::ops::Range<u32>| u64::from(r.end).div_ceil(64) - u64::from(r.start) / 64;
         let size: usize = spans.clone().map(|(a, b)| (b - a) as usize).sum::<usize>()
             + ranges.clone().map(|r| words(r) as usize).sum::<usize>();
         self.work += size;
