@@ -81,10 +81,9 @@ pub(crate) struct PrioritySearch {
     pub(crate) epoch: u32,
     /// Per group: reached from an enabled interaction.
     pub(crate) reached: Vec<u32>,
-    /// Per group: leads to an enabled interaction through any priorities (`live`), through
-    /// priorities whose `when` holds (`active`); see [`Memo`].
-    pub(crate) live: Vec<(u32, Memo)>,
-    pub(crate) active: Vec<(u32, Memo)>,
+    /// Per group and kind of path (`Through` in `suppression`): whether it leads to an
+    /// enabled interaction; see [`Memo`].
+    pub(crate) leads: [Vec<(u32, Memo)>; 3],
     /// Per priority: its `when`, once evaluated.
     pub(crate) when: Vec<(u32, bool)>,
     pub(crate) stack: Vec<u32>,

@@ -4,14 +4,16 @@
 //! An enabled interaction is suppressed when a path of priorities whose `when`s hold leads
 //! up from it to an enabled interaction (docs/model.md, "Priorities"). The search walks the
 //! priority graph up from the state's enabled searched interactions, once per state for
-//! all of them: first the groups they reach through priorities whose `when`s hold,
+//! all of them. First the groups they reach through priorities whose `when`s hold,
 //! evaluating each `when` met on the way once, and only if its priority leads to an enabled
-//! interaction at all; then, for each, whether such a path ends at an enabled interaction.
+//! interaction at all; a group that a path of priorities without `when` leads up from to
+//! an enabled interaction is suppressed whatever the `when`s, and the walk does not start
+//! or go on from it. Then, for each, whether such a path ends at an enabled interaction.
 //! Groups with a mask end the walk: their mask answers for everything above them, and no
-//! `when` lies there. So a priority's `when` is evaluated in a state exactly when an
-//! enabled interaction leads to its low side through priorities whose `when`s hold, and its
-//! high side leads to an enabled interaction through any priorities; which ones that are
-//! does not depend on the order of the walk, and the verifier's encoding evaluates the same.
+//! `when` lies there. So a priority's `when` is evaluated in a state exactly when its
+//! priority leads to an enabled interaction and its low side is reached (the definition in
+//! docs/model.md); which ones those are does not depend on the order of the walk, and the
+//! verifier's encoding evaluates the same.
 
 #[allow(unused_imports)]
 use crate::prelude::*;
@@ -26,22 +28,33 @@ use crate::system::System;
 /// A frame's priority has not been started.
 const UNSTARTED: u32 = u32::MAX;
 
+/// The priorities a path up may go through.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Through {
+    /// Any: the path may lead to an enabled interaction.
+    Any = 0,
+    /// Those without `when`, or whose `when` was found to hold: the path suppresses.
+    Holding = 1,
+    /// Those without `when`: the path suppresses whatever the `when`s.
+    Plain = 2,
+}
+
 impl PrioritySearch {
     /// A new epoch for a new state, sized for `groups` groups and `priorities` priorities.
     fn begin(&mut self, groups: u32, priorities: usize) {
         let groups = groups as usize;
         if self.reached.len() != groups || self.when.len() != priorities {
             self.reached = vec![0; groups];
-            self.live = vec![(0, Memo::Open); groups];
-            self.active = vec![(0, Memo::Open); groups];
+            self.leads = core::array::from_fn(|_| vec![(0, Memo::Open); groups]);
             self.when = vec![(0, false); priorities];
             self.epoch = 0;
         }
         self.epoch = self.epoch.wrapping_add(1);
         if self.epoch == 0 {
             self.reached.fill(0);
-            self.live.fill((0, Memo::Open));
-            self.active.fill((0, Memo::Open));
+            for l in &mut self.leads {
+                l.fill((0, Memo::Open));
+            }
             self.when.fill((0, false));
             self.epoch = 1;
         }
@@ -76,7 +89,9 @@ impl System {
             if let Some(g) = graph.group_of(i) {
                 if s.reached[g as usize] != s.epoch {
                     s.reached[g as usize] = s.epoch;
-                    s.stack.push(g);
+                    if !self.leads_up(g, Through::Plain, enabled, s) {
+                        s.stack.push(g);
+                    }
                 }
             }
         }
@@ -89,14 +104,16 @@ impl System {
                     // a masked group leads to no `when`
                     if masks.group_span(z).is_none() && s.reached[z as usize] != s.epoch {
                         s.reached[z as usize] = s.epoch;
-                        s.stack.push(z);
+                        if !self.leads_up(z, Through::Plain, enabled, s) {
+                            s.stack.push(z);
+                        }
                     }
                 }
             }
         }
         for i in starts() {
             let up = match graph.group_of(i) {
-                Some(g) => self.leads_up(g, true, enabled, s),
+                Some(g) => self.leads_up(g, Through::Holding, enabled, s),
                 None => false,
             };
             set_bit(out, i, up);
@@ -124,9 +141,9 @@ impl System {
         }
         let mut live = false;
         for z in self.priority_graph.high_groups(p) {
-            live = match self.look(z, false, enabled, s) {
+            live = match self.look(z, Through::Any, enabled, s) {
                 Some(yes) => yes,
-                None => self.leads_up(z, false, enabled, s),
+                None => self.leads_up(z, Through::Any, enabled, s),
             };
             if live {
                 break;
@@ -140,43 +157,31 @@ impl System {
     }
 
     /// What is known without a walk of whether group `z` is or leads to an enabled
-    /// interaction (through priorities whose `when`s hold if `active`, through any if not).
+    /// interaction (through the priorities `through` says).
     #[inline]
-    fn look(&self, z: u32, active: bool, enabled: &[u64], s: &PrioritySearch) -> Option<bool> {
+    fn look(&self, z: u32, through: Through, enabled: &[u64], s: &PrioritySearch) -> Option<bool> {
         if crate::step::any_bit(enabled, self.priority_graph.interactions(z)) {
             return Some(true);
         }
+        // a masked group has no `when` above it: every path up is plain
         if let Some(span) = self.priority_masks.group_span(z) {
             return Some(self.priority_masks.span_blocked(span, enabled));
         }
-        let (stamp, memo) = if active {
-            s.active[z as usize]
-        } else {
-            s.live[z as usize]
-        };
+        let (stamp, memo) = s.leads[through as usize][z as usize];
         // (open in this epoch: on the walk's path, which a cycle would come back to)
         (stamp == s.epoch).then_some(memo == Memo::Yes)
     }
 
-    /// True if a path of priorities leads up from group `g` to an enabled interaction:
-    /// through priorities whose `when` was found to hold if `active`, through any if not.
-    /// A walk with a memo per group, without recursion (chains may be long).
-    fn leads_up(&self, g: u32, active: bool, enabled: &[u64], s: &mut PrioritySearch) -> bool {
+    /// True if a path of priorities (of the kind `through` says) leads up from group `g` to
+    /// an enabled interaction. A walk with a memo per group, without recursion (chains may
+    /// be long).
+    fn leads_up(&self, g: u32, through: Through, enabled: &[u64], s: &mut PrioritySearch) -> bool {
         let graph = &self.priority_graph;
         let epoch = s.epoch;
         let memo = |s: &mut PrioritySearch, z: u32, m: Memo| {
-            let slot = if active {
-                &mut s.active[z as usize]
-            } else {
-                &mut s.live[z as usize]
-            };
-            *slot = (epoch, m);
+            s.leads[through as usize][z as usize] = (epoch, m);
         };
-        let known = if active {
-            s.active[g as usize]
-        } else {
-            s.live[g as usize]
-        };
+        let known = s.leads[through as usize][g as usize];
         if known.0 == epoch {
             return known.1 == Memo::Yes;
         }
@@ -191,15 +196,16 @@ impl System {
                 continue;
             };
             let highs = graph.high_groups(p);
-            let z = if z != UNSTARTED {
-                z
-            } else if active
-                && self.priorities[p as usize].when.is_some()
-                && s.when[p as usize] != (epoch, true)
-            {
-                highs.end
-            } else {
-                highs.start
+            let when = self.priorities[p as usize].when.is_some();
+            let skip = match through {
+                Through::Any => false,
+                Through::Holding => when && s.when[p as usize] != (epoch, true),
+                Through::Plain => when,
+            };
+            let z = match (z, skip) {
+                (UNSTARTED, true) => highs.end,
+                (UNSTARTED, false) => highs.start,
+                (z, _) => z,
             };
             let top = s.frames.len() - 1;
             if z >= highs.end {
@@ -207,7 +213,7 @@ impl System {
                 continue;
             }
             s.frames[top] = (g, k, z + 1);
-            match self.look(z, active, enabled, s) {
+            match self.look(z, through, enabled, s) {
                 Some(true) => {
                     // every group on the path leads there
                     for f in 0..s.frames.len() {

@@ -87,29 +87,32 @@ fn the_generator_gives_long_chains() {
     assert!(with_when >= 20, "only {with_when} of them with a `when`");
 }
 
-/// `a < b` when a condition that divides by `c.d`, `b < c`: the condition is evaluated
-/// only where an enabled interaction leads to `a` and `b` leads to an enabled one (here
-/// `c`, through `b < c`, though `b` itself is not enabled).
+/// `a < b` when a condition that divides by `p.d`, `b < c`, `a < e`: the condition is
+/// evaluated only where `a` is enabled and not already suppressed by `e`, and `b` leads to
+/// an enabled interaction (`c`, through `b < c`, though `b` itself is not enabled).
 #[test]
 fn a_when_is_evaluated_where_its_priority_can_matter() {
     let sys = load_str(
         "chain.ron",
         r#"System(name: "chain",
-        atoms: { "P": Atom(locations: ["l"], initial: "l", ports: ["a", "b", "c"],
-            vars: [(name: "on", ty: Int(0, 7)), (name: "d", ty: Int(0, 1))],
+        atoms: { "P": Atom(locations: ["l"], initial: "l", ports: ["a", "b", "c", "e"],
+            vars: [(name: "on", ty: Int(0, 15)), (name: "d", ty: Int(0, 1))],
             transitions: [
                 (from: "l", port: "a", to: "l", guard: "on % 2 == 1"),
                 (from: "l", port: "b", to: "l", guard: "on / 2 % 2 == 1"),
-                (from: "l", port: "c", to: "l", guard: "on / 4 == 1"),
+                (from: "l", port: "c", to: "l", guard: "on / 4 % 2 == 1"),
+                (from: "l", port: "e", to: "l", guard: "on / 8 == 1"),
             ]) },
         components: [(name: "p", atom: "P")],
         connectors: [(name: "a", ports: ["p.a"]), (name: "b", ports: ["p.b"]),
-                     (name: "c", ports: ["p.c"])],
-        priorities: [(low: "a", high: "b", when: "1 / p.d > 0"), (low: "b", high: "c")])"#,
+                     (name: "c", ports: ["p.c"]), (name: "e", ports: ["p.e"])],
+        priorities: [(low: "a", high: "b", when: "1 / p.d > 0"), (low: "b", high: "c"),
+                     (low: "a", high: "e")])"#,
     )
     .expect("loads");
     let mut buf = Steps::new();
-    // `on` says which of a, b, c are enabled (bits 1, 2, 4); d = 0: the condition fails
+    // `on` says which of a, b, c, e are enabled (bits 1, 2, 4, 8); d = 0: the condition
+    // fails
     let run = |on: i64, d: i64, buf: &mut Steps| {
         sys.enabled_steps(&State::from_slots(vec![0, on, d]), buf)
             .map(|()| {
@@ -130,4 +133,10 @@ fn a_when_is_evaluated_where_its_priority_can_matter() {
     assert_eq!(run(0b110, 0, &mut buf), Ok(vec!["c".to_string()]));
     // a and b enabled: evaluated
     assert!(run(0b011, 0, &mut buf).is_err());
+    // a, c and e enabled: a is suppressed by e whatever the condition, which is not
+    // evaluated
+    assert_eq!(
+        run(0b1101, 0, &mut buf),
+        Ok(vec!["c".to_string(), "e".to_string()])
+    );
 }

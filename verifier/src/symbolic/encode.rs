@@ -472,9 +472,10 @@ impl<'s> Encoding<'s> {
     /// `suppression.rs`), over the groups of the priority graph, highest first: per group,
     /// whether a path of priorities whose `when`s hold leads up from it to an enabled
     /// interaction; and the condition under which a `when` that must be evaluated fails
-    /// (one is evaluated when an enabled interaction leads to its priority's low side
-    /// through priorities whose `when`s hold, and its high side leads to an enabled
-    /// interaction through any priorities).
+    /// (docs/model.md, "Priorities": one is evaluated when its priority's low side is
+    /// reached from an enabled interaction, through priorities whose `when`s hold and
+    /// interactions that no path of priorities without `when` suppresses, and its high side
+    /// leads to an enabled interaction through any priorities).
     fn priorities(&self, f: &Frame, inter_en: &[Bool]) -> (Vec<Bool>, Option<Bool>) {
         let sys = self.sys;
         let graph = sys.priority_graph();
@@ -488,14 +489,16 @@ impl<'s> Encoding<'s> {
             .map(|p| p.when.as_ref().map(|w| translate(w, f, 0)))
             .collect();
         // up from each group: through any priorities (`live`), through those whose `when`
-        // holds where it is evaluated (`active`)
+        // holds where it is evaluated (`active`), through those without `when` (`plain`)
         let mut live = vec![ff(); groups];
         let mut active = vec![ff(); groups];
+        let mut plain = vec![ff(); groups];
         let mut live_p: Vec<Option<Bool>> = vec![None; sys.priorities.len()];
         let mut pass: Vec<Option<Bool>> = vec![None; sys.priorities.len()];
         for &g in graph.order() {
             let mut any = Vec::new();
             let mut act = Vec::new();
+            let mut pl = Vec::new();
             for &p in graph.below(g) {
                 let highs = graph.high_groups(p);
                 let lp = live_p[p as usize]
@@ -513,6 +516,12 @@ impl<'s> Encoding<'s> {
                     })
                     .clone();
                 any.push(lp);
+                if whens[p as usize].is_none() {
+                    pl.push(or(highs.clone().map(|z| {
+                        let z = z as usize;
+                        or([en[z].clone(), plain[z].clone()])
+                    })));
+                }
                 let up = or(highs.map(|z| {
                     let z = z as usize;
                     or([en[z].clone(), active[z].clone()])
@@ -521,9 +530,11 @@ impl<'s> Encoding<'s> {
             }
             live[g as usize] = or(any);
             active[g as usize] = or(act);
+            plain[g as usize] = or(pl);
         }
         // down from the enabled interactions, lowest group first: the groups reached
-        // through priorities whose `when` holds, and the `when`s evaluated on the way
+        // through priorities whose `when` holds and not suppressed by a plain path (the
+        // search goes on from those only), and the `when`s evaluated on the way
         let mut reached = vec![ff(); groups];
         let mut low_reached: Vec<Option<Bool>> = vec![None; sys.priorities.len()];
         let mut err: Option<Bool> = None;
@@ -535,7 +546,7 @@ impl<'s> Encoding<'s> {
                     from.push(and2(&r, carries));
                 }
             }
-            reached[g as usize] = or(from);
+            reached[g as usize] = and2(&or(from), &not(&plain[g as usize]));
         }
         for (p, w) in whens.iter().enumerate() {
             let (Some(w), Some(lp)) = (w, &live_p[p]) else {

@@ -299,9 +299,9 @@ fn guards_fail_only_where_the_step_relation_evaluates_them() {
 }
 
 /// A priority's condition is evaluated where an enabled interaction leads to its low side
-/// through priorities whose conditions hold, and its high side leads to an enabled
-/// interaction through any (bip-model's `suppression.rs`): on a chain with conditions that
-/// fail, in every state, the encoding fails exactly where the relation does and allows the
+/// through priorities whose conditions hold (and interactions no plain path suppresses),
+/// and its high side leads to an enabled interaction through any (bip-model's
+/// `suppression.rs`): on a chain with conditions that fail, in every state, the encoding fails exactly where the relation does and allows the
 /// same steps, with the priority masks and with the search alone.
 #[test]
 fn priority_conditions_fail_only_where_the_search_evaluates_them() {
@@ -318,7 +318,8 @@ fn priority_conditions_fail_only_where_the_search_evaluates_them() {
         connectors: [(name: "a", ports: ["p.a"]), (name: "b", ports: ["p.b"]),
                      (name: "c", ports: ["p.c"]), (name: "e", ports: ["p.e"])],
         priorities: [(low: "e", high: "a", when: "2 / (p.d - 2) < 0"),
-                     (low: "a", high: "b", when: "1 / p.d > 0"), (low: "b", high: "c")])"#;
+                     (low: "a", high: "b", when: "1 / p.d > 0"), (low: "b", high: "c"),
+                     (low: "e", high: "c")])"#;
     let masked = load_str("chain.ron", text).unwrap();
     let mut searched = masked.clone();
     searched.drop_priority_masks();
