@@ -36,6 +36,11 @@ pub(crate) struct PriorityMasks {
     highs: Arc<[(u32, u64)]>,
     /// Per group of the priority graph, its span in `highs`; `None` for a searched group.
     group_highs: Arc<[Option<(u32, u32)>]>,
+    /// Per group, the span in `highs` of the interactions above it through priorities
+    /// without `when`, if it fits (for a group that is not searched, its whole mask).
+    group_plain: Arc<[Option<(u32, u32)>]>,
+    /// The priorities with a `when`.
+    pub(crate) with_when: Arc<[u32]>,
     /// Interactions whose suppression is searched per state.
     pub(crate) searched: Vec<u64>,
     /// Interactions that no priority names as higher and that are not searched: while
@@ -152,39 +157,46 @@ impl PriorityMasks {
             scratch: Vec::new(),
         };
         let empty = pool.union(core::iter::empty(), core::iter::empty());
-        // per group, its mask (`None`: searched, or not reached by the order: a cycle)
-        let mut mask: Vec<Option<(u32, u32)>> = vec![None; groups];
-        // per priority, the union of its high side's groups and their masks, once
+        // per group, its plain mask: the interactions above it through priorities without
+        // `when` (`None`: past the budget, or not reached by the order: a cycle); and
+        // whether it is searched (below a `when`, or its plain mask is not the whole answer)
+        let mut plain: Vec<Option<(u32, u32)>> = vec![None; groups];
+        let mut searched_group = vec![true; groups];
+        // per priority without `when`, the union of its high side's groups and their plain
+        // masks, once
         let mut above: Vec<Option<Option<(u32, u32)>>> = vec![None; priorities.len()];
         for &g in graph.order() {
             let mut parts: Vec<(u32, u32)> = Vec::new();
+            let mut fits = true;
             let mut searched = false;
             for &p in graph.below(g) {
+                let highs = graph.high_groups(p);
+                searched |= highs.clone().any(|z| searched_group[z as usize]);
                 if priorities[p as usize].when.is_some() {
                     searched = true;
-                    break;
+                    continue;
                 }
                 let a = *above[p as usize].get_or_insert_with(|| {
-                    let highs = graph.high_groups(p);
                     let masks: Option<Vec<(u32, u32)>> =
-                        highs.clone().map(|z| mask[z as usize]).collect();
+                        highs.clone().map(|z| plain[z as usize]).collect();
                     pool.union(masks?.into_iter(), highs.map(|z| graph.interactions(z)))
                 });
                 match a {
                     Some(s) => parts.push(s),
-                    None => {
-                        searched = true;
-                        break;
-                    }
+                    None => fits = false,
                 }
             }
-            mask[g as usize] = match (searched, &parts[..]) {
-                (true, _) => None,
-                (false, []) => empty,
-                (false, [one]) => Some(*one),
-                (false, _) => pool.union(parts.iter().copied(), core::iter::empty()),
+            plain[g as usize] = match (fits, &parts[..]) {
+                (false, _) => None,
+                (true, []) => empty,
+                (true, [one]) => Some(*one),
+                (true, _) => pool.union(parts.iter().copied(), core::iter::empty()),
             };
+            searched_group[g as usize] = searched || plain[g as usize].is_none();
         }
+        let mask: Vec<Option<(u32, u32)>> = (0..groups)
+            .map(|g| plain[g].filter(|_| !searched_group[g]))
+            .collect();
         let mut highs_of = vec![(0u32, 0u32); n_inter];
         let mut searched = vec![0u64; words];
         let mut is_high = vec![0u64; words];
@@ -219,6 +231,10 @@ impl PriorityMasks {
             highs_of: highs_of.into(),
             highs: pool.pairs.into(),
             group_highs: mask.into(),
+            group_plain: plain.into(),
+            with_when: (0..priorities.len() as u32)
+                .filter(|&p| priorities[p as usize].when.is_some())
+                .collect(),
             any_searched: searched.iter().any(|&w| w != 0),
             searched,
             lazy,
@@ -243,6 +259,13 @@ impl PriorityMasks {
     #[inline]
     pub(crate) fn group_span(&self, g: u32) -> Option<(u32, u32)> {
         self.group_highs[g as usize]
+    }
+
+    /// The span of the interactions above the interactions of group `g` through
+    /// priorities without `when`, if it fits.
+    #[inline]
+    pub(crate) fn group_plain(&self, g: u32) -> Option<(u32, u32)> {
+        self.group_plain[g as usize]
     }
 
     /// [`PriorityMasks::blocked`] for the interactions of span `(a, b)`.

@@ -85,6 +85,25 @@ impl System {
                 .enumerate()
                 .flat_map(|(w, (&e, &m))| Bits(e & m).map(move |b| (w * 64) as u32 + b))
         };
+        // most states: no `when` can matter, so none is evaluated and only plain paths
+        // suppress
+        let mut any_live = false;
+        for &p in masks.with_when.iter() {
+            if self.live(p, enabled, s) {
+                any_live = true;
+                break;
+            }
+        }
+        if !any_live {
+            for i in starts() {
+                let up = match graph.group_of(i) {
+                    Some(g) => self.leads_up(g, Through::Plain, enabled, s),
+                    None => false,
+                };
+                set_bit(out, i, up);
+            }
+            return Ok(());
+        }
         for i in starts() {
             if let Some(g) = graph.group_of(i) {
                 if s.reached[g as usize] != s.epoch {
@@ -139,21 +158,34 @@ impl System {
         if stamp == s.epoch {
             return Ok(holds);
         }
-        let mut live = false;
-        for z in self.priority_graph.high_groups(p) {
-            live = match self.look(z, Through::Any, enabled, s) {
-                Some(yes) => yes,
-                None => self.leads_up(z, Through::Any, enabled, s),
-            };
-            if live {
-                break;
-            }
-        }
-        let holds = live
+        let holds = self.live(p, enabled, s)
             && w.holds(&mut Env::new(state.slots(), 0))
                 .map_err(|e| self.range_error(e, &format!("priority {}", prio.text)))?;
         s.when[p as usize] = (s.epoch, holds);
         Ok(holds)
+    }
+
+    /// True if priority `p`'s high side leads to an enabled interaction through any
+    /// priorities.
+    fn live(&self, p: u32, enabled: &[u64], s: &mut PrioritySearch) -> bool {
+        self.priority_graph.high_groups(p).any(|z| {
+            self.look(z, Through::Any, enabled, s)
+                .unwrap_or_else(|| self.leads_up(z, Through::Any, enabled, s))
+        })
+    }
+
+    /// What the masks say of whether a path of the kind `through` leads up from group `g`
+    /// to an enabled interaction, if they know.
+    #[inline]
+    fn masked(&self, g: u32, through: Through, enabled: &[u64]) -> Option<bool> {
+        let masks = &self.priority_masks;
+        // a masked group has no `when` above it: every path up is plain
+        let span = masks.group_span(g).or_else(|| {
+            (through == Through::Plain)
+                .then(|| masks.group_plain(g))
+                .flatten()
+        })?;
+        Some(masks.span_blocked(span, enabled))
     }
 
     /// What is known without a walk of whether group `z` is or leads to an enabled
@@ -163,9 +195,8 @@ impl System {
         if crate::step::any_bit(enabled, self.priority_graph.interactions(z)) {
             return Some(true);
         }
-        // a masked group has no `when` above it: every path up is plain
-        if let Some(span) = self.priority_masks.group_span(z) {
-            return Some(self.priority_masks.span_blocked(span, enabled));
+        if let Some(yes) = self.masked(z, through, enabled) {
+            return Some(yes);
         }
         let (stamp, memo) = s.leads[through as usize][z as usize];
         // (open in this epoch: on the walk's path, which a cycle would come back to)
@@ -181,6 +212,9 @@ impl System {
         let memo = |s: &mut PrioritySearch, z: u32, m: Memo| {
             s.leads[through as usize][z as usize] = (epoch, m);
         };
+        if let Some(yes) = self.masked(g, through, enabled) {
+            return yes;
+        }
         let known = s.leads[through as usize][g as usize];
         if known.0 == epoch {
             return known.1 == Memo::Yes;
