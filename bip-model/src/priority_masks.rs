@@ -8,9 +8,10 @@
 //!
 //! The masks hold the closure, which may grow with the square of the declared relation: a
 //! group whose mask would take the masks past [`MAX_PAIRS`] (or their building past
-//! [`MAX_WORK`]) gets none, and neither does a group below a `when`. Those interactions
-//! are *searched*: their suppression is decided per state by a walk up the graph
-//! (`suppression`), which meets masked groups and reads their masks.
+//! [`MAX_WORK`]) gets none, and a group below a `when` gets only its *plain* mask (the
+//! interactions above it through priorities without `when`). Those interactions are
+//! *searched*: their suppression is decided per state by a walk up the graph
+//! (`suppression`), which reads the masks it meets.
 
 #[allow(unused_imports)]
 use crate::prelude::*;

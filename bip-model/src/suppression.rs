@@ -2,9 +2,12 @@
 //! interactions below a `when`, and those whose closure did not fit the masks' budget.
 //!
 //! An enabled interaction is suppressed when a path of priorities whose `when`s hold leads
-//! up from it to an enabled interaction (docs/model.md, "Priorities"). The search walks the
-//! priority graph up from the state's enabled searched interactions, once per state for
-//! all of them. First the groups they reach through priorities whose `when`s hold,
+//! up from it to an enabled interaction (docs/model.md, "Priorities"). In most states no
+//! priority with a `when` leads to an enabled interaction: none is evaluated, and the
+//! paths without `when` decide alone, read from the groups' plain masks. Otherwise the
+//! search walks the priority graph up from the state's enabled searched interactions, once
+//! per state for all of them. First the groups they reach through priorities whose `when`s
+//! hold,
 //! evaluating each `when` met on the way once, and only if its priority leads to an enabled
 //! interaction at all; a group that a path of priorities without `when` leads up from to
 //! an enabled interaction is suppressed whatever the `when`s, and the walk does not start
