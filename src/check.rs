@@ -29,8 +29,8 @@ fn print_summary(path: &std::path::Path, system: &bip_model::System) {
     println!("  locations     {} (summed over components)", s.locations);
     println!("  variables     {}", s.variables);
     println!(
-        "  priorities    {} declared, {} after transitive closure",
-        s.priorities_declared, s.priority_rules
+        "  priorities    {} declared, chains of up to {} in their closure",
+        s.priorities_declared, s.priority_depth
     );
     let names: Vec<&str> = system.properties.iter().map(|p| p.name.as_str()).collect();
     if names.is_empty() {

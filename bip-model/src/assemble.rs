@@ -7,9 +7,10 @@ use crate::prelude::*;
 use crate::enable_index::EnableIndex;
 use crate::genom::GenomMap;
 use crate::model::{
-    Atom, Component, Connector, Family, Interaction, PriorityRule, Property, RangeError,
+    Atom, Component, Connector, Family, Interaction, Priority, Property, RangeError,
 };
-use crate::priority_masks::PriorityMasks;
+use crate::priority_graph::PriorityGraph;
+use crate::priority_masks::{PriorityMasks, MAX_PAIRS};
 use crate::state::{State, StateLayout};
 use crate::step_tables::{StepTables, Tabulated};
 use crate::steps::{Choices, Pick};
@@ -27,10 +28,8 @@ pub struct SystemParts {
     pub components: Vec<Component>,
     pub connectors: Vec<Connector>,
     pub interactions: Vec<Interaction>,
-    /// The transitive closure of the declared priorities.
-    pub priorities: Vec<PriorityRule>,
-    /// How many priorities the file declares.
-    pub declared_priorities: usize,
+    /// The priorities as declared, without cycles (the closure is the system's).
+    pub priorities: Vec<Priority>,
     pub properties: Vec<Property>,
     /// The initial value of every slot.
     pub initial: Vec<i64>,
@@ -52,14 +51,13 @@ impl System {
             &parts.interactions,
             &parts.slot_ranges,
         );
-        let mut rules_by_low = vec![Vec::new(); parts.interactions.len()];
-        for (r, rule) in parts.priorities.iter().enumerate() {
-            for i in rule.low.clone() {
-                rules_by_low[i as usize].push(r as u32);
-            }
-        }
-        let priority_masks =
-            PriorityMasks::new(&parts.priorities, &rules_by_low, parts.interactions.len());
+        let priority_graph = PriorityGraph::new(&parts.priorities);
+        let priority_masks = PriorityMasks::new(
+            &priority_graph,
+            &parts.priorities,
+            parts.interactions.len(),
+            MAX_PAIRS,
+        );
         let mut system = System {
             name: parts.name,
             tick_ms: parts.tick_ms,
@@ -70,14 +68,13 @@ impl System {
             connectors: parts.connectors,
             interactions: parts.interactions,
             priorities: parts.priorities,
-            declared_priorities: parts.declared_priorities,
             properties: parts.properties,
             layout: StateLayout::new(&parts.slot_ranges),
             initial: State::from_slots(parts.initial),
-            rules_by_low,
             slot_ranges: parts.slot_ranges,
             genom: parts.genom,
             enable_index,
+            priority_graph,
             priority_masks,
         };
         system.enable_index.tables = StepTables::build(&system);

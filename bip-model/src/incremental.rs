@@ -12,8 +12,8 @@
 //! the interaction's step table where it has one, else with
 //! [`System::compute_interaction_picks`]; priorities are applied by looking
 //! up, for a lower interaction, whether one of its higher interactions has steps (a sparse
-//! bit mask per lower interaction), or with [`System::is_suppressed`] itself for
-//! interactions under a rule with a `when`. It is not a second notion of "enabled": it
+//! bit mask per lower interaction), or by the relation's own search for the interactions
+//! the masks leave to it (those below a `when`). It is not a second notion of "enabled": it
 //! yields exactly the steps of [`System::enabled_steps`], in the same order (a property
 //! test checks it on random systems), only computed from a cache.
 //!
@@ -24,7 +24,7 @@
 //! and the interactions a written slot marks where the watched component takes part are
 //! listed per slot. The rest is read from the state as above.
 //!
-//! An interaction that is higher in no rule and that priorities suppress now cannot
+//! An interaction that is higher in no priority and that priorities suppress now cannot
 //! change anything the set answers, so it is not evaluated until it is no longer
 //! suppressed (it is "stale" meanwhile). In a GenoM layer that is the tick and the
 //! requests while a codel is due: most of what a codel step would otherwise re-evaluate.
@@ -42,7 +42,7 @@ use crate::plan_effects::{PlanEffects, SlotEffect};
 use crate::priority_masks::{bit, set_bit, PriorityMasks};
 use crate::state::State;
 use crate::step_tables::LastKey;
-use crate::steps::{Choices, Label, Pick, Step, Steps};
+use crate::steps::{Choices, Label, Pick, PrioritySearch, Step, Steps};
 use crate::system::System;
 use crate::watches::{location_bit, Dep, Mark, Watches, ANYWHERE};
 
@@ -80,13 +80,14 @@ pub struct EnabledSet {
     /// Lazy interactions not evaluated since they were suppressed: their `found`,
     /// `picks` and `pre` bit are out of date (and do not matter while they stay suppressed).
     stale: Box<[u64]>,
-    /// Per interaction under a `when` rule: suppressed in this state.
-    when_suppressed: Box<[u64]>,
+    /// Per searched interaction (see `priority_masks`): suppressed in this state.
+    search_suppressed: Box<[u64]>,
     /// Per component, its enabled internal transitions.
     internal: Vec<Vec<Pick>>,
 
     // ---- scratch ----
     scratch: Choices,
+    search: PrioritySearch,
     stamp: Vec<u32>,
     comp_stamp: Vec<u32>,
     epoch: u32,
@@ -192,9 +193,10 @@ impl EnabledSet {
             found: vec![Found::default(); n_inter].into_boxed_slice(),
             pre: vec![0; words].into_boxed_slice(),
             stale: vec![0; words].into_boxed_slice(),
-            when_suppressed: vec![0; words].into_boxed_slice(),
+            search_suppressed: vec![0; words].into_boxed_slice(),
             internal: vec![Vec::new(); n_comp],
             scratch: Choices::default(),
+            search: PrioritySearch::default(),
             stamp: vec![0; n_inter],
             comp_stamp: vec![0; n_comp],
             epoch: 0,
@@ -211,7 +213,7 @@ impl EnabledSet {
         self.valid = false;
         self.last_key = LastKey::NONE;
         self.pre.fill(0);
-        self.when_suppressed.fill(0);
+        self.search_suppressed.fill(0);
         for p in &mut self.picks {
             p.clear();
         }
@@ -486,16 +488,16 @@ impl EnabledSet {
         Ok(())
     }
 
-    /// With every interaction that some rule names as higher up to date: evaluates the
-    /// stale interactions that are no longer suppressed, and decides the `when` rules.
+    /// With every interaction that some priority names as higher up to date: evaluates the
+    /// stale interactions that are no longer suppressed, and decides the searched ones.
     #[inline(always)]
     fn settle(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
         // most updates leave nothing stale (a codel is due, or none is): a word test
         if self.stale.iter().any(|&w| w != 0) {
             self.settle_stale(system, state)?;
         }
-        if self.masks.any_when {
-            self.decide_whens(system, state)?;
+        if self.masks.any_searched {
+            self.decide_searched(system, state)?;
         }
         Ok(())
     }
@@ -503,7 +505,7 @@ impl EnabledSet {
     /// Evaluates the stale interactions that are no longer suppressed.
     #[inline(never)]
     fn settle_stale(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
-        // a stale interaction is higher in no rule, so evaluating one changes no other's
+        // a stale interaction is higher in no priority, so evaluating one changes no other's
         // verdict: consecutive interactions with the same higher ones are decided once
         let mut last: Option<((u32, u32), bool)> = None;
         for w in 0..self.stale.len() {
@@ -549,7 +551,7 @@ impl EnabledSet {
         core::mem::swap(&mut self.found, &mut e.found);
         core::mem::swap(&mut self.pre, &mut e.pre);
         core::mem::swap(&mut self.stale, &mut e.stale);
-        core::mem::swap(&mut self.when_suppressed, &mut e.when_suppressed);
+        core::mem::swap(&mut self.search_suppressed, &mut e.search_suppressed);
         // the key found last is of the state before
         self.last_key = LastKey::NONE;
     }
@@ -566,7 +568,7 @@ impl EnabledSet {
         copy(&mut e.found, &self.found);
         copy(&mut e.pre, &self.pre);
         copy(&mut e.stale, &self.stale);
-        copy(&mut e.when_suppressed, &self.when_suppressed);
+        copy(&mut e.search_suppressed, &self.search_suppressed);
     }
 
     fn eval_internal(&mut self, system: &System, state: &State, c: u32) -> Result<(), RangeError> {
@@ -617,29 +619,25 @@ impl EnabledSet {
         self.found[i as usize] = found;
     }
 
-    /// True if a higher interaction of a rule without `when` over `i` has steps.
+    /// True if an interaction above `i` in the masks has steps.
     #[inline]
     fn blocked(&self, i: u32) -> bool {
         self.masks.blocked(i, &self.pre)
     }
 
-    /// Decides suppression of the enabled interactions under a rule with a `when`.
+    /// Decides suppression of the enabled searched interactions.
     #[inline(never)]
-    fn decide_whens(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
-        for w in 0..self.pre.len() {
-            let mut bits = self.pre[w] & self.masks.under_when[w];
-            while bits != 0 {
-                let i = (w * 64) as u32 + bits.trailing_zeros();
-                bits &= bits - 1;
-                let s = system.is_suppressed(state, i, &self.pre)?;
-                set_bit(&mut self.when_suppressed, i, s);
-            }
-        }
-        Ok(())
+    fn decide_searched(&mut self, system: &System, state: &State) -> Result<(), RangeError> {
+        system.search_suppressed(
+            state,
+            &self.pre,
+            &mut self.search,
+            &mut self.search_suppressed,
+        )
     }
 
     /// True if interaction `i` has steps before priorities are applied; `None` if the
-    /// set did not evaluate it because it is suppressed and higher in no rule.
+    /// set did not evaluate it because it is suppressed and higher in no priority.
     pub fn has_steps_before_priorities(&self, i: u32) -> Option<bool> {
         (!bit(&self.stale, i)).then(|| bit(&self.pre, i))
     }
@@ -652,8 +650,8 @@ impl EnabledSet {
 
     #[inline]
     fn is_suppressed(&self, i: u32) -> bool {
-        if bit(&self.masks.under_when, i) {
-            bit(&self.when_suppressed, i)
+        if bit(&self.masks.searched, i) {
+            bit(&self.search_suppressed, i)
         } else {
             self.blocked(i)
         }
@@ -761,21 +759,21 @@ impl EnabledSet {
 
 /// What an [`EnabledSet`] knows of the state it describes, apart from its tables: per
 /// interaction what its last evaluation found, and the bits of those with steps, of the
-/// stale ones and of those a `when` rule suppresses. [`crate::StateCache`] keeps one per
+/// stale ones and of the searched ones suppressed. [`crate::StateCache`] keeps one per
 /// state it knows.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Evaluation {
     found: Box<[Found]>,
     pre: Box<[u64]>,
     stale: Box<[u64]>,
-    when_suppressed: Box<[u64]>,
+    search_suppressed: Box<[u64]>,
 }
 
 impl Evaluation {
     /// The bytes its buffers hold.
     pub(crate) fn bytes(&self) -> usize {
         self.found.len() * core::mem::size_of::<Found>()
-            + (self.pre.len() + self.stale.len() + self.when_suppressed.len()) * 8
+            + (self.pre.len() + self.stale.len() + self.search_suppressed.len()) * 8
     }
 }
 

@@ -1,8 +1,8 @@
 //! `bip-model`: a compiled bip model and its one semantics, `no_std` + `alloc`.
 //!
 //! - [`System`] is the compiled model: dense indices, compiled expressions, priorities
-//!   closed transitively; [`System::new`] builds one from [`SystemParts`] (the front end,
-//!   `bip-lang`, reads and compiles model files into them);
+//!   closed transitively (as a graph, [`PriorityGraph`]); [`System::new`] builds one from
+//!   [`SystemParts`] (the front end, `bip-lang`, reads and compiles model files into them);
 //! - [`System::enabled_steps`] and [`System::fire`] are the step relation, shared by the
 //!   verifier, the simulator and the engine; [`EnabledSet`] keeps a state's enabled steps
 //!   up to date as the state moves, re-evaluating only what a step can have changed;
@@ -26,6 +26,7 @@ mod prelude {
 }
 
 mod assemble;
+pub mod choices;
 mod deadlock;
 mod enable_index;
 pub mod eval;
@@ -39,6 +40,7 @@ mod model;
 pub mod ops;
 mod ordered_map;
 mod plan_effects;
+mod priority_graph;
 mod priority_masks;
 mod radix;
 mod rng;
@@ -47,6 +49,7 @@ mod state_cache;
 mod step;
 mod step_tables;
 mod steps;
+mod suppression;
 mod system;
 pub mod trace;
 mod watches;
@@ -58,11 +61,12 @@ pub use gate::{CommitError, Committed, Gate, GateStep};
 pub use genom::GenomMap;
 pub use incremental::{Enabled, EnabledSet};
 pub use model::{
-    family_indices, Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule,
+    family_indices, Assign, Atom, Component, Connector, Family, Interaction, PortRef, Priority,
     Property, PropertyKind, RangeError, RangeErrorKind, Role, Target, Transition, Var, VarType,
 };
 pub use ordered_map::OrderedMap;
 pub use plan_effects::PlanEffects;
+pub use priority_graph::{PriorityGraph, MAX_INCIDENCES};
 pub use rng::Rng;
 pub use state::{State, StateLayout};
 pub use state_cache::{CacheStats, StateCache};

@@ -155,15 +155,16 @@ pub struct PortRef {
     pub port: u32,
 }
 
-/// After transitive closure: an interaction in `low` is suppressed in a state where an
-/// interaction in `high` is enabled and every `when` holds.
+/// A priority as declared: an interaction in `low` is suppressed in a state where an
+/// interaction in `high` is enabled and `when` holds. The system closes the declared ones
+/// transitively without listing the closure (docs/model.md, "Priorities").
 #[derive(Clone, Debug)]
-pub struct PriorityRule {
+pub struct Priority {
     pub low: Range<u32>,
     pub high: Range<u32>,
-    pub when: Vec<Expr>,
-    /// `low < high` as written, or the chain it was derived from.
-    pub origin: String,
+    pub when: Option<Expr>,
+    /// `low < high` as written.
+    pub text: String,
 }
 
 #[derive(Clone, Debug)]

@@ -12,6 +12,7 @@ use crate::enable_index::{PortCell, Read, STAYS};
 use crate::eval::{Env, EvalError};
 use crate::fast_path::ActionCode;
 use crate::model::{Assign, RangeError, RangeErrorKind};
+use crate::priority_masks::bit;
 use crate::state::State;
 use crate::step_tables::LastKey;
 use crate::steps::{Choices, Label, OwnedStep, Pick, Step, StepEntry, Steps};
@@ -359,7 +360,7 @@ impl System {
         }
     }
 
-    /// Removes the steps of interactions suppressed by a priority rule.
+    /// Removes the steps of interactions suppressed by priorities.
     fn apply_priorities(&self, state: &State, out: &mut Steps) -> Result<(), RangeError> {
         let words = self.interactions.len().div_ceil(64);
         out.enabled.clear();
@@ -371,7 +372,21 @@ impl System {
         }
         out.suppressed.clear();
         out.suppressed.resize(words, 0);
+        let masks = &self.priority_masks;
         let mut any = false;
+        // the interactions the masks leave to a search are decided together
+        if masks.any_searched
+            && (out.enabled.iter().zip(&masks.searched)).any(|(&e, &s)| e & s != 0)
+        {
+            let Steps {
+                enabled,
+                suppressed,
+                search,
+                ..
+            } = out;
+            self.search_suppressed(state, enabled, search, suppressed)?;
+            any = suppressed.iter().any(|&w| w != 0);
+        }
         let mut last = None;
         for e in &out.entries {
             let Label::Interaction(i) = e.label else {
@@ -382,7 +397,7 @@ impl System {
                 continue;
             }
             last = Some(i);
-            if self.is_suppressed(state, i, &out.enabled)? {
+            if !bit(&masks.searched, i) && masks.blocked(i, &out.enabled) {
                 out.suppressed[i as usize / 64] |= 1 << (i % 64);
                 any = true;
             }
@@ -395,40 +410,6 @@ impl System {
             });
         }
         Ok(())
-    }
-
-    /// True if interaction `i` is suppressed in `state`, given the set of interactions
-    /// enabled before priorities.
-    pub fn is_suppressed(
-        &self,
-        state: &State,
-        i: u32,
-        enabled: &[u64],
-    ) -> Result<bool, RangeError> {
-        let masks = &self.priority_masks;
-        if !crate::priority_masks::bit(&masks.under_when, i) {
-            return Ok(masks.blocked(i, enabled));
-        }
-        for &r in &self.rules_by_low[i as usize] {
-            let rule = &self.priorities[r as usize];
-            if !any_bit(enabled, rule.high.clone()) {
-                continue;
-            }
-            let mut all = true;
-            for w in &rule.when {
-                let holds = w
-                    .holds(&mut Env::new(state.slots(), 0))
-                    .map_err(|e| self.range_error(e, &format!("priority {}", rule.origin)))?;
-                if !holds {
-                    all = false;
-                    break;
-                }
-            }
-            if all {
-                return Ok(true);
-            }
-        }
-        Ok(false)
     }
 
     /// Fires `step` from `from`, writing the successor into `to` (which is overwritten; it
@@ -655,7 +636,8 @@ enum ActionError {
     OutOfRange { slot: u32, value: i64 },
 }
 
-fn any_bit(bits: &[u64], range: core::ops::Range<u32>) -> bool {
+/// True if a bit of `range` is set in `bits`.
+pub(crate) fn any_bit(bits: &[u64], range: core::ops::Range<u32>) -> bool {
     let (mut i, end) = (range.start, range.end);
     while i < end {
         let word = bits[i as usize / 64];

@@ -156,6 +156,7 @@ impl StepTables {
                 continue;
             }
             let (entries_start, picks_start) = (t.entries.len(), picks.len());
+            let mut fits = true;
             for key in 0..d.size {
                 // every slot the steps read is set; the others do not matter
                 d.set(key, state.slots_mut(), 0);
@@ -175,8 +176,14 @@ impl StepTables {
                     }
                 };
                 t.entries.push(entry);
+                // give up on a table as soon as it is too large (no interaction has more
+                // than `choices::MAX_CHOICES` steps in one state)
+                if picks.len() > MAX_PICKS {
+                    fits = false;
+                    break;
+                }
             }
-            if picks.len() > MAX_PICKS {
+            if !fits {
                 t.entries.truncate(entries_start);
                 picks.truncate(picks_start);
                 continue;

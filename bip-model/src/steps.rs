@@ -70,6 +70,33 @@ pub struct Steps {
     /// suppressed (one bit each).
     pub(crate) enabled: Vec<u64>,
     pub(crate) suppressed: Vec<u64>,
+    pub(crate) search: PrioritySearch,
+}
+
+/// Scratch for deciding the searched interactions' suppression in one state: per group of
+/// the priority graph and per priority, what the search found, valid where its stamp is
+/// the current epoch (so that nothing is cleared between states).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PrioritySearch {
+    pub(crate) epoch: u32,
+    /// Per group: reached from an enabled interaction.
+    pub(crate) reached: Vec<u32>,
+    /// Per group and kind of path (`Through` in `suppression`): whether it leads to an
+    /// enabled interaction; see [`Memo`].
+    pub(crate) leads: [Vec<(u32, Memo)>; 3],
+    /// Per priority: its `when`, once evaluated.
+    pub(crate) when: Vec<(u32, bool)>,
+    pub(crate) stack: Vec<u32>,
+    pub(crate) frames: Vec<(u32, u32, u32)>,
+}
+
+/// What a search knows of a group.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Memo {
+    #[default]
+    Open,
+    Yes,
+    No,
 }
 
 /// Scratch for expanding an interaction into steps: the enabled transitions of each

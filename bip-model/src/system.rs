@@ -9,9 +9,10 @@ use crate::prelude::*;
 
 use crate::eval::{Env, EvalError, Expr};
 use crate::model::{
-    Atom, Component, Connector, Family, Interaction, PriorityRule, Property, RangeError,
+    Atom, Component, Connector, Family, Interaction, Priority, Property, RangeError,
     RangeErrorKind, Role,
 };
+use crate::priority_graph::PriorityGraph;
 use crate::state::{State, StateLayout};
 
 /// A compiled model.
@@ -26,15 +27,11 @@ pub struct System {
     pub components: Vec<Component>,
     pub connectors: Vec<Connector>,
     pub interactions: Vec<Interaction>,
-    /// The transitive closure of the declared priorities.
-    pub priorities: Vec<PriorityRule>,
-    /// How many priorities the file declares.
-    pub declared_priorities: usize,
+    /// The priorities as declared; the step relation closes them transitively.
+    pub priorities: Vec<Priority>,
     pub properties: Vec<Property>,
     pub layout: StateLayout,
     pub(crate) initial: State,
-    /// For each interaction, the priority rules in which it is the lower one.
-    pub(crate) rules_by_low: Vec<Vec<u32>>,
     /// For each slot, the range of values it may hold.
     pub(crate) slot_ranges: Vec<(i64, i64)>,
     /// The GenoM layer the system was expanded from, if any: what the engine binds codels
@@ -42,7 +39,9 @@ pub struct System {
     pub genom: Option<crate::genom::GenomMap>,
     /// Flat tables for the step relation's inner loop.
     pub(crate) enable_index: crate::enable_index::EnableIndex,
-    /// The priorities as sparse bit masks, for deciding suppression quickly.
+    /// The priorities as a graph, whose reachability is their closure.
+    pub(crate) priority_graph: PriorityGraph,
+    /// The closure as sparse bit masks, where it fits, for deciding suppression quickly.
     pub(crate) priority_masks: crate::priority_masks::PriorityMasks,
 }
 
@@ -51,6 +50,11 @@ impl System {
     /// (none without a layer): see [`crate::GenomMap::requestable`].
     pub fn requestable(&self) -> impl Iterator<Item = (&str, &str)> + '_ {
         self.genom.iter().flat_map(|g| g.requestable())
+    }
+
+    /// The priorities as a graph: its reachability is their transitive closure.
+    pub fn priority_graph(&self) -> &PriorityGraph {
+        &self.priority_graph
     }
 
     /// The initial state.
@@ -205,7 +209,8 @@ pub struct Summary {
     /// Variables summed over components.
     pub variables: usize,
     pub priorities_declared: usize,
-    pub priority_rules: usize,
+    /// The most declared priorities one chain of their closure goes through.
+    pub priority_depth: u32,
     pub properties: usize,
     pub bits_per_state: u32,
 }
@@ -230,8 +235,8 @@ impl System {
             }),
             locations: per_comp(&|a| a.locations.len()),
             variables: per_comp(&|a| a.vars.len()),
-            priorities_declared: self.declared_priorities,
-            priority_rules: self.priorities.len(),
+            priorities_declared: self.priorities.len(),
+            priority_depth: self.priority_graph.depth(),
             properties: self.properties.len(),
             bits_per_state: self.layout.bits(),
         }
@@ -244,5 +249,17 @@ impl System {
     /// and to measure what the tables bring. The steps are the same either way.
     pub fn drop_step_tables(&mut self, which: impl Fn(u32) -> bool) {
         self.enable_index.tables.drop_where(which);
+    }
+
+    /// Decides the suppression of every interaction below a priority by searching the
+    /// priority graph, as for those whose closure does not fit the masks: for tests that
+    /// check the masks against the search. The steps are the same either way.
+    pub fn drop_priority_masks(&mut self) {
+        self.priority_masks = crate::priority_masks::PriorityMasks::new(
+            &self.priority_graph,
+            &self.priorities,
+            self.interactions.len(),
+            0,
+        );
     }
 }

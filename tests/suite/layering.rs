@@ -31,12 +31,26 @@ const CRATES: &[Layers] = &[
             ("parts", &["model", "steps", "genom::map"]),
             (
                 "tables",
-                &["fast_path", "priority_masks", "step_tables", "enable_index"],
+                &[
+                    "fast_path",
+                    "choices",
+                    "priority_graph",
+                    "priority_masks",
+                    "step_tables",
+                    "enable_index",
+                ],
             ),
             ("system", &["system"]),
             (
                 "semantics",
-                &["step", "assemble", "deadlock", "trace", "genom"],
+                &[
+                    "step",
+                    "suppression",
+                    "assemble",
+                    "deadlock",
+                    "trace",
+                    "genom",
+                ],
             ),
             (
                 "acceleration",

@@ -1,6 +1,7 @@
 //! The `bip` command end to end (`check`, `engine`, `genom`, `sched`, `verify`: the binary run as a
 //! user runs it, with SPIN as a cross-check where it is installed), and the architecture's
-//! layering read from the sources (`layering`), in one binary.
+//! layering read from the sources (`layering`), and wide models within memory and time
+//! bounds (`wide_models`), in one binary.
 
 mod check;
 mod common;
@@ -10,3 +11,4 @@ mod genom;
 mod layering;
 mod sched;
 mod verify;
+mod wide_models;

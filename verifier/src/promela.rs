@@ -29,7 +29,7 @@
 //! [`MAX_QUANTIFIER_TERMS`] terms.
 
 use std::cell::Cell;
-use std::collections::HashSet;
+use std::collections::{BTreeSet, HashSet};
 use std::fmt::Write as _;
 
 use bip_model::eval::Expr;
@@ -38,6 +38,9 @@ use bip_model::{PropertyKind, Role, System, Target};
 
 /// Bound on the quantifier terms of one export, all quantifiers together.
 pub const MAX_QUANTIFIER_TERMS: u64 = 1_000_000;
+
+/// Bound on the conditions under which one interaction is suppressed by priorities.
+const MAX_SUPPRESSIONS: usize = 100_000;
 
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum ExportError {
@@ -441,18 +444,50 @@ impl<'a> Exporter<'a> {
         })
     }
 
-    /// The condition under which interaction `i` is suppressed by a priority, if any rule
-    /// can suppress it (the higher interactions' `enabled_` macros).
+    /// The condition under which interaction `i` is suppressed by priorities, if any can
+    /// suppress it: for each group of interactions a path of priorities leads up to from
+    /// its group, with the `when`s along the path, an enabled interaction of that group
+    /// and those `when`s (the higher interactions' `enabled_` macros).
     fn suppressed(&self, i: u32) -> Result<Option<String>, ExportError> {
-        let mut any = Vec::new();
-        for rule in &self.sys.priorities {
-            if !rule.low.contains(&i) {
-                continue;
+        let sys = self.sys;
+        let graph = sys.priority_graph();
+        let Some(g) = graph.group_of(i) else {
+            return Ok(None);
+        };
+        let mut seen: BTreeSet<(u32, Vec<u32>)> = BTreeSet::new();
+        let mut stack = vec![(g, Vec::new())];
+        while let Some((x, whens)) = stack.pop() {
+            for &p in graph.below(x) {
+                let mut whens = whens.clone();
+                if sys.priorities[p as usize].when.is_some() && !whens.contains(&p) {
+                    whens.push(p);
+                    whens.sort_unstable();
+                }
+                for z in graph.high_groups(p) {
+                    if seen.insert((z, whens.clone())) {
+                        if seen.len() > MAX_SUPPRESSIONS {
+                            return Err(ExportError::Unsupported(format!(
+                                "the priorities above {} close into more than \
+                                 {MAX_SUPPRESSIONS} conditions",
+                                sys.interactions[i as usize].name
+                            )));
+                        }
+                        stack.push((z, whens.clone()));
+                    }
+                }
             }
-            let highs: Vec<String> = rule.high.clone().map(|h| format!("enabled_{h}")).collect();
+        }
+        let mut any = Vec::new();
+        for (z, whens) in &seen {
+            let mut highs = Vec::new();
+            for h in graph.interactions(*z) {
+                highs.push(format!("enabled_{h}"));
+            }
             let mut conj = vec![format!("({})", highs.join(" || "))];
-            for w in &rule.when {
-                conj.push(self.expr(w, 0, &mut Vec::new())?);
+            for &p in whens {
+                if let Some(w) = &sys.priorities[p as usize].when {
+                    conj.push(self.expr(w, 0, &mut Vec::new())?);
+                }
             }
             any.push(format!("({})", conj.join(" && ")));
         }

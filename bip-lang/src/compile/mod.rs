@@ -2,6 +2,7 @@
 //! component families, `forall` connectors, priorities and properties, with every name
 //! resolved and every expression type-checked. All errors are collected with positions.
 
+mod choices;
 mod priority;
 mod resolve;
 
@@ -17,7 +18,7 @@ use crate::syntax::{
 };
 use bip_model::eval;
 use bip_model::{
-    Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule, Property,
+    Assign, Atom, Component, Connector, Family, Interaction, PortRef, Priority, Property,
     PropertyKind, System, SystemParts, Target, Transition, Var, VarType,
 };
 
@@ -41,6 +42,9 @@ pub(crate) fn compile_core(
     c.atoms(def);
     c.components(def);
     c.connectors(def);
+    for e in choices::check(def, &c.atoms, &c.components, &c.connectors, &c.interactions) {
+        c.errors.push(e);
+    }
     let priorities = c.priorities(def);
     let properties = c.properties(def);
     let extra: Vec<eval::Expr> = extra.iter().filter_map(|e| c.global_bool_tree(e)).collect();
@@ -69,7 +73,6 @@ pub(crate) fn compile_core(
         connectors: c.connectors,
         interactions: c.interactions,
         priorities,
-        declared_priorities: def.priorities.len(),
         properties,
         initial: c.initial,
         slot_ranges: c.slot_ranges,
@@ -836,7 +839,7 @@ impl Compiler {
         })
     }
 
-    fn priorities(&mut self, def: &SystemDef) -> Vec<PriorityRule> {
+    fn priorities(&mut self, def: &SystemDef) -> Vec<Priority> {
         let mut declared = Vec::new();
         for p in &def.priorities {
             let low = self.priority_target(&p.low);
@@ -847,15 +850,17 @@ impl Compiler {
             };
             if let (Some(low), Some(high), Some(when)) = (low, high, when) {
                 declared.push(priority::Declared {
-                    low,
-                    high,
-                    when,
-                    text: format!("{} < {}", p.low, p.high),
+                    priority: Priority {
+                        low,
+                        high,
+                        when,
+                        text: format!("{} < {}", p.low, p.high),
+                    },
                     span: p.low.span(),
                 });
             }
         }
-        match priority::close(&declared) {
+        match priority::check(declared) {
             Ok(r) => r,
             Err(e) => {
                 self.errors.push(e);

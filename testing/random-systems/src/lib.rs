@@ -460,6 +460,56 @@ pub fn generate_with(seed: u64, opts: &Options) -> Gen {
             .then(|| gen_bool(&mut r, 1, &mut leaf, GUARD_OPS));
         gen.prios.push(Prio { low, high, when });
     }
+    // a quarter of the systems get a long chain of priorities, through connectors of one
+    // port added for it: the closure is then deep, and its `when`s lie along paths
+    if r.chance(25) {
+        let first = gen.conns.len();
+        for _ in 0..3 + r.below(6) {
+            let forall = r.chance(30).then(|| 1 + r.below(3));
+            let f = r.below(gen.families.len());
+            let idx = match (gen.families[f].count, forall) {
+                (None, _) => Idx::Single,
+                (Some(c), Some(_)) => Idx::Shift(r.below(c)),
+                (Some(c), None) => Idx::Const(r.below(c)),
+            };
+            let port = r.below(gen.atoms[gen.families[f].atom].ports);
+            gen.conns.push(Conn {
+                forall,
+                ports: vec![(f, idx, port)],
+                trigger: None,
+                guard: None,
+                action: Vec::new(),
+                role: None,
+            });
+        }
+        // from the last connector of the system before them (if any) up through the new ones
+        let from = first.saturating_sub(1);
+        for c in from..gen.conns.len() - 1 {
+            let pick = |r: &mut Rng, c: usize| -> (usize, Option<usize>) {
+                match gen.conns[c].forall {
+                    Some(k) if r.chance(30) => (c, Some(r.below(k))),
+                    _ => (c, None),
+                }
+            };
+            let low = pick(&mut r, c);
+            let high = pick(&mut r, c + 1);
+            let (atoms, families) = (&gen.atoms, &gen.families);
+            let mut leaf =
+                |r: &mut Rng, want_bool: bool| global_leaf(r, atoms, families, want_bool);
+            let when = r
+                .chance(25)
+                .then(|| gen_bool(&mut r, 1, &mut leaf, GUARD_OPS));
+            gen.prios.push(Prio { low, high, when });
+        }
+        // and a shortcut along it now and then
+        if r.chance(50) && gen.conns.len() - from > 2 {
+            gen.prios.push(Prio {
+                low: (from, None),
+                high: (gen.conns.len() - 1, None),
+                when: None,
+            });
+        }
+    }
     if opts.properties {
         let (atoms, families) = (&gen.atoms, &gen.families);
         let mut leaf = |r: &mut Rng, want_bool: bool| global_leaf(r, atoms, families, want_bool);

@@ -58,9 +58,8 @@ pub struct Encoding<'s> {
     pub kinds: Vec<SlotKind>,
     /// Per atom, per port (the last index holds the internal transitions): its transitions.
     pub by_port: Vec<Vec<Vec<u32>>>,
-    /// Per interaction, the priority rules in which it is the lower one, in rule order
-    /// (the order `System::is_suppressed` evaluates them).
-    pub rules_by_low: Vec<Vec<u32>>,
+    /// Per group of the priority graph, the priorities with it on their high side.
+    pub groups_above: Vec<Vec<u32>>,
     /// Per component, the interactions it takes part in and its position in their ports.
     pub inters_of: Vec<Vec<(u32, u32)>>,
     pub roles: Vec<Role>,
@@ -204,10 +203,11 @@ impl<'s> Encoding<'s> {
                 ports
             })
             .collect();
-        let mut rules_by_low = vec![Vec::new(); sys.interactions.len()];
-        for (r, rule) in sys.priorities.iter().enumerate() {
-            for i in rule.low.clone() {
-                rules_by_low[i as usize].push(r as u32);
+        let graph = sys.priority_graph();
+        let mut groups_above = vec![Vec::new(); graph.groups() as usize];
+        for p in 0..sys.priorities.len() as u32 {
+            for z in graph.high_groups(p) {
+                groups_above[z as usize].push(p);
             }
         }
         let mut inters_of = vec![Vec::new(); sys.components.len()];
@@ -225,7 +225,7 @@ impl<'s> Encoding<'s> {
             sys,
             kinds,
             by_port,
-            rules_by_low,
+            groups_above,
             inters_of,
             roles,
         }
@@ -441,46 +441,22 @@ impl<'s> Encoding<'s> {
             }
             inter_en.push(en);
         }
-        // priorities: for each enabled interaction, its rules in order; a rule's conditions
-        // are evaluated (in order, up to the first false one) when a higher interaction is
-        // enabled; the first rule that applies suppresses it
         let mut allowed = inter_en.clone();
         if !sys.priorities.is_empty() {
-            let mut high_en: Vec<Option<Bool>> = vec![None; sys.priorities.len()];
-            let mut whens: Vec<Option<Vec<Sym>>> = vec![None; sys.priorities.len()];
-            for (i, rules) in self.rules_by_low.iter().enumerate() {
-                if rules.is_empty() || lit(&inter_en[i]) == Some(false) {
-                    continue;
-                }
-                let mut none_before = tt();
-                let mut applies_any = Vec::new();
-                let mut err: Option<Bool> = None;
-                for &r in rules {
-                    let rule = &sys.priorities[r as usize];
-                    let hen = high_en[r as usize]
-                        .get_or_insert_with(|| {
-                            or(rule.high.clone().map(|h| inter_en[h as usize].clone()))
-                        })
-                        .clone();
-                    let ws = whens[r as usize]
-                        .get_or_insert_with(|| {
-                            rule.when.iter().map(|w| translate(w, f, 0)).collect()
-                        })
-                        .clone();
-                    let reached = and2(&none_before, &hen);
-                    let mut all = tt();
-                    for w in &ws {
-                        err = err_or(err, err_when(&and2(&reached, &all), w.err.clone()));
-                        all = and2(&all, &w.bool_term());
+            let (suppressed, err) = self.priorities(f, &inter_en);
+            if let Some(e) = err {
+                errors.push(e);
+            }
+            for (i, a) in allowed.iter_mut().enumerate() {
+                if let Some(s) = sys
+                    .priority_graph()
+                    .group_of(i as u32)
+                    .map(|g| &suppressed[g as usize])
+                {
+                    if lit(a) != Some(false) {
+                        *a = and2(a, &not(s));
                     }
-                    let applies = and2(&hen, &all);
-                    none_before = and2(&none_before, &not(&applies));
-                    applies_any.push(applies);
                 }
-                if let Some(e) = err_when(&inter_en[i], err) {
-                    errors.push(e);
-                }
-                allowed[i] = and2(&inter_en[i], &not(&or(applies_any)));
             }
         }
         Enabling {
@@ -490,6 +466,104 @@ impl<'s> Encoding<'s> {
             allowed,
             guard_error: or(errors),
         }
+    }
+
+    /// Priorities as bip-model's suppression search decides them (see its
+    /// `suppression.rs`), over the groups of the priority graph, highest first: per group,
+    /// whether a path of priorities whose `when`s hold leads up from it to an enabled
+    /// interaction; and the condition under which a `when` that must be evaluated fails
+    /// (docs/model.md, "Priorities": one is evaluated when its priority's low side is
+    /// reached from an enabled interaction, through priorities whose `when`s hold and
+    /// interactions that no path of priorities without `when` suppresses, and its high side
+    /// leads to an enabled interaction through any priorities).
+    fn priorities(&self, f: &Frame, inter_en: &[Bool]) -> (Vec<Bool>, Option<Bool>) {
+        let sys = self.sys;
+        let graph = sys.priority_graph();
+        let groups = graph.groups() as usize;
+        let en: Vec<Bool> = (0..groups as u32)
+            .map(|z| or(graph.interactions(z).map(|i| inter_en[i as usize].clone())))
+            .collect();
+        let whens: Vec<Option<Sym>> = sys
+            .priorities
+            .iter()
+            .map(|p| p.when.as_ref().map(|w| translate(w, f, 0)))
+            .collect();
+        // up from each group: through any priorities (`live`), through those whose `when`
+        // holds where it is evaluated (`active`), through those without `when` (`plain`)
+        let mut live = vec![ff(); groups];
+        let mut active = vec![ff(); groups];
+        let mut plain = vec![ff(); groups];
+        let mut live_p: Vec<Option<Bool>> = vec![None; sys.priorities.len()];
+        let mut pass: Vec<Option<Bool>> = vec![None; sys.priorities.len()];
+        for &g in graph.order() {
+            let mut any = Vec::new();
+            let mut act = Vec::new();
+            let mut pl = Vec::new();
+            for &p in graph.below(g) {
+                let highs = graph.high_groups(p);
+                let lp = live_p[p as usize]
+                    .get_or_insert_with(|| {
+                        or(highs.clone().map(|z| {
+                            let z = z as usize;
+                            or([en[z].clone(), live[z].clone()])
+                        }))
+                    })
+                    .clone();
+                let carries = pass[p as usize]
+                    .get_or_insert_with(|| match &whens[p as usize] {
+                        None => tt(),
+                        Some(w) => and2(&lp, &w.bool_term()),
+                    })
+                    .clone();
+                any.push(lp);
+                if whens[p as usize].is_none() {
+                    pl.push(or(highs.clone().map(|z| {
+                        let z = z as usize;
+                        or([en[z].clone(), plain[z].clone()])
+                    })));
+                }
+                let up = or(highs.map(|z| {
+                    let z = z as usize;
+                    or([en[z].clone(), active[z].clone()])
+                }));
+                act.push(and2(&carries, &up));
+            }
+            live[g as usize] = or(any);
+            active[g as usize] = or(act);
+            plain[g as usize] = or(pl);
+        }
+        // down from the enabled interactions, lowest group first: the groups reached
+        // through priorities whose `when` holds and not suppressed by a plain path (the
+        // search goes on from those only), and the `when`s evaluated on the way
+        let mut reached = vec![ff(); groups];
+        let mut low_reached: Vec<Option<Bool>> = vec![None; sys.priorities.len()];
+        let mut err: Option<Bool> = None;
+        for &g in graph.order().iter().rev() {
+            let mut from = vec![en[g as usize].clone()];
+            for &p in &self.groups_above[g as usize] {
+                let r = self.low_reached(p, &reached, &mut low_reached);
+                if let Some(carries) = &pass[p as usize] {
+                    from.push(and2(&r, carries));
+                }
+            }
+            reached[g as usize] = and2(&or(from), &not(&plain[g as usize]));
+        }
+        for (p, w) in whens.iter().enumerate() {
+            let (Some(w), Some(lp)) = (w, &live_p[p]) else {
+                continue;
+            };
+            let r = self.low_reached(p as u32, &reached, &mut low_reached);
+            err = err_or(err, err_when(&and2(&r, lp), w.err.clone()));
+        }
+        (active, err)
+    }
+
+    /// Some group of priority `p`'s low side is reached.
+    fn low_reached(&self, p: u32, reached: &[Bool], memo: &mut [Option<Bool>]) -> Bool {
+        let graph = self.sys.priority_graph();
+        memo[p as usize]
+            .get_or_insert_with(|| or(graph.low_groups(p).map(|x| reached[x as usize].clone())))
+            .clone()
     }
 
     /// No progress step is enabled in the frame (after priorities), and its enabled steps

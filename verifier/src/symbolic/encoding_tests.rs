@@ -208,7 +208,7 @@ fn the_generator_covers_every_feature() {
         seen[1] |= sys.interactions.iter().any(|i| i.guard.is_some());
         seen[2] |= sys.interactions.iter().any(|i| !i.action.is_empty());
         seen[3] |= !sys.priorities.is_empty();
-        seen[4] |= sys.priorities.iter().any(|p| !p.when.is_empty());
+        seen[4] |= sys.priorities.iter().any(|p| p.when.is_some());
         seen[5] |= sys.has_time();
         seen[6] |= sys
             .atoms
@@ -296,4 +296,46 @@ fn guards_fail_only_where_the_step_relation_evaluates_them() {
         );
         check_state(&sys, &Encoding::new(&sys), &s).unwrap();
     }
+}
+
+/// A priority's condition is evaluated where an enabled interaction leads to its low side
+/// through priorities whose conditions hold (and interactions no plain path suppresses),
+/// and its high side leads to an enabled interaction through any (bip-model's
+/// `suppression.rs`): on a chain with conditions that fail, in every state, the encoding fails exactly where the relation does and allows the
+/// same steps, with the priority masks and with the search alone.
+#[test]
+fn priority_conditions_fail_only_where_the_search_evaluates_them() {
+    let text = r#"System(name: "chain",
+        atoms: { "P": Atom(locations: ["l"], initial: "l", ports: ["a", "b", "c", "e"],
+            vars: [(name: "on", ty: Int(0, 15)), (name: "d", ty: Int(0, 2))],
+            transitions: [
+                (from: "l", port: "a", to: "l", guard: "on % 2 == 1"),
+                (from: "l", port: "b", to: "l", guard: "on / 2 % 2 == 1"),
+                (from: "l", port: "c", to: "l", guard: "on / 4 % 2 == 1"),
+                (from: "l", port: "e", to: "l", guard: "on / 8 == 1"),
+            ]) },
+        components: [(name: "p", atom: "P")],
+        connectors: [(name: "a", ports: ["p.a"]), (name: "b", ports: ["p.b"]),
+                     (name: "c", ports: ["p.c"]), (name: "e", ports: ["p.e"])],
+        priorities: [(low: "e", high: "a", when: "2 / (p.d - 2) < 0"),
+                     (low: "a", high: "b", when: "1 / p.d > 0"), (low: "b", high: "c"),
+                     (low: "e", high: "c")])"#;
+    let masked = load_str("chain.ron", text).unwrap();
+    let mut searched = masked.clone();
+    searched.drop_priority_masks();
+    let mut failures = 0;
+    for sys in [&masked, &searched] {
+        let enc = Encoding::new(sys);
+        for on in 0..16 {
+            for d in 0..3 {
+                let s = State::from_slots(vec![0, on, d]);
+                failures += usize::from(explicit(sys, &s).guard_error);
+                check_state(sys, &enc, &s).unwrap_or_else(|e| panic!("on {on}, d {d}: {e}"));
+            }
+        }
+    }
+    assert!(
+        failures >= 8,
+        "only {failures} states where a condition fails"
+    );
 }
