@@ -303,6 +303,12 @@ fn pair(r: &Expr, q: &Expr, out: &mut Vec<(Span, Span)>) {
             pair(a1, b1, out);
             pair(a2, b2, out);
         }
+        (ExprKind::Chain(a, xs), ExprKind::Chain(b, ys)) => {
+            pair(a, b, out);
+            for ((_, x), (_, y)) in xs.iter().zip(ys) {
+                pair(x, y, out);
+            }
+        }
         (ExprKind::Cond(a1, a2, a3), ExprKind::Cond(b1, b2, b3)) => {
             pair(a1, b1, out);
             pair(a2, b2, out);
