@@ -1,8 +1,10 @@
 //! bip-lang's integration tests, in one binary: every kind of bad input with its message and
 //! position (`diagnostics`, `genom`), and the GenoM expansion on random layers
-//! (`genom_random`); reproducers of crashes and hangs (`robustness`).
+//! (`genom_random`); reproducers of crashes and hangs (`robustness`)
+//! and mutated example models through the loader (`fuzz`).
 
 mod diagnostics;
+mod fuzz;
 mod genom;
 mod genom_random;
 mod robustness;
