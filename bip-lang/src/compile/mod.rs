@@ -32,6 +32,10 @@ const MAX_COUNT: i64 = 10_000_000;
 /// together exhaust memory.
 const MAX_TOTAL: usize = 10_000_000;
 
+/// The most state slots (a location per component, and its variables) a model may have:
+/// the state's tables take about 24 bytes a slot before any state is explored.
+const MAX_SLOTS: usize = 50_000_000;
+
 /// Compiles a core model (its GenoM layer, if any, is ignored: it must have been expanded
 /// first), plus `extra` global boolean expressions over it (the GenoM layer's conditions,
 /// for the engine's map). On failure, returns every error found.
@@ -513,7 +517,7 @@ impl Compiler {
         );
         // the total is checked before any family is built: building them is what exhausts
         // memory
-        let mut total: i64 = 0;
+        let (mut total, mut slots): (i64, i64) = (0, 0);
         for cd in &def.components {
             let n = match &cd.count {
                 None => 1,
@@ -523,6 +527,24 @@ impl Compiler {
                 },
             };
             total += n;
+            if let Some(&a) = self.atom_by_name.get(cd.atom.as_str()) {
+                slots += n * (1 + self.atoms[a as usize].vars.len() as i64);
+            }
+            if slots > MAX_SLOTS as i64 {
+                self.errors.push(
+                    ModelError::new(
+                        format!(
+                            "the families hold {slots} locations and variables up to here; at \
+                             most {MAX_SLOTS} are allowed in all"
+                        ),
+                        cd.count.as_ref().map_or(cd.name.span, |c| c.span),
+                    )
+                    .with_help(
+                        "each component holds its location and each of its atom's variables",
+                    ),
+                );
+                return;
+            }
             if total > MAX_TOTAL as i64 {
                 self.errors.push(
                     ModelError::new(

@@ -234,6 +234,22 @@ fn families_together_are_limited_before_they_are_built() {
     let (msg, (line, _), _) = error(text);
     assert!(msg.contains("at most 10000000 are allowed in all"), "{msg}");
     assert_eq!(line, 13);
+    // fewer components, but with many variables each
+    let vars: Vec<String> = (0..20)
+        .map(|k| format!(r#"(name: "v{k}", ty: Bool)"#))
+        .collect();
+    let text = model(1, "", "true", "", "")
+        .replace(
+            r#"vars: [(name: "b""#,
+            &format!(r#"vars: [{}, (name: "b""#, vars.join(", ")),
+        )
+        .replace(
+            "count: 1)",
+            r#"count: 1), (name: "q", atom: "P", count: 5000000)"#,
+        );
+    let (msg, (line, _), _) = error(text);
+    assert!(msg.contains("locations and variables"), "{msg}");
+    assert_eq!(line, 13);
 }
 
 #[test]
