@@ -61,6 +61,8 @@ enum Mutation {
     Digit(f64, u8),
     Number(f64, &'static str),
     Insert(f64, Insertion),
+    /// An insertion inside a string (where expressions are): which string, and where in it.
+    InString(f64, f64, Insertion),
 }
 
 #[derive(Clone, Debug)]
@@ -99,7 +101,8 @@ fn mutation() -> impl Strategy<Value = Mutation> {
         (at.clone(), at.clone()).prop_map(|(a, b)| Mutation::SwapTokens(a, b)),
         (at.clone(), 0..10u8).prop_map(|(a, d)| Mutation::Digit(a, d)),
         (at.clone(), prop::sample::select(NUMBERS)).prop_map(|(a, n)| Mutation::Number(a, n)),
-        (at, insertion()).prop_map(|(a, i)| Mutation::Insert(a, i)),
+        (at.clone(), insertion()).prop_map(|(a, i)| Mutation::Insert(a, i)),
+        (at.clone(), at, insertion()).prop_map(|(a, b, i)| Mutation::InString(a, b, i)),
     ]
 }
 
@@ -235,16 +238,29 @@ fn apply(text: &mut String, m: &Mutation) {
         }
         Mutation::Insert(at, ref what) => {
             let p = pos(text, at);
-            let s = match *what {
-                Insertion::LongLine(n) => " ".repeat(n),
-                Insertion::Parens(n) => "(".repeat(n) + "true" + &")".repeat(n),
-                Insertion::Nots(n) => "!".repeat(n),
-                Insertion::Chain(op, n) => op.repeat(n),
-                Insertion::Quantifier(q) => q.to_string(),
-                Insertion::Text(t) => t.to_string(),
-            };
-            text.insert_str(p, &s);
+            text.insert_str(p, &insertion_text(what));
         }
+        Mutation::InString(which, at, ref what) => {
+            let strings: Vec<&(usize, usize)> = toks
+                .iter()
+                .filter(|(a, b)| b - a >= 2 && text.as_bytes()[*a] == b'"')
+                .collect();
+            if let Some(&&(a, b)) = strings.get((which * strings.len() as f64) as usize) {
+                let p = floor(text, a + 1 + ((b - a - 2) as f64 * at) as usize);
+                text.insert_str(p, &insertion_text(what));
+            }
+        }
+    }
+}
+
+fn insertion_text(what: &Insertion) -> String {
+    match *what {
+        Insertion::LongLine(n) => " ".repeat(n),
+        Insertion::Parens(n) => "(".repeat(n) + "true" + &")".repeat(n),
+        Insertion::Nots(n) => "!".repeat(n),
+        Insertion::Chain(op, n) => op.repeat(n),
+        Insertion::Quantifier(q) => q.to_string(),
+        Insertion::Text(t) => t.to_string(),
     }
 }
 
