@@ -13,6 +13,7 @@ mod interrupt;
 mod load;
 mod replay;
 mod report;
+mod sched;
 mod simulate;
 mod startup;
 mod verify;
@@ -60,6 +61,11 @@ enum Command {
     /// random requests, checking every invariant at every step. Exit code 0: they held,
     /// 1: one failed (the trace is printed), 2: model or usage error.
     Simulate(simulate::Args),
+    /// Whether the GenoM layer's tasks meet their deadlines, from the codels' WCETs:
+    /// each task's work per period, its worst response time by exact response-time
+    /// analysis, per CPU. Exit code 0: schedulable, 1: a task misses its deadline, 2: model
+    /// or usage error (or no WCETs).
+    Sched(sched::Args),
     /// Re-execute a trace (a counterexample, a witness, a recording) through the engine,
     /// step by step, and show where the property fails. Exit code 0: a recording replayed,
     /// 1: the trace's failure (or witness) is reached, 2: the trace does not fit the model.
@@ -77,6 +83,7 @@ fn main() -> ExitCode {
         Command::Export(args) => export::run(&args),
         Command::Simulate(args) => simulate::run(&args),
         Command::Replay(args) => replay::run(&args),
+        Command::Sched(args) => sched::run(&args),
     };
     ExitCode::from(code)
 }

@@ -9,7 +9,7 @@
 //! [`StateCache`] of the states met and the steps between them. Those pieces have a
 //! protocol between them (which state the cache's evaluation belongs to, which slots a
 //! step wrote, what to do when a step is not known); the gate keeps it, so a caller
-//! cannot get it wrong. `tests/gate.rs` compares every state's steps with
+//! cannot get it wrong. `tests/suite/gate.rs` compares every state's steps with
 //! [`System::enabled_steps`] and every commit with [`System::fire`].
 
 #[allow(unused_imports)]

@@ -58,8 +58,8 @@ pub use gate::{CommitError, Committed, Gate, GateStep};
 pub use genom::GenomMap;
 pub use incremental::{Enabled, EnabledSet};
 pub use model::{
-    Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule, Property,
-    PropertyKind, RangeError, RangeErrorKind, Role, Target, Transition, Var, VarType,
+    family_indices, Assign, Atom, Component, Connector, Family, Interaction, PortRef, PriorityRule,
+    Property, PropertyKind, RangeError, RangeErrorKind, Role, Target, Transition, Var, VarType,
 };
 pub use ordered_map::OrderedMap;
 pub use plan_effects::PlanEffects;

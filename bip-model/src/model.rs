@@ -213,7 +213,7 @@ impl core::fmt::Display for RangeError {
         match &self.kind {
             RangeErrorKind::OutOfRange { var, value, lo, hi } => write!(
                 f,
-                "{var} = {value} is outside {lo}..={hi} in the {}",
+                "{var} = {value} is outside its range Int({lo}, {hi}) in the {}",
                 self.context
             ),
             RangeErrorKind::DivisionByZero => write!(f, "division by zero in the {}", self.context),
@@ -224,7 +224,8 @@ impl core::fmt::Display for RangeError {
                 count,
             } => write!(
                 f,
-                "index {index} is outside {family}[0..{count}] in the {}",
+                "index {index} is outside `{family}`, {}, in the {}",
+                family_indices(*count),
                 self.context
             ),
         }
@@ -232,6 +233,15 @@ impl core::fmt::Display for RangeError {
 }
 
 impl core::error::Error for RangeError {}
+
+/// The indices of a family of `count` components, for messages.
+pub fn family_indices(count: u32) -> String {
+    match count {
+        0 => "which has no components".into(),
+        1 => "whose only index is 0".into(),
+        n => format!("whose indices run from 0 to {}", n - 1),
+    }
+}
 
 impl Atom {
     /// An atom type whose transitions are indexed by (location, port); transitions that

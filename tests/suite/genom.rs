@@ -272,6 +272,50 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
     );
 }
 
+/// A GenoM model that states no property is checked for deadlock freedom as if it wrote
+/// `DeadlockFree`: the idle layer, waiting for its operator, is not a deadlock, and a
+/// request held forever still is, with either method.
+#[test]
+fn the_implicit_deadlock_check_excuses_the_idle_layer_as_a_written_one_does() {
+    let layer = |constraints: &str| {
+        format!(
+            r#"System(name: "two",
+    modules: [(name: "m", tasks: [(name: "t", period: 1)],
+        services: [
+            (name: "A", kind: Activity, task: "t", codels: [(state: "start", yields: ["ether"])]),
+            (name: "B", kind: Activity, task: "t", codels: [(state: "start", yields: ["pause::start", "ether"])]),
+        ])],
+    constraints: [{constraints}],
+)"#
+        )
+    };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let idle = dir.path().join("idle.ron");
+    let held = dir.path().join("held.ron");
+    std::fs::write(&idle, layer("")).expect("write");
+    std::fs::write(&held, layer(r#"Requires(service: "m.A", active: ["m.B"])"#)).expect("write");
+    for method in ["explicit", "symbolic"] {
+        let out = bip(&["verify", idle.to_str().unwrap(), "--method", method]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(out.status.code(), Some(0), "{method}: {stdout}");
+        assert!(
+            stdout
+                .lines()
+                .any(|l| l.trim_start().starts_with("DeadlockFree") && l.contains("holds")),
+            "{method}: {stdout}"
+        );
+    }
+    let out = bip(&["verify", held.to_str().unwrap(), "--method", "explicit"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.trim_start().starts_with("DeadlockFree") && l.contains("FAILS")),
+        "{stdout}"
+    );
+}
+
 #[test]
 fn the_satellite_verifies() {
     let (code, stdout, _dir) = verify("robots/satellite.ron");

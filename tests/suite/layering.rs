@@ -82,7 +82,17 @@ const CRATES: &[Layers] = &[
             ("stores", &["visited", "promela"]),
             ("explicit", &["explore"]),
             ("symbolic", &["symbolic"]),
+            ("schedulability", &["schedulability"]),
             ("auto", &["auto"]),
+        ],
+    },
+    Layers {
+        src: "sched/src",
+        layers: &[
+            ("values", &["error", "task"]),
+            ("analysis", &["rta"]),
+            ("schedules", &["analysis", "simulate"]),
+            ("pictures", &["svg"]),
         ],
     },
     Layers {

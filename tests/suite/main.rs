@@ -1,4 +1,4 @@
-//! The `bip` command end to end (`check`, `engine`, `genom`, `verify`: the binary run as a
+//! The `bip` command end to end (`check`, `engine`, `genom`, `sched`, `verify`: the binary run as a
 //! user runs it, with SPIN as a cross-check where it is installed), and the architecture's
 //! layering read from the sources (`layering`), in one binary.
 
@@ -7,4 +7,5 @@ mod common;
 mod engine;
 mod genom;
 mod layering;
+mod sched;
 mod verify;

@@ -31,7 +31,7 @@ use crate::error::VerifyError;
 use crate::memory;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::properties::{checked_properties, RANGE_ERRORS};
+use crate::properties::{checked_properties, default_terminal, RANGE_ERRORS};
 use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 use crate::visited::{hash, shard_of, Chunk, ShardFull, StateId, Visited, SHARDS};
 
@@ -74,8 +74,13 @@ fn targets(system: &System) -> Vec<Target<'_>> {
                     ModelKind::Invariant(e) => (CheckKind::Invariant, Check::Invariant(e)),
                     ModelKind::Reachable(e) => (CheckKind::Reachable, Check::Reachable(e)),
                 },
-                // the default property: deadlock freedom without terminal states
-                Cow::Owned(_) => (CheckKind::DeadlockFree, Check::Deadlock { terminal: None }),
+                // the default property, which borrows nothing from the system's list
+                Cow::Owned(_) => (
+                    CheckKind::DeadlockFree,
+                    Check::Deadlock {
+                        terminal: default_terminal(system),
+                    },
+                ),
             };
             Target {
                 name: p.name.clone(),

@@ -22,6 +22,7 @@ mod progress;
 mod promela;
 mod properties;
 mod report;
+mod schedulability;
 mod symbolic;
 mod visited;
 
@@ -37,6 +38,7 @@ pub use report::{
     human_bytes, CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop,
     SymbolicStats, VerifyOutcome,
 };
+pub use schedulability::{schedulability, DemandChoice, DemandMethod, LayerTask, Schedulability};
 
 /// Verifies every property of `system` (deadlock freedom if it declares none, and range
 /// errors always) with `method`, within the limits of `options`.

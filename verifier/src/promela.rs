@@ -11,7 +11,7 @@
 //! variable's range with an `assert`, so a range error is an assertion violation in SPIN.
 //!
 //! A state with no enabled step blocks the loop: SPIN reports it as an invalid end state,
-//! which is MODEL.md's deadlock. `DeadlockFree(terminal: e)` adds a step that is enabled
+//! which is docs/model.md's deadlock. `DeadlockFree(terminal: e)` adds a step that is enabled
 //! exactly in the blocked states where `e` holds and changes nothing, so those are not
 //! reported. bip's finer deadlock definition with `Time` and `Environment` connectors has no
 //! counterpart here; for such models compare state counts, not deadlock verdicts.

@@ -35,7 +35,7 @@ pub enum CheckKind {
     DeadlockFree,
     Invariant,
     Reachable,
-    /// Range errors are always checked (MODEL.md section 3); reported as a property of their own.
+    /// Range errors are always checked (docs/model.md, "Range errors"); reported as a property of their own.
     RangeErrors,
 }
 

@@ -157,7 +157,10 @@ fn invariant_violation_range_error_and_witness_have_shortest_traces() {
             panic!()
         };
         assert_eq!(t.steps.len(), 2);
-        assert!(reason.contains("b.y = 6 is outside 0..=5"), "{reason}");
+        assert!(
+            reason.contains("b.y = 6 is outside its range Int(0, 5)"),
+            "{reason}"
+        );
         assert!(matches!(&t.verdict, TraceVerdict::RangeError(m) if m.contains("b.y")));
         // witness: five steps of a
         let PropertyVerdict::Holds { witness: Some(w) } = &r.property("x_five").unwrap().verdict

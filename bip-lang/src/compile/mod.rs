@@ -420,7 +420,7 @@ impl Compiler {
                     if v < *lo || v > *hi {
                         let mut e = ModelError::new(
                             format!(
-                                "initial value {v} of `{var}` is outside its range {lo}..={hi}"
+                                "initial value {v} of `{var}` is outside its range Int({lo}, {hi})"
                             ),
                             init.span,
                         );

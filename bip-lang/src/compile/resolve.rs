@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use crate::expr::{self, BinOp, ExprKind, QuantKind, UnOp};
 use crate::source::Span;
 use bip_model::eval::{self, Indexed, Quant, MAX_QUANT_DEPTH};
-use bip_model::{Atom, Component, Family};
+use bip_model::{family_indices, Atom, Component, Family};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Ty {
@@ -499,7 +499,10 @@ impl<'a> Resolver<'a> {
                 match index {
                     eval::Expr::Const(k) => {
                         if k < 0 || k >= i64::from(count) {
-                            return err(idx.span, format!("index {k} is outside {n}[0..{count}]"));
+                            return err(
+                                idx.span,
+                                format!("index {k} is outside `{n}`, {}", family_indices(count)),
+                            );
                         }
                         Ok(CompRef::Static(fam.first + k as u32))
                     }

@@ -1,4 +1,4 @@
-//! The expression language of MODEL.md section 2, as written: a syntax tree with positions
+//! The expression language of docs/model.md ("Expressions"), as written: a syntax tree with positions
 //! relative to the expression's text, a parser, and a printer that writes an expression back
 //! with the fewest parentheses (used by `bip expand`).
 //!

@@ -1066,6 +1066,8 @@ impl<'a, 'd> Builder<'a, 'd> {
             def: SystemDef {
                 name: def.name.clone(),
                 tick_ms: def.tick_ms.clone(),
+                // the core has no tasks to place
+                cpus: Vec::new(),
                 constants: def.constants.clone(),
                 atoms,
                 components,

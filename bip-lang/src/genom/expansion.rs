@@ -2,7 +2,7 @@
 //! expansion with its engine map.
 
 use super::build::Expansion;
-use super::{build, check, origin, rewrite};
+use super::{build, check, origin, rewrite, timing};
 use crate::compile::{compile_core, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::syntax::{PropertyDef, SystemDef, Text};
@@ -23,6 +23,7 @@ pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
     for e in const_errors {
         errors.push(e);
     }
+    let timing = timing::check(def, &layer, &consts, &mut errors);
     let mut rw = rewrite::Rewriter::new(&layer, &consts);
     let mut origins = Origins::default();
     let mut user = UserTexts::default();
@@ -78,7 +79,9 @@ pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
         return Err(errors.list);
     }
     let ages = std::mem::take(&mut rw.ages);
-    build::build(&layer, def, ages, user, origins)
+    let mut expansion = build::build(&layer, def, ages, user, origins)?;
+    expansion.recipe.timing = timing;
+    Ok(expansion)
 }
 
 impl Expansion {

@@ -8,6 +8,7 @@
 //! - `rewrite`: the rewriting of GenoM names in users' expressions into generated ones;
 //! - `origin`: where the expanded texts come from, to put errors back in the user's file;
 //! - `build`: the expansion itself;
+//! - `timing`: the time budgets (CPUs, priorities, deadlines, WCETs), checked;
 //! - `recipe`: the engine's map of the layer by names, as the expansion writes it; once
 //!   the expanded model is compiled it becomes a [`bip_model::GenomMap`].
 
@@ -19,6 +20,7 @@ mod origin;
 mod recipe;
 mod rewrite;
 pub mod syntax;
+mod timing;
 
 #[cfg(test)]
 mod tests;

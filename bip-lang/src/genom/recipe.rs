@@ -1,6 +1,7 @@
 //! The engine's map by names, as the expansion writes it (a recipe); once the expanded
 //! model is compiled, [`Recipe::resolve`] turns the names into the system's indices.
 
+use super::timing::Timing;
 use crate::syntax::{ServiceKind, Text};
 use bip_model::eval;
 use bip_model::genom::map::*;
@@ -11,6 +12,7 @@ pub(crate) struct Recipe {
     pub tick: String,
     pub modules: Vec<RecipeModule>,
     pub idle: Option<String>,
+    pub timing: Timing,
 }
 
 #[derive(Clone, Debug)]
@@ -229,6 +231,11 @@ impl Recipe {
                         ids,
                         ids_transitions,
                         holds,
+                        wcet_us: self
+                            .timing
+                            .wcets
+                            .get(&(m.name.clone(), s.name.clone(), c.state.clone()))
+                            .copied(),
                     });
                 }
                 services.push(ServiceMap {
@@ -249,9 +256,20 @@ impl Recipe {
                 tasks: m
                     .tasks
                     .iter()
-                    .map(|(n, p)| TaskMap {
-                        name: n.clone(),
-                        period: u32::try_from(*p).unwrap_or(u32::MAX),
+                    .map(|(n, p)| {
+                        let budget = self
+                            .timing
+                            .tasks
+                            .get(&(m.name.clone(), n.clone()))
+                            .copied()
+                            .unwrap_or_default();
+                        TaskMap {
+                            name: n.clone(),
+                            period: u32::try_from(*p).unwrap_or(u32::MAX),
+                            cpu: budget.cpu,
+                            priority: budget.priority,
+                            deadline_us: budget.deadline_us,
+                        }
                     })
                     .collect(),
                 ports,
@@ -268,6 +286,7 @@ impl Recipe {
             tick_ms: system.tick_ms,
             modules,
             idle,
+            cpus: self.timing.cpus.clone(),
         })
     }
 }

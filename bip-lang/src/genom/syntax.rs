@@ -1,4 +1,4 @@
-//! The GenoM layer of the file format (MODEL.md section 4): modules and constraints, as
+//! The GenoM layer of the file format (docs/model.md, "The GenoM layer"): modules and constraints, as
 //! written. `genom::check` validates them; `genom::build` expands them into BIP core.
 
 use crate::source::{ConstExpr, Text};
@@ -32,6 +32,17 @@ pub struct TaskDef {
     pub name: Text,
     /// In ticks; at least 1.
     pub period: ConstExpr,
+    /// Larger is more urgent; given on every task of a CPU or on none, which then takes
+    /// rate-monotonic priorities (docs/model.md, "Time budgets").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub priority: Option<ConstExpr>,
+    /// One of the model's `cpus`; by default the first.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu: Option<Text>,
+    /// How long after its release a period's work must be done (a duration); by default
+    /// the period.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deadline: Option<ConstExpr>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub doc: Option<Text>,
 }
@@ -80,6 +91,9 @@ pub struct CodelDef {
     /// Out ports of the module the codel writes on every normal completion.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub writes: Vec<Text>,
+    /// Worst-case execution time of one run: `"2ms"`, `"150us"`, or microseconds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wcet: Option<ConstExpr>,
 }
 
 /// A system-level constraint between services of (possibly different) modules. Services

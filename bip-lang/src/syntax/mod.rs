@@ -1,4 +1,4 @@
-//! The model file format: what a user writes in a `.ron` file (MODEL.md), as serde types.
+//! The model file format: what a user writes in a `.ron` file (docs/model.md), as serde types.
 //!
 //! These types hold the text as written (names and expressions are strings with their
 //! positions); `compile` resolves them into a [`bip_model::System`]. They also serialize back
@@ -35,6 +35,10 @@ pub struct SystemDef {
     /// Real-time length of one model tick in milliseconds (used by the engine's clock).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tick_ms: Option<ConstExpr>,
+    /// The CPUs the GenoM layer's tasks run on, for the scheduling analysis
+    /// (docs/model.md, "Time budgets"); none declared: one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cpus: Vec<Text>,
     #[serde(default, skip_serializing_if = "OrderedMap::is_empty")]
     pub constants: OrderedMap<Text, ConstExpr>,
     #[serde(default, skip_serializing_if = "OrderedMap::is_empty")]
@@ -45,7 +49,7 @@ pub struct SystemDef {
     pub connectors: Vec<ConnectorDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub priorities: Vec<PriorityDef>,
-    /// The GenoM layer (MODEL.md section 4), expanded into the core before compilation.
+    /// The GenoM layer (docs/model.md, "The GenoM layer"), expanded into the core before compilation.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub modules: Vec<ModuleDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -72,7 +76,7 @@ impl SystemDef {
     }
 }
 
-/// Writes printed RON the way MODEL.md does: the inner structs without their type names
+/// Writes printed RON the way docs/model.md does: the inner structs without their type names
 /// (`(from: …)`, not `TransitionDef(from: …)`), and lists of plain values on one line.
 fn tidy_ron(text: &str) -> String {
     const INNER: [&str; 5] = [

@@ -170,11 +170,21 @@ fn type_errors() {
 }
 
 #[test]
+fn constant_index_outside_its_family() {
+    let text = ok_model().replace(r#""fork[(i+1)%N].take""#, r#""fork[N].take""#);
+    assert_error(
+        &text,
+        "index 3 is outside `fork`, whose indices run from 0 to 2 (in instance i = 0)",
+        "N",
+    );
+}
+
+#[test]
 fn init_outside_its_range() {
     let text = ok_model().replace("init: 0)", "init: 9)");
     assert_error(
         &text,
-        "initial value 9 of `uses` is outside its range 0..=5",
+        "initial value 9 of `uses` is outside its range Int(0, 5)",
         "9",
     );
     let text = ok_model().replace(

@@ -1,7 +1,7 @@
 //! bip-lang's integration tests, in one binary: every kind of bad input with its message and
-//! position (`diagnostics`, `genom`), and the GenoM expansion on random layers
-//! (`genom_random`); reproducers of crashes and hangs (`robustness`)
-//! and mutated example models through the loader (`fuzz`).
+//! position (`diagnostics`, `genom`, `timing`), and the GenoM expansion on random layers
+//! (`genom_random`); reproducers of crashes and hangs (`robustness`) and mutated example
+//! models through the loader (`fuzz`).
 
 mod diagnostics;
 mod fuzz;
@@ -9,3 +9,4 @@ mod genom;
 mod genom_random;
 mod robustness;
 mod support;
+mod timing;

@@ -35,6 +35,9 @@ pub struct GenomMap {
     /// which `DeadlockFree` excuses when requests come from the environment; `None` if
     /// the model has no activity or its requests all come from components of the model.
     pub idle: Option<eval::Expr>,
+    /// The CPUs the tasks run on (docs/model.md, "Time budgets"); empty if the model
+    /// declares none, and then every task is on one CPU.
+    pub cpus: Vec<String>,
 }
 
 #[derive(Clone, Debug)]
@@ -67,6 +70,12 @@ pub struct TaskMap {
     pub name: String,
     /// In ticks.
     pub period: u32,
+    /// Index into [`GenomMap::cpus`] (0 if the model declares none).
+    pub cpu: u32,
+    /// Larger is more urgent; `None` on every task of its CPU: rate-monotonic.
+    pub priority: Option<i64>,
+    /// How long after its release a period's work must be done; `None`: the period.
+    pub deadline_us: Option<u64>,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -127,6 +136,8 @@ pub struct CodelMap {
     pub ids_transitions: Range<u32>,
     /// What must hold for the codel to run; the failed ones say why it is held.
     pub holds: Vec<Condition>,
+    /// Its worst-case execution time in microseconds, if declared.
+    pub wcet_us: Option<u64>,
 }
 
 /// An ids field a codel writes (docs/genom.md, "Codels that write ids").

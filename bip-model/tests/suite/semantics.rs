@@ -284,7 +284,8 @@ fn range_errors_are_values_with_their_place() {
         }
     );
     assert!(
-        err.to_string().contains("c.n = 3 is outside 0..=2"),
+        err.to_string()
+            .contains("c.n = 3 is outside its range Int(0, 2)"),
         "{err}"
     );
     let div = steps
@@ -324,6 +325,12 @@ fn guard_that_cannot_be_evaluated_is_a_range_error_of_the_state() {
         "{err:?}"
     );
     assert!(err.context.contains("guard of go"), "{}", err.context);
+    assert!(
+        err.to_string().starts_with(
+            "index 2 is outside `f`, whose indices run from 0 to 1, in the guard of go"
+        ),
+        "{err}"
+    );
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! The z3 encoding of a compiled [`System`]: states as frames of terms, and the step relation
-//! of MODEL.md's "Semantics (one step)" as formulas.
+//! of docs/model.md's "Semantics: one step" as formulas.
 //!
-//! This is the one necessary second description of `bip-model`'s step relation (DESIGN.md),
+//! This is the one necessary second description of `bip-model`'s step relation (ARCHITECTURE.md, "one semantics"),
 //! mirrored from `bip-model/src/step.rs` rule for rule, and cross-checked against it by a
 //! property test on random systems (`verifier/src/symbolic/encoding_tests.rs`):
 //!

@@ -1,0 +1,390 @@
+//! `bip sched FILE`: whether the GenoM layer's tasks meet their deadlines, from the
+//! codels' WCETs: each task's demand per period, its worst response by exact
+//! response-time analysis, per CPU; the schedule as a picture.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use bip_sched::{
+    hyperperiod, schedule_svg, show_micros as show, simulate, Assignment, ResponseTime,
+};
+use bip_verifier::{schedulability, DemandChoice, DemandMethod, Options, Schedulability};
+
+use crate::verify::{parse_seconds, parse_size, Format};
+use crate::{exit, load};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum AssignArg {
+    /// The tasks' own priorities (rate-monotonic on a CPU where none is given).
+    Given,
+    /// Propose priorities by period, shorter first.
+    Rm,
+    /// Propose priorities by deadline, shorter first.
+    Dm,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum DemandArg {
+    /// The most work a run of the model packs into one period (explores the states;
+    /// the bound if they exceed the limits).
+    Exact,
+    /// A bound from the codel automata alone (no exploration).
+    Bound,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The model file (RON).
+    pub file: PathBuf,
+    /// Which priorities to analyse.
+    #[arg(long, value_enum, default_value = "given")]
+    pub assign: AssignArg,
+    /// How each task's work per period is found.
+    #[arg(long, value_enum, default_value = "exact")]
+    pub demand: DemandArg,
+    /// Output format on stdout.
+    #[arg(long, value_enum, default_value = "text")]
+    pub format: Format,
+    /// Also draw the schedule from the critical instant over a hyperperiod as SVG.
+    #[arg(long, value_name = "FILE")]
+    pub svg: Option<PathBuf>,
+    /// Exact demand: use the bound beyond N states.
+    #[arg(long, value_name = "N")]
+    pub max_states: Option<u64>,
+    /// Exact demand: use the bound before using more memory than SIZE.
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    pub max_memory: Option<u64>,
+    /// Exact demand: use the bound after SECS seconds of exploration.
+    #[arg(long, value_name = "SECS", value_parser = parse_seconds)]
+    pub timeout: Option<Duration>,
+}
+
+/// Jobs the picture may draw.
+const MAX_DRAWN_JOBS: u64 = 20_000;
+
+pub fn run(args: &Args) -> u8 {
+    let Some(system) = load::system(&args.file) else {
+        return exit::ERROR;
+    };
+    let options = Options {
+        max_states: args.max_states,
+        max_memory: args.max_memory,
+        timeout: args.timeout,
+        ..Options::default()
+    };
+    let assignment = match args.assign {
+        AssignArg::Given => Assignment::Given,
+        AssignArg::Rm => Assignment::RateMonotonic,
+        AssignArg::Dm => Assignment::DeadlineMonotonic,
+    };
+    let choice = match args.demand {
+        DemandArg::Exact => DemandChoice::Exact,
+        DemandArg::Bound => DemandChoice::Bound,
+    };
+    let sched = match schedulability(&system, &options, assignment, choice) {
+        Ok(Some(s)) => s,
+        Ok(None) => {
+            eprintln!(
+                "error: {}: no time budgets to analyse: give codels a `wcet` and the model a `tick_ms` (docs/model.md, \"Time budgets\")",
+                args.file.display()
+            );
+            return exit::ERROR;
+        }
+        Err(e) => {
+            eprintln!("error: {}: {e}", args.file.display());
+            return exit::ERROR;
+        }
+    };
+    let title = format!("{}: system `{}`", args.file.display(), system.name);
+    match args.format {
+        Format::Text => print!("{}", text(&title, &sched, assignment)),
+        Format::Json => println!("{}", json(&args.file, &system.name, &sched, assignment)),
+    }
+    if let Some(path) = &args.svg {
+        if let Err(why) = draw(path, &title, &sched, assignment) {
+            eprintln!(
+                "error: cannot draw the schedule into {}: {why}",
+                path.display()
+            );
+            return exit::ERROR;
+        }
+    }
+    if sched.schedulable() {
+        exit::OK
+    } else {
+        exit::FAILED
+    }
+}
+
+fn demand_line(sched: &Schedulability) -> String {
+    match &sched.method {
+        DemandMethod::Exact {
+            states,
+            transitions,
+        } => format!(
+            "exact: the most a run packs into a period ({states} states, {transitions} transitions explored)"
+        ),
+        DemandMethod::Bound { why } => {
+            format!("bounded from the codel automata ({why})")
+        }
+    }
+}
+
+fn response_text(r: ResponseTime) -> String {
+    match r {
+        ResponseTime::Exact(us) => show(us),
+        ResponseTime::Unbounded => "unbounded".into(),
+        ResponseTime::AtLeast(us) => format!("≥ {}", show(us)),
+    }
+}
+
+fn text(title: &str, sched: &Schedulability, assignment: Assignment) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "{title}");
+    let _ = writeln!(out, "  demand per period: {}", demand_line(sched));
+    let set = &sched.set;
+    let rows: Vec<Vec<String>> = (0..set.tasks.len())
+        .map(|i| {
+            let t = &set.tasks[i];
+            let a = sched.analysis.as_ref().map(|a| a.tasks[i]);
+            vec![
+                t.name.clone(),
+                show(t.period),
+                sched.demands[i].map_or("unbounded".into(), show),
+                t.priority.map_or("-".into(), |p| p.to_string()),
+                a.map_or("-".into(), |a| (a.rank + 1).to_string()),
+                a.map_or("unbounded".into(), |a| response_text(a.response)),
+                show(t.deadline),
+                a.and_then(|a| a.slack(t.deadline))
+                    .map_or("MISSES".into(), show),
+            ]
+        })
+        .collect();
+    let header = [
+        "task", "period", "demand", "priority", "rank", "response", "deadline", "slack",
+    ];
+    let widths: Vec<usize> = (0..header.len())
+        .map(|c| {
+            rows.iter()
+                .map(|r| r[c].chars().count())
+                .chain([header[c].len()])
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let line = |cells: &[String]| {
+        let mut l = String::from("    ");
+        for (c, cell) in cells.iter().enumerate() {
+            let pad = widths[c].saturating_sub(cell.chars().count());
+            if c == 0 {
+                l.push_str(cell);
+                l.push_str(&" ".repeat(pad + 2));
+            } else {
+                l.push_str(&" ".repeat(pad));
+                l.push_str(cell);
+                l.push_str("  ");
+            }
+        }
+        l.trim_end().to_string()
+    };
+    for (cpu, name) in sched.cpus.iter().enumerate() {
+        let on_cpu: Vec<usize> = (0..set.tasks.len())
+            .filter(|&i| set.tasks[i].cpu == cpu)
+            .collect();
+        match &sched.analysis {
+            Some(a) => {
+                let c = &a.cpus[cpu];
+                let _ = writeln!(
+                    out,
+                    "  CPU {name}: utilisation {:.3} (Liu-Layland bound for {} {}: {:.3})",
+                    c.utilisation,
+                    on_cpu.len(),
+                    if on_cpu.len() == 1 { "task" } else { "tasks" },
+                    c.liu_layland
+                );
+            }
+            None => {
+                let _ = writeln!(out, "  CPU {name}:");
+            }
+        }
+        let _ = writeln!(out, "{}", line(&header.map(String::from)));
+        let mut order = on_cpu.clone();
+        if let Some(a) = &sched.analysis {
+            order.sort_by_key(|&i| a.tasks[i].rank);
+        }
+        for i in order {
+            let _ = writeln!(out, "{}", line(&rows[i]));
+        }
+    }
+    for t in sched.tasks.iter().filter(|t| !t.unbudgeted.is_empty()) {
+        let _ = writeln!(
+            out,
+            "  note: {} counts these codels as taking no time (no wcet): {}",
+            t.name,
+            t.unbudgeted.join(", ")
+        );
+    }
+    if assignment != Assignment::Given {
+        let kind = if assignment == Assignment::RateMonotonic {
+            "rate-monotonic"
+        } else {
+            "deadline-monotonic"
+        };
+        let _ = writeln!(
+            out,
+            "  proposed priorities ({kind}): {}",
+            proposed(sched)
+                .iter()
+                .map(|(t, p)| format!("{t}: {p}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    let _ = writeln!(out, "result: {}", verdict(sched));
+    out
+}
+
+/// Priorities as numbers for the analysed order: per CPU, the most urgent gets the
+/// number of its CPU's tasks, the least urgent 1.
+fn proposed(sched: &Schedulability) -> Vec<(String, usize)> {
+    let Some(a) = &sched.analysis else {
+        return Vec::new();
+    };
+    a.cpus
+        .iter()
+        .flat_map(|c| {
+            let n = c.order.len();
+            c.order
+                .iter()
+                .enumerate()
+                .map(move |(rank, &i)| (sched.set.tasks[i].name.clone(), n - rank))
+        })
+        .collect()
+}
+
+fn verdict(sched: &Schedulability) -> String {
+    let set = &sched.set;
+    let Some(a) = &sched.analysis else {
+        let looping: Vec<&str> = (0..set.tasks.len())
+            .filter(|&i| sched.demands[i].is_none())
+            .map(|i| set.tasks[i].name.as_str())
+            .collect();
+        return format!(
+            "not schedulable: {} can run without end in one period",
+            looping.join(", ")
+        );
+    };
+    let misses: Vec<String> = a
+        .misses(set)
+        .map(|i| {
+            let t = &set.tasks[i];
+            match a.tasks[i].response {
+                ResponseTime::Exact(r) => format!(
+                    "{} misses its deadline by {} (responds in {}, deadline {})",
+                    t.name,
+                    show(r - t.deadline),
+                    show(r),
+                    show(t.deadline)
+                ),
+                ResponseTime::Unbounded => format!(
+                    "{} never catches up: it and the tasks above it need more than the CPU",
+                    t.name
+                ),
+                ResponseTime::AtLeast(r) => format!(
+                    "{} responds in at least {}, past its deadline {}",
+                    t.name,
+                    show(r),
+                    show(t.deadline)
+                ),
+            }
+        })
+        .collect();
+    if misses.is_empty() {
+        "schedulable: every task meets its deadline".into()
+    } else {
+        format!("not schedulable: {}", misses.join("; "))
+    }
+}
+
+fn json(
+    file: &std::path::Path,
+    system: &str,
+    sched: &Schedulability,
+    assignment: Assignment,
+) -> String {
+    use serde_json::{json, Value};
+    let set = &sched.set;
+    let demand = match &sched.method {
+        DemandMethod::Exact {
+            states,
+            transitions,
+        } => json!({"method": "exact", "states": states, "transitions": transitions}),
+        DemandMethod::Bound { why } => json!({"method": "bound", "why": why}),
+    };
+    let response = |r: ResponseTime| -> Value {
+        match r {
+            ResponseTime::Exact(us) => json!({"us": us}),
+            ResponseTime::Unbounded => json!({"unbounded": true}),
+            ResponseTime::AtLeast(us) => json!({"at_least_us": us}),
+        }
+    };
+    let cpus: Vec<Value> = sched
+        .cpus
+        .iter()
+        .enumerate()
+        .map(|(cpu, name)| {
+            let tasks: Vec<Value> = (0..set.tasks.len())
+                .filter(|&i| set.tasks[i].cpu == cpu)
+                .map(|i| {
+                    let t = &set.tasks[i];
+                    let a = sched.analysis.as_ref().map(|a| a.tasks[i]);
+                    json!({
+                        "name": t.name,
+                        "period_us": t.period,
+                        "demand_us": sched.demands[i],
+                        "priority": t.priority,
+                        "rank": a.map(|a| a.rank),
+                        "response": a.map(|a| response(a.response)),
+                        "deadline_us": t.deadline,
+                        "slack_us": a.and_then(|a| a.slack(t.deadline)),
+                        "unbudgeted_codels": sched.tasks[i].unbudgeted,
+                    })
+                })
+                .collect();
+            let load = sched.analysis.as_ref().map(|a| &a.cpus[cpu]);
+            json!({
+                "name": name,
+                "utilisation": load.map(|c| c.utilisation),
+                "liu_layland_bound": load.map(|c| c.liu_layland),
+                "tasks": tasks,
+            })
+        })
+        .collect();
+    let doc = json!({
+        "file": file.display().to_string(),
+        "system": system,
+        "assignment": format!("{assignment:?}"),
+        "demand": demand,
+        "cpus": cpus,
+        "schedulable": sched.schedulable(),
+        "result": verdict(sched),
+    });
+    serde_json::to_string_pretty(&doc).unwrap_or_default()
+}
+
+fn draw(
+    path: &std::path::Path,
+    title: &str,
+    sched: &Schedulability,
+    assignment: Assignment,
+) -> Result<(), String> {
+    let set = &sched.set;
+    // a hyperperiod, or as many periods of the slowest task as the picture can hold
+    let slowest = set.tasks.iter().map(|t| t.period).max().unwrap_or(1);
+    let horizon = hyperperiod(set)
+        .filter(|&h| set.tasks.iter().map(|t| h / t.period).sum::<u64>() <= MAX_DRAWN_JOBS)
+        .unwrap_or(slowest);
+    let schedule = simulate(set, assignment, horizon, MAX_DRAWN_JOBS).map_err(|e| e.to_string())?;
+    std::fs::write(path, schedule_svg(set, assignment, &schedule, title)).map_err(|e| e.to_string())
+}

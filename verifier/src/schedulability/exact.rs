@@ -1,0 +1,252 @@
+//! A task's exact demand per period: the most WCET of its codels that any run of the
+//! model can pack between two ticks.
+//!
+//! The reachable states are explored with their steps (the graph is kept: the question is
+//! about paths, not states). A task's period is a path of steps other than the tick,
+//! starting where a tick (or the start) left the model; its cost is the sum of the WCETs
+//! of the task's codel runs on it. The longest such path is found on the graph of
+//! non-tick steps condensed into strongly connected components: a component with a costly
+//! step inside it is a loop the task can run forever in one period (no bound), the others
+//! form a DAG, costed from its sinks up in the order Tarjan's algorithm completes them.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use bip_model::{Label, State, Steps, System};
+
+use super::tasks::TaskTable;
+
+/// What the exploration may use.
+#[derive(Clone, Copy, Debug)]
+pub struct Limits {
+    pub max_states: u64,
+    pub max_bytes: u64,
+    pub deadline: Option<Instant>,
+}
+
+/// The exact demands, and the size of what was explored.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Exact {
+    /// Per task of the table: its demand in microseconds, `None` if unbounded.
+    pub demands: Vec<Option<u64>>,
+    pub states: u64,
+    pub transitions: u64,
+}
+
+/// Label of an internal transition in the graph (it belongs to no task, and is no tick).
+const INTERNAL: u32 = u32::MAX;
+
+/// The explored graph, in compressed rows.
+struct Graph {
+    /// Edges of state `s`: `offsets[s]..offsets[s + 1]`.
+    offsets: Vec<u32>,
+    targets: Vec<u32>,
+    labels: Vec<u32>,
+    /// States a period starts in: the initial state and every tick's target.
+    starts: Vec<u32>,
+}
+
+/// Explores `system` and computes every task's demand; `Err` says why it could not
+/// (a limit, or a range error in the model).
+pub fn exact_demands(system: &System, table: &TaskTable, limits: Limits) -> Result<Exact, String> {
+    let graph = explore(system, table.tick, limits)?;
+    let states = graph.offsets.len() as u64 - 1;
+    let transitions = graph.targets.len() as u64;
+    let (scc_of, members) = condense(&graph, table.tick);
+    let demands = (0..table.tasks.len())
+        .map(|t| longest_period(&graph, table, t, &scc_of, &members))
+        .collect();
+    Ok(Exact {
+        demands,
+        states,
+        transitions,
+    })
+}
+
+fn explore(system: &System, tick: u32, limits: Limits) -> Result<Graph, String> {
+    let layout = &system.layout;
+    let mut ids: HashMap<Box<[u8]>, u32> = HashMap::new();
+    let mut queue: Vec<Box<[u8]>> = Vec::new();
+    let initial: Box<[u8]> = layout.pack(&system.initial_state()).into();
+    ids.insert(initial.clone(), 0);
+    queue.push(initial);
+    let mut graph = Graph {
+        offsets: vec![0],
+        targets: Vec::new(),
+        labels: Vec::new(),
+        starts: vec![0],
+    };
+    let mut steps = Steps::new();
+    let mut next = State::from_slots(vec![0; system.slot_count()]);
+    let mut bytes: u64 = 0;
+    let mut at = 0;
+    while at < queue.len() {
+        let state = layout.unpack(&queue[at]);
+        system
+            .enabled_steps(&state, &mut steps)
+            .map_err(|e| format!("a range error ({e}); `bip verify` shows it"))?;
+        for step in steps.iter() {
+            system
+                .fire(&state, step, &mut next)
+                .map_err(|e| format!("a range error ({e}); `bip verify` shows it"))?;
+            let packed: Box<[u8]> = layout.pack(&next).into();
+            let id = match ids.get(&packed) {
+                Some(&id) => id,
+                None => {
+                    let id = u32::try_from(queue.len()).map_err(|_| {
+                        "more states than the demand's graph can number".to_string()
+                    })?;
+                    bytes += 2 * packed.len() as u64 + 64;
+                    ids.insert(packed.clone(), id);
+                    queue.push(packed);
+                    id
+                }
+            };
+            let label = match step.label {
+                Label::Interaction(i) => i,
+                Label::Internal { .. } => INTERNAL,
+            };
+            if label == tick {
+                graph.starts.push(id);
+            }
+            graph.targets.push(id);
+            graph.labels.push(label);
+        }
+        graph.offsets.push(graph.targets.len() as u32);
+        at += 1;
+        if at % 4096 == 0 {
+            let used = bytes + 8 * graph.targets.len() as u64;
+            if queue.len() as u64 > limits.max_states {
+                return Err(format!("more than {} states", limits.max_states));
+            }
+            if used > limits.max_bytes {
+                return Err(format!("more than {} bytes of graph", limits.max_bytes));
+            }
+            if limits.deadline.is_some_and(|d| Instant::now() >= d) {
+                return Err("the time limit".into());
+            }
+        }
+    }
+    if graph.targets.len() > u32::MAX as usize {
+        return Err("more transitions than the demand's graph can number".into());
+    }
+    graph.starts.sort_unstable();
+    graph.starts.dedup();
+    Ok(graph)
+}
+
+/// Strongly connected components of the non-tick steps (iterative Tarjan): each state's
+/// component, and the states of each component. Components are numbered in the order
+/// they were completed, so every component comes after those it reaches.
+fn condense(graph: &Graph, tick: u32) -> (Vec<u32>, Vec<Vec<u32>>) {
+    let n = graph.offsets.len() - 1;
+    const UNSEEN: u32 = u32::MAX;
+    let mut index = vec![UNSEEN; n];
+    let mut low = vec![0u32; n];
+    let mut on_stack = vec![false; n];
+    let mut stack: Vec<u32> = Vec::new();
+    let mut scc_of = vec![0u32; n];
+    let mut members: Vec<Vec<u32>> = Vec::new();
+    let mut counter = 0u32;
+    // (state, next edge to look at)
+    let mut calls: Vec<(u32, u32)> = Vec::new();
+    for root in 0..n as u32 {
+        if index[root as usize] != UNSEEN {
+            continue;
+        }
+        calls.push((root, graph.offsets[root as usize]));
+        index[root as usize] = counter;
+        low[root as usize] = counter;
+        counter += 1;
+        stack.push(root);
+        on_stack[root as usize] = true;
+        while let Some(&(v, e)) = calls.last() {
+            if e < graph.offsets[v as usize + 1] {
+                let edge = e as usize;
+                if let Some(top) = calls.last_mut() {
+                    top.1 += 1;
+                }
+                if graph.labels[edge] == tick {
+                    continue;
+                }
+                let w = graph.targets[edge];
+                if index[w as usize] == UNSEEN {
+                    index[w as usize] = counter;
+                    low[w as usize] = counter;
+                    counter += 1;
+                    stack.push(w);
+                    on_stack[w as usize] = true;
+                    calls.push((w, graph.offsets[w as usize]));
+                } else if on_stack[w as usize] {
+                    low[v as usize] = low[v as usize].min(index[w as usize]);
+                }
+                continue;
+            }
+            calls.pop();
+            if let Some(&(parent, _)) = calls.last() {
+                low[parent as usize] = low[parent as usize].min(low[v as usize]);
+            }
+            if low[v as usize] == index[v as usize] {
+                let id = members.len() as u32;
+                let mut component = Vec::new();
+                while let Some(w) = stack.pop() {
+                    on_stack[w as usize] = false;
+                    scc_of[w as usize] = id;
+                    component.push(w);
+                    if w == v {
+                        break;
+                    }
+                }
+                members.push(component);
+            }
+        }
+    }
+    (scc_of, members)
+}
+
+/// Task `task`'s costliest period, over every period start; `None` if unbounded.
+fn longest_period(
+    graph: &Graph,
+    table: &TaskTable,
+    task: usize,
+    scc_of: &[u32],
+    members: &[Vec<u32>],
+) -> Option<u64> {
+    let cost = |edge: usize| -> u64 {
+        match table.cost.get(graph.labels[edge] as usize) {
+            Some(Some((t, w))) if *t == task => *w,
+            _ => 0,
+        }
+    };
+    // best[c]: the costliest path from any state of component c; None: unbounded
+    let mut best: Vec<Option<u64>> = vec![Some(0); members.len()];
+    for c in 0..members.len() as u32 {
+        let mut here = Some(0u64);
+        'states: for &v in &members[c as usize] {
+            let v = v as usize;
+            for edge in graph.offsets[v] as usize..graph.offsets[v + 1] as usize {
+                if graph.labels[edge] == table.tick {
+                    continue;
+                }
+                let w = cost(edge);
+                let target = scc_of[graph.targets[edge] as usize];
+                let through = if target == c {
+                    (w == 0).then_some(0)
+                } else {
+                    best[target as usize].map(|b| b.saturating_add(w))
+                };
+                match (here, through) {
+                    (Some(h), Some(t)) => here = Some(h.max(t)),
+                    _ => {
+                        here = None;
+                        break 'states;
+                    }
+                }
+            }
+        }
+        best[c as usize] = here;
+    }
+    graph.starts.iter().try_fold(0u64, |m, &s| {
+        Some(m.max(best[scc_of[s as usize] as usize]?))
+    })
+}

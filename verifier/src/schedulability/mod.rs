@@ -1,0 +1,156 @@
+//! Whether the tasks of a GenoM layer meet their deadlines (docs/sched.md).
+//!
+//! The verifier's tick semantics assumes that every task's work of one period ends
+//! within its period. With WCETs declared this checks it: each task's demand per
+//! period, exact from the model's states (`exact`) or, when they are too many, bounded
+//! from its codel automata (`bound`), then `bip-sched`'s response-time analysis per
+//! CPU. `tasks` says which interaction is whose codel run.
+
+mod bound;
+mod exact;
+mod tasks;
+
+use std::time::Instant;
+
+use bip_model::System;
+use bip_sched::{analyse, Analysis, Assignment, SchedError, Task, TaskSet};
+
+pub use tasks::LayerTask;
+
+use crate::memory;
+use crate::options::Options;
+
+/// How a demand was found.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum DemandMethod {
+    /// From every reachable state: the most a run can ask in one period.
+    Exact { states: u64, transitions: u64 },
+    /// From the codel automata: never below what a run can ask; `why` the states were not
+    /// explored.
+    Bound { why: String },
+}
+
+/// Which demand to compute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum DemandChoice {
+    /// Exact within the options' limits, else the bound.
+    #[default]
+    Exact,
+    /// The bound only (no exploration).
+    Bound,
+}
+
+/// The schedulability of a layer: its tasks, their demands, and the analysis.
+#[derive(Clone, Debug)]
+pub struct Schedulability {
+    pub tasks: Vec<LayerTask>,
+    /// Per task, microseconds per period; `None` if its activities can loop forever in one
+    /// period (a chain of codels that never pauses).
+    pub demands: Vec<Option<u64>>,
+    pub method: DemandMethod,
+    /// The CPUs' names (one, `cpu`, if the model declares none).
+    pub cpus: Vec<String>,
+    /// The task set analysed (tasks in the order of [`Schedulability::tasks`]).
+    pub set: TaskSet,
+    /// `None` if some demand is unbounded: the layer is then not schedulable.
+    pub analysis: Option<Analysis>,
+}
+
+impl Schedulability {
+    /// Every task meets its deadline.
+    pub fn schedulable(&self) -> bool {
+        self.analysis
+            .as_ref()
+            .is_some_and(|a| a.schedulable(&self.set))
+    }
+}
+
+/// The schedulability of `system`'s GenoM layer; `Ok(None)` if it declares no WCET (or
+/// has no `tick_ms` to measure periods with). An error is a task set the analysis cannot
+/// take, which the model's checks should have refused.
+pub fn schedulability(
+    system: &System,
+    options: &Options,
+    assignment: Assignment,
+    choice: DemandChoice,
+) -> Result<Option<Schedulability>, SchedError> {
+    let (Some(table), Some(map)) = (tasks::TaskTable::new(system), system.genom.as_ref()) else {
+        return Ok(None);
+    };
+    let (demands, method) = match choice {
+        DemandChoice::Bound => (
+            bounds(map, &table),
+            DemandMethod::Bound {
+                why: "asked for".into(),
+            },
+        ),
+        DemandChoice::Exact => {
+            let limits = exact::Limits {
+                max_states: options.max_states.unwrap_or(20_000_000),
+                max_bytes: options
+                    .max_memory
+                    .or_else(memory::default_limit)
+                    .unwrap_or(4 << 30),
+                deadline: options.timeout.map(|t| Instant::now() + t),
+            };
+            match exact::exact_demands(system, &table, limits) {
+                Ok(found) => (
+                    found.demands,
+                    DemandMethod::Exact {
+                        states: found.states,
+                        transitions: found.transitions,
+                    },
+                ),
+                Err(why) => (
+                    bounds(map, &table),
+                    DemandMethod::Bound {
+                        why: format!("the states were not all explored: {why}"),
+                    },
+                ),
+            }
+        }
+    };
+    let cpus = if map.cpus.is_empty() {
+        vec!["cpu".to_string()]
+    } else {
+        map.cpus.clone()
+    };
+    let set = TaskSet {
+        cpus: cpus.clone(),
+        tasks: table
+            .tasks
+            .iter()
+            .zip(&demands)
+            .map(|(t, d)| Task {
+                name: t.name.clone(),
+                cpu: t.cpu as usize,
+                period: t.period_us,
+                demand: d.unwrap_or(0),
+                deadline: t.deadline_us.unwrap_or(t.period_us),
+                priority: t.priority,
+            })
+            .collect(),
+    };
+    let analysis = if demands.iter().all(Option::is_some) {
+        Some(analyse(&set, assignment)?)
+    } else {
+        set.validate()?;
+        None
+    };
+    Ok(Some(Schedulability {
+        tasks: table.tasks,
+        demands,
+        method,
+        cpus,
+        set,
+        analysis,
+    }))
+}
+
+fn bounds(map: &bip_model::GenomMap, table: &tasks::TaskTable) -> Vec<Option<u64>> {
+    table
+        .tasks
+        .iter()
+        .map(|t| bound::demand_bound(map, t))
+        .collect()
+}

@@ -1,0 +1,242 @@
+//! A task's demand per period against an oracle that walks every path between two ticks
+//! (depth first, from every state a tick leads to): the exact demand is the oracle's
+//! maximum, the bound from the codel automata is never below it, and the analysis on
+//! top gives the verdict a hand computation gives.
+
+use std::collections::{HashMap, HashSet};
+
+use bip_lang::load_str;
+use bip_model::{Label, State, Steps, System};
+use bip_sched::{Assignment, ResponseTime};
+use bip_verifier::{schedulability, DemandChoice, DemandMethod, Options};
+
+/// Two activities: `A` runs `main` and `check` in one period (2.5 ms) and stays active,
+/// or `main` (2 ms) and ends; `B` runs its `start` (0.3 ms). `Exclusive` keeps them from
+/// being active together when `exclusive` is true.
+fn layer(exclusive: bool, task_b: &str) -> String {
+    let constraint = if exclusive {
+        r#"Exclusive(services: ["m.A", "m.B"])"#
+    } else {
+        ""
+    };
+    format!(
+        r#"System(name: "budget", tick_ms: 10,
+    modules: [(name: "m", tasks: [(name: "t", period: 1), (name: "u", period: 2)],
+        services: [
+            (name: "A", kind: Activity, task: "t", codels: [
+                (state: "start", yields: ["pause::main"], wcet: "1ms"),
+                (state: "main", yields: ["pause::main", "check", "ether"], wcet: "2ms"),
+                (state: "check", yields: ["pause::main"], wcet: 500)]),
+            (name: "B", kind: Activity, task: "{task_b}", codels: [
+                (state: "start", yields: ["ether"], wcet: 300)]),
+        ])],
+    constraints: [{constraint}],
+)"#
+    )
+}
+
+/// The costliest path between two ticks for each task, by walking every path from every
+/// state a tick (or the start) leads to; `None` for a task whose paths can loop with a
+/// cost (no bound). Independent of the verifier: the step relation, a stack, a set.
+fn oracle(system: &System) -> Vec<Option<u64>> {
+    let map = system.genom.as_ref().unwrap();
+    let mut owner: HashMap<u32, (usize, u64)> = HashMap::new();
+    let mut tasks = 0;
+    for module in &map.modules {
+        for (ti, _) in module.tasks.iter().enumerate() {
+            for s in module.services.iter().filter(|s| s.task == Some(ti)) {
+                for c in &s.codels {
+                    let w = c.wcet_us.unwrap_or(0);
+                    owner.insert(c.run, (tasks, w));
+                    owner.insert(c.fail, (tasks, w));
+                }
+            }
+            tasks += 1;
+        }
+    }
+    let successors = |s: &State| -> Vec<(u32, State)> {
+        let mut steps = Steps::new();
+        system.enabled_steps(s, &mut steps).unwrap();
+        steps
+            .iter()
+            .map(|step| {
+                let mut next = s.clone();
+                system.fire(s, step, &mut next).unwrap();
+                let label = match step.label {
+                    Label::Interaction(i) => i,
+                    Label::Internal { .. } => u32::MAX,
+                };
+                (label, next)
+            })
+            .collect()
+    };
+    // every reachable state, and the period starts
+    let mut seen = HashSet::new();
+    let mut starts = HashSet::new();
+    let mut todo = vec![system.initial_state()];
+    starts.insert(system.initial_state());
+    seen.insert(system.initial_state());
+    while let Some(s) = todo.pop() {
+        for (label, next) in successors(&s) {
+            if label == map.tick {
+                starts.insert(next.clone());
+            }
+            if seen.insert(next.clone()) {
+                todo.push(next);
+            }
+        }
+    }
+    let mut best: Vec<Option<u64>> = vec![Some(0); tasks];
+    for (task, best) in best.iter_mut().enumerate() {
+        for start in &starts {
+            // depth-first over simple paths; a path that comes back to a state with a
+            // higher cost has a costly loop
+            let mut path: Vec<(State, u64)> = Vec::new();
+            let mut stack = vec![(start.clone(), 0u64, 0usize)];
+            while let Some((s, cost, depth)) = stack.pop() {
+                path.truncate(depth);
+                if let Some(&(_, before)) = path.iter().find(|(p, _)| *p == s) {
+                    if cost > before {
+                        *best = None;
+                    }
+                    continue;
+                }
+                if let Some(b) = best {
+                    *b = (*b).max(cost);
+                }
+                path.push((s.clone(), cost));
+                for (label, next) in successors(&s) {
+                    if label == map.tick {
+                        continue;
+                    }
+                    let w = match owner.get(&label) {
+                        Some(&(t, w)) if t == task => w,
+                        _ => 0,
+                    };
+                    stack.push((next, cost + w, depth + 1));
+                }
+            }
+        }
+    }
+    best
+}
+
+fn demands(system: &System, choice: DemandChoice) -> (Vec<Option<u64>>, DemandMethod) {
+    let s = schedulability(system, &Options::default(), Assignment::Given, choice)
+        .unwrap()
+        .expect("the model has WCETs");
+    (s.demands, s.method)
+}
+
+/// Checks a model's exact demands against the oracle and the bound against them; returns
+/// the first task's exact demand and bound.
+fn first_task(text: &str) -> (u64, u64) {
+    let system = load_str("budget.ron", text).unwrap();
+    let (exact, method) = demands(&system, DemandChoice::Exact);
+    assert!(matches!(method, DemandMethod::Exact { .. }), "{method:?}");
+    assert_eq!(exact, oracle(&system));
+    let (bound, _) = demands(&system, DemandChoice::Bound);
+    for (b, e) in bound.iter().zip(&exact) {
+        assert!(b.unwrap() >= e.unwrap(), "{bound:?} below {exact:?}");
+    }
+    (exact[0].unwrap(), bound[0].unwrap())
+}
+
+#[test]
+fn the_exact_demand_is_the_costliest_period_and_the_bound_is_above_it() {
+    // A's costliest chain (main, check: 2.5 ms) and B's start (0.3 ms) in one period; the
+    // bound is the same sum
+    assert_eq!(first_task(&layer(false, "t")), (2800, 2800));
+    // with Exclusive, B's start waits for A to be at ether: A's chain ends there by
+    // `check` failing (an error path costs its codel too), then B starts
+    assert_eq!(first_task(&layer(true, "t")), (2800, 2800));
+    // B on its own task
+    assert_eq!(first_task(&layer(false, "u")), (2500, 2500));
+    // Exclusive where it matters: B's `run` (0.4 ms) and A's `main` (2 ms) are never in
+    // one period, which the bound from the automata cannot know
+    let apart = r#"System(name: "apart", tick_ms: 10,
+    modules: [(name: "m", tasks: [(name: "t", period: 1)],
+        services: [
+            (name: "A", kind: Activity, task: "t", codels: [
+                (state: "start", yields: ["pause::main"], wcet: "1ms"),
+                (state: "main", yields: ["pause::main", "ether"], wcet: "2ms")]),
+            (name: "B", kind: Activity, task: "t", codels: [
+                (state: "start", yields: ["pause::run"], wcet: 300),
+                (state: "run", yields: ["pause::run", "ether"], wcet: 400)]),
+        ])],
+    constraints: [Exclusive(services: ["m.A", "m.B"])],
+)"#;
+    assert_eq!(first_task(apart), (2300, 2400));
+}
+
+#[test]
+fn the_robots_demands_match_the_oracle() {
+    // mini.ron with a WCET on every codel
+    let text = include_str!("../../robots/tests/mini.ron");
+    let mut k = 0;
+    let timed: String = text
+        .split("(state: ")
+        .enumerate()
+        .map(|(i, part)| {
+            if i == 0 {
+                part.to_string()
+            } else {
+                k += 1;
+                format!("(wcet: {}, state: {part}", 100 * k)
+            }
+        })
+        .collect();
+    let system = load_str("mini.ron", &timed).unwrap();
+    let (exact, _) = demands(&system, DemandChoice::Exact);
+    assert_eq!(exact, oracle(&system));
+    assert!(exact.iter().all(|d| d.is_some_and(|d| d > 0)), "{exact:?}");
+    let (bound, _) = demands(&system, DemandChoice::Bound);
+    for (b, e) in bound.iter().zip(&exact) {
+        assert!(b.unwrap() >= e.unwrap(), "{bound:?} below {exact:?}");
+    }
+}
+
+/// `t` (10 ms) asks 2.8 ms; with `main` at 9 ms, `t` asks 9.5 ms and `u` (20 ms, below
+/// it) responds after 9.8 ms; with `B` at 1 ms `u` responds at 20 ms, its deadline, and
+/// with a deadline of 15 ms it misses.
+#[test]
+fn the_analysis_on_the_demands() {
+    let analysed = |text: &str| {
+        let system = load_str("budget.ron", text).unwrap();
+        schedulability(
+            &system,
+            &Options::default(),
+            Assignment::Given,
+            DemandChoice::Exact,
+        )
+        .unwrap()
+        .unwrap()
+    };
+    let s = analysed(&layer(false, "t"));
+    assert!(s.schedulable());
+    assert_eq!(
+        s.analysis.as_ref().unwrap().tasks[0].response,
+        ResponseTime::Exact(2800)
+    );
+    let heavy = layer(false, "u").replace(r#"wcet: "2ms""#, r#"wcet: "9ms""#);
+    let s = analysed(&heavy);
+    let a = s.analysis.as_ref().unwrap();
+    assert_eq!(a.tasks[0].response, ResponseTime::Exact(9500));
+    assert_eq!(a.tasks[1].response, ResponseTime::Exact(9800));
+    assert!(s.schedulable());
+    let heavier = heavy.replace("wcet: 300", r#"wcet: "1ms""#);
+    let s = analysed(&heavier);
+    assert_eq!(
+        s.analysis.as_ref().unwrap().tasks[1].response,
+        ResponseTime::Exact(20_000)
+    );
+    assert!(s.schedulable());
+    let late = heavier.replace(
+        r#"(name: "u", period: 2)"#,
+        r#"(name: "u", period: 2, deadline: "15ms")"#,
+    );
+    let s = analysed(&late);
+    assert!(!s.schedulable());
+    let a = s.analysis.as_ref().unwrap();
+    assert_eq!(a.misses(&s.set).collect::<Vec<_>>(), [1]);
+}
