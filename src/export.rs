@@ -8,8 +8,9 @@ use crate::{exit, load};
 pub struct Args {
     /// The model file (RON).
     pub file: PathBuf,
-    /// Write a Promela model for SPIN to OUT (`-` for stdout): one process, one d_step per
-    /// step, so SPIN's reachable states and deadlocks are bip's.
+    /// Write a Promela model for SPIN to OUT (`-` for stdout): one process, one statement
+    /// per interaction, so SPIN's reachable states and deadlocks are bip's; invariants are
+    /// assertions, a reachability property `p` is checked with `spin -DREACH_p`.
     #[arg(long, value_name = "OUT", required = true)]
     pub promela: PathBuf,
 }

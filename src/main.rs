@@ -58,8 +58,9 @@ enum Command {
     /// Write the model in another tool's language (Promela, for SPIN).
     Export(export::Args),
     /// Run the model in the engine with default codels (random declared outcomes) and
-    /// random requests, checking every invariant at every step. Exit code 0: they held,
-    /// 1: one failed (the trace is printed), 2: model or usage error.
+    /// random requests, checking every invariant at every step, in constant memory. Exit
+    /// code 0: they held, 1: one failed (the last steps are printed), 2: model or usage
+    /// error, 3: interrupted (Ctrl-C; the report and the trace so far).
     Simulate(simulate::Args),
     /// Whether the GenoM layer's tasks meet their deadlines, from the codels' WCETs:
     /// each task's work per period, its worst response time by exact response-time

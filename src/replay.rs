@@ -5,12 +5,10 @@
 //! (deadlock, violation, range error) or its witness holds; 2 the trace does not fit
 //! the model (a step is not allowed, or its verdict does not show), or bad input.
 
-use std::collections::HashMap;
 use std::path::PathBuf;
 
 use bip_engine::replay::{replay, End};
 use bip_engine::Stepped;
-use bip_model::TraceValue;
 
 use crate::{exit, load};
 
@@ -20,6 +18,10 @@ pub struct Args {
     pub file: PathBuf,
     /// The trace file (RON), as `bip verify --trace-dir` or `bip simulate --trace` write it.
     pub trace: PathBuf,
+    /// Show every variable in the steps, the GenoM expansion's bookkeeping (`req`,
+    /// `paused`) included.
+    #[arg(long)]
+    pub all_variables: bool,
 }
 
 pub fn run(args: &Args) -> u8 {
@@ -46,24 +48,44 @@ pub fn run(args: &Args) -> u8 {
             trace.system, system.name
         );
     }
-    // the values before each step, for `old → new`
-    let mut current: HashMap<String, TraceValue> = HashMap::new();
-    let init = system.initial_state();
-    for slot in 0..system.slot_count() as u32 {
-        current.insert(system.slot_name(slot), system.trace_value(&init, slot));
-    }
-    let result = match replay(system, &trace) {
+    let result = match replay(system.clone(), &trace) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("error: {e}");
             return exit::ERROR;
         }
     };
+    let n = trace.steps.len() as u64;
     println!(
-        "{}: replaying {} ({} steps) through the engine",
+        "{}: replaying {} ({n} step{}) through the engine",
         args.file.display(),
         args.trace.display(),
-        trace.steps.len()
+        if n == 1 { "" } else { "s" }
+    );
+    let notes: Vec<String> = result
+        .steps
+        .iter()
+        .map(|done| {
+            let what = match done.stepped {
+                Stepped::Tick => "tick".to_string(),
+                Stepped::Codel { codel, failed } => {
+                    let (m, s, c) = result.engine.inspect().codel_name(codel);
+                    let path = if failed { ", error path" } else { "" };
+                    format!("codel {m}.{s}.{c} ran{path}")
+                }
+                Stepped::Request { .. } => "request accepted".to_string(),
+                Stepped::Other | Stepped::Idle { .. } => "step".to_string(),
+            };
+            format!("allowed: {what}")
+        })
+        .collect();
+    print!(
+        "{}",
+        trace
+            .display(Some(&system))
+            .notes(&notes)
+            .without_header()
+            .all_variables(args.all_variables)
     );
     let width = trace
         .steps
@@ -73,31 +95,6 @@ pub fn run(args: &Args) -> u8 {
         .unwrap_or(0)
         .min(32);
     let num = trace.steps.len().to_string().len();
-    for (k, (done, ts)) in result.steps.iter().zip(&trace.steps).enumerate() {
-        let what = match done.stepped {
-            Stepped::Tick => "tick".to_string(),
-            Stepped::Codel { codel, failed } => {
-                let (m, s, c) = result.engine.inspect().codel_name(codel);
-                let path = if failed { ", error path" } else { "" };
-                format!("codel {m}.{s}.{c} ran{path}")
-            }
-            Stepped::Request { .. } => "request accepted".to_string(),
-            Stepped::Other | Stepped::Idle { .. } => "step".to_string(),
-        };
-        let mut changes = Vec::new();
-        for (name, v) in ts.state.iter() {
-            match current.insert(name.clone(), v.clone()) {
-                Some(old) if old != *v => changes.push(format!("{name}: {old} → {v}")),
-                _ => changes.push(format!("{name} = {v}")),
-            }
-        }
-        println!(
-            "  {:>num$}  {:<width$}  allowed: {what:<36}  {}",
-            k + 1,
-            done.name,
-            changes.join(", ")
-        );
-    }
     if let Some(r) = &result.refused {
         println!(
             "  {:>num$}  {:<width$}  NOT ALLOWED: {}",
@@ -118,9 +115,10 @@ pub fn run(args: &Args) -> u8 {
             exit::OK
         }
         Some(End::Deadlock { held }) => {
+            let n = result.steps.len();
             println!(
-                "deadlock reached after {} steps: no progress step is enabled now or after any number of ticks",
-                result.steps.len()
+                "deadlock reached after {n} step{}: no progress step is enabled now or after any number of ticks",
+                if n == 1 { "" } else { "s" }
             );
             for h in held {
                 println!("  waiting: {h}");

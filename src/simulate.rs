@@ -1,13 +1,20 @@
 //! `bip simulate FILE --steps N --seed S [--trace OUT]`: prints a simulation of the model
 //! ([`bip_engine::simulate`]: the engine with default codels and random requests,
 //! checking every invariant, and deadlock freedom if the model asks for it, at every
-//! step) and saves its trace.
+//! step) and streams its trace to OUT as it runs. Memory stays constant for any number of
+//! steps. Exit codes: 0 every check held, 1 one failed (the last steps are printed), 2
+//! model or usage error, 3 interrupted (Ctrl-C; the report so far, the trace so far).
 
+use std::fs::File;
+use std::io::{BufWriter, Write};
 use std::path::PathBuf;
+use std::sync::atomic::Ordering;
 
-use bip_engine::simulate::{simulate, SimulationEnd, SimulationOptions};
+use bip_engine::simulate::{simulate_with, Hooks, SimulationEnd, SimulationOptions};
+use bip_lang::trace_file::TraceWriter;
+use bip_model::Trace;
 
-use crate::{exit, load};
+use crate::{exit, interrupt, load};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -19,20 +26,52 @@ pub struct Args {
     /// Seed of the random requests and codel outcomes (the run is the same for a seed).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Save the run as a trace (RON) in OUT.
+    /// Save the run as a trace (RON) in OUT, written as it runs (some 100 bytes a step).
     #[arg(long, value_name = "OUT")]
     pub trace: Option<PathBuf>,
+    /// Show every variable in printed steps, the GenoM expansion's bookkeeping (`req`,
+    /// `paused`) included.
+    #[arg(long)]
+    pub all_variables: bool,
 }
 
 pub fn run(args: &Args) -> u8 {
     let Some(system) = load::system(&args.file) else {
         return exit::ERROR;
     };
+    // the trace file is opened before the run, so that a bad path fails at once
+    let mut writer = match &args.trace {
+        None => None,
+        Some(out) => match File::create(out)
+            .and_then(|f| TraceWriter::new(BufWriter::new(f), &system.name))
+        {
+            Ok(w) => Some(w),
+            Err(e) => {
+                eprintln!("error: cannot write {}: {e}", out.display());
+                return exit::ERROR;
+            }
+        },
+    };
+    let mut write_error: Option<std::io::Error> = None;
+    let mut on_steps = |segment: &Trace| {
+        if let (Some(w), None) = (writer.as_mut(), write_error.as_ref()) {
+            write_error = w.steps(&segment.steps).err();
+        }
+    };
+    let stop_flag = interrupt::stop_flag();
+    let stop = || stop_flag.load(Ordering::Relaxed);
+    let hooks = Hooks {
+        stop: Some(&stop),
+        on_steps: args
+            .trace
+            .is_some()
+            .then_some(&mut on_steps as &mut dyn FnMut(&Trace)),
+    };
     let options = SimulationOptions {
         steps: args.steps,
         seed: args.seed,
     };
-    let sim = match simulate(system.clone(), options) {
+    let sim = match simulate_with(system.clone(), options, hooks) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
@@ -40,10 +79,10 @@ pub fn run(args: &Args) -> u8 {
         }
     };
     let stats = sim.stats;
-    let code = if sim.end.fails() {
-        exit::FAILED
-    } else {
-        exit::OK
+    let mut code = match sim.end {
+        SimulationEnd::Interrupted => exit::INCONCLUSIVE,
+        ref end if end.fails() => exit::FAILED,
+        _ => exit::OK,
     };
     println!(
         "{}: system `{}`, simulation with seed {}",
@@ -52,28 +91,32 @@ pub fn run(args: &Args) -> u8 {
         args.seed
     );
     println!(
-        "  {} steps: {} ticks, {} codels ({} exceptions, {} faults), {} requests sent ({} accepted, {} refused)",
-        stats.steps,
-        stats.ticks,
-        stats.codels,
-        stats.exceptions,
-        stats.faults,
-        sim.requests_sent,
+        "  {}: {}, {} ({}, {}), {} sent ({} accepted, {} refused)",
+        count(stats.steps, "step"),
+        count(stats.ticks, "tick"),
+        count(stats.codels, "codel"),
+        count(stats.exceptions, "exception"),
+        count(stats.faults, "fault"),
+        count(sim.requests_sent, "request"),
         stats.requests_accepted,
         stats.requests_refused
     );
-    let invariants = sim.invariants;
+    let invariants = count(sim.invariants as u64, "invariant");
+    let and_deadlock = if sim.deadlock_checked {
+        " and deadlock freedom"
+    } else {
+        ""
+    };
     match &sim.end {
-        SimulationEnd::Completed => println!(
-            "  {invariants} invariants{} held at every step",
-            if sim.deadlock_checked {
-                " and deadlock freedom"
-            } else {
-                ""
-            }
+        SimulationEnd::Completed => {
+            println!("  {invariants}{and_deadlock} held at every step")
+        }
+        SimulationEnd::Interrupted => println!(
+            "  interrupted after {}: {invariants}{and_deadlock} held at every step until then",
+            count(stats.steps, "step")
         ),
         SimulationEnd::Stuck => println!(
-            "  stopped: no step is possible and nothing can arrive; {invariants} invariants held until then"
+            "  stopped: no step is possible and nothing can arrive; {invariants} held until then"
         ),
         SimulationEnd::Violation(p) => {
             println!("  invariant `{p}` FAILS after step {}", stats.steps)
@@ -83,15 +126,35 @@ pub fn run(args: &Args) -> u8 {
             println!("  RANGE ERROR after step {}: {m}", stats.steps)
         }
     }
-    if code != exit::OK {
-        print!("{}", sim.trace.display(Some(&system)));
+    if code == exit::FAILED {
+        let last = &sim.last_steps;
+        print!(
+            "{}",
+            last.trace
+                .display(Some(&system))
+                .from(&last.start, last.skipped)
+                .all_variables(args.all_variables)
+        );
     }
-    if let Some(out) = &args.trace {
-        if let Err(e) = std::fs::write(out, bip_lang::trace_file::to_ron(&sim.trace)) {
-            eprintln!("error: cannot write {}: {e}", out.display());
-            return exit::ERROR;
+    if let (Some(out), Some(w)) = (&args.trace, writer) {
+        let done = match write_error {
+            Some(e) => Err(e),
+            None => w
+                .finish(&sim.last_steps.trace.verdict)
+                .and_then(|mut f| f.flush()),
+        };
+        match done {
+            Ok(()) => println!("  trace saved in {}", out.display()),
+            Err(e) => {
+                eprintln!("error: cannot write {}: {e}", out.display());
+                code = exit::ERROR;
+            }
         }
-        println!("  trace saved in {}", out.display());
     }
     code
+}
+
+/// "1 step", "2 steps".
+fn count(n: u64, what: &str) -> String {
+    format!("{n} {what}{}", if n == 1 { "" } else { "s" })
 }

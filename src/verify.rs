@@ -67,6 +67,10 @@ pub struct Args {
     /// No progress line and no statistics on stderr.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Show every variable in counterexamples, the GenoM expansion's bookkeeping (`req`,
+    /// `paused`) included.
+    #[arg(long)]
+    pub all_variables: bool,
     /// Symbolic method: wall-clock limit of one solver call; a call that reaches it makes
     /// its property inconclusive.
     #[arg(long, value_name = "SECS", value_parser = parse_seconds, default_value = "120")]
@@ -305,7 +309,9 @@ fn text_report(
             "\n{} ({}), {what}: {}",
             p.name,
             kind_name(p.kind),
-            trace.display(Some(system))
+            trace
+                .display(Some(system))
+                .all_variables(args.all_variables)
         );
         if p.kind == CheckKind::DeadlockFree && p.verdict.fails() {
             write_why_stuck(&mut s, system, trace);
@@ -402,7 +408,7 @@ fn write_why_stuck(s: &mut String, system: &System, trace: &bip_model::Trace) {
             for st in stuck {
                 let _ = writeln!(s, "    {st} but held by");
                 for c in &st.held_by {
-                    let _ = writeln!(s, "      {}: {}", c.reason, c.text);
+                    let _ = writeln!(s, "      {c}");
                 }
             }
         }

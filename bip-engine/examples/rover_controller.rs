@@ -5,9 +5,9 @@
 //!     cargo run --release -p bip-engine --example rover_controller [-- --real-time]
 //!
 //! The script shows what the model allows and what it does not: a request refused (its
-//! `after` is not met), starts and codels held by the rover's constraints (each named in
-//! the event: `constraint #k (Exclusive)`), activities that end in `ether`, in an
-//! exception and interrupted, and an overrun. At the end the recorded run is checked with
+//! `after` is not met), starts and codels held by the rover's constraints (each shown by
+//! its name, its line and as written: `mast_still (line 140): Exclusive(…)`), activities
+//! that end in `ether`, in an exception and interrupted, and an overrun. At the end the recorded run is checked with
 //! bip-model's step relation (it is a path of the model) and against every invariant.
 //!
 //! On rover.ron every constraint applies to activities, which the model *holds* (the

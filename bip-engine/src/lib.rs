@@ -90,3 +90,4 @@ pub use event::{
 #[cfg(feature = "std")]
 pub use handle::{Handle, PendingReply};
 pub use policy::Policy;
+pub use record::Window;

@@ -152,13 +152,13 @@ fn reasons_for(engine: &Engine, name: &str) -> Vec<String> {
         for s in &m.services {
             if s.request == i {
                 if let Ok(failed) = s.refused_by(system, state) {
-                    out.extend(failed.iter().map(|c| format!("{} ({})", c.reason, c.text)));
+                    out.extend(failed.iter().map(|c| c.to_string()));
                 }
             }
             for c in &s.codels {
                 if c.run == i || c.fail == i {
                     if let Ok(failed) = c.held_by(system, state) {
-                        out.extend(failed.iter().map(|c| format!("{} ({})", c.reason, c.text)));
+                        out.extend(failed.iter().map(|c| c.to_string()));
                     }
                 }
             }

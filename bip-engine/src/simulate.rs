@@ -2,6 +2,10 @@
 //! ids values) and random requests from the environment, on a virtual clock, checking
 //! every invariant (and deadlock freedom, if the model asks for it) after every step
 //! (docs/engine.md, "`bip simulate` and `bip replay`"). A run is the same for a seed.
+//!
+//! A run of any length takes constant memory: the engine records only the last steps (a
+//! window, for the report of a failure), and [`Hooks::on_steps`] receives the run in
+//! segments as it goes, to stream the whole trace to a file.
 
 #[allow(unused_imports)]
 use crate::prelude::*;
@@ -16,6 +20,11 @@ use crate::codel::DefaultCodels;
 use crate::engine::{Engine, Stats, Stepped};
 use crate::error::BuildError;
 use crate::policy::Policy;
+use crate::record::Window;
+
+/// Steps per recorded segment: the window of a failure's report holds the last one to two
+/// segments.
+pub const SEGMENT: usize = 1000;
 
 /// What to simulate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -26,11 +35,24 @@ pub struct SimulationOptions {
     pub seed: u64,
 }
 
+/// What a simulation reports to its caller while it runs.
+#[derive(Default)]
+pub struct Hooks<'a> {
+    /// Asked between steps: true ends the run early, as [`SimulationEnd::Interrupted`]
+    /// (Ctrl-C).
+    pub stop: Option<&'a dyn Fn() -> bool>,
+    /// Given the run's steps in order, a segment at a time, each from the state the last
+    /// one ended in (the whole run when joined; its verdict is [`Simulation::end`]).
+    pub on_steps: Option<&'a mut dyn FnMut(&Trace)>,
+}
+
 /// How a simulation ended.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum SimulationEnd {
     /// Every check held for all the steps asked.
     Completed,
+    /// Stopped from outside ([`Hooks::stop`]); every check held until then.
+    Interrupted,
     /// No step is possible and nothing can arrive; every check held until then.
     Stuck,
     /// This invariant fails in the last state.
@@ -44,7 +66,10 @@ pub enum SimulationEnd {
 impl SimulationEnd {
     /// True if a check failed.
     pub fn fails(&self) -> bool {
-        !matches!(self, SimulationEnd::Completed | SimulationEnd::Stuck)
+        !matches!(
+            self,
+            SimulationEnd::Completed | SimulationEnd::Stuck | SimulationEnd::Interrupted
+        )
     }
 }
 
@@ -59,12 +84,22 @@ pub struct Simulation {
     /// How many invariants were checked at every step, and whether deadlock freedom was.
     pub invariants: usize,
     pub deadlock_checked: bool,
-    /// The run as a trace, whose verdict is the failure (if any).
-    pub trace: Trace,
+    /// The run's last steps (all of them for a run of at most [`SEGMENT`] steps), from the
+    /// state they start in, as a trace whose verdict is the failure (if any).
+    pub last_steps: Window,
 }
 
 /// Simulates `system` (see the module documentation).
 pub fn simulate(system: System, options: SimulationOptions) -> Result<Simulation, BuildError> {
+    simulate_with(system, options, Hooks::default())
+}
+
+/// [`simulate`], with a way to stop it and to receive its steps as it goes.
+pub fn simulate_with(
+    system: System,
+    options: SimulationOptions,
+    mut hooks: Hooks<'_>,
+) -> Result<Simulation, BuildError> {
     let services: Vec<(String, String)> = system
         .requestable()
         .map(|(m, s)| (m.to_string(), s.to_string()))
@@ -81,7 +116,7 @@ pub fn simulate(system: System, options: SimulationOptions) -> Result<Simulation
     let mut engine = Engine::builder(system)
         .default_codels(DefaultCodels::Random(options.seed))
         .policy(Policy::Seeded(options.seed))
-        .record(options.steps.min(1 << 20) as usize)
+        .record_window(SEGMENT)
         .event_capacity(0)
         .build()?;
     let mut checks = Checks {
@@ -92,7 +127,20 @@ pub fn simulate(system: System, options: SimulationOptions) -> Result<Simulation
     let mut rng = Rng(options.seed ^ 0x5eed);
     let mut requests_sent = 0u64;
     let mut end = checks.check(&engine);
+    // the segment last given to `on_steps`, kept for the report's window
+    let mut given: Option<Window> = None;
     while end.is_none() && engine.inspect().stats().steps < options.steps {
+        if let Some(on_steps) = hooks.on_steps.as_mut() {
+            if engine.inspect().recorded_steps() >= SEGMENT {
+                let segment = engine.take_record();
+                on_steps(&segment.trace);
+                given = Some(segment);
+            }
+        }
+        if hooks.stop.is_some_and(|stop| stop()) {
+            end = Some(SimulationEnd::Interrupted);
+            break;
+        }
         // a request now and then, from the environment
         if rng.below(4) == 0 {
             if !services.is_empty() {
@@ -125,20 +173,37 @@ pub fn simulate(system: System, options: SimulationOptions) -> Result<Simulation
         }
     }
     let end = end.unwrap_or(SimulationEnd::Completed);
-    let mut trace = engine.record();
-    trace.verdict = match &end {
-        SimulationEnd::Completed | SimulationEnd::Stuck => Verdict::None,
+    let verdict = match &end {
+        SimulationEnd::Completed | SimulationEnd::Stuck | SimulationEnd::Interrupted => {
+            Verdict::None
+        }
         SimulationEnd::Violation(p) => Verdict::Violation(p.clone()),
         SimulationEnd::Deadlock => Verdict::Deadlock,
         SimulationEnd::RangeError(m) => Verdict::RangeError(m.clone()),
     };
+    let mut last_steps = match hooks.on_steps.as_mut() {
+        Some(on_steps) => {
+            let rest = engine.take_record();
+            on_steps(&rest.trace);
+            match given {
+                // the report shows the last segment given and the rest
+                Some(mut window) if rest.trace.steps.len() < SEGMENT => {
+                    window.trace.steps.extend(rest.trace.steps);
+                    window
+                }
+                _ => rest,
+            }
+        }
+        None => engine.record_window(),
+    };
+    last_steps.trace.verdict = verdict;
     Ok(Simulation {
         end,
         stats: engine.inspect().stats(),
         requests_sent,
         invariants,
         deadlock_checked: checks.deadlock_free.is_some(),
-        trace,
+        last_steps,
     })
 }
 

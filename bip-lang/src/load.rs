@@ -11,6 +11,21 @@ use crate::source::{normalized, offset_of, with_positions, Span};
 use crate::syntax::{ron_options, SystemDef};
 use bip_model::System;
 
+/// The parts of a model's GenoM layer, as `ron` names them in errors: their fields are
+/// described in docs/genom.md.
+const GENOM_PARTS: &[&str] = &[
+    "ModuleDef",
+    "TaskDef",
+    "PortDef",
+    "ServiceDef",
+    "CodelDef",
+    "Exclusive",
+    "Requires",
+    "Fresh",
+    "Guard",
+    "AtMost",
+];
+
 /// Reads a file's text. Errors name the file.
 pub fn read_model_file(path: &Path) -> Result<String, LoadError> {
     std::fs::read_to_string(path).map_err(|source| LoadError::Io {
@@ -38,9 +53,14 @@ fn parse_shared(name: &str, text: &Arc<String>) -> Result<SystemDef, LoadError> 
         let start = offset_of(text, e.span.start.line, e.span.start.col);
         let end = offset_of(text, e.span.end.line, e.span.end.col).max(start);
         let mut err = ModelError::new(e.code.to_string(), Span::new(start, end));
-        if let ron::Error::NoSuchStructField { .. } | ron::Error::MissingStructField { .. } = e.code
+        if let ron::Error::NoSuchStructField { outer, .. }
+        | ron::Error::MissingStructField { outer, .. } = &e.code
         {
-            err = err.with_help("see docs/model.md for the fields of each part of a model");
+            let page = match outer {
+                Some(o) if GENOM_PARTS.contains(&o.as_str()) => "docs/genom.md",
+                _ => "docs/model.md",
+            };
+            err = err.with_help(format!("see {page} for the fields of each part of a model"));
         }
         LoadError::model(name, text, vec![err])
     })
@@ -62,8 +82,8 @@ pub fn expand_str(name: &str, text: &str) -> Result<SystemDef, LoadError> {
         compile_def(name, &shared, &def)?;
         return Ok(def);
     }
-    let expansion =
-        genom::expand(&def).map_err(|errors| LoadError::model(name, &shared, errors))?;
+    let expansion = genom::expand_in(&def, Some(&shared))
+        .map_err(|errors| LoadError::model(name, &shared, errors))?;
     compile_def(name, &shared, &def)?;
     Ok(expansion.def)
 }
@@ -81,15 +101,19 @@ pub fn expand_file(path: impl AsRef<Path>) -> Result<SystemDef, LoadError> {
 /// ([`genom::expand`]); the compiled system then carries the map the engine binds codels
 /// and requests with ([`System::genom`]).
 pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
-    if def.has_genom_layer() {
-        return genom::expand(def)?.compile(def);
-    }
-    compile_core(def, &[]).map(|(system, _)| system)
+    compile_in(def, None)
 }
 
 /// Compiles parsed file-format types; `text` is the file they came from (for positions).
 pub fn compile_def(name: &str, text: &Arc<String>, def: &SystemDef) -> Result<System, LoadError> {
-    compile(def).map_err(|errors| LoadError::model(name, text, errors))
+    compile_in(def, Some(text)).map_err(|errors| LoadError::model(name, text, errors))
+}
+
+fn compile_in(def: &SystemDef, text: Option<&str>) -> Result<System, Vec<ModelError>> {
+    if def.has_genom_layer() {
+        return genom::expand_in(def, text)?.compile(def);
+    }
+    compile_core(def, &[]).map(|(system, _)| system)
 }
 
 /// Reads, parses and compiles a model file.

@@ -1,24 +1,78 @@
 //! The trace file format: a [`Trace`] as RON, the way `bip verify --trace-dir`,
-//! `bip simulate --trace` and the engine's recorder write it and `bip replay` reads it.
+//! `bip simulate --trace` and the engine's recorder write it and `bip replay` reads it:
+//!
+//! ```text
+//! Trace(
+//!     system: "philosophers",
+//!     steps: [
+//!         (step: "left[2]", state: {"phil[2]": "hungry", "fork[2]": "taken"}),
+//!     ],
+//!     verdict: Deadlock,
+//! )
+//! ```
+//!
+//! The verdict comes last, so that a run is written as it goes ([`TraceWriter`]).
 
-use bip_model::Trace;
+use std::io::{self, Write};
+
+use bip_model::{Trace, TraceStep, Verdict};
 
 use crate::syntax::ron_options;
 
-/// The trace as pretty RON: `Trace(` then its steps, each written
-/// `(step: "...", state: {...})`.
+/// The trace as RON, one line per step.
 pub fn to_ron(trace: &Trace) -> String {
-    // ron names either every struct or none; the format names only the outer one
-    let config = ron::ser::PrettyConfig::new()
-        .struct_names(false)
-        .depth_limit(2);
-    match ron_options().to_string_pretty(trace, config) {
-        Ok(body) => format!("Trace{body}\n"),
-        Err(e) => format!("// could not write the trace: {e}\n"),
+    let mut w = TraceWriter::new(Vec::new(), &trace.system).expect("writes to memory");
+    w.steps(&trace.steps).expect("writes to memory");
+    let bytes = w.finish(&trace.verdict).expect("writes to memory");
+    String::from_utf8(bytes).expect("RON is UTF-8")
+}
+
+/// Writes a trace step by step, as a run goes, into `W`.
+pub struct TraceWriter<W: Write> {
+    out: W,
+}
+
+impl<W: Write> TraceWriter<W> {
+    /// Writes the head of the trace of system `system`.
+    pub fn new(mut out: W, system: &str) -> io::Result<TraceWriter<W>> {
+        writeln!(
+            out,
+            "Trace(\n    system: {},\n    steps: [",
+            value(&system)?
+        )?;
+        Ok(TraceWriter { out })
+    }
+
+    /// Writes the next steps.
+    pub fn steps(&mut self, steps: &[TraceStep]) -> io::Result<()> {
+        for s in steps {
+            writeln!(self.out, "        {},", value(s)?)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the verdict and the end of the trace, and returns the writer.
+    pub fn finish(mut self, verdict: &Verdict) -> io::Result<W> {
+        writeln!(self.out, "    ],\n    verdict: {},\n)", value(verdict)?)?;
+        self.out.flush()?;
+        Ok(self.out)
     }
 }
 
-/// Reads a trace written in RON; the error says where, as `line:column: what`.
+/// One value as compact RON, with a space after each separator.
+fn value<T: serde::Serialize>(v: &T) -> io::Result<String> {
+    let config = ron::ser::PrettyConfig::new()
+        .struct_names(false)
+        .depth_limit(0)
+        .separator(" ");
+    ron_options()
+        .to_string_pretty(v, config)
+        .map_err(io::Error::other)
+}
+
+/// Reads a trace written in RON (in this format, or with the verdict first and a
+/// recording's verdict written `r#None`, as earlier versions wrote it); the error says
+/// where, as `line:column: what`.
 pub fn from_ron(text: &str) -> Result<Trace, String> {
     ron_options()
         .from_str(text)

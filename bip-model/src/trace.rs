@@ -16,12 +16,14 @@ use crate::state::State;
 use crate::steps::{OwnedStep, Steps};
 use crate::system::System;
 
+/// A trace file reads `Trace(system: "...", steps: [...], verdict: ...)`; the verdict comes
+/// last so that a recording can be written as it runs.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename = "Trace", deny_unknown_fields)]
 pub struct Trace {
     pub system: String,
-    pub verdict: Verdict,
     pub steps: Vec<TraceStep>,
+    pub verdict: Verdict,
 }
 
 /// Why a trace was recorded.
@@ -36,7 +38,9 @@ pub enum Verdict {
     /// The step after the last state (or its guards) leaves a variable's range; the
     /// message says where.
     RangeError(String),
-    /// A plain recording (simulation, engine run).
+    /// A plain recording (simulation, engine run). Written `Recording`; files of earlier
+    /// versions say `r#None`.
+    #[serde(rename = "Recording", alias = "None")]
     None,
 }
 
@@ -128,14 +132,24 @@ impl System {
 impl Trace {
     /// A trace from the initial state along `path` (each step with the state it leads to).
     pub fn from_path(system: &System, verdict: Verdict, path: &[(OwnedStep, State)]) -> Trace {
-        let mut prev = system.initial_state();
+        Trace::from_path_at(system, &system.initial_state(), verdict, path)
+    }
+
+    /// A trace from `start` along `path` (the last steps of a longer run).
+    pub fn from_path_at(
+        system: &System,
+        start: &State,
+        verdict: Verdict,
+        path: &[(OwnedStep, State)],
+    ) -> Trace {
+        let mut prev = start;
         let mut steps = Vec::with_capacity(path.len());
         for (step, state) in path {
             steps.push(TraceStep {
                 step: system.label_name(step.label),
-                state: system.diff(&prev, state),
+                state: system.diff(prev, state),
             });
-            prev = state.clone();
+            prev = state;
         }
         Trace {
             system: system.name.clone(),
@@ -156,56 +170,97 @@ impl Trace {
     /// Like [`Trace::replay`], but keeps the steps that replay before the first that does
     /// not: the path so far, and the error, if any.
     pub fn replay_prefix(&self, system: &System) -> (Vec<(OwnedStep, State)>, Option<ReplayError>) {
+        self.replay_prefix_from(system, system.initial_state())
+    }
+
+    /// Like [`Trace::replay`], from `start` instead of the initial state (the last steps of
+    /// a longer run, as an engine's windowed recording keeps them).
+    pub fn replay_from(
+        &self,
+        system: &System,
+        start: State,
+    ) -> Result<Vec<(OwnedStep, State)>, ReplayError> {
+        match self.replay_prefix_from(system, start) {
+            (path, None) => Ok(path),
+            (_, Some(e)) => Err(e),
+        }
+    }
+
+    fn replay_prefix_from(
+        &self,
+        system: &System,
+        start: State,
+    ) -> (Vec<(OwnedStep, State)>, Option<ReplayError>) {
         let mut out = Vec::with_capacity(self.steps.len());
-        let err = self.replay_into(system, &mut out).err();
+        let err = self.replay_into(system, start, &mut out).err();
         (out, err)
     }
 
     fn replay_into(
         &self,
         system: &System,
+        start: State,
         out: &mut Vec<(OwnedStep, State)>,
     ) -> Result<(), ReplayError> {
         let slots = system.slot_by_name();
-        let mut state = system.initial_state();
+        let mut state = start;
         let mut steps = Steps::new();
         for (k, ts) in self.steps.iter().enumerate() {
             let n = k + 1;
             let fail = |message: String| ReplayError { step: n, message };
             let mut recorded: Vec<(u32, &TraceValue)> = Vec::with_capacity(ts.state.len());
             for (name, value) in ts.state.iter() {
-                let slot = *slots
-                    .get(name)
-                    .ok_or_else(|| fail(format!("`{name}` is not a component or variable")))?;
+                let slot = *slots.get(name).ok_or_else(|| {
+                    fail(format!(
+                        "`{name}` is not a component or variable{}",
+                        did_you_mean(name, slots.keys().map(String::as_str))
+                    ))
+                })?;
                 recorded.push((slot, value));
             }
             system
                 .enabled_steps(&state, &mut steps)
                 .map_err(|e: RangeError| fail(format!("range error before the step: {e}")))?;
             let mut found = None;
-            let mut same_name = 0;
+            // the differences of the enabled step with this name that comes closest
+            let mut closest: Option<Vec<String>> = None;
+            let mut fire_error = None;
             let mut next = state.clone();
             for s in steps.iter() {
                 if system.label_name(s.label) != ts.step {
                     continue;
                 }
-                same_name += 1;
-                if system.fire(&state, s, &mut next).is_err() {
+                if let Err(e) = system.fire(&state, s, &mut next) {
+                    fire_error.get_or_insert(e);
                     continue;
                 }
-                if matches_record(system, &state, &next, &recorded) {
+                let differences = record_differences(system, &state, &next, &recorded);
+                if differences.is_empty() {
                     found = Some(s.to_owned());
                     break;
                 }
+                if closest.as_ref().is_none_or(|c| differences.len() < c.len()) {
+                    closest = Some(differences);
+                }
             }
             let Some(step) = found else {
-                return Err(fail(if same_name == 0 {
-                    format!("`{}` is not enabled here", ts.step)
-                } else {
-                    format!(
-                        "`{}` is enabled but does not lead to the recorded state",
-                        ts.step
-                    )
+                return Err(fail(match (closest, fire_error) {
+                    (Some(differences), _) => format!(
+                        "`{}` is enabled but does not lead to the recorded state: {}",
+                        ts.step,
+                        differences.join(", ")
+                    ),
+                    (None, Some(e)) => {
+                        format!("`{}` is enabled but has a range error: {e}", ts.step)
+                    }
+                    (None, None) if system.has_label(&ts.step) => {
+                        format!("`{}` is not enabled here", ts.step)
+                    }
+                    (None, None) => format!(
+                        "no such interaction: `{}`{}",
+                        ts.step,
+                        did_you_mean(&ts.step, system.label_names().iter().map(String::as_str))
+                    ),
                 }));
             };
             state = next;
@@ -214,38 +269,167 @@ impl Trace {
         Ok(())
     }
 
-    /// A readable rendering; with the system, changes show as `old → new`.
+    /// A readable rendering; with the system, changes show as `old → new`, and the GenoM
+    /// expansion's bookkeeping variables are left out unless asked
+    /// ([`TraceDisplay::all_variables`]).
     pub fn display<'a>(&'a self, system: Option<&'a System>) -> TraceDisplay<'a> {
         TraceDisplay {
             trace: self,
             system,
+            all_variables: false,
+            start: None,
+            notes: None,
+            header: true,
         }
     }
 }
 
-/// True if `after` differs from `before` exactly where the record says, with its values.
-fn matches_record(
+impl System {
+    /// True for a variable the GenoM expansion keeps for its own bookkeeping, which a
+    /// trace shows only on request: an activity's `req` (a request is pending) and
+    /// `paused` (it waits for its task's next period), as bip-lang's `genom::names` calls
+    /// them.
+    pub fn is_bookkeeping(&self, slot: u32) -> bool {
+        let Some(map) = &self.genom else {
+            return false;
+        };
+        let c = self.component_of_slot(slot);
+        let comp = &self.components[c as usize];
+        if slot == comp.slot {
+            return false;
+        }
+        let is_activity = map
+            .modules
+            .iter()
+            .flat_map(|m| &m.services)
+            .any(|s| s.component == Some(c));
+        let var = &self.atom_of(c).vars[(slot - comp.slot - 1) as usize].name;
+        is_activity && (var == "req" || var == "paused")
+    }
+}
+
+/// Where `after` differs from what the record says (a recorded value, or no change where
+/// the record has none), each as "`name`: recorded X, the step gives Y"; empty if it fits.
+fn record_differences(
     system: &System,
     before: &State,
     after: &State,
     recorded: &[(u32, &TraceValue)],
-) -> bool {
+) -> Vec<String> {
+    let mut out = Vec::new();
     for &(slot, v) in recorded {
-        if system.trace_value(after, slot) != *v {
-            return false;
+        let actual = system.trace_value(after, slot);
+        if actual != *v {
+            out.push(format!(
+                "`{}` recorded {v}, the step gives {actual}",
+                system.slot_name(slot)
+            ));
         }
     }
-    before
-        .slots()
-        .iter()
-        .zip(after.slots())
-        .enumerate()
-        .all(|(slot, (a, b))| a == b || recorded.iter().any(|&(s, _)| s == slot as u32))
+    for (slot, (a, b)) in before.slots().iter().zip(after.slots()).enumerate() {
+        let slot = slot as u32;
+        if a != b && !recorded.iter().any(|&(s, _)| s == slot) {
+            out.push(format!(
+                "`{}` recorded unchanged ({}), the step gives {}",
+                system.slot_name(slot),
+                system.trace_value(before, slot),
+                system.trace_value(after, slot)
+            ));
+        }
+    }
+    out
+}
+
+impl System {
+    /// Every step name a trace may use: the interactions, and `comp.internal` for each
+    /// component with internal transitions.
+    fn label_names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self.interactions.iter().map(|i| i.name.clone()).collect();
+        for (c, comp) in self.components.iter().enumerate() {
+            let atom = self.atom_of(c as u32);
+            if atom.transitions.iter().any(|t| t.port.is_none()) {
+                names.push(format!("{}.internal", comp.name));
+            }
+        }
+        names
+    }
+
+    fn has_label(&self, name: &str) -> bool {
+        self.interaction_index(name).is_some() || self.label_names().iter().any(|n| n == name)
+    }
+}
+
+/// ", did you mean `x`?" for the name closest to `name` (by edit distance, within a third
+/// of its length), or nothing.
+fn did_you_mean<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> String {
+    let limit = (name.chars().count() / 3).max(1);
+    let best = candidates
+        .map(|c| (edit_distance(name, c), c))
+        .filter(|&(d, _)| d <= limit)
+        .min();
+    match best {
+        Some((_, c)) => format!(" (did you mean `{c}`?)"),
+        None => String::new(),
+    }
+}
+
+/// Levenshtein distance, over characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let above = row[j + 1];
+            row[j + 1] = if ca == *cb {
+                diagonal
+            } else {
+                1 + diagonal.min(above).min(row[j])
+            };
+            diagonal = above;
+        }
+    }
+    row[b.len()]
 }
 
 pub struct TraceDisplay<'a> {
     trace: &'a Trace,
     system: Option<&'a System>,
+    all_variables: bool,
+    /// For the last steps of a longer run: the state before the first, and the steps
+    /// before it.
+    start: Option<(&'a State, u64)>,
+    /// A note per step, shown between its name and its changes (replay: what the engine
+    /// did with it); only the steps with a note are shown.
+    notes: Option<&'a [String]>,
+    header: bool,
+}
+
+impl<'a> TraceDisplay<'a> {
+    /// Shows the GenoM expansion's bookkeeping variables too (`-v`).
+    pub fn all_variables(mut self, all: bool) -> Self {
+        self.all_variables = all;
+        self
+    }
+
+    /// The trace is the last steps of a run: `skipped` steps came before, ending in `start`.
+    pub fn from(mut self, start: &'a State, skipped: u64) -> Self {
+        self.start = Some((start, skipped));
+        self
+    }
+
+    /// Shows `notes[k]` with step `k`, and only the steps that have one.
+    pub fn notes(mut self, notes: &'a [String]) -> Self {
+        self.notes = Some(notes);
+        self
+    }
+
+    /// Leaves out the first line (what the trace shows, after how many steps).
+    pub fn without_header(mut self) -> Self {
+        self.header = false;
+        self
+    }
 }
 
 impl fmt::Display for TraceDisplay<'_> {
@@ -259,12 +443,25 @@ impl fmt::Display for TraceDisplay<'_> {
             Verdict::None => "recording".to_string(),
         };
         let n = t.steps.len();
-        writeln!(f, "{what} after {n} step{}", if n == 1 { "" } else { "s" })?;
+        let skipped = self.start.map_or(0, |(_, k)| k);
+        let total = skipped + n as u64;
+        if self.header {
+            write!(f, "{what} after {total} step{}", plural(total))?;
+            if skipped > 0 {
+                write!(f, " (the last {n} shown)")?;
+            }
+            writeln!(f)?;
+        }
         let mut current: HashMap<String, TraceValue> = HashMap::new();
+        let mut hidden: HashMap<String, ()> = HashMap::new();
         if let Some(sys) = self.system {
             let init = sys.initial_state();
+            let start = self.start.map_or(&init, |(s, _)| s);
             for slot in 0..sys.slot_count() as u32 {
-                current.insert(sys.slot_name(slot), sys.trace_value(&init, slot));
+                current.insert(sys.slot_name(slot), sys.trace_value(start, slot));
+                if !self.all_variables && sys.is_bookkeeping(slot) {
+                    hidden.insert(sys.slot_name(slot), ());
+                }
             }
         }
         let width = t
@@ -274,12 +471,33 @@ impl fmt::Display for TraceDisplay<'_> {
             .max()
             .unwrap_or(0)
             .min(32);
-        let num_width = n.to_string().len();
-        for (k, s) in t.steps.iter().enumerate() {
-            write!(f, "  {:>num_width$}  {:<width$}", k + 1, s.step)?;
-            for (i, (name, v)) in s.state.iter().enumerate() {
-                let sep = if i == 0 { "  " } else { ", " };
-                match current.insert(name.clone(), v.clone()) {
+        let num_width = total.to_string().len();
+        let note_width = self
+            .notes
+            .map_or(0, |n| {
+                n.iter().map(|s| s.chars().count()).max().unwrap_or(0)
+            })
+            .min(40);
+        let shown = self.notes.map_or(n, |notes| notes.len().min(n));
+        for (k, s) in t.steps.iter().enumerate().take(shown) {
+            write!(
+                f,
+                "  {:>num_width$}  {:<width$}",
+                skipped + k as u64 + 1,
+                s.step
+            )?;
+            if let Some(notes) = self.notes {
+                write!(f, "  {:<note_width$}", notes[k])?;
+            }
+            let mut first = true;
+            for (name, v) in s.state.iter() {
+                let old = current.insert(name.clone(), v.clone());
+                if hidden.contains_key(name) {
+                    continue;
+                }
+                let sep = if first { "  " } else { ", " };
+                first = false;
+                match old {
                     Some(old) => write!(f, "{sep}{name}: {old} → {v}")?,
                     None => write!(f, "{sep}{name} = {v}")?,
                 }
@@ -287,5 +505,14 @@ impl fmt::Display for TraceDisplay<'_> {
             writeln!(f)?;
         }
         Ok(())
+    }
+}
+
+/// "s" unless there is one.
+fn plural(n: u64) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
     }
 }

@@ -99,7 +99,8 @@ fn simulate_finds_the_rovers_deadlock_and_replay_shows_it() {
     assert_eq!(out.status.code(), Some(1), "{text}");
     assert!(text.contains("deadlock reached after"), "{text}");
     assert!(
-        text.contains("waiting: ndd.GoTo codel `start`") && text.contains("(Requires)"),
+        text.contains("waiting: ndd.GoTo codel `start`")
+            && text.contains("held by navigate_with_laser (line 145): Requires("),
         "{text}"
     );
     assert!(text.contains("result: DeadlockFree fails"), "{text}");
@@ -148,7 +149,10 @@ fn replay_refuses_a_trace_the_model_does_not_allow_with_the_reason() {
     assert_eq!(out.status.code(), Some(2), "{text}");
     assert!(text.contains("3  ndd_GoTo_start"), "{text}");
     assert!(text.contains("NOT ALLOWED"), "{text}");
-    assert!(text.contains("because: constraint #1 (Requires)"), "{text}");
+    assert!(
+        text.contains("because: navigate_with_laser (line 145): Requires("),
+        "{text}"
+    );
 }
 
 #[test]
@@ -208,6 +212,193 @@ fn simulate_stops_at_the_first_state_that_breaks_an_invariant() {
     assert_eq!(out.status.code(), Some(1), "{text}");
     assert!(
         text.contains("invariant `slow` fails in the last state"),
+        "{text}"
+    );
+}
+
+/// Run in a shell under a memory cap (KiB of address space), from the repository.
+fn capped(cap_kib: u64, args: &str) -> Command {
+    let mut c = Command::new("sh");
+    c.arg("-c")
+        .arg(format!(
+            "ulimit -v {cap_kib}; exec {} {args}",
+            env!("CARGO_BIN_EXE_bip")
+        ))
+        .current_dir(env!("CARGO_MANIFEST_DIR"));
+    c
+}
+
+/// Without `--trace` a simulation keeps only its last steps: three million steps run in
+/// 200 MB of address space (they took some 600 bytes each, 1.8 GB).
+#[test]
+fn simulate_runs_in_constant_memory() {
+    let out = capped(
+        200_000,
+        "simulate robots/pipeline.ron --steps 3000000 --seed 1",
+    )
+    .output()
+    .expect("sh runs");
+    let text = stdout(&out);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(text.contains("3000000 steps"), "{text}");
+    assert!(text.contains("held at every step"), "{text}");
+}
+
+/// Ctrl-C ends a simulation of (nearly) endless steps with its report so far, exit 3,
+/// and the trace streamed so far, complete and replayable.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_ends_a_simulation_with_its_report_and_trace() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let trace = dir.path().join("run.ron");
+    let trace = trace.to_str().expect("utf-8");
+    let child = capped(
+        400_000,
+        &format!("simulate robots/rover.ron --steps 18446744073709551615 --trace {trace}"),
+    )
+    .stdout(std::process::Stdio::piped())
+    .stderr(std::process::Stdio::piped())
+    .spawn()
+    .expect("spawns");
+    // wait until the run is under way (its trace is being written), then interrupt it
+    let start = std::time::Instant::now();
+    while std::fs::metadata(trace).map_or(0, |m| m.len()) < 100_000 {
+        assert!(
+            start.elapsed().as_secs() < 60,
+            "the simulation does not start"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+    let out = child.wait_with_output().expect("ends");
+    let text = stdout(&out);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(text.contains("interrupted after"), "{text}");
+    assert!(text.contains("held at every step until then"), "{text}");
+    assert!(text.contains("trace saved in"), "{text}");
+    let steps: u64 = text
+        .lines()
+        .nth(1)
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    let out = bip(&["replay", "robots/rover.ron", trace]);
+    let replayed = stdout(&out);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        &replayed[..replayed.len().min(2000)]
+    );
+    assert_eq!(replayed.matches("allowed: ").count() as u64, steps);
+}
+
+/// The GenoM expansion's bookkeeping (`req`, `paused`) shows only with `--all-variables`,
+/// in simulate's, replay's and verify's traces alike; plurals agree with their numbers.
+#[test]
+fn traces_show_bookkeeping_only_on_request() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let trace = dir.path().join("dl.ron");
+    let trace = trace.to_str().expect("utf-8");
+    let args = [
+        "simulate",
+        "robots/rover-deadlock.ron",
+        "--steps",
+        "5000",
+        "--seed",
+        "1",
+        "--trace",
+        trace,
+    ];
+    let short = stdout(&bip(&args));
+    let all = stdout(&bip(&[&args[..], &["--all-variables"]].concat()));
+    assert!(all.contains(".req: false → true"), "{all}");
+    assert!(
+        !short.contains(".req") && !short.contains(".paused"),
+        "{short}"
+    );
+    let short = stdout(&bip(&["replay", "robots/rover-deadlock.ron", trace]));
+    let all = stdout(&bip(&[
+        "replay",
+        "robots/rover-deadlock.ron",
+        trace,
+        "--all-variables",
+    ]));
+    assert!(all.contains(".paused: "), "{all}");
+    assert!(
+        !short.contains(".req") && !short.contains(".paused"),
+        "{short}"
+    );
+    let verify = [
+        "verify",
+        "robots/rover-deadlock.ron",
+        "-q",
+        "--method",
+        "explicit",
+    ];
+    let short = stdout(&bip(&verify));
+    let all = stdout(&bip(&[&verify[..], &["--all-variables"]].concat()));
+    assert!(
+        short.contains("deadlock after 1 step\n  1  ndd_GoTo_request\n"),
+        "{short}"
+    );
+    assert!(all.contains("ndd_GoTo.req: false → true"), "{all}");
+    let one = stdout(&bip(&[
+        "simulate",
+        "robots/philosophers.ron",
+        "--steps",
+        "1",
+    ]));
+    assert!(one.contains("  1 step: 0 ticks, 0 codels"), "{one}");
+}
+
+/// A misspelt step and a tampered value, through `bip replay`.
+#[test]
+fn replay_names_a_misspelt_step_and_a_tampered_value() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("bad.ron");
+    let write = |steps: &str| {
+        std::fs::write(
+            &path,
+            format!("Trace(system: \"philosophers\", steps: [{steps}], verdict: Recording)"),
+        )
+        .expect("writes")
+    };
+    let replay = || {
+        let out = bip(&[
+            "replay",
+            "robots/philosophers.ron",
+            path.to_str().expect("utf-8"),
+        ]);
+        assert_eq!(out.status.code(), Some(2));
+        stdout(&out)
+    };
+    write(r#"(step: "lfet[0]", state: {"phil[0]": "hungry", "fork[0]": "taken"})"#);
+    let text = replay();
+    assert!(
+        text.contains("NOT ALLOWED: no such interaction: `lfet[0]` (did you mean `left[0]`?)"),
+        "{text}"
+    );
+    write(r#"(step: "left[0]", state: {"phil[0]": "eating", "fork[0]": "taken"})"#);
+    let text = replay();
+    assert!(
+        text.contains(
+            "does not lead to the recorded state: `phil[0]` recorded eating, the step gives hungry"
+        ),
         "{text}"
     );
 }

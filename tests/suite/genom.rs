@@ -117,7 +117,7 @@ fn bad_genom_input_gets_positions_and_exit_2() {
         ),
         &[
             "yields to `mvoe`, which is not a codel state of `GoTo`",
-            "yield.ron:71:49]",
+            "yield.ron:74:49]",
             "undeclared state",
         ],
     );
@@ -142,7 +142,10 @@ fn bad_genom_input_gets_positions_and_exit_2() {
     );
     expand_bad(
         "period",
-        (r#"(name: "nav", period: 1)"#, r#"(name: "nav", period: 0)"#),
+        (
+            r#"(name: "nav", period: 1, cpu"#,
+            r#"(name: "nav", period: 0, cpu"#,
+        ),
         &["task `nav` has period 0", "a period is at least 1 tick"],
     );
     expand_bad(
@@ -219,7 +222,7 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
     // the report says which constraint holds the navigation back
     assert!(
         stdout.contains(
-            "ndd.GoTo codel start is ready after 1 tick but held by\n      constraint #1 (Requires): "
+            "ndd.GoTo codel start is ready after 1 tick but held by\n      navigate_with_laser (line 145): Requires(service: \"ndd.GoTo\", active: [\"sick.Scan\"])\n      fresh_pose (line 146): Fresh("
         ),
         "{stdout}"
     );
@@ -267,7 +270,8 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
     assert!(text.contains("allowed: request accepted"), "{text}");
     assert!(text.contains("deadlock reached after"), "{text}");
     assert!(
-        text.contains("waiting: ndd.GoTo codel `start`") && text.contains("(Requires)"),
+        text.contains("waiting: ndd.GoTo codel `start`")
+            && text.contains("held by navigate_with_laser (line 145): Requires("),
         "{text}"
     );
 }
@@ -327,8 +331,7 @@ fn the_satellite_verifies() {
 /// models (an independent check of the expansion's step relation through the exporter).
 #[test]
 fn spin_counts_the_same_states_on_expanded_models() {
-    if !common::have("spin") || !common::have("gcc") {
-        println!("note: spin or gcc is not on PATH; the SPIN cross-check was NOT run (apt-get install spin)");
+    if !common::spin_available("spin_counts_the_same_states_on_expanded_models") {
         return;
     }
     for model in ["robots/satellite.ron", "robots/tests/mini.ron"] {
@@ -341,28 +344,7 @@ fn spin_counts_the_same_states_on_expanded_models() {
             "{}",
             String::from_utf8_lossy(&o.stderr)
         );
-        let run = |cmd: &str| {
-            let o = Command::new("sh")
-                .arg("-c")
-                .arg(cmd)
-                .current_dir(dir.path())
-                .output()
-                .expect("sh runs");
-            assert!(
-                o.status.success(),
-                "{cmd}: {}",
-                String::from_utf8_lossy(&o.stderr)
-            );
-            String::from_utf8_lossy(&o.stdout).into_owned()
-        };
-        run("spin -o2 -a model.pml && gcc -O1 -DSAFETY -DNOREDUCE -o pan pan.c");
-        let pan = run("./pan -c0");
-        let stored: u64 = pan
-            .lines()
-            .find(|l| l.trim_end().ends_with("states, stored"))
-            .and_then(|l| l.split_whitespace().next())
-            .and_then(|n| n.parse().ok())
-            .expect("pan reports the states stored");
+        let (stored, _) = common::spin(dir.path(), "model.pml", &[]);
         let ours = bip(&["verify", model, "-q", "--format", "json"]);
         let doc: serde_json::Value =
             serde_json::from_slice(&ours.stdout).expect("one JSON document");

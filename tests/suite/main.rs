@@ -5,6 +5,7 @@
 mod check;
 mod common;
 mod engine;
+mod export;
 mod genom;
 mod layering;
 mod sched;

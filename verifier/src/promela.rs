@@ -1,26 +1,34 @@
 //! The system as a Promela model for SPIN, to cross-check verdicts and state counts.
 //!
-//! One process loops over every step of the system; each step (an internal transition, or
-//! one combination of transitions of an interaction's participants) is one guarded
-//! `d_step`, so SPIN stores no intermediate state and its reachable states correspond one to
-//! one to bip's. The guard of a step is what `bip-model`'s step relation checks: the
-//! participants' locations and transition guards, the connector guard, for a broadcast that
-//! each absent receiver cannot join, and that no higher-priority interaction is enabled
-//! where a priority applies. Actions run in bip's order (connector action, then each
-//! participant's action in port order, then the moves), each assignment checked against its
-//! variable's range with an `assert`, so a range error is an assertion violation in SPIN.
+//! One process loops over the steps of the system: one guarded statement per interaction
+//! and per internal transition. An interaction's guard is what `bip-model`'s step relation
+//! checks: each participant that must join has an enabled transition on its port (its
+//! location and transition guard), the connector guard holds, and no higher-priority
+//! interaction is enabled where a priority applies (the higher ones' enabledness is one
+//! macro each, `enabled_N`). Inside, each participant's transition is chosen among its
+//! enabled ones, every choice in the state before the step (into `hidden` variables, not
+//! part of SPIN's state); a broadcast receiver that can take none does not join. Then the
+//! actions run in bip's order (connector action, each participant's action in port order,
+//! the moves), each assignment checked against its variable's range with an `assert`, so a
+//! range error is an assertion violation. A statement with a real choice is `atomic` (SPIN
+//! explores every choice and stores no state inside it), one without is a `d_step`: either
+//! way SPIN's stored states are bip's states.
 //!
 //! A state with no enabled step blocks the loop: SPIN reports it as an invalid end state,
 //! which is docs/model.md's deadlock. `DeadlockFree(terminal: e)` adds a step that is enabled
 //! exactly in the blocked states where `e` holds and changes nothing, so those are not
 //! reported. bip's finer deadlock definition with `Time` and `Environment` connectors has no
 //! counterpart here; for such models compare state counts, not deadlock verdicts.
-//! Invariants and reachability properties are written as comments.
+//! Invariants are assertions in a second process, `properties`, that loops at an `end`
+//! label waiting for a state that breaks one (its one location adds no state); a `Reachable`
+//! property is an assertion that fails where it holds, switched on by `spin -DREACH_name`
+//! (its witness ends SPIN's search, so each is checked in a run of its own).
 //!
 //! Not exported (an error says so): variables whose range does not fit in 32 bits, family
-//! indices that depend on the state (`phil[x]`), and interactions with more than
-//! [`MAX_ALTERNATIVES`] combinations of transitions.
+//! indices that depend on the state (`phil[x]`), and quantifiers that unroll into more than
+//! [`MAX_QUANTIFIER_TERMS`] terms.
 
+use std::cell::Cell;
 use std::collections::HashSet;
 use std::fmt::Write as _;
 
@@ -28,8 +36,8 @@ use bip_model::eval::Expr;
 use bip_model::ops::{BinOp, QuantKind};
 use bip_model::{PropertyKind, Role, System, Target};
 
-/// Bound on the number of `d_step`s of one export.
-pub const MAX_ALTERNATIVES: usize = 100_000;
+/// Bound on the quantifier terms of one export, all quantifiers together.
+pub const MAX_QUANTIFIER_TERMS: u64 = 1_000_000;
 
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum ExportError {
@@ -46,6 +54,8 @@ struct Exporter<'a> {
     sys: &'a System,
     /// Promela name of each slot.
     names: Vec<String>,
+    /// Quantifier terms written so far (Promela has no quantifiers: each is spelt out).
+    terms: Cell<u64>,
 }
 
 /// One transition of one participant in a step.
@@ -79,7 +89,11 @@ impl<'a> Exporter<'a> {
             }
             names.push(name);
         }
-        Ok(Exporter { sys, names })
+        Ok(Exporter {
+            sys,
+            names,
+            terms: Cell::new(0),
+        })
     }
 
     fn run(&self) -> Result<String, ExportError> {
@@ -92,7 +106,7 @@ impl<'a> Exporter<'a> {
         );
         let _ = writeln!(
             out,
-            "/* One process, one d_step per step of the system: SPIN's states are bip's states. */\n"
+            "/* One process, one atomic statement per interaction (its participants' choices inside)\n   and per internal transition: SPIN's stored states are bip's states. Compile with\n   `spin -o2 -a`. Invariants are assertions of the process `properties`; a reachability\n   property is checked with `spin -DREACH_<name>` (an assertion that fails where it holds). */\n"
         );
         let init = sys.initial_state();
         for (slot, name) in self.names.iter().enumerate() {
@@ -105,61 +119,72 @@ impl<'a> Exporter<'a> {
             })?;
             let _ = writeln!(out, "{ty} {name} = {};", init.slots()[slot]);
         }
-        let _ = writeln!(out);
-        for p in &sys.properties {
-            match &p.kind {
-                PropertyKind::Invariant(e) => {
-                    let _ = writeln!(
-                        out,
-                        "/* invariant {}: {} */",
-                        p.name,
-                        self.expr(e, 0, &mut Vec::new())?
-                    );
-                }
-                PropertyKind::Reachable(e) => {
-                    let _ = writeln!(
-                        out,
-                        "/* reachable {}: {} */",
-                        p.name,
-                        self.expr(e, 0, &mut Vec::new())?
-                    );
-                }
-                PropertyKind::DeadlockFree { .. } => {}
-            }
+        // the transition each participant takes, chosen before any action runs; hidden:
+        // not part of SPIN's state
+        let widest = sys
+            .interactions
+            .iter()
+            .map(|i| i.ports.len())
+            .max()
+            .unwrap_or(0);
+        let most = sys
+            .atoms
+            .iter()
+            .map(|a| a.transitions.len() as i64)
+            .max()
+            .unwrap_or(0);
+        if widest > 0 {
+            let ty = promela_type(0, most).unwrap_or("int");
+            let chosen: Vec<String> = (0..widest).map(|k| format!("chosen_{k}")).collect();
+            let _ = writeln!(out, "hidden {ty} {};", chosen.join(", "));
         }
+        let _ = writeln!(out);
         if sys.connectors.iter().any(|c| c.role != Role::Progress) {
             let _ = writeln!(
                 out,
                 "/* This system has Time or Environment connectors: bip's deadlocks are finer than SPIN's invalid end states. */"
             );
         }
-        let mut steps = Vec::new();
-        self.internal_steps(&mut steps)?;
-        for i in 0..sys.interactions.len() as u32 {
-            self.interaction_steps(i, &mut steps)?;
-            if steps.len() > MAX_ALTERNATIVES {
-                return Err(ExportError::Unsupported(format!(
-                    "more than {MAX_ALTERNATIVES} combinations of transitions"
-                )));
+        // each interaction's enabledness before priorities, for the priorities that read it
+        let mut highs = vec![false; sys.interactions.len()];
+        for rule in &sys.priorities {
+            for h in rule.high.clone() {
+                highs[h as usize] = true;
             }
+        }
+        for (i, used) in highs.iter().enumerate() {
+            if *used {
+                let _ = writeln!(
+                    out,
+                    "#define enabled_{i} {} /* {} */",
+                    self.interaction_enabled(i as u32)?,
+                    sys.interactions[i].name
+                );
+            }
+        }
+        let mut guards = Vec::new();
+        let mut statements = Vec::new();
+        self.internal_steps(&mut guards, &mut statements)?;
+        for i in 0..sys.interactions.len() as u32 {
+            self.interaction_step(i, &mut guards, &mut statements)?;
+        }
+        for (k, g) in guards.iter().enumerate() {
+            let _ = writeln!(out, "#define step_{k} {g}");
         }
         let terminal = sys.properties.iter().find_map(|p| match &p.kind {
             PropertyKind::DeadlockFree { terminal: Some(e) } => Some(e),
             _ => None,
         });
         let _ = writeln!(out, "\nactive proctype system() {{\n  do");
-        for (label, guard, body) in &steps {
-            let _ = writeln!(
-                out,
-                "  :: d_step {{ /* {label} */\n       {guard} ->\n       {body}\n     }}"
-            );
+        for s in &statements {
+            let _ = writeln!(out, "{s}");
         }
         if let Some(t) = terminal {
-            let any: Vec<&str> = steps.iter().map(|(_, g, _)| g.as_str()).collect();
+            let any: Vec<String> = (0..guards.len()).map(|k| format!("step_{k}")).collect();
             let blocked = if any.is_empty() {
                 "1".to_string()
             } else {
-                format!("!({})", any.join(" ||\n         "))
+                format!("!({})", any.join(" || "))
             };
             let _ = writeln!(
                 out,
@@ -168,10 +193,75 @@ impl<'a> Exporter<'a> {
             );
         }
         let _ = writeln!(out, "  od\n}}");
+        self.properties(&mut out)?;
         Ok(out)
     }
 
-    fn internal_steps(&self, steps: &mut Vec<(String, String, String)>) -> Result<(), ExportError> {
+    /// The invariants as assertions, and the reachability properties as assertions that
+    /// fail where they hold (each under its `REACH_` switch, since a witness ends SPIN's
+    /// search), in a second process whose one location SPIN does not count as a state
+    /// of its own: its guards wait for a state that breaks a property, in every state, and
+    /// a check that fails comes back to that location (`pan -c0` goes on with the same
+    /// states).
+    fn properties(&self, out: &mut String) -> Result<(), ExportError> {
+        let mut invariants = Vec::new();
+        let mut reachables = Vec::new();
+        let mut defines = Vec::new();
+        for p in &self.sys.properties {
+            let id = identifier(&p.name);
+            match &p.kind {
+                PropertyKind::Invariant(e) => {
+                    let m = format!("invariant_{id}");
+                    defines.push(format!(
+                        "/* invariant {} */\n#define {m} {}",
+                        p.name,
+                        self.expr(e, 0, &mut Vec::new())?
+                    ));
+                    invariants.push(format!("     :: atomic {{ !{m} -> assert({m}) }}"));
+                }
+                PropertyKind::Reachable(e) => {
+                    let m = format!("reachable_{id}");
+                    defines.push(format!(
+                        "/* reachable {}: with `spin -DREACH_{id}`, a state where it holds is an assertion violation (the witness) */\n#define {m} {}\n#ifdef REACH_{id}\n#define REACHABILITY_RUN\n#endif",
+                        p.name,
+                        self.expr(e, 0, &mut Vec::new())?
+                    ));
+                    reachables.push(format!(
+                        "#ifdef REACH_{id}\n     :: atomic {{ {m} -> assert(!{m}) }}\n#endif"
+                    ));
+                }
+                PropertyKind::DeadlockFree { .. } => {}
+            }
+        }
+        if invariants.is_empty() && reachables.is_empty() {
+            return Ok(());
+        }
+        let _ = writeln!(out);
+        for d in &defines {
+            let _ = writeln!(out, "{d}");
+        }
+        let mut options = Vec::new();
+        if !invariants.is_empty() {
+            // a run for a witness checks only that witness
+            options.push(format!(
+                "#ifndef REACHABILITY_RUN\n{}\n#endif",
+                invariants.join("\n")
+            ));
+        }
+        options.extend(reachables);
+        let _ = writeln!(
+            out,
+            "\nactive proctype properties() {{\nend: do\n{}\n     :: false /* no property switched on */\n   od\n}}",
+            options.join("\n")
+        );
+        Ok(())
+    }
+
+    fn internal_steps(
+        &self,
+        guards: &mut Vec<String>,
+        statements: &mut Vec<String>,
+    ) -> Result<(), ExportError> {
         let sys = self.sys;
         for (c, comp) in sys.components.iter().enumerate() {
             let atom = sys.atom_of(c as u32);
@@ -183,97 +273,119 @@ impl<'a> Exporter<'a> {
                     component: c as u32,
                     transition: t as u32,
                 };
-                let guard = self.pick_enabled(pick)?;
-                let body = self.body(None, &[pick])?;
-                steps.push((format!("{}.internal", comp.name), guard, body));
+                let k = guards.len();
+                guards.push(self.pick_enabled(pick)?);
+                let mut stmts = self.actions(pick)?;
+                stmts.push(self.moves(pick));
+                statements.push(format!(
+                    "  :: d_step {{ /* {}.internal */\n       step_{k} ->\n       {}\n     }}",
+                    comp.name,
+                    stmts.join(";\n       ")
+                ));
             }
         }
         Ok(())
     }
 
-    /// The steps of interaction `i`: one per combination of its participants' transitions.
-    fn interaction_steps(
+    /// The statement of interaction `i`: its guard (each participant can take a
+    /// transition on its port, the connector guard, no priority suppresses it), then the
+    /// choice of each participant's transition among those enabled (all choices are made in
+    /// the state before the step, as the step relation makes them), then the actions in
+    /// bip's order and the moves. Where a participant has several transitions on its port
+    /// the choice is nondeterministic, so the statement is `atomic` (SPIN explores every
+    /// choice and stores no state inside); otherwise it is a `d_step`.
+    fn interaction_step(
         &self,
         i: u32,
-        steps: &mut Vec<(String, String, String)>,
+        guards: &mut Vec<String>,
+        statements: &mut Vec<String>,
     ) -> Result<(), ExportError> {
         let sys = self.sys;
         let inter = &sys.interactions[i as usize];
-        // per port, the choices: Some(transition), or None for a broadcast receiver that
-        // does not join (allowed only where it cannot)
-        let mut options: Vec<Vec<Option<Pick>>> = Vec::new();
-        for (k, pr) in inter.ports.iter().enumerate() {
+        let mut options: Vec<Vec<Pick>> = Vec::new();
+        for pr in &inter.ports {
             let atom = sys.atom_of(pr.component);
-            let mut opts: Vec<Option<Pick>> = atom
-                .transitions
-                .iter()
-                .enumerate()
-                .filter(|(_, t)| t.port == Some(pr.port))
-                .map(|(t, _)| {
-                    Some(Pick {
+            options.push(
+                atom.transitions
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, t)| t.port == Some(pr.port))
+                    .map(|(t, _)| Pick {
                         component: pr.component,
                         transition: t as u32,
                     })
-                })
-                .collect();
-            if inter.trigger.is_some_and(|tr| tr as usize != k) {
-                opts.push(None);
-            }
-            options.push(opts);
+                    .collect(),
+            );
         }
-        let count = options
+        let receiver = |k: usize| inter.trigger.is_some_and(|tr| tr as usize != k);
+        if options
             .iter()
-            .map(Vec::len)
-            .try_fold(1usize, |a, n| a.checked_mul(n));
-        if count.is_none_or(|n| n > MAX_ALTERNATIVES) {
-            return Err(ExportError::Unsupported(format!(
-                "interaction {} has more than {MAX_ALTERNATIVES} combinations of transitions",
-                inter.name
-            )));
+            .enumerate()
+            .any(|(k, o)| o.is_empty() && !receiver(k))
+        {
+            return Ok(()); // a participant without a transition on its port: never enabled
         }
-        let mut common = Vec::new();
-        if let Some(g) = &inter.guard {
-            common.push(self.expr(g, 0, &mut Vec::new())?);
-        }
+        let mut guard = vec![self.interaction_enabled(i)?];
         if let Some(s) = self.suppressed(i)? {
-            common.push(format!("!({s})"));
+            guard.push(format!("!({s})"));
         }
-        let mut cursor = vec![0usize; options.len()];
-        if options.iter().any(Vec::is_empty) {
-            return Ok(());
+        let k = guards.len();
+        guards.push(format!("({})", guard.join(" && ")));
+        let nondeterministic = options.iter().any(|o| o.len() > 1);
+        let mut stmts = Vec::new();
+        for (k, opts) in options.iter().enumerate() {
+            if opts.len() == 1 && !receiver(k) {
+                continue; // no choice: the guard says it is enabled
+            }
+            let mut alts = Vec::new();
+            for (n, p) in opts.iter().enumerate() {
+                alts.push(format!(":: {} -> chosen_{k} = {n}", self.pick_enabled(*p)?));
+            }
+            if receiver(k) {
+                // a receiver that can take no transition does not join
+                alts.push(format!(":: else -> chosen_{k} = {}", opts.len()));
+            }
+            stmts.push(format!("if {} fi", alts.join(" ")));
         }
-        loop {
-            let mut conj = Vec::new();
-            let mut picks = Vec::new();
-            for (k, &c) in cursor.iter().enumerate() {
-                match options[k][c] {
-                    Some(p) => {
-                        conj.push(self.pick_enabled(p)?);
-                        picks.push(p);
-                    }
-                    None => {
-                        let pr = inter.ports[k];
-                        conj.push(format!("!({})", self.port_enabled(pr.component, pr.port)?));
-                    }
+        for a in &inter.action {
+            stmts.extend(self.assign(a, 0)?);
+        }
+        let fixed = |k: usize| opts_fixed(&options[k], receiver(k));
+        for (k, opts) in options.iter().enumerate() {
+            if let Some(p) = fixed(k) {
+                stmts.extend(self.actions(p)?);
+                continue;
+            }
+            let mut alts = Vec::new();
+            for (n, p) in opts.iter().enumerate() {
+                let body = self.actions(*p)?;
+                if !body.is_empty() {
+                    alts.push(format!(":: chosen_{k} == {n} -> {}", body.join("; ")));
                 }
             }
-            conj.extend(common.iter().cloned());
-            let body = self.body(Some(i), &picks)?;
-            steps.push((inter.name.clone(), conj.join(" && "), body));
-            // odometer, last port fastest, as the step relation orders combinations
-            let mut k = cursor.len();
-            loop {
-                if k == 0 {
-                    return Ok(());
-                }
-                k -= 1;
-                cursor[k] += 1;
-                if cursor[k] < options[k].len() {
-                    break;
-                }
-                cursor[k] = 0;
+            if !alts.is_empty() {
+                stmts.push(format!("if {} :: else fi", alts.join(" ")));
             }
         }
+        for (k, opts) in options.iter().enumerate() {
+            if let Some(p) = fixed(k) {
+                stmts.push(self.moves(p));
+                continue;
+            }
+            let alts: Vec<String> = opts
+                .iter()
+                .enumerate()
+                .map(|(n, p)| format!(":: chosen_{k} == {n} -> {}", self.moves(*p)))
+                .collect();
+            stmts.push(format!("if {} :: else fi", alts.join(" ")));
+        }
+        let kind = if nondeterministic { "atomic" } else { "d_step" };
+        statements.push(format!(
+            "  :: {kind} {{ /* {} */\n       step_{k} ->\n       {}\n     }}",
+            inter.name,
+            stmts.join(";\n       ")
+        ));
+        Ok(())
     }
 
     /// The condition for a participant's transition: its location and its guard.
@@ -330,17 +442,14 @@ impl<'a> Exporter<'a> {
     }
 
     /// The condition under which interaction `i` is suppressed by a priority, if any rule
-    /// can suppress it.
+    /// can suppress it (the higher interactions' `enabled_` macros).
     fn suppressed(&self, i: u32) -> Result<Option<String>, ExportError> {
         let mut any = Vec::new();
         for rule in &self.sys.priorities {
             if !rule.low.contains(&i) {
                 continue;
             }
-            let mut highs = Vec::new();
-            for h in rule.high.clone() {
-                highs.push(self.interaction_enabled(h)?);
-            }
+            let highs: Vec<String> = rule.high.clone().map(|h| format!("enabled_{h}")).collect();
             let mut conj = vec![format!("({})", highs.join(" || "))];
             for w in &rule.when {
                 conj.push(self.expr(w, 0, &mut Vec::new())?);
@@ -354,31 +463,22 @@ impl<'a> Exporter<'a> {
         })
     }
 
-    /// The effects of a step, in bip's order.
-    fn body(&self, interaction: Option<u32>, picks: &[Pick]) -> Result<String, ExportError> {
-        let sys = self.sys;
+    /// A participant's transition's action, as statements.
+    fn actions(&self, p: Pick) -> Result<Vec<String>, ExportError> {
+        let comp = &self.sys.components[p.component as usize];
+        let t = &self.sys.atom_of(p.component).transitions[p.transition as usize];
         let mut stmts = Vec::new();
-        if let Some(i) = interaction {
-            for a in &sys.interactions[i as usize].action {
-                stmts.extend(self.assign(a, 0)?);
-            }
+        for a in &t.action {
+            stmts.extend(self.assign(a, comp.slot + 1)?);
         }
-        for p in picks {
-            let comp = &sys.components[p.component as usize];
-            let t = &sys.atom_of(p.component).transitions[p.transition as usize];
-            for a in &t.action {
-                stmts.extend(self.assign(a, comp.slot + 1)?);
-            }
-        }
-        for p in picks {
-            let comp = &sys.components[p.component as usize];
-            let t = &sys.atom_of(p.component).transitions[p.transition as usize];
-            stmts.push(format!("{} = {}", self.names[comp.slot as usize], t.to));
-        }
-        if stmts.is_empty() {
-            stmts.push("skip".into());
-        }
-        Ok(stmts.join(";\n       "))
+        Ok(stmts)
+    }
+
+    /// A participant's move to its transition's target.
+    fn moves(&self, p: Pick) -> String {
+        let comp = &self.sys.components[p.component as usize];
+        let t = &self.sys.atom_of(p.component).transitions[p.transition as usize];
+        format!("{} = {}", self.names[comp.slot as usize], t.to)
     }
 
     fn assign(&self, a: &bip_model::Assign, base: u32) -> Result<Vec<String>, ExportError> {
@@ -449,6 +549,14 @@ impl<'a> Exporter<'a> {
                 self.expr(b, base, bound)?
             ),
             Expr::Quant(q) => {
+                let width = q.hi.saturating_sub(q.lo).max(0) as u64;
+                let terms = self.terms.get().saturating_add(width);
+                if terms > MAX_QUANTIFIER_TERMS {
+                    return Err(ExportError::Unsupported(format!(
+                        "the quantifiers unroll into more than {MAX_QUANTIFIER_TERMS} terms (Promela has no quantifiers: each is written out term by term)"
+                    )));
+                }
+                self.terms.set(terms);
                 let mut parts = Vec::new();
                 for i in q.lo..q.hi {
                     bound.truncate(q.depth as usize);
@@ -494,6 +602,22 @@ fn const_value(e: &Expr, bound: &[i64]) -> Option<i64> {
         }
         _ => None,
     }
+}
+
+/// The one transition a participant takes without a choice: the only one on its port, for
+/// a participant that must join.
+fn opts_fixed(options: &[Pick], receiver: bool) -> Option<Pick> {
+    match options {
+        [only] if !receiver => Some(*only),
+        _ => None,
+    }
+}
+
+/// A Promela identifier for a property's name.
+fn identifier(name: &str) -> String {
+    name.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
 }
 
 /// The smallest Promela type holding `lo..=hi`.

@@ -32,7 +32,7 @@ pub struct EngineBuilder {
     clock: Option<Box<dyn Clock>>,
     policy: Policy,
     tick_us: Option<u64>,
-    record: Option<usize>,
+    record: Option<Recording>,
     event_capacity: usize,
     on_event: Option<EventFn>,
     threads: bool,
@@ -77,7 +77,14 @@ impl EngineBuilder {
     /// Records the steps for [`Engine::record`], with room for `capacity` steps before
     /// the recording allocates.
     pub fn record(mut self, capacity: usize) -> Self {
-        self.record = Some(capacity);
+        self.record = Some(Recording::with_capacity(capacity));
+        self
+    }
+
+    /// Records only the last `window` to `2 * window` steps, in constant memory, for
+    /// [`Engine::record_window`] and [`Engine::take_record`].
+    pub fn record_window(mut self, window: usize) -> Self {
+        self.record = Some(Recording::window(window));
         self
     }
 
@@ -217,7 +224,7 @@ impl EngineBuilder {
                 capacity: self.event_capacity,
                 on_event: self.on_event,
             },
-            recording: self.record.map(Recording::with_capacity),
+            recording: self.record,
             stats: Stats::default(),
             stopped: None,
             #[cfg(feature = "std")]

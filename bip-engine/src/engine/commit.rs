@@ -40,10 +40,13 @@ impl Engine {
             self.track(cause);
         }
         if let Some(r) = &mut self.recording {
-            r.push(Step {
-                label,
-                picks: self.chosen.picks(self.gate.enabled()),
-            });
+            r.push(
+                Step {
+                    label,
+                    picks: self.chosen.picks(self.gate.enabled()),
+                },
+                self.gate.state(),
+            );
         }
         if tracing::enabled!(target: "bip_engine", tracing::Level::DEBUG) {
             self.trace_step(label);

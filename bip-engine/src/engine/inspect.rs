@@ -128,7 +128,7 @@ impl<'a> Inspect<'a> {
         let list = &self.engine.t.services[s.0 as usize].refusals;
         r.iter()
             .filter_map(move |k| list.get(k))
-            .map(|c| format!("{} ({})", c.reason, c.text))
+            .map(|c| c.to_string())
     }
 
     /// The conditions of a codel's holds that `r` names.
@@ -136,7 +136,7 @@ impl<'a> Inspect<'a> {
         let list = &self.engine.t.codels[c.0 as usize].map.holds;
         r.iter()
             .filter_map(move |k| list.get(k))
-            .map(|c| format!("{} ({})", c.reason, c.text))
+            .map(|c| c.to_string())
     }
 
     /// The codels held now: activities with work to do (requested, or running and not

@@ -36,7 +36,7 @@ use crate::event::{Event, EventFn, Reasons, Ticket};
 use crate::per_state::PerState;
 use crate::policy::{Chooser, Rng};
 use crate::ports::PortStore;
-use crate::record::Recording;
+use crate::record::{Recording, Window};
 
 mod builder;
 mod codels;
@@ -168,13 +168,24 @@ impl Engine {
     /// The steps committed so far, as a trace in the shared format (empty unless the
     /// builder asked to record).
     pub fn record(&self) -> Trace {
+        self.record_window().trace
+    }
+
+    /// The steps recorded so far, from the state before the first of them: all of them
+    /// (from the initial state), or with [`EngineBuilder::record_window`] the last ones.
+    pub fn record_window(&self) -> Window {
         match &self.recording {
-            Some(r) => r.to_trace(self.gate.system(), Verdict::None),
-            None => Trace {
-                system: self.gate.system().name.clone(),
-                verdict: Verdict::None,
-                steps: Vec::new(),
-            },
+            Some(r) => r.to_window(self.gate.system(), Verdict::None),
+            None => Recording::default().to_window(self.gate.system(), Verdict::None),
+        }
+    }
+
+    /// Takes the steps recorded so far away (as [`Engine::record_window`] gives them); the
+    /// recording goes on from the current state. Streams a recording of any length.
+    pub fn take_record(&mut self) -> Window {
+        match &mut self.recording {
+            Some(r) => r.take(self.gate.system(), self.gate.state()),
+            None => Recording::default().to_window(self.gate.system(), Verdict::None),
         }
     }
 

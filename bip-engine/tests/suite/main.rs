@@ -12,3 +12,4 @@ mod requests;
 mod rover_controller;
 mod scheduling;
 mod simulate;
+mod soak;

@@ -29,22 +29,29 @@ fn the_rover_controller_plays_its_script_within_the_model() {
             .is_some_and(|t| t.starts_with("REFUSED: after rflex.Init")),
         "{log}"
     );
-    // held by the rover's constraints, each named
-    let held_by = |codel: &str, constraint: &str| {
+    // held by the rover's constraints, each named, with its line in the file
+    let text = std::fs::read_to_string(&model).expect("the rover");
+    let held_by = |codel: &str, name: &str, kind: &str| {
+        let line = text
+            .lines()
+            .position(|l| l.contains(&format!("name: \"{name}\"")) && l.contains(kind))
+            .expect("the constraint")
+            + 1;
+        let shown = format!("{name} (line {line}): {kind}(");
         r.held
             .iter()
-            .any(|(c, why)| c == codel && why.iter().any(|w| w.starts_with(constraint)))
+            .any(|(c, why)| c == codel && why.iter().any(|w| w.starts_with(&shown)))
     };
     assert!(
-        held_by("antenna.Communicate.start", "constraint #0 (Exclusive)"),
+        held_by("antenna.Communicate.start", "mast_still", "Exclusive"),
         "{log}"
     );
     assert!(
-        held_by("camera.Shoot.start", "constraint #4 (AtMost)"),
+        held_by("camera.Shoot.start", "power_budget", "AtMost"),
         "{log}"
     );
     assert!(
-        held_by("rflex.TrackSpeed.track", "constraint #3 (Guard)"),
+        held_by("rflex.TrackSpeed.track", "battery_reserve", "Guard"),
         "{log}"
     );
     // navigation: aborted without the laser, arrives, then blocked by the rock

@@ -5,13 +5,15 @@
 mod priority;
 mod resolve;
 
-use std::collections::HashMap;
+use std::borrow::Cow;
+use std::collections::{HashMap, HashSet};
 
 use crate::diag::{Errors, ModelError};
-use crate::expr::{self, parse_action, parse_expr, parse_range, ExprKind};
-use crate::source::{ConstExpr, ConstValue, Span, Spanned};
+use crate::expr::{self, ExprKind};
+use crate::source::{ConstExpr, ConstValue, Span};
 use crate::syntax::{
-    AtomDef, ComponentDef, ConnectorDef, ConnectorKindDef, PropertyDef, SystemDef, Text, TypeDef,
+    parse_in_file, parse_range_in_file, ActionDef, AtomDef, ComponentDef, ConnectorDef,
+    ConnectorKindDef, ExprDef, PropertyDef, SystemDef, Text, TypeDef,
 };
 use bip_model::eval;
 use bip_model::{
@@ -41,7 +43,7 @@ const MAX_SLOTS: usize = 50_000_000;
 /// for the engine's map). On failure, returns every error found.
 pub(crate) fn compile_core(
     def: &SystemDef,
-    extra: &[Text],
+    extra: &[expr::Expr],
 ) -> Result<(System, Vec<eval::Expr>), Vec<ModelError>> {
     let mut c = Compiler::default();
     c.constants(def);
@@ -50,7 +52,7 @@ pub(crate) fn compile_core(
     c.connectors(def);
     let priorities = c.priorities(def);
     let properties = c.properties(def);
-    let extra: Vec<eval::Expr> = extra.iter().filter_map(|t| c.global_bool(t)).collect();
+    let extra: Vec<eval::Expr> = extra.iter().filter_map(|e| c.global_bool_tree(e)).collect();
     if !c.errors.is_empty() {
         return Err(c.errors.list);
     }
@@ -129,21 +131,16 @@ struct Compiler {
     initial: Vec<i64>,
     connectors: Vec<Connector>,
     connector_by_name: HashMap<String, u32>,
+    /// Connectors that failed to compile: a priority naming one says nothing more.
+    failed_connectors: HashSet<String>,
     interactions: Vec<Interaction>,
 }
 
-/// Turns an expression error into a model error at its place in the file.
-fn expr_error(text: &Text, e: ResolveError) -> ModelError {
-    let mut m = ModelError::new(e.message, text.sub_span(e.span.start..e.span.end));
+/// Turns an expression error into a model error (trees have their positions in the file).
+fn expr_error(e: ResolveError) -> ModelError {
+    let mut m = ModelError::new(e.message, e.span);
     m.help = e.help;
     m
-}
-
-fn parse_error(text: &Text, e: expr::ParseError) -> ModelError {
-    ModelError::new(
-        format!("syntax error: {}", e.message),
-        text.sub_span(e.span.start..e.span.end),
-    )
 }
 
 /// Checks that a user-given name can be written in expressions.
@@ -229,11 +226,10 @@ impl Compiler {
             ConstValue::Int(i) => Ok((*i, Ty::Int)),
             ConstValue::Bool(b) => Ok((*b as i64, Ty::Bool)),
             ConstValue::Expr(_) => {
-                let text = v.as_text();
-                let e = parse_expr(&text).map_err(|e| parse_error(&text, e))?;
+                let e = parse_in_file(&v.as_text())?;
                 let names = self.names();
                 let mut r = Resolver::new(&names, Place::Constant, fixed);
-                r.constant_any(&e).map_err(|e| expr_error(&text, e))
+                r.constant_any(&e).map_err(expr_error)
             }
         }
     }
@@ -440,11 +436,11 @@ impl Compiler {
         }
     }
 
-    fn atom_guard(&mut self, atom: &Atom, g: &Text) -> Option<eval::Expr> {
-        let e = match parse_expr(g) {
+    fn atom_guard(&mut self, atom: &Atom, g: &ExprDef) -> Option<eval::Expr> {
+        let e = match g.tree() {
             Ok(e) => e,
             Err(e) => {
-                self.errors.push(parse_error(g, e));
+                self.errors.push(e);
                 return None;
             }
         };
@@ -453,27 +449,27 @@ impl Compiler {
         match r.expect(&e, Ty::Bool) {
             Ok(c) => Some(c),
             Err(e) => {
-                self.errors.push(expr_error(g, e));
+                self.errors.push(expr_error(e));
                 None
             }
         }
     }
 
-    fn atom_action(&mut self, atom: &Atom, act: &Text) -> Vec<Assign> {
-        let assigns = match parse_action(act) {
+    fn atom_action(&mut self, atom: &Atom, act: &ActionDef) -> Vec<Assign> {
+        let assigns = match act.tree() {
             Ok(a) => a,
             Err(e) => {
-                self.errors.push(parse_error(act, e));
+                self.errors.push(e);
                 return Vec::new();
             }
         };
         let mut out = Vec::new();
-        for a in &assigns {
+        for a in assigns.iter() {
             let ExprKind::Name(n) = &a.target.kind else {
                 self.errors.push(
                     ModelError::new(
                         "an atom's action assigns only its own variables",
-                        act.sub_span(a.target.span.start..a.target.span.end),
+                        a.target.span,
                     )
                     .with_help("write `x = …` with `x` a variable of this atom"),
                 );
@@ -483,7 +479,7 @@ impl Compiler {
                 self.errors.push(
                     ModelError::new(
                         format!("atom `{}` has no variable `{n}`", atom.name),
-                        act.sub_span(a.target.span.start..a.target.span.end),
+                        a.target.span,
                     )
                     .with_help(one_of(
                         "its variables are",
@@ -503,7 +499,7 @@ impl Compiler {
                     target: Target::Local(v),
                     value,
                 }),
-                Err(e) => self.errors.push(expr_error(act, e)),
+                Err(e) => self.errors.push(expr_error(e)),
             }
         }
         out
@@ -682,6 +678,7 @@ impl Compiler {
             }
             if let Err(e) = self.connector(cd) {
                 self.errors.push(e);
+                self.failed_connectors.insert(cd.name.value.clone());
             }
         }
     }
@@ -696,15 +693,11 @@ impl Compiler {
         let (var, values) = match &cd.forall {
             None => (None, None),
             Some(f) => {
-                let r = parse_range(f).map_err(|e| parse_error(f, e))?;
+                let r = parse_range_in_file(f)?;
                 let names = self.names();
                 let mut res = Resolver::new(&names, Place::Constant, &[]);
-                let lo = res
-                    .constant(&r.lo, Ty::Int)
-                    .map_err(|e| forall_bound(f, e))?;
-                let hi = res
-                    .constant(&r.hi, Ty::Int)
-                    .map_err(|e| forall_bound(f, e))?;
+                let lo = res.constant(&r.lo, Ty::Int).map_err(forall_bound)?;
+                let hi = res.constant(&r.hi, Ty::Int).map_err(forall_bound)?;
                 let size = i128::from(hi) - i128::from(lo);
                 if size > i128::from(MAX_COUNT) {
                     return Err(ModelError::new(
@@ -726,25 +719,17 @@ impl Compiler {
             }
         };
         // parse once, resolve per instance
-        let parse = |t: &Text| parse_expr(t).map_err(|e| parse_error(t, e));
-        let ports: Vec<(&Text, expr::Expr)> = cd
+        let ports: Vec<(Span, Cow<expr::Expr>)> = cd
             .ports
             .iter()
-            .map(|p| parse(p).map(|e| (p, e)))
+            .map(|p| p.tree().map(|e| (p.span(), e)))
             .collect::<Result<_, _>>()?;
         let trigger = match &cd.kind {
             ConnectorKindDef::Rendezvous => None,
-            ConnectorKindDef::Broadcast { trigger } => Some((trigger, parse(trigger)?)),
+            ConnectorKindDef::Broadcast { trigger } => Some((trigger.span(), trigger.tree()?)),
         };
-        let guard = cd
-            .guard
-            .as_ref()
-            .map(|g| parse(g).map(|e| (g, e)))
-            .transpose()?;
-        let action = match &cd.action {
-            None => None,
-            Some(a) => Some((a, parse_action(a).map_err(|e| parse_error(a, e))?)),
-        };
+        let guard = cd.guard.as_ref().map(ExprDef::tree).transpose()?;
+        let action = cd.action.as_ref().map(ActionDef::tree).transpose()?;
 
         let id = self.connectors.len() as u32;
         let start = self.interactions.len() as u32;
@@ -787,10 +772,10 @@ impl Compiler {
         id: u32,
         name: String,
         fixed: &[(&str, i64)],
-        ports: &[(&Text, expr::Expr)],
-        trigger: &Option<(&Text, expr::Expr)>,
-        guard: &Option<(&Text, expr::Expr)>,
-        action: &Option<(&Text, Vec<expr::Assign>)>,
+        ports: &[(Span, Cow<expr::Expr>)],
+        trigger: &Option<(Span, Cow<expr::Expr>)>,
+        guard: &Option<Cow<expr::Expr>>,
+        action: &Option<Cow<[expr::Assign]>>,
     ) -> Result<Interaction, ModelError> {
         let names = self.names();
         let mut r = Resolver::new(&names, Place::Global, fixed);
@@ -798,9 +783,9 @@ impl Compiler {
             Some((v, i)) => format!(" (in instance {v} = {i})"),
             None => String::new(),
         };
-        let mut port_ref = |text: &Text, e: &expr::Expr| -> Result<PortRef, ModelError> {
+        let mut port_ref = |e: &expr::Expr| -> Result<PortRef, ModelError> {
             let (comp, member) = r.static_member(e).map_err(|err| {
-                let mut m = expr_error(text, err);
+                let mut m = expr_error(err);
                 m.message.push_str(&at(fixed));
                 m
             })?;
@@ -812,7 +797,7 @@ impl Compiler {
                 }),
                 None => Err(ModelError::new(
                     format!("atom `{}` has no port `{}`", atom.name, member.name),
-                    text.sub_span(member.span.start..member.span.end),
+                    member.span,
                 )
                 .with_help(one_of(
                     "its ports are",
@@ -822,18 +807,18 @@ impl Compiler {
         };
         let mut refs = Vec::with_capacity(ports.len() + 1);
         let mut spans = Vec::with_capacity(ports.len() + 1);
-        for (text, e) in ports {
-            refs.push(port_ref(text, e)?);
-            spans.push(text.span);
+        for (span, e) in ports {
+            refs.push(port_ref(e)?);
+            spans.push(*span);
         }
         let mut trigger_pos = None;
-        if let Some((text, e)) = trigger {
-            let t = port_ref(text, e)?;
+        if let Some((span, e)) = trigger {
+            let t = port_ref(e)?;
             match refs.iter().position(|p| *p == t) {
                 Some(k) => trigger_pos = Some(k as u32),
                 None => {
                     refs.insert(0, t);
-                    spans.insert(0, text.span);
+                    spans.insert(0, *span);
                     trigger_pos = Some(0);
                 }
             }
@@ -856,17 +841,17 @@ impl Compiler {
         let mut r = Resolver::new(&names, Place::Global, fixed);
         let guard = match guard {
             None => None,
-            Some((text, e)) => Some(r.expect(e, Ty::Bool).map_err(|err| {
-                let mut m = expr_error(text, err);
+            Some(e) => Some(r.expect(e, Ty::Bool).map_err(|err| {
+                let mut m = expr_error(err);
                 m.message.push_str(&at(fixed));
                 m
             })?),
         };
         let mut assigns = Vec::new();
-        if let Some((text, list)) = action {
-            for a in list {
+        if let Some(list) = action {
+            for a in list.iter() {
                 let fail = |err: ResolveError| {
-                    let mut m = expr_error(text, err);
+                    let mut m = expr_error(err);
                     m.message.push_str(&at(fixed));
                     m
                 };
@@ -880,7 +865,7 @@ impl Compiler {
                             cd.name,
                             at(fixed)
                         ),
-                        text.sub_span(a.target.span.start..a.target.span.end),
+                        a.target.span,
                     ));
                 }
                 let c = &self.components[comp as usize];
@@ -888,7 +873,7 @@ impl Compiler {
                 let Some(v) = atom.var_index(&member.name) else {
                     return Err(ModelError::new(
                         format!("atom `{}` has no variable `{}`", atom.name, member.name),
-                        text.sub_span(member.span.start..member.span.end),
+                        member.span,
                     ));
                 };
                 let ty = match atom.vars[v as usize].ty {
@@ -927,7 +912,7 @@ impl Compiler {
                     high,
                     when,
                     text: format!("{} < {}", p.low, p.high),
-                    span: p.low.span,
+                    span: p.low.span(),
                 });
             }
         }
@@ -942,11 +927,11 @@ impl Compiler {
 
     /// `"left"` (every instance of a connector) or `"left[3]"` (the instance for the
     /// `forall` value 3) as a range of interactions.
-    fn priority_target(&mut self, t: &Text) -> Option<std::ops::Range<u32>> {
-        let e = match parse_expr(t) {
+    fn priority_target(&mut self, t: &ExprDef) -> Option<std::ops::Range<u32>> {
+        let e = match t.tree() {
             Ok(e) => e,
             Err(e) => {
-                self.errors.push(parse_error(t, e));
+                self.errors.push(e);
                 return None;
             }
         };
@@ -959,13 +944,16 @@ impl Compiler {
             _ => (&String::new(), None),
         };
         let Some(&c) = self.connector_by_name.get(name.as_str()) else {
+            if self.failed_connectors.contains(name.as_str()) {
+                return None;
+            }
             let msg = if name.is_empty() {
                 "expected a connector name or `connector[index]`".to_string()
             } else {
                 format!("unknown connector `{name}`")
             };
             self.errors
-                .push(ModelError::new(msg, t.span).with_help(one_of(
+                .push(ModelError::new(msg, t.span()).with_help(one_of(
                     "the connectors are",
                     self.connectors.iter().map(|c| c.name.as_str()),
                 )));
@@ -979,7 +967,7 @@ impl Compiler {
             self.errors.push(
                 ModelError::new(
                     format!("connector `{name}` has no `forall`; it has no instances"),
-                    t.span,
+                    t.span(),
                 )
                 .with_help(format!("write `{name}`")),
             );
@@ -989,7 +977,7 @@ impl Compiler {
         let value = match Resolver::new(&names, Place::Constant, &[]).constant(idx, Ty::Int) {
             Ok(v) => v,
             Err(e) => {
-                self.errors.push(expr_error(t, e));
+                self.errors.push(expr_error(e));
                 return None;
             }
         };
@@ -1001,7 +989,7 @@ impl Compiler {
             None => {
                 self.errors.push(ModelError::new(
                     format!("connector `{name}` has no instance {value}"),
-                    t.sub_span(idx.span.start..idx.span.end),
+                    idx.span,
                 ));
                 None
             }
@@ -1014,7 +1002,7 @@ impl Compiler {
         for p in &def.properties {
             let (name_span, text) = match p {
                 PropertyDef::DeadlockFree { terminal } => (
-                    terminal.as_ref().map_or(Span::NONE, |t| t.span),
+                    terminal.as_ref().map_or(Span::NONE, ExprDef::span),
                     terminal.as_ref(),
                 ),
                 PropertyDef::Invariant { name, expr } | PropertyDef::Reachable { name, expr } => {
@@ -1048,36 +1036,39 @@ impl Compiler {
             out.push(Property {
                 name,
                 kind,
-                text: text.map(|t| t.value.clone()).unwrap_or_default(),
+                text: text.map(ExprDef::to_string).unwrap_or_default(),
             });
         }
         out
     }
 
     /// Parses and resolves a global boolean expression (property, priority condition).
-    fn global_bool(&mut self, t: &Text) -> Option<eval::Expr> {
-        let e = match parse_expr(t) {
-            Ok(e) => e,
+    fn global_bool(&mut self, t: &ExprDef) -> Option<eval::Expr> {
+        match t.tree() {
+            Ok(e) => self.global_bool_tree(&e),
             Err(e) => {
-                self.errors.push(parse_error(t, e));
-                return None;
+                self.errors.push(e);
+                None
             }
-        };
+        }
+    }
+
+    fn global_bool_tree(&mut self, e: &expr::Expr) -> Option<eval::Expr> {
         let names = self.names();
         let mut r = Resolver::new(&names, Place::Global, &[]);
-        match r.expect(&e, Ty::Bool) {
+        match r.expect(e, Ty::Bool) {
             Ok(c) => Some(c),
             Err(e) => {
-                self.errors.push(expr_error(t, e));
+                self.errors.push(expr_error(e));
                 None
             }
         }
     }
 }
 
-fn forall_bound(f: &Spanned<String>, mut e: ResolveError) -> ModelError {
+fn forall_bound(mut e: ResolveError) -> ModelError {
     if e.message.starts_with("expected a constant") {
         e.message = "`forall` bounds must be constant expressions".into();
     }
-    expr_error(f, e)
+    expr_error(e)
 }

@@ -211,12 +211,6 @@ pub fn action_to_string(action: &[Assign]) -> String {
         .join("; ")
 }
 
-/// An expression's text printed back with the fewest parentheses; a text that does not
-/// parse is kept as it is (the compiler reports it where it was written).
-pub fn reprint(text: &str) -> String {
-    parse_expr(text).map_or_else(|_| text.to_string(), |e| e.to_string())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -7,52 +7,75 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use super::check::{ConstraintKind, Layer, Module, PortRef, Service, ServiceRef, Yield, ETHER};
 use super::names::*;
-use super::origin::{Origins, Src};
 use super::recipe::{Recipe, RecipeCodel, RecipeCondition, RecipeModule, RecipeService};
+use super::tree::{all, and, assign, at, binary, boolean, chain, cond, int, member, name, not, or};
+use crate::compile::one_of;
 use crate::diag::{Errors, ModelError};
-use crate::expr::{parse_expr, reprint, ExprKind};
+use crate::expr::{Assign, BinOp, Expr, ExprKind};
 use crate::source::{ConstExpr, ConstValue, OrderedMap, Span, Spanned};
 use crate::syntax::{
-    AtomDef, ComponentDef, ConnectorDef, ConnectorKindDef, PriorityDef, PropertyDef, Role,
-    SystemDef, Text, TransitionDef, TypeDef, VarDef,
+    ActionDef, AtomDef, ComponentDef, ConnectorDef, ConnectorKindDef, ExprDef, PriorityDef,
+    PropertyDef, Role, SystemDef, Text, TransitionDef, TypeDef, VarDef,
 };
 use bip_model::genom::map::Reason;
 
-/// The result of expanding a model: its core form, the recipe of the engine's map, and
-/// where the expanded texts come from (compile it with [`Expansion::compile`], which puts
-/// errors back at their places in the model's file).
+/// The result of expanding a model: its core form and the recipe of the engine's map
+/// (compile it with [`Expansion::compile`]).
 pub struct Expansion {
     /// The expanded model: BIP core only.
     pub def: SystemDef,
     pub(crate) recipe: Recipe,
-    pub(crate) origins: Origins,
+}
+
+/// A user's expression as the expansion uses it: its tree (positions in the file) and
+/// whether rewriting GenoM names changed it (if not, the core keeps the text as written).
+#[derive(Clone)]
+pub(super) struct UserExpr<T> {
+    pub tree: T,
+    pub rewritten: bool,
+}
+
+impl<T: Clone> UserExpr<T> {
+    /// What the core holds: the text as written, or the rewritten tree.
+    fn def<D: Clone + From<T>>(&self, written: &D) -> D {
+        if self.rewritten {
+            D::from(self.tree.clone())
+        } else {
+            written.clone()
+        }
+    }
 }
 
 /// The user texts the expansion needs (rewritten where they name GenoM things), by place.
 #[derive(Default)]
 pub(super) struct UserTexts {
     /// `Guard` constraints' conditions, by constraint index.
-    pub guards: HashMap<usize, Src>,
+    pub guards: HashMap<usize, Expr>,
     /// User connectors' guards and actions, by connector index.
-    pub connector_guards: HashMap<usize, Src>,
-    pub connector_actions: HashMap<usize, Src>,
-    pub priority_whens: HashMap<usize, Src>,
-    pub properties: HashMap<usize, Src>,
+    pub connector_guards: HashMap<usize, UserExpr<Expr>>,
+    pub connector_actions: HashMap<usize, UserExpr<Vec<Assign>>>,
+    pub priority_whens: HashMap<usize, UserExpr<Expr>>,
+    pub properties: HashMap<usize, UserExpr<Expr>>,
 }
 
 /// A condition of a request or a codel, while the expansion builds it.
 #[derive(Clone)]
 struct Cond {
     reason: Reason,
-    src: Src,
+    expr: Expr,
 }
 
 fn text(s: impl Into<String>) -> Text {
     Spanned::generated(s.into())
 }
 
+/// `comp.port`, a port of a generated connector.
+fn port(comp: &str, port: &str) -> ExprDef {
+    ExprDef::Built(member(comp, port))
+}
+
 /// A generated rendezvous connector (guards and actions are set when it is finished).
-fn connector(name: &str, ports: Vec<Text>, role: Role) -> ConnectorDef {
+fn connector(name: &str, ports: Vec<ExprDef>, role: Role) -> ConnectorDef {
     ConnectorDef {
         name: text(name),
         forall: None,
@@ -65,18 +88,19 @@ fn connector(name: &str, ports: Vec<Text>, role: Role) -> ConnectorDef {
 }
 
 /// A generated transition.
-fn tr(from: &str, port: &str, to: &str, guard: Option<String>, action: &[String]) -> TransitionDef {
+fn tr(from: &str, port: &str, to: &str, guard: Option<Expr>, action: Vec<Assign>) -> TransitionDef {
     TransitionDef {
         from: text(from),
         port: Some(text(port)),
         to: text(to),
-        guard: guard.map(text),
-        action: if action.is_empty() {
-            None
-        } else {
-            Some(text(action.join("; ")))
-        },
+        guard: guard.map(ExprDef::Built),
+        action: (!action.is_empty()).then_some(ActionDef::Built(action)),
     }
+}
+
+/// `var = b`, for an atom's own boolean.
+fn set(var: &str, b: bool) -> Assign {
+    assign(name(var), boolean(b))
 }
 
 fn var(name: &str, ty: TypeDef, init: Option<i64>) -> VarDef {
@@ -118,17 +142,17 @@ struct Builder<'a, 'd> {
     activity_components: HashSet<String>,
     /// Generated connectors, their guards and actions kept apart until user connectors
     /// have extended them.
-    connectors: Vec<(ConnectorDef, Option<Src>, Option<Src>)>,
+    connectors: Vec<(ConnectorDef, Option<Expr>, Vec<Assign>)>,
     recipe: Recipe,
-    origins: Origins,
 }
 
+/// `caps`: for each port whose age is read, its cap (one more than the largest constant
+/// it is compared with).
 pub(super) fn build(
     layer: &Layer<'_>,
     def: &SystemDef,
-    ages: BTreeMap<PortRef, i64>,
+    caps: BTreeMap<PortRef, i64>,
     user: UserTexts,
-    origins: Origins,
 ) -> Result<Expansion, Vec<ModelError>> {
     let mut tracked = HashSet::new();
     for (mi, m) in layer.modules.iter().enumerate() {
@@ -141,7 +165,6 @@ pub(super) fn build(
             }
         }
     }
-    let caps = ages.into_iter().map(|(p, k)| (p, k.max(0) + 1)).collect();
     let mut b = Builder {
         layer,
         def,
@@ -154,7 +177,6 @@ pub(super) fn build(
         activity_components: HashSet::new(),
         connectors: Vec::new(),
         recipe: Recipe::default(),
-        origins,
     };
     for mi in 0..layer.modules.len() {
         b.recipe_module(mi);
@@ -282,7 +304,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             initial: text("on"),
             ports: vec![text("tick")],
             vars,
-            transitions: vec![tr("on", "tick", "on", None, &[])],
+            transitions: vec![tr("on", "tick", "on", None, Vec::new())],
         };
         let span = self
             .layer
@@ -311,10 +333,10 @@ impl<'a, 'd> Builder<'a, 'd> {
             }) {
                 let d = done_var(s.name);
                 vars.push(var(&d, TypeDef::Bool, Some(0)));
-                action.push(format!("{d} = true"));
+                action.push(set(&d, true));
                 reserved.push((d, s.def.name.span));
             }
-            transitions.push(tr("on", s.name, "on", None, &action));
+            transitions.push(tr("on", s.name, "on", None, action));
         }
         let aged: Vec<(usize, i64)> = self
             .caps
@@ -333,7 +355,7 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
         if !aged.is_empty() {
             ports.push(text("tick"));
-            transitions.push(tr("on", "tick", "on", None, &[]));
+            transitions.push(tr("on", "tick", "on", None, Vec::new()));
             // a codel that writes ids joins through its own port (below) instead
             let writes = m.services.iter().any(|s| {
                 s.codels.iter().any(|c| {
@@ -342,7 +364,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             });
             if writes {
                 ports.push(text("write"));
-                transitions.push(tr("on", "write", "on", None, &[]));
+                transitions.push(tr("on", "write", "on", None, Vec::new()));
             }
         }
         // a codel that writes ids: one transition per combination of the values it may
@@ -361,12 +383,12 @@ impl<'a, 'd> Builder<'a, 'd> {
                 ports.push(text(&port));
                 let mut values: Vec<i64> = fields.iter().map(|f| f.1).collect();
                 loop {
-                    let action: Vec<String> = fields
+                    let action: Vec<Assign> = fields
                         .iter()
                         .zip(&values)
-                        .map(|(f, v)| format!("{} = {}", f.0, ids_literal(m, f.0, *v)))
+                        .map(|(f, v)| assign(name(f.0), ids_literal(m, f.0, *v)))
                         .collect();
-                    transitions.push(tr("on", &port, "on", None, &action));
+                    transitions.push(tr("on", &port, "on", None, action));
                     // advance the odometer, last field fastest
                     let mut k = fields.len();
                     loop {
@@ -442,32 +464,31 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
         let mut ports = vec![text("request")];
         let mut t = Vec::new();
-        let set = |xs: &[&str]| xs.iter().map(|x| x.to_string()).collect::<Vec<_>>();
         // requests
         t.push(tr(
             ETHER,
             "request",
             ETHER,
-            Some(format!("!{REQ}")),
-            &set(&["req = true", "paused = true"]),
+            Some(not(name(REQ))),
+            vec![set(REQ, true), set(PAUSED, true)],
         ));
         if self_int {
-            t.push(tr(ETHER, "request", ETHER, Some(REQ.into()), &[]));
+            t.push(tr(ETHER, "request", ETHER, Some(name(REQ)), Vec::new()));
             for l in &locs {
                 if has_stop {
                     t.push(tr(
                         l,
                         "request",
                         "stop",
-                        Some(format!("!{STOPPING}")),
-                        &set(&["stopping = true", "req = true"]),
+                        Some(not(name(STOPPING))),
+                        vec![set(STOPPING, true), set(REQ, true)],
                     ));
                     t.push(tr(
                         l,
                         "request",
                         l,
-                        Some(STOPPING.into()),
-                        &set(&["req = true"]),
+                        Some(name(STOPPING)),
+                        vec![set(REQ, true)],
                     ));
                 } else {
                     t.push(tr(
@@ -475,7 +496,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         "request",
                         ETHER,
                         None,
-                        &set(&["req = true", "paused = true"]),
+                        vec![set(REQ, true), set(PAUSED, true)],
                     ));
                 }
             }
@@ -488,8 +509,8 @@ impl<'a, 'd> Builder<'a, 'd> {
                     l,
                     port,
                     "stop",
-                    Some(format!("!{STOPPING}")),
-                    &set(&["stopping = true", "req = false"]),
+                    Some(not(name(STOPPING))),
+                    vec![set(STOPPING, true), set(REQ, false)],
                 ));
             } else {
                 t.push(tr(
@@ -497,7 +518,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                     port,
                     ETHER,
                     None,
-                    &set(&["req = false", "paused = false"]),
+                    vec![set(REQ, false), set(PAUSED, false)],
                 ));
             }
         };
@@ -508,7 +529,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 "interrupt",
                 ETHER,
                 None,
-                &set(&["req = false", "paused = false"]),
+                vec![set(REQ, false), set(PAUSED, false)],
             ));
             for l in &locs {
                 stop_or_end(&mut t, "interrupt", l);
@@ -517,8 +538,8 @@ impl<'a, 'd> Builder<'a, 'd> {
                         l,
                         "interrupt",
                         l,
-                        Some(STOPPING.into()),
-                        &set(&["req = false"]),
+                        Some(name(STOPPING)),
+                        vec![set(REQ, false)],
                     ));
                 }
             }
@@ -530,8 +551,8 @@ impl<'a, 'd> Builder<'a, 'd> {
             ETHER,
             "abort",
             ETHER,
-            Some(REQ.into()),
-            &set(&["req = false", "paused = false"]),
+            Some(name(REQ)),
+            vec![set(REQ, false), set(PAUSED, false)],
         ));
         for l in &locs {
             stop_or_end(&mut t, "abort", l);
@@ -540,16 +561,16 @@ impl<'a, 'd> Builder<'a, 'd> {
                     l,
                     "abort",
                     l,
-                    Some(format!("{STOPPING} && {REQ}")),
-                    &set(&["req = false"]),
+                    Some(and(name(STOPPING), name(REQ))),
+                    vec![set(REQ, false)],
                 ));
             }
         }
         // time: the tick connector's action clears `paused` at the task's period
         ports.push(text("tick"));
-        t.push(tr(ETHER, "tick", ETHER, None, &[]));
+        t.push(tr(ETHER, "tick", ETHER, None, Vec::new()));
         for l in &locs {
-            t.push(tr(l, "tick", l, None, &[]));
+            t.push(tr(l, "tick", l, None, Vec::new()));
         }
         // codels: one transition per yield, from each place the codel runs from
         for c in &s.codels {
@@ -557,36 +578,40 @@ impl<'a, 'd> Builder<'a, 'd> {
             // every codel has an error path: a declared exception, or what the engine does
             // with a codel that panics, yields something undeclared or leaves a range
             ports.push(text(fail_port(c.state)));
-            let mut sources: Vec<(&str, String, Vec<String>)> = Vec::new();
+            let mut sources: Vec<(&str, Expr, Vec<Assign>)> = Vec::new();
             if c.state == "start" {
-                sources.push((ETHER, format!("{REQ} && !{PAUSED}"), set(&["req = false"])));
+                sources.push((
+                    ETHER,
+                    and(name(REQ), not(name(PAUSED))),
+                    vec![set(REQ, false)],
+                ));
             }
             if locs.contains(&c.state) {
-                sources.push((c.state, format!("!{PAUSED}"), Vec::new()));
+                sources.push((c.state, not(name(PAUSED)), Vec::new()));
             }
             let mut end = Vec::new();
             if has_stop {
-                end.push("stopping = false".to_string());
+                end.push(set(STOPPING, false));
             }
-            end.push("paused = req".to_string());
+            end.push(assign(name(PAUSED), name(REQ)));
             for (from, guard, pre) in &sources {
                 for y in &c.yields {
                     let mut action = pre.clone();
                     let to = match *y {
                         Yield::Go(k) => s.codels[k].state,
                         Yield::Pause(k) => {
-                            action.push("paused = true".into());
+                            action.push(set(PAUSED, true));
                             s.codels[k].state
                         }
                         Yield::Ether => {
                             if tracked {
-                                action.push("done = true".into());
+                                action.push(set(DONE, true));
                             }
                             action.extend(end.iter().cloned());
                             ETHER
                         }
                     };
-                    t.push(tr(from, c.state, to, Some(guard.clone()), &action));
+                    t.push(tr(from, c.state, to, Some(guard.clone()), action));
                 }
                 let mut action = pre.clone();
                 action.extend(end.iter().cloned());
@@ -595,7 +620,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                     &fail_port(c.state),
                     ETHER,
                     Some(guard.clone()),
-                    &action,
+                    action,
                 ));
             }
         }
@@ -620,10 +645,12 @@ impl<'a, 'd> Builder<'a, 'd> {
 
     fn tick(&mut self) {
         let l = self.phase_len();
-        let mut ports = vec![text(format!("{CLOCK}.tick"))];
+        let mut ports = vec![port(CLOCK, "tick")];
         let mut action = Vec::new();
         if l > 1 {
-            action.push(format!("{CLOCK}.{PHASE} = ({CLOCK}.{PHASE} + 1) % {l}"));
+            let phase = member(CLOCK, PHASE);
+            let next = binary(BinOp::Add, phase.clone(), int(1));
+            action.push(assign(phase, binary(BinOp::Rem, next, int(l))));
         }
         for (mi, m) in self.layer.modules.iter().enumerate() {
             for s in &m.services {
@@ -631,14 +658,18 @@ impl<'a, 'd> Builder<'a, 'd> {
                     continue;
                 };
                 let c = activity_component(m.name, s.name);
-                ports.push(text(format!("{c}.tick")));
+                ports.push(port(&c, "tick"));
                 let p = m.tasks[task].1;
+                let paused = member(&c, PAUSED);
                 if p == 1 {
-                    action.push(format!("{c}.{PAUSED} = false"));
+                    action.push(assign(paused, boolean(false)));
                 } else {
-                    action.push(format!(
-                        "{c}.{PAUSED} = {c}.{PAUSED} && {CLOCK}.{PHASE} % {p} != 0"
-                    ));
+                    let off_period = binary(
+                        BinOp::Ne,
+                        binary(BinOp::Rem, member(CLOCK, PHASE), int(p)),
+                        int(0),
+                    );
+                    action.push(assign(paused.clone(), and(paused, off_period)));
                 }
             }
             let aged: Vec<(usize, i64)> = self
@@ -649,10 +680,15 @@ impl<'a, 'd> Builder<'a, 'd> {
                 .collect();
             if !aged.is_empty() {
                 let c = module_component(m.name);
-                ports.push(text(format!("{c}.tick")));
+                ports.push(port(&c, "tick"));
                 for (p, cap) in aged {
-                    let a = format!("{c}.{}", age_var(m.ports[p]));
-                    action.push(format!("{a} = {a} < {cap} ? {a} + 1 : {cap}"));
+                    let a = member(&c, &age_var(m.ports[p]));
+                    let older = cond(
+                        binary(BinOp::Lt, a.clone(), int(cap)),
+                        binary(BinOp::Add, a.clone(), int(1)),
+                        int(cap),
+                    );
+                    action.push(assign(a, older));
                 }
             }
         }
@@ -662,11 +698,10 @@ impl<'a, 'd> Builder<'a, 'd> {
             .first()
             .map_or(Span::NONE, |m| m.def.name.span);
         self.claim(TICK, span, "the clock's tick".into());
-        let action = (!action.is_empty()).then(|| Src::gen(action.join("; ")));
         self.connectors.push((
             ConnectorDef {
                 kind: ConnectorKindDef::Broadcast {
-                    trigger: text(format!("{CLOCK}.tick")),
+                    trigger: port(CLOCK, "tick"),
                 },
                 ..connector(TICK, ports, Role::Time)
             },
@@ -692,45 +727,29 @@ impl<'a, 'd> Builder<'a, 'd> {
                     reason: Reason::Interrupting {
                         service: format!("{m}.{}", self.service(target).name),
                     },
-                    src: Src::gen(format!("{}@{ETHER}", self.comp(target))),
+                    expr: at(&self.comp(target), ETHER),
                 });
             }
         }
         for (ci, c) in self.layer.constraints.iter().enumerate() {
-            let reason = Reason::Constraint {
-                index: ci,
-                kind: c.def.kind().to_string(),
-            };
-            let others = |list: &[ServiceRef], f: &dyn Fn(String) -> String| -> Vec<String> {
+            let reason = c.reason.clone();
+            let others = |list: &[ServiceRef], f: &dyn Fn(String) -> Expr| -> Vec<Expr> {
                 list.iter()
                     .filter(|&&y| y != r)
                     .map(|&y| f(self.comp(y)))
                     .collect()
             };
-            match &c.kind {
+            let expr = match &c.kind {
                 ConstraintKind::Exclusive(list) if list.contains(&r) => {
-                    let at_ether = others(list, &|c| format!("{c}@{ETHER}"));
-                    start.push(Cond {
-                        reason,
-                        src: Src::gen(at_ether.join(" && ")),
-                    });
+                    all(others(list, &|c| at(&c, ETHER)))
                 }
                 ConstraintKind::AtMost { max, services } if services.contains(&r) => {
-                    let count = others(services, &|c| format!("({c}@{ETHER} ? 0 : 1)"));
-                    start.push(Cond {
-                        reason,
-                        src: Src::gen(reprint(&format!("{} < {max}", count.join(" + ")))),
-                    });
+                    let active = |c: String| cond(at(&c, ETHER), int(0), int(1));
+                    chain(BinOp::Add, others(services, &active))
+                        .map(|count| binary(BinOp::Lt, count, int(*max)))
                 }
                 ConstraintKind::Requires { service, active } if *service == r => {
-                    let active: Vec<String> = active
-                        .iter()
-                        .map(|&y| format!("!{}@{ETHER}", self.comp(y)))
-                        .collect();
-                    run.push(Cond {
-                        reason,
-                        src: Src::gen(active.join(" && ")),
-                    });
+                    all(active.iter().map(|&y| not(at(&self.comp(y), ETHER))))
                 }
                 ConstraintKind::Fresh {
                     service,
@@ -738,37 +757,22 @@ impl<'a, 'd> Builder<'a, 'd> {
                     max_age,
                 } if *service == r => {
                     let pm = &self.layer.modules[port.module];
-                    let age = format!(
-                        "{}.{}",
-                        module_component(pm.name),
-                        age_var(pm.ports[port.port])
-                    );
-                    run.push(Cond {
-                        reason,
-                        src: Src::gen(format!("{age} <= {max_age}")),
-                    });
+                    let age = member(&module_component(pm.name), &age_var(pm.ports[port.port]));
+                    Some(binary(BinOp::Le, age, int(*max_age)))
                 }
                 ConstraintKind::Guard { service, .. } if *service == r => {
-                    if let Some(src) = user.guards.get(&ci) {
-                        run.push(Cond {
-                            reason,
-                            src: src.clone(),
-                        });
-                    }
+                    user.guards.get(&ci).cloned()
                 }
-                _ => {}
+                _ => None,
+            };
+            let Some(expr) = expr else { continue };
+            let cond = Cond { reason, expr };
+            match &c.kind {
+                ConstraintKind::Exclusive(_) | ConstraintKind::AtMost { .. } => start.push(cond),
+                _ => run.push(cond),
             }
         }
         (start, run)
-    }
-
-    /// A condition for the engine's map: its text, and the text to compile.
-    fn recipe_condition(&mut self, c: &Cond) -> RecipeCondition {
-        RecipeCondition {
-            reason: c.reason.clone(),
-            text: c.src.plain(),
-            compiled: self.origins.text(c.src.clone()),
-        }
     }
 
     fn service_connectors(&mut self, r: ServiceRef, user: &UserTexts) {
@@ -779,22 +783,23 @@ impl<'a, 'd> Builder<'a, 'd> {
         let mut ports = Vec::new();
         let mut refusals = Vec::new();
         if s.is_activity() {
-            ports.push(text(format!("{}.request", self.comp(r))));
+            let comp = self.comp(r);
+            ports.push(port(&comp, "request"));
             if !s.interrupts_itself(r.service) {
                 refusals.push(Cond {
                     reason: Reason::AlreadyRequested,
-                    src: Src::gen(format!("{0}@{ETHER} && !{0}.{REQ}", self.comp(r))),
+                    expr: and(at(&comp, ETHER), not(member(&comp, REQ))),
                 });
             }
         } else {
-            ports.push(text(format!("{}.{}", module_component(m), s.name)));
+            ports.push(port(&module_component(m), s.name));
         }
         for &x in s.interrupts.iter().filter(|&&x| x != r.service) {
             let target = ServiceRef {
                 module: r.module,
                 service: x,
             };
-            ports.push(text(format!("{}.interrupt", self.comp(target))));
+            ports.push(port(&self.comp(target), "interrupt"));
         }
         for &a in &s.after {
             let target = ServiceRef {
@@ -803,15 +808,15 @@ impl<'a, 'd> Builder<'a, 'd> {
             };
             let t = self.service(target);
             let flag = if t.is_activity() {
-                format!("{}.{DONE}", self.comp(target))
+                member(&self.comp(target), DONE)
             } else {
-                format!("{}.{}", module_component(m), done_var(t.name))
+                member(&module_component(m), &done_var(t.name))
             };
             refusals.push(Cond {
                 reason: Reason::After {
                     service: format!("{m}.{}", t.name),
                 },
-                src: Src::gen(flag),
+                expr: flag,
             });
         }
         if !s.is_activity() {
@@ -819,22 +824,22 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
         // the request port's own guards say "already requested"; the others guard the
         // connector
-        let guard = Src::and(
-            refusals
-                .iter()
-                .filter(|c| c.reason != Reason::AlreadyRequested)
-                .map(|c| c.src.clone())
-                .collect(),
-        );
+        let guard = all(refusals
+            .iter()
+            .filter(|c| c.reason != Reason::AlreadyRequested)
+            .map(|c| c.expr.clone()));
         let name = request_connector(m, s.name);
         self.claim(
             &name,
             s.def.name.span,
             format!("requests of `{m}.{}`", s.name),
         );
-        self.connectors
-            .push((connector(&name, ports, Role::Environment), guard, None));
-        let refusals = refusals.iter().map(|c| self.recipe_condition(c)).collect();
+        self.connectors.push((
+            connector(&name, ports, Role::Environment),
+            guard,
+            Vec::new(),
+        ));
+        let refusals = refusals.into_iter().map(RecipeCondition::from).collect();
         let mut service = RecipeService {
             name: s.name.to_string(),
             kind: s.kind,
@@ -858,31 +863,31 @@ impl<'a, 'd> Builder<'a, 'd> {
             if c.state == "start" {
                 for sc in &start_conds {
                     // a start condition applies to starting, not to re-entering `start`
-                    let src = if start_is_location {
-                        sc.src.clone().or_after(&format!("!{comp}@{ETHER}"))
+                    let expr = if start_is_location {
+                        or(not(at(&comp, ETHER)), sc.expr.clone())
                     } else {
-                        sc.src.clone()
+                        sc.expr.clone()
                     };
                     holds.push(Cond {
                         reason: sc.reason.clone(),
-                        src,
+                        expr,
                     });
                 }
             }
             for rc in &run_conds {
                 // the stop path is not gated
-                let src = if s.stop.is_some() {
-                    rc.src.clone().or_after(&format!("{comp}.{STOPPING}"))
+                let expr = if s.stop.is_some() {
+                    or(member(&comp, STOPPING), rc.expr.clone())
                 } else {
-                    rc.src.clone()
+                    rc.expr.clone()
                 };
                 holds.push(Cond {
                     reason: rc.reason.clone(),
-                    src,
+                    expr,
                 });
             }
-            let guard = Src::and(holds.iter().map(|h| h.src.clone()).collect());
-            let mut ports = vec![text(format!("{comp}.{}", c.state))];
+            let guard = all(holds.iter().map(|h| h.expr.clone()));
+            let mut ports = vec![port(&comp, c.state)];
             let mut action = Vec::new();
             let mi = r.module;
             for &w in &c.writes {
@@ -890,20 +895,14 @@ impl<'a, 'd> Builder<'a, 'd> {
                     module: mi,
                     port: w,
                 }) {
-                    action.push(format!(
-                        "{m}.{} = 0",
-                        age_var(self.layer.modules[mi].ports[w])
-                    ));
+                    let age = age_var(self.layer.modules[mi].ports[w]);
+                    action.push(assign(member(&module_component(m), &age), int(0)));
                 }
             }
             if !c.ids.is_empty() {
-                ports.push(text(format!(
-                    "{}.{}",
-                    module_component(m),
-                    ids_port(s.name, c.state)
-                )));
+                ports.push(port(&module_component(m), &ids_port(s.name, c.state)));
             } else if !action.is_empty() {
-                ports.push(text(format!("{}.write", module_component(m))));
+                ports.push(port(&module_component(m), "write"));
             }
             let run = codel_connector(m, s.name, c.state);
             let span = c.def.state.span;
@@ -912,7 +911,6 @@ impl<'a, 'd> Builder<'a, 'd> {
                 span,
                 format!("codel `{}` of `{m}.{}`", c.state, s.name),
             );
-            let action = (!action.is_empty()).then(|| Src::gen(action.join("; ")));
             self.connectors.push((
                 connector(&run, ports, Role::Progress),
                 guard.clone(),
@@ -924,10 +922,13 @@ impl<'a, 'd> Builder<'a, 'd> {
                 span,
                 format!("error path of codel `{}` of `{m}.{}`", c.state, s.name),
             );
-            let fail_ports = vec![text(format!("{comp}.{}", fail_port(c.state)))];
-            self.connectors
-                .push((connector(&fail, fail_ports, Role::Progress), guard, None));
-            let holds = holds.iter().map(|h| self.recipe_condition(h)).collect();
+            let fail_ports = vec![port(&comp, &fail_port(c.state))];
+            self.connectors.push((
+                connector(&fail, fail_ports, Role::Progress),
+                guard,
+                Vec::new(),
+            ));
+            let holds = holds.into_iter().map(RecipeCondition::from).collect();
             service.codels.push(RecipeCodel {
                 state: c.state.to_string(),
                 run,
@@ -1034,8 +1035,8 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
         let mut connectors = Vec::with_capacity(generated.len() + def.connectors.len());
         for (mut g, guard, action) in generated {
-            g.guard = guard.map(|s| self.origins.text(s));
-            g.action = action.map(|s| self.origins.text(s));
+            g.guard = guard.map(ExprDef::Built);
+            g.action = (!action.is_empty()).then_some(ActionDef::Built(action));
             connectors.push(g);
         }
         for (k, c) in def.connectors.iter().enumerate() {
@@ -1044,11 +1045,11 @@ impl<'a, 'd> Builder<'a, 'd> {
             }
             self.check_user_ports(c, &generated_components);
             let mut c = c.clone();
-            if let Some(g) = user.connector_guards.get(&k) {
-                c.guard = Some(self.origins.text(g.clone()));
+            if let (Some(u), Some(written)) = (user.connector_guards.get(&k), &c.guard) {
+                c.guard = Some(u.def(written));
             }
-            if let Some(a) = user.connector_actions.get(&k) {
-                c.action = Some(self.origins.text(a.clone()));
+            if let (Some(u), Some(written)) = (user.connector_actions.get(&k), &c.action) {
+                c.action = Some(u.def(written));
             }
             connectors.push(c);
         }
@@ -1078,7 +1079,6 @@ impl<'a, 'd> Builder<'a, 'd> {
                 properties,
             },
             recipe: std::mem::take(&mut self.recipe),
-            origins: std::mem::take(&mut self.origins),
         }
     }
 
@@ -1087,13 +1087,14 @@ impl<'a, 'd> Builder<'a, 'd> {
     fn extend(
         &mut self,
         g: &mut ConnectorDef,
-        guard: &mut Option<Src>,
-        action: &mut Option<Src>,
+        guard: &mut Option<Expr>,
+        action: &mut Vec<Assign>,
         u: &ConnectorDef,
         k: usize,
         user: &UserTexts,
     ) {
         let is_tick = g.name.as_str() == TICK;
+        let trigger = format!("{CLOCK}.tick");
         if let Some(f) = &u.forall {
             self.errors.push(
                 ModelError::new(
@@ -1110,11 +1111,10 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
         match (&u.kind, is_tick) {
             (ConnectorKindDef::Rendezvous, _) => {}
-            (ConnectorKindDef::Broadcast { trigger }, true)
-                if trigger.as_str() == format!("{CLOCK}.tick") => {}
+            (ConnectorKindDef::Broadcast { trigger: t }, true) if t.to_string() == trigger => {}
             (ConnectorKindDef::Broadcast { trigger }, _) => {
                 self.errors.push(
-                    ModelError::new(format!("`{}` extends a generated connector; its kind is fixed", u.name), trigger.span)
+                    ModelError::new(format!("`{}` extends a generated connector; its kind is fixed", u.name), trigger.span())
                         .with_help(if is_tick {
                             "the tick is `Broadcast(trigger: \"clock.tick\")`; the ports you list join it as receivers"
                         } else {
@@ -1123,10 +1123,12 @@ impl<'a, 'd> Builder<'a, 'd> {
                 );
             }
         }
-        let trigger = format!("{CLOCK}.tick");
         for p in &u.ports {
-            if is_tick && p.as_str() == trigger {
+            if is_tick && p.to_string() == trigger {
                 continue;
+            }
+            if let Some(e) = self.unknown_generated_port(p) {
+                self.errors.push(e);
             }
             g.ports.push(p.clone());
         }
@@ -1157,21 +1159,24 @@ impl<'a, 'd> Builder<'a, 'd> {
                 s.owned_by_model = u.role != Role::Environment;
             }
         }
-        if let Some(ug) = user.connector_guards.get(&k) {
-            *guard = Src::and(guard.take().into_iter().chain([ug.clone()]).collect());
-            let cond = self.recipe_condition(&Cond {
-                reason: Reason::Connector,
-                src: ug.clone(),
+        if let (Some(ug), Some(written)) = (user.connector_guards.get(&k), &u.guard) {
+            *guard = Some(match guard.take() {
+                None => ug.tree.clone(),
+                Some(gg) => and(gg, ug.tree.clone()),
+            });
+            let cond = RecipeCondition::from(Cond {
+                reason: Reason::Connector {
+                    connector: u.name.value.clone(),
+                    guard: written.to_string(),
+                },
+                expr: ug.tree.clone(),
             });
             if let Some(s) = self.recipe_request_mut(g.name.as_str()) {
                 s.refusals.push(cond);
             }
         }
         if let Some(ua) = user.connector_actions.get(&k) {
-            *action = Some(match action.take() {
-                None => ua.clone(),
-                Some(ga) => ga.then(ua.clone()),
-            });
+            action.extend(ua.tree.iter().cloned());
         }
     }
 
@@ -1186,12 +1191,16 @@ impl<'a, 'd> Builder<'a, 'd> {
     /// A user connector that does not extend a generated one may not use generated ports:
     /// that would run a codel, or accept a request, outside the gates.
     fn check_user_ports(&mut self, c: &ConnectorDef, generated: &HashSet<String>) {
-        let mut texts: Vec<&Text> = c.ports.iter().collect();
+        let mut texts: Vec<&ExprDef> = c.ports.iter().collect();
         if let ConnectorKindDef::Broadcast { trigger } = &c.kind {
             texts.push(trigger);
         }
         for p in texts {
-            let Ok(e) = parse_expr(p) else { continue };
+            if let Some(e) = self.unknown_generated_port(p) {
+                self.errors.push(e);
+                continue;
+            }
+            let Ok(e) = p.tree() else { continue };
             let ExprKind::Member(base, port) = &e.kind else {
                 continue;
             };
@@ -1211,7 +1220,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 } else {
                     format!(
                         "name the connector like the generated one it should join (e.g. `{}`), or see docs/genom.md",
-                        self.connector_for_port(p.as_str()).unwrap_or_else(|| "rflex_TrackSpeed_request".into())
+                        self.connector_for_port(comp, &port.name).unwrap_or_else(|| "rflex_TrackSpeed_request".into())
                     )
                 };
                 self.errors.push(
@@ -1220,7 +1229,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                             "`{p}` is a generated port; connector `{}` cannot use it",
                             c.name
                         ),
-                        p.span,
+                        p.span(),
                     )
                     .with_help(help),
                 );
@@ -1228,17 +1237,34 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
     }
 
-    /// The generated connector that uses port `p`, for help texts.
-    fn connector_for_port(&self, p: &str) -> Option<String> {
-        self.names
-            .keys()
-            .filter(|n| {
-                // connectors are named `<component>_<port>` for codels and requests
-                p.split_once('.')
-                    .is_some_and(|(c, port)| n.as_str() == format!("{c}_{port}"))
-            })
-            .min()
-            .cloned()
+    /// A user's port `c.p` on a generated component `c` that has no port `p`, said of the
+    /// module or activity `c` stands for (the compiler would name the generated atom).
+    fn unknown_generated_port(&self, p: &ExprDef) -> Option<ModelError> {
+        let e = p.tree().ok()?;
+        let ExprKind::Member(base, port) = &e.kind else {
+            return None;
+        };
+        let ExprKind::Name(comp) = &base.kind else {
+            return None;
+        };
+        let c = self.components.iter().find(|c| c.name.as_str() == comp)?;
+        let (_, atom) = self.atoms.iter().find(|(n, _)| *n == c.atom)?;
+        if atom.ports.iter().any(|q| q.as_str() == port.name) {
+            return None;
+        }
+        let (_, what) = self.names.get(comp.as_str())?;
+        Some(
+            ModelError::new(format!("{what} has no port `{}`", port.name), port.span).with_help(
+                one_of("its ports are", atom.ports.iter().map(|q| q.as_str())),
+            ),
+        )
+    }
+
+    /// The generated connector that uses port `comp.port`, for help texts: connectors are
+    /// named `<component>_<port>` for codels and requests.
+    fn connector_for_port(&self, comp: &str, port: &str) -> Option<String> {
+        let wanted = format!("{comp}_{port}");
+        self.names.keys().filter(|n| **n == wanted).min().cloned()
     }
 
     /// Codels are urgent (the tick is below every codel step), requests wait for the
@@ -1263,8 +1289,8 @@ impl<'a, 'd> Builder<'a, 'd> {
             }
         }
         let pr = |low: &str, high: &str| PriorityDef {
-            low: text(low),
-            high: text(high),
+            low: ExprDef::Built(name(low)),
+            high: ExprDef::Built(name(high)),
             when: None,
         };
         let mut out = Vec::new();
@@ -1285,8 +1311,8 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
         for (k, p) in self.def.priorities.iter().enumerate() {
             let mut p = p.clone();
-            if let Some(w) = user.priority_whens.get(&k) {
-                p.when = Some(self.origins.text(w.clone()));
+            if let (Some(u), Some(written)) = (user.priority_whens.get(&k), &p.when) {
+                p.when = Some(u.def(written));
             }
             out.push(p);
         }
@@ -1310,68 +1336,67 @@ impl<'a, 'd> Builder<'a, 'd> {
                 .iter()
                 .filter(|c| requests.contains(c.name.as_str()))
                 .all(|c| c.role == Role::Environment);
-        let idle: Vec<String> = self
-            .recipe
-            .modules
-            .iter()
-            .flat_map(|m| m.services.iter())
-            .filter_map(|s| s.component.as_ref())
-            .map(|c| format!("{c}@{ETHER} && !{c}.{REQ}"))
-            .collect();
         // with no activity at all, nothing is ever outstanding
-        let idle = match (open, Src::and(idle.into_iter().map(Src::gen).collect())) {
-            (false, _) => None,
-            (true, None) => Some("true".to_string()),
-            (true, Some(src)) => Some(src.plain()),
-        };
+        let idle = open.then(|| {
+            let activities = self
+                .recipe
+                .modules
+                .iter()
+                .flat_map(|m| m.services.iter())
+                .filter_map(|s| s.component.as_deref());
+            all(activities.map(|c| and(at(c, ETHER), not(member(c, REQ)))))
+                .unwrap_or_else(|| boolean(true))
+        });
         self.recipe.idle = idle.clone();
         let mut out = Vec::with_capacity(self.def.properties.len());
         for (k, p) in self.def.properties.iter().enumerate() {
+            let rewritten = |written: &ExprDef| match user.properties.get(&k) {
+                Some(u) => u.def(written),
+                None => written.clone(),
+            };
             out.push(match p {
                 PropertyDef::DeadlockFree { terminal } => {
-                    let user_terminal = user.properties.get(&k).cloned();
-                    let parts: Vec<Src> = user_terminal
-                        .into_iter()
-                        .chain(idle.clone().map(Src::gen))
-                        .collect();
-                    let terminal = match Src::join(parts, "||") {
-                        Some(src) => Some(self.origins.text(src)),
-                        None => terminal.clone(),
+                    let user_terminal = user.properties.get(&k).map(|u| u.tree.clone());
+                    let terminal = match (user_terminal, &idle) {
+                        (Some(t), Some(idle)) => Some(ExprDef::Built(or(t, idle.clone()))),
+                        (None, Some(idle)) => Some(ExprDef::Built(idle.clone())),
+                        (_, None) => terminal.as_ref().map(rewritten),
                     };
                     PropertyDef::DeadlockFree { terminal }
                 }
                 PropertyDef::Invariant { name, expr } => PropertyDef::Invariant {
                     name: name.clone(),
-                    expr: self.user_text(user.properties.get(&k), expr),
+                    expr: rewritten(expr),
                 },
                 PropertyDef::Reachable { name, expr } => PropertyDef::Reachable {
                     name: name.clone(),
-                    expr: self.user_text(user.properties.get(&k), expr),
+                    expr: rewritten(expr),
                 },
             });
         }
         out
     }
-
-    /// The text to compile for a user's text: as written, or rewritten.
-    fn user_text(&mut self, src: Option<&Src>, written: &Text) -> Text {
-        match src {
-            Some(src) => self.origins.text(src.clone()),
-            None => written.clone(),
-        }
-    }
 }
 
 /// A value of ids field `x` as the model writes it (`true`/`false` for a `Bool`).
-fn ids_literal(m: &Module, x: &str, v: i64) -> String {
+fn ids_literal(m: &Module, x: &str, v: i64) -> Expr {
     let is_bool = m
         .def
         .ids
         .iter()
         .any(|d| d.name.as_str() == x && matches!(d.ty, TypeDef::Bool));
-    match (is_bool, v) {
-        (true, 0) => "false".into(),
-        (true, _) => "true".into(),
-        (false, v) => v.to_string(),
+    if is_bool {
+        boolean(v != 0)
+    } else {
+        int(v)
+    }
+}
+
+impl From<Cond> for RecipeCondition {
+    fn from(c: Cond) -> Self {
+        RecipeCondition {
+            reason: c.reason,
+            expr: c.expr,
+        }
     }
 }

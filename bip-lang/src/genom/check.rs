@@ -6,10 +6,11 @@ use std::collections::{HashMap, HashSet};
 
 use crate::compile::{check_name, one_of, unique, Constants};
 use crate::diag::{Errors, ModelError};
-use crate::source::Span;
+use crate::source::{line_col, Span};
 use crate::syntax::{
     CodelDef, ConstraintDef, ModuleDef, ServiceDef, ServiceKind, SystemDef, Text, TypeDef,
 };
+use bip_model::genom::map::{ConstraintRef, Reason};
 
 /// The name of the final state of every activity (GenoM's `ether`).
 pub const ETHER: &str = "ether";
@@ -21,7 +22,7 @@ pub const ACTIVITY_PORTS: [&str; 4] = ["request", "interrupt", "abort", "tick"];
 pub const MODULE_PORTS: [&str; 2] = ["tick", "write"];
 /// A codel that writes ids takes one step per combination of values it may write (the
 /// verifier explores them all); more than this many is almost surely a modelling mistake.
-pub const MAX_IDS_VALUES: u64 = 1024;
+pub const MAX_IDS_VALUES: u128 = 1024;
 
 /// A service of a module: `(module, service)` indices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -125,8 +126,9 @@ pub enum Yield {
 
 #[derive(Debug)]
 pub struct Constraint<'d> {
-    pub def: &'d ConstraintDef,
     pub kind: ConstraintKind<'d>,
+    /// What the requests it refuses and the codels it holds say.
+    pub reason: Reason,
 }
 
 #[derive(Debug)]
@@ -151,8 +153,13 @@ pub enum ConstraintKind<'d> {
     },
 }
 
-/// Validates the modules and constraints of `def`.
-pub fn check<'d>(def: &'d SystemDef, consts: &Constants) -> Result<Layer<'d>, Vec<ModelError>> {
+/// Validates the modules and constraints of `def`; `text` is the file it was read from,
+/// if any (reasons give the constraints' lines).
+pub fn check<'d>(
+    def: &'d SystemDef,
+    consts: &Constants,
+    text: Option<&str>,
+) -> Result<Layer<'d>, Vec<ModelError>> {
     let mut errors = Errors::default();
     unique(&mut errors, def.modules.iter().map(|m| &m.name), "module");
     let mut seen = HashSet::new();
@@ -167,9 +174,23 @@ pub fn check<'d>(def: &'d SystemDef, consts: &Constants) -> Result<Layer<'d>, Ve
         modules,
         constraints: Vec::new(),
     };
-    for c in &def.constraints {
+    unique(
+        &mut errors,
+        def.constraints.iter().filter_map(ConstraintDef::name),
+        "constraint name",
+    );
+    for (index, c) in def.constraints.iter().enumerate() {
         if let Some(k) = constraint(&mut errors, consts, &layer, c) {
-            layer.constraints.push(Constraint { def: c, kind: k });
+            let reason = Reason::Constraint(ConstraintRef {
+                index,
+                kind: c.kind().to_string(),
+                name: c.name().map(|n| n.value.clone()),
+                written: c.written(),
+                line: text
+                    .filter(|_| !c.span().is_none())
+                    .and_then(|t| u32::try_from(line_col(t, c.span().start).0).ok()),
+            });
+            layer.constraints.push(Constraint { kind: k, reason });
         }
     }
     if errors.is_empty() {
@@ -465,7 +486,7 @@ fn codels<'d>(
         }
         let mut writes = Vec::new();
         let mut written_ids = Vec::new();
-        let mut combinations: u64 = 1;
+        let mut combinations: u128 = 1;
         unique(errors, c.writes.iter(), "written port or ids field");
         for w in &c.writes {
             let port = ports.iter().position(|&p| p == w.as_str());
@@ -489,7 +510,10 @@ fn codels<'d>(
                     }
                     written_ids.push(k);
                     if let Some((lo, hi)) = ids[k].1 {
-                        let values = (i128::from(hi) - i128::from(lo) + 1).max(1) as u64;
+                        // a full 64-bit range has 2^64 values: count in 128 bits
+                        let values = u128::try_from(i128::from(hi) - i128::from(lo) + 1)
+                            .unwrap_or(0)
+                            .max(1);
                         combinations = combinations.saturating_mul(values);
                         if combinations > MAX_IDS_VALUES {
                             errors.push(
@@ -793,11 +817,11 @@ fn constraint<'d>(
         out.into_iter().collect::<Option<Vec<_>>>()
     };
     match c {
-        ConstraintDef::Exclusive { services } => {
+        ConstraintDef::Exclusive { services, .. } => {
             let why = "`Exclusive` is about activities being active";
             list(errors, services, why, 2, Span::NONE).map(ConstraintKind::Exclusive)
         }
-        ConstraintDef::AtMost { max, services } => {
+        ConstraintDef::AtMost { max, services, .. } => {
             let why = "`AtMost` counts active activities";
             let l = list(errors, services, why, 2, max.span);
             let k = match consts.int(max) {
@@ -819,7 +843,9 @@ fn constraint<'d>(
                 services: l?,
             })
         }
-        ConstraintDef::Requires { service, active } => {
+        ConstraintDef::Requires {
+            service, active, ..
+        } => {
             let s = svc(errors, service);
             let why = "`Requires` lists services that must be active";
             let l = list(errors, active, why, 1, service.span);
@@ -840,10 +866,15 @@ fn constraint<'d>(
             service,
             port,
             max_age,
+            ..
         } => {
             let s = svc(errors, service);
             let p = port_ref(errors, layer, port);
             let k = match consts.int(max_age) {
+                Ok(k) if k == i64::MAX => {
+                    errors.push(too_old(k, max_age.span));
+                    None
+                }
                 Ok(k) if k >= 0 => Some(k),
                 Ok(k) => {
                     errors.push(ModelError::new(
@@ -863,9 +894,17 @@ fn constraint<'d>(
                 max_age: k?,
             })
         }
-        ConstraintDef::Guard { service, when } => Some(ConstraintKind::Guard {
+        ConstraintDef::Guard { service, when, .. } => Some(ConstraintKind::Guard {
             service: svc(errors, service)?,
             when,
         }),
     }
+}
+
+/// An age compared with `k`: ages count up to one more than the largest such constant,
+/// which must fit in 64 bits.
+pub fn too_old(k: i64, span: Span) -> ModelError {
+    ModelError::new(format!("an age cannot be compared with {k}"), span)
+        .with_label("ages count up to one more than this, which does not fit in 64 bits")
+        .with_help("an age is a number of ticks: compare it with a smaller constant")
 }

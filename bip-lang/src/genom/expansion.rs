@@ -1,21 +1,28 @@
 //! `expand`: validation, rewriting of GenoM names and the expansion into core; compiling an
 //! expansion with its engine map.
 
-use super::build::Expansion;
-use super::{build, check, origin, rewrite, timing};
+use std::collections::BTreeMap;
+
+use super::build::{Expansion, UserExpr, UserTexts};
+use super::{build, check, rewrite, timing};
 use crate::compile::{compile_core, Constants};
 use crate::diag::{Errors, ModelError};
-use crate::syntax::{PropertyDef, SystemDef, Text};
+use crate::expr::{Assign, Expr};
+use crate::syntax::{ActionDef, ExprDef, PropertyDef, SystemDef};
 use bip_model::System;
-use build::UserTexts;
 use check::ConstraintKind;
-use origin::Origins;
 
 /// Expands the GenoM layer of `def` into BIP core. The result has no `modules` or
 /// `constraints`; a model without them comes back unchanged.
 pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
+    expand_in(def, None)
+}
+
+/// [`expand`], knowing the text of the file `def` was read from (reports then give the
+/// constraints' lines).
+pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion, Vec<ModelError>> {
     let (consts, mut const_errors) = Constants::new(def);
-    let layer = check::check(def, &consts).map_err(|mut e| {
+    let layer = check::check(def, &consts, text).map_err(|mut e| {
         const_errors.append(&mut e);
         const_errors.clone()
     })?;
@@ -25,30 +32,46 @@ pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
     }
     let timing = timing::check(def, &layer, &consts, &mut errors);
     let mut rw = rewrite::Rewriter::new(&layer, &consts);
-    let mut origins = Origins::default();
     let mut user = UserTexts::default();
-    // each user text, rewritten if it names GenoM things, becomes a piece with its origin
-    let mut expr = |errors: &mut Errors, origins: &mut Origins, t: &Text| {
-        rw.expr(errors, t).ok().map(|r| origins.user(t, r))
+    // each user text as a tree, rewritten if it names GenoM things
+    let mut expr = |errors: &mut Errors, t: &ExprDef| -> Option<UserExpr<Expr>> {
+        match rw.expr(errors, t) {
+            Ok(Some(tree)) => Some(UserExpr {
+                tree,
+                rewritten: true,
+            }),
+            Ok(None) => match t.tree() {
+                Ok(tree) => Some(UserExpr {
+                    tree: tree.into_owned(),
+                    rewritten: false,
+                }),
+                Err(e) => {
+                    errors.push(e);
+                    None
+                }
+            },
+            Err(()) => None,
+        }
     };
     for (k, c) in layer.constraints.iter().enumerate() {
         if let ConstraintKind::Guard { when, .. } = &c.kind {
-            if let Some(src) = expr(&mut errors, &mut origins, when) {
-                user.guards.insert(k, src);
+            let when = ExprDef::Written((*when).clone());
+            if let Some(u) = expr(&mut errors, &when) {
+                user.guards.insert(k, u.tree);
             }
         }
     }
     for (k, c) in def.connectors.iter().enumerate() {
         if let Some(g) = &c.guard {
-            if let Some(src) = expr(&mut errors, &mut origins, g) {
-                user.connector_guards.insert(k, src);
+            if let Some(u) = expr(&mut errors, g) {
+                user.connector_guards.insert(k, u);
             }
         }
     }
     for (k, p) in def.priorities.iter().enumerate() {
         if let Some(w) = &p.when {
-            if let Some(src) = expr(&mut errors, &mut origins, w) {
-                user.priority_whens.insert(k, src);
+            if let Some(u) = expr(&mut errors, w) {
+                user.priority_whens.insert(k, u);
             }
         }
     }
@@ -58,15 +81,15 @@ pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
             PropertyDef::Invariant { expr, .. } | PropertyDef::Reachable { expr, .. } => Some(expr),
         };
         if let Some(t) = text {
-            if let Some(src) = expr(&mut errors, &mut origins, t) {
-                user.properties.insert(k, src);
+            if let Some(u) = expr(&mut errors, t) {
+                user.properties.insert(k, u);
             }
         }
     }
     for (k, c) in def.connectors.iter().enumerate() {
         if let Some(a) = &c.action {
-            if let Ok(r) = rw.action(&mut errors, a) {
-                user.connector_actions.insert(k, origins.user(a, r));
+            if let Some(u) = action(&mut rw, &mut errors, a) {
+                user.connector_actions.insert(k, u);
             }
         }
     }
@@ -78,20 +101,49 @@ pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
     if !errors.is_empty() {
         return Err(errors.list);
     }
-    let ages = std::mem::take(&mut rw.ages);
-    let mut expansion = build::build(&layer, def, ages, user, origins)?;
+    // an age saturates one above the largest constant it is compared with (each checked
+    // to be below `i64::MAX`)
+    let caps: BTreeMap<_, _> = std::mem::take(&mut rw.ages)
+        .into_iter()
+        .map(|(p, k)| (p, k.max(0) + 1))
+        .collect();
+    let mut expansion = build::build(&layer, def, caps, user)?;
     expansion.recipe.timing = timing;
     Ok(expansion)
 }
 
+/// A user's action as a tree, rewritten if it names GenoM things.
+fn action(
+    rw: &mut rewrite::Rewriter<'_, '_>,
+    errors: &mut Errors,
+    a: &ActionDef,
+) -> Option<UserExpr<Vec<Assign>>> {
+    match rw.action(errors, a) {
+        Ok(Some(tree)) => Some(UserExpr {
+            tree,
+            rewritten: true,
+        }),
+        Ok(None) => match a.tree() {
+            Ok(tree) => Some(UserExpr {
+                tree: tree.into_owned(),
+                rewritten: false,
+            }),
+            Err(e) => {
+                errors.push(e);
+                None
+            }
+        },
+        Err(()) => None,
+    }
+}
+
 impl Expansion {
     /// Compiles the expanded model into a [`System`] with its [`GenomMap`](bip_model::genom::map::GenomMap); `def` is the
-    /// model it was expanded from. Errors point into the model's file (the expanded texts
-    /// that hold user texts have spans of their own, which this maps back).
+    /// model it was expanded from. Errors point into the model's file: the user's
+    /// subtrees in generated expressions kept their positions.
     pub fn compile(&self, def: &SystemDef) -> Result<System, Vec<ModelError>> {
-        let texts = self.recipe.condition_texts();
-        let (mut system, exprs) =
-            compile_core(&self.def, &texts).map_err(|e| self.origins.locate_errors(e))?;
+        let conditions = self.recipe.conditions();
+        let (mut system, exprs) = compile_core(&self.def, &conditions).map_err(placed)?;
         let map = self.recipe.resolve(&system, exprs).map_err(|m| {
             vec![ModelError::new(
                 format!(
@@ -106,14 +158,31 @@ impl Expansion {
             p.text = match written {
                 PropertyDef::DeadlockFree { terminal } => terminal
                     .as_ref()
-                    .map(|t| t.value.clone())
+                    .map(ExprDef::to_string)
                     .unwrap_or_default(),
                 PropertyDef::Invariant { expr, .. } | PropertyDef::Reachable { expr, .. } => {
-                    expr.value.clone()
+                    expr.to_string()
                 }
             };
         }
         system.genom = Some(map);
         Ok(system)
     }
+}
+
+/// A user's expression inside generated ones (a `Guard` condition in every guard of its
+/// service's codels and in their map) fails once per copy: each error is kept once. An
+/// error with no place in the file fails only because of one that has a place, which is
+/// kept alone.
+fn placed(errors: Vec<ModelError>) -> Vec<ModelError> {
+    let mut out: Vec<ModelError> = Vec::new();
+    for e in errors {
+        if !out.contains(&e) {
+            out.push(e);
+        }
+    }
+    if out.iter().any(|e| !e.span.is_none()) {
+        out.retain(|e| !e.span.is_none());
+    }
+    out
 }

@@ -6,8 +6,10 @@
 //! - `check`: validation with positions;
 //! - `names`: the generated names;
 //! - `rewrite`: the rewriting of GenoM names in users' expressions into generated ones;
-//! - `origin`: where the expanded texts come from, to put errors back in the user's file;
-//! - `build`: the expansion itself;
+//! - `tree`: the expressions the expansion generates, as syntax trees;
+//! - `build`: the expansion itself, which builds guards, actions and conditions as trees
+//!   holding the user's own subtrees with their positions in the file, so that the
+//!   compiler reports an error in them where the user wrote it;
 //! - `timing`: the time budgets (CPUs, priorities, deadlines, WCETs), checked;
 //! - `recipe`: the engine's map of the layer by names, as the expansion writes it; once
 //!   the expanded model is compiled it becomes a [`bip_model::GenomMap`].
@@ -16,11 +18,11 @@ mod build;
 mod check;
 mod expansion;
 mod names;
-mod origin;
 mod recipe;
 mod rewrite;
 pub mod syntax;
 mod timing;
+mod tree;
 
 #[cfg(test)]
 mod tests;
@@ -28,3 +30,4 @@ mod tests;
 pub use build::Expansion;
 
 pub use expansion::expand;
+pub(crate) use expansion::expand_in;

@@ -2,7 +2,8 @@
 //! model is compiled, [`Recipe::resolve`] turns the names into the system's indices.
 
 use super::timing::Timing;
-use crate::syntax::{ServiceKind, Text};
+use crate::expr::Expr;
+use crate::syntax::ServiceKind;
 use bip_model::eval;
 use bip_model::genom::map::*;
 use bip_model::System;
@@ -11,7 +12,7 @@ use bip_model::System;
 pub(crate) struct Recipe {
     pub tick: String,
     pub modules: Vec<RecipeModule>,
-    pub idle: Option<String>,
+    pub idle: Option<Expr>,
     pub timing: Timing,
 }
 
@@ -61,10 +62,9 @@ pub(crate) struct RecipeCodel {
 #[derive(Clone, Debug)]
 pub(crate) struct RecipeCondition {
     pub reason: Reason,
-    /// The condition as an expression of the expanded model.
-    pub text: String,
-    /// The same, to compile (its span leads back to the user's text it holds, if any).
-    pub compiled: Text,
+    /// The condition as an expression of the expanded model (a user's subtree in it keeps
+    /// its position in the file).
+    pub expr: Expr,
 }
 
 /// Something in the recipe that the compiled system lacks: a bug of the expansion.
@@ -72,25 +72,23 @@ pub(crate) struct RecipeCondition {
 pub(crate) struct MissingName(pub String);
 
 impl Recipe {
-    /// The condition texts, in the order [`Recipe::resolve`] expects them compiled.
-    pub fn condition_texts(&self) -> Vec<Text> {
+    /// The conditions, in the order [`Recipe::resolve`] expects them compiled.
+    pub fn conditions(&self) -> Vec<Expr> {
         let mut out = Vec::new();
         for m in &self.modules {
             for s in &m.services {
-                out.extend(s.refusals.iter().map(|c| c.compiled.clone()));
+                out.extend(s.refusals.iter().map(|c| c.expr.clone()));
                 for c in &s.codels {
-                    out.extend(c.holds.iter().map(|h| h.compiled.clone()));
+                    out.extend(c.holds.iter().map(|h| h.expr.clone()));
                 }
             }
         }
-        if let Some(i) = &self.idle {
-            out.push(Text::from(i.as_str()));
-        }
+        out.extend(self.idle.clone());
         out
     }
 
     /// Resolves names into `system`'s indices; `exprs` are the compiled
-    /// [`Recipe::condition_texts`].
+    /// [`Recipe::conditions`].
     pub fn resolve(
         &self,
         system: &System,
@@ -98,7 +96,7 @@ impl Recipe {
     ) -> Result<GenomMap, MissingName> {
         let missing = |what: &str| MissingName(what.to_string());
         let mut exprs = exprs.into_iter();
-        let mut next = |text: &str| exprs.next().ok_or_else(|| missing(text));
+        let mut next = |what: &str| exprs.next().ok_or_else(|| missing(what));
         let interaction = |name: &str| system.interaction_index(name).ok_or_else(|| missing(name));
         let component = |name: &str| system.component_index(name).ok_or_else(|| missing(name));
         let mut modules = Vec::new();
@@ -140,10 +138,11 @@ impl Recipe {
             for s in &m.services {
                 let mut refusals = Vec::new();
                 for c in &s.refusals {
+                    let text = c.expr.to_string();
                     refusals.push(Condition {
                         reason: c.reason.clone(),
-                        text: c.text.clone(),
-                        expr: next(&c.text)?,
+                        expr: next(&text)?,
+                        text,
                     });
                 }
                 let comp = match &s.component {
@@ -154,10 +153,11 @@ impl Recipe {
                 for c in &s.codels {
                     let mut holds = Vec::new();
                     for h in &c.holds {
+                        let text = h.expr.to_string();
                         holds.push(Condition {
                             reason: h.reason.clone(),
-                            text: h.text.clone(),
-                            expr: next(&h.text)?,
+                            expr: next(&text)?,
+                            text,
                         });
                     }
                     let ac = comp.ok_or_else(|| missing(&c.state))?;
@@ -216,7 +216,10 @@ impl Recipe {
                     let mut stride = 1u32;
                     for f in ids.iter_mut().rev() {
                         f.stride = stride;
-                        stride = stride.saturating_mul((f.hi - f.lo + 1) as u32);
+                        let values = u32::try_from(i128::from(f.hi) - i128::from(f.lo) + 1).ok();
+                        stride = values
+                            .and_then(|n| stride.checked_mul(n))
+                            .ok_or_else(|| missing("the transitions that write ids"))?;
                     }
                     if !ids.is_empty() && stride as usize != ids_transitions.len() {
                         return Err(missing("the transitions that write ids"));
@@ -278,7 +281,7 @@ impl Recipe {
             });
         }
         let idle = match &self.idle {
-            Some(i) => Some(next(i)?),
+            Some(_) => Some(next("the idle condition")?),
             None => None,
         };
         Ok(GenomMap {

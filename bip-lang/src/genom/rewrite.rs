@@ -1,20 +1,20 @@
 //! The rewriting of the GenoM names users write in expressions (`active(m.S)`,
 //! `pending(m.S)`, `m.S@state`, `age(m.port)`) into names of the generated core.
 //!
-//! Rewriting works on the expression syntax tree and prints it back. An expression without
-//! GenoM names is kept as written, so errors in it keep their exact positions; a rewritten
-//! one keeps the span of the string it came from.
+//! Rewriting works on the expression syntax tree, whose spans are positions in the file: the
+//! rewritten tree keeps the positions of what the user wrote, and its generated nodes have
+//! none. An expression without GenoM names is kept as written.
 
 use std::collections::{BTreeMap, HashMap};
 
-use super::check::{Layer, PortRef, ETHER};
+use super::check::{too_old, Layer, PortRef, ETHER};
 use super::names::{activity_component, age_var, module_component, REQ};
-use super::origin::Rewrite;
+use super::tree::{at, member};
 use crate::compile::{one_of, Constants};
 use crate::diag::{Errors, ModelError};
-use crate::expr::{self, parse_action, parse_expr, BinOp, Expr, ExprKind, Ident, UnOp};
+use crate::expr::{self, BinOp, Expr, ExprKind, Ident, UnOp};
 use crate::source::Span;
-use crate::syntax::Text;
+use crate::syntax::{ActionDef, ExprDef};
 
 /// Rewrites GenoM names in user expressions, and records how ports' ages are compared.
 pub struct Rewriter<'a, 'd> {
@@ -25,19 +25,11 @@ pub struct Rewriter<'a, 'd> {
     pub ages: BTreeMap<PortRef, i64>,
 }
 
-/// A failure inside one expression, with its span relative to the expression's text.
-struct Failure {
-    message: String,
-    span: Span,
-    help: Option<String>,
-}
+/// A failure inside one expression (trees have their positions in the file).
+type Failure = ModelError;
 
 fn fail<T>(span: Span, message: impl Into<String>) -> Result<T, Failure> {
-    Err(Failure {
-        message: message.into(),
-        span,
-        help: None,
-    })
+    Err(ModelError::new(message, span))
 }
 
 fn fail_help<T>(
@@ -45,11 +37,7 @@ fn fail_help<T>(
     message: impl Into<String>,
     help: impl Into<String>,
 ) -> Result<T, Failure> {
-    Err(Failure {
-        message: message.into(),
-        span,
-        help: Some(help.into()),
-    })
+    Err(ModelError::new(message, span).with_help(help))
 }
 
 impl<'a, 'd> Rewriter<'a, 'd> {
@@ -75,20 +63,19 @@ impl<'a, 'd> Rewriter<'a, 'd> {
     }
 
     /// Rewrites an expression: `Ok(None)` if it has no GenoM names (it stays as written),
-    /// `Ok(Some(..))` with the printed text and the tree it was printed from (which keeps
-    /// the original's positions), `Err` with the error pushed. A syntax error is left for
-    /// the compiler to report.
-    pub fn expr(&mut self, errors: &mut Errors, t: &Text) -> Result<Option<(String, Rewrite)>, ()> {
-        let Ok(e) = parse_expr(t) else {
+    /// `Ok(Some(..))` with the rewritten tree, `Err` with the error pushed. A syntax error
+    /// is left for whoever needs the tree to report.
+    pub fn expr(&mut self, errors: &mut Errors, t: &ExprDef) -> Result<Option<Expr>, ()> {
+        let Ok(e) = t.tree() else {
             return Ok(None);
         };
         let mut changed = false;
         let mut bound = Vec::new();
         match self.walk(&e, &mut bound, &mut changed) {
-            Ok(new) if changed => Ok(Some((new.to_string(), Rewrite::Expr(new)))),
+            Ok(new) if changed => Ok(Some(new)),
             Ok(_) => Ok(None),
             Err(f) => {
-                errors.push(failure(t, f));
+                errors.push(f);
                 Err(())
             }
         }
@@ -98,30 +85,26 @@ impl<'a, 'd> Rewriter<'a, 'd> {
     pub fn action(
         &mut self,
         errors: &mut Errors,
-        t: &Text,
-    ) -> Result<Option<(String, Rewrite)>, ()> {
-        let Ok(assigns) = parse_action(t) else {
+        t: &ActionDef,
+    ) -> Result<Option<Vec<expr::Assign>>, ()> {
+        let Ok(assigns) = t.tree() else {
             return Ok(None);
         };
         let mut changed = false;
         let mut out = Vec::with_capacity(assigns.len());
-        for a in &assigns {
+        for a in assigns.iter() {
             let mut bound = Vec::new();
             let target = self.walk(&a.target, &mut bound, &mut changed);
             let value = self.walk(&a.value, &mut bound, &mut changed);
             match (target, value) {
                 (Ok(target), Ok(value)) => out.push(expr::Assign { target, value }),
                 (Err(f), _) | (_, Err(f)) => {
-                    errors.push(failure(t, f));
+                    errors.push(f);
                     return Err(());
                 }
             }
         }
-        if changed {
-            Ok(Some((expr::action_to_string(&out), Rewrite::Action(out))))
-        } else {
-            Ok(None)
-        }
+        Ok(changed.then_some(out))
     }
 
     /// The module `e` names, if it is a bare module name not shadowed by a quantifier.
@@ -241,6 +224,9 @@ impl<'a, 'd> Rewriter<'a, 'd> {
                         "ages saturate above the largest constant they are compared with, so the other side must be a constant",
                     );
                 };
+                if k == i64::MAX {
+                    return Err(too_old(k, other.span));
+                }
                 self.note_age(port, k);
                 *changed = true;
                 let other = self.walk(other, bound, changed)?;
@@ -306,6 +292,18 @@ impl<'a, 'd> Rewriter<'a, 'd> {
                             format!("write `age({}.{}) <= k`", module.name, field.name),
                         );
                     }
+                    // the module atom's generated variables (`age_p`, `done_f`) stay readable
+                    let generated = ["age_", "done_"].iter().any(|p| field.name.starts_with(p));
+                    if !generated && !module.ids.iter().any(|(x, _)| *x == field.name) {
+                        return fail_help(
+                            field.span,
+                            format!("module `{}` has no ids field `{}`", module.name, field.name),
+                            one_of(
+                                "its ids fields are",
+                                module.ids.iter().map(|(x, _)| *x),
+                            ),
+                        );
+                    }
                 }
                 return self.children(e, bound, changed);
             }
@@ -361,31 +359,4 @@ impl<'a, 'd> Rewriter<'a, 'd> {
         };
         Ok(Expr::new(kind, e.span))
     }
-}
-
-fn failure(t: &Text, f: Failure) -> ModelError {
-    let mut e = ModelError::new(f.message, t.sub_span(f.span.start..f.span.end));
-    e.help = f.help;
-    e
-}
-
-fn name(n: &str) -> Expr {
-    Expr::generated(ExprKind::Name(n.to_string()))
-}
-
-fn ident(n: &str) -> Ident {
-    Ident {
-        name: n.to_string(),
-        span: Span::NONE,
-    }
-}
-
-/// `comp.var`
-pub fn member(comp: &str, var: &str) -> Expr {
-    Expr::generated(ExprKind::Member(Box::new(name(comp)), ident(var)))
-}
-
-/// `comp@loc`
-pub fn at(comp: &str, loc: &str) -> Expr {
-    Expr::generated(ExprKind::At(Box::new(name(comp)), ident(loc)))
 }

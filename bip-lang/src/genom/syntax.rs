@@ -1,7 +1,7 @@
 //! The GenoM layer of the file format (docs/model.md, "The GenoM layer"): modules and constraints, as
 //! written. `genom::check` validates them; `genom::build` expands them into BIP core.
 
-use crate::source::{ConstExpr, Text};
+use crate::source::{ConstExpr, ConstValue, Span, Text};
 use crate::syntax::VarDef;
 pub use bip_model::genom::map::ServiceKind;
 
@@ -97,24 +97,46 @@ pub struct CodelDef {
 }
 
 /// A system-level constraint between services of (possibly different) modules. Services
-/// are written `"module.Service"`, ports `"module.port"`.
+/// are written `"module.Service"`, ports `"module.port"`. Every kind may have a `name`,
+/// which reports show with the constraint as written.
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
 pub enum ConstraintDef {
     /// Never two of these activities active at once: a start is held back while another
     /// is active.
-    Exclusive { services: Vec<Text> },
+    Exclusive {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<Text>,
+        services: Vec<Text>,
+    },
     /// The service runs only while every listed activity is active.
-    Requires { service: Text, active: Vec<Text> },
+    Requires {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<Text>,
+        service: Text,
+        active: Vec<Text>,
+    },
     /// The service runs only while the port's age is at most `max_age` ticks.
     Fresh {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<Text>,
         service: Text,
         port: Text,
         max_age: ConstExpr,
     },
     /// The service runs only while the expression holds.
-    Guard { service: Text, when: Text },
+    Guard {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<Text>,
+        service: Text,
+        when: Text,
+    },
     /// At most `max` of these activities active at once.
-    AtMost { max: ConstExpr, services: Vec<Text> },
+    AtMost {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<Text>,
+        max: ConstExpr,
+        services: Vec<Text>,
+    },
 }
 
 impl ConstraintDef {
@@ -127,5 +149,68 @@ impl ConstraintDef {
             ConstraintDef::Guard { .. } => "Guard",
             ConstraintDef::AtMost { .. } => "AtMost",
         }
+    }
+
+    /// The name given to the constraint, if any.
+    pub fn name(&self) -> Option<&Text> {
+        match self {
+            ConstraintDef::Exclusive { name, .. }
+            | ConstraintDef::Requires { name, .. }
+            | ConstraintDef::Fresh { name, .. }
+            | ConstraintDef::Guard { name, .. }
+            | ConstraintDef::AtMost { name, .. } => name.as_ref(),
+        }
+    }
+
+    /// Where the constraint is in the file: its first field.
+    pub fn span(&self) -> Span {
+        match self {
+            ConstraintDef::Exclusive { name, services } => name
+                .as_ref()
+                .or(services.first())
+                .map_or(Span::NONE, |t| t.span),
+            ConstraintDef::AtMost { name, max, .. } => name.as_ref().map_or(max.span, |t| t.span),
+            ConstraintDef::Requires { name, service, .. }
+            | ConstraintDef::Fresh { name, service, .. }
+            | ConstraintDef::Guard { name, service, .. } => name.as_ref().unwrap_or(service).span,
+        }
+    }
+
+    /// The constraint as written, without its name:
+    /// `Requires(service: "ndd.GoTo", active: ["sick.Scan"])`.
+    pub fn written(&self) -> String {
+        let s = |t: &Text| format!("{:?}", t.value);
+        let list = |ts: &[Text]| {
+            let items: Vec<String> = ts.iter().map(s).collect();
+            format!("[{}]", items.join(", "))
+        };
+        let value = |c: &ConstExpr| match &c.value {
+            ConstValue::Expr(e) => format!("{e:?}"),
+            v => v.to_string(),
+        };
+        let fields = match self {
+            ConstraintDef::Exclusive { services, .. } => format!("services: {}", list(services)),
+            ConstraintDef::Requires {
+                service, active, ..
+            } => format!("service: {}, active: {}", s(service), list(active)),
+            ConstraintDef::Fresh {
+                service,
+                port,
+                max_age,
+                ..
+            } => format!(
+                "service: {}, port: {}, max_age: {}",
+                s(service),
+                s(port),
+                value(max_age)
+            ),
+            ConstraintDef::Guard { service, when, .. } => {
+                format!("service: {}, when: {}", s(service), s(when))
+            }
+            ConstraintDef::AtMost { max, services, .. } => {
+                format!("max: {}, services: {}", value(max), list(services))
+            }
+        };
+        format!("{}({fields})", self.kind())
     }
 }

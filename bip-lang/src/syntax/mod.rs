@@ -1,9 +1,11 @@
 //! The model file format: what a user writes in a `.ron` file (docs/model.md), as serde types.
 //!
-//! These types hold the text as written (names and expressions are strings with their
-//! positions); `compile` resolves them into a [`bip_model::System`]. They also serialize back
-//! to RON, which is how `bip expand` prints an expanded model.
+//! These types hold the text as written (names are strings with their positions;
+//! expressions and actions are [`ExprDef`]/[`ActionDef`]: a text as written, or a tree the
+//! GenoM expansion built); `compile` resolves them into a [`bip_model::System`]. They also
+//! serialize back to RON, which is how `bip expand` prints an expanded model.
 
+mod code;
 mod var;
 
 use std::fmt;
@@ -18,6 +20,9 @@ pub use crate::genom::syntax::{
 pub use crate::source::Text;
 use crate::source::{ident_has_parens, ConstExpr, OrderedMap};
 pub use bip_model::Role;
+pub use code::{
+    parse_action_in_file, parse_in_file, parse_range_in_file, syntax_error, ActionDef, ExprDef,
+};
 pub use var::{TypeDef, VarDef};
 
 /// The `ron` options every model file is read and printed with (docs/model.md:
@@ -161,9 +166,9 @@ pub struct TransitionDef {
     pub port: Option<Text>,
     pub to: Text,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub guard: Option<Text>,
+    pub guard: Option<ExprDef>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub action: Option<Text>,
+    pub action: Option<ActionDef>,
 }
 
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
@@ -189,16 +194,16 @@ pub struct ConnectorDef {
     /// Required except in a connector that extends a generated one (docs/genom.md), which
     /// may add only a guard.
     #[serde(default)]
-    pub ports: Vec<Text>,
+    pub ports: Vec<ExprDef>,
     #[serde(default, skip_serializing_if = "ConnectorKindDef::is_rendezvous")]
     pub kind: ConnectorKindDef,
     /// What the connector's steps stand for, for deadlock detection (docs/model.md).
     #[serde(default, skip_serializing_if = "Role::is_progress")]
     pub role: Role,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub guard: Option<Text>,
+    pub guard: Option<ExprDef>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub action: Option<Text>,
+    pub action: Option<ActionDef>,
 }
 
 #[derive(Clone, Debug, Default, serde::Deserialize, serde::Serialize)]
@@ -206,7 +211,7 @@ pub enum ConnectorKindDef {
     #[default]
     Rendezvous,
     Broadcast {
-        trigger: Text,
+        trigger: ExprDef,
     },
 }
 
@@ -225,18 +230,18 @@ impl ConnectorKindDef {
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PriorityDef {
-    pub low: Text,
-    pub high: Text,
+    pub low: ExprDef,
+    pub high: ExprDef,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub when: Option<Text>,
+    pub when: Option<ExprDef>,
 }
 
 /// A property to verify. `DeadlockFree` may be written bare or with a `terminal` condition.
 #[derive(Clone, Debug)]
 pub enum PropertyDef {
-    DeadlockFree { terminal: Option<Text> },
-    Invariant { name: Text, expr: Text },
-    Reachable { name: Text, expr: Text },
+    DeadlockFree { terminal: Option<ExprDef> },
+    Invariant { name: Text, expr: ExprDef },
+    Reachable { name: Text, expr: ExprDef },
 }
 
 impl PropertyDef {
@@ -253,14 +258,14 @@ impl PropertyDef {
 #[serde(deny_unknown_fields)]
 struct NamedExprDef {
     name: Text,
-    expr: Text,
+    expr: ExprDef,
 }
 
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct TerminalDef {
     #[serde(default)]
-    terminal: Option<Text>,
+    terminal: Option<ExprDef>,
 }
 
 #[derive(serde::Deserialize)]

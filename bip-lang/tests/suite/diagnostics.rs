@@ -331,3 +331,17 @@ fn huge_file_loads() {
     let (line, _) = err.positions()[0];
     assert!(line > 2 * n - 10, "line {line}");
 }
+
+#[test]
+fn a_connector_that_fails_is_reported_once_not_again_by_its_priorities() {
+    let text = model(
+        FORK,
+        r#"(name: "fork", atom: "Fork", count: "N")"#,
+        r#"(name: "pair", forall: "i in 0..N", ports: ["fork[i].take", "fork[(i+1)%N].take"], guard: "fork[i].usse > 0"),
+           (name: "back", ports: ["fork[0].release"])"#,
+        r#"priorities: [(low: "back", high: "pair"), (low: "back", high: "pair[1]")],"#,
+    );
+    let err = load_str("bad.ron", &text).expect_err("rejected");
+    assert_eq!(err.errors().len(), 1, "{}", err.summary());
+    assert_error(&text, "has no variable `usse`", "usse");
+}

@@ -164,7 +164,8 @@ pub struct YieldMap {
     pub transitions: Vec<u32>,
 }
 
-/// A condition of a request or a codel, with the reason it stands for.
+/// A condition of a request or a codel, with the reason it stands for. It prints as its
+/// reason, in the model's terms.
 #[derive(Clone, Debug)]
 pub struct Condition {
     pub reason: Reason,
@@ -182,10 +183,26 @@ pub enum Reason {
     After { service: String },
     /// The activity waits for a service it interrupts to end.
     Interrupting { service: String },
-    /// The constraint at this index of the model's `constraints`.
-    Constraint { index: usize, kind: String },
+    /// A constraint of the model's `constraints`.
+    Constraint(ConstraintRef),
     /// The guard of a user connector that extends the request connector.
-    Connector,
+    Connector { connector: String, guard: String },
+}
+
+/// A constraint of the model, as reports show it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ConstraintRef {
+    /// Its index in the model's `constraints`, counting from 0.
+    pub index: usize,
+    /// `Requires`, `Fresh`, …
+    pub kind: String,
+    /// The name the model gives it, if any.
+    pub name: Option<String>,
+    /// The constraint as written, without its name:
+    /// `Requires(service: "ndd.GoTo", active: ["sick.Scan"])`.
+    pub written: String,
+    /// Its line in the model's file (from 1), when the model was read from text.
+    pub line: Option<u32>,
 }
 
 impl core::fmt::Display for Reason {
@@ -194,9 +211,31 @@ impl core::fmt::Display for Reason {
             Reason::AlreadyRequested => f.write_str("already requested or active"),
             Reason::After { service } => write!(f, "after {service}"),
             Reason::Interrupting { service } => write!(f, "waits for {service} to end"),
-            Reason::Constraint { index, kind } => write!(f, "constraint #{index} ({kind})"),
-            Reason::Connector => f.write_str("the guard of the extending connector"),
+            Reason::Constraint(c) => c.fmt(f),
+            Reason::Connector { connector, guard } => {
+                write!(f, "the guard of connector {connector}: {guard}")
+            }
         }
+    }
+}
+
+/// `fresh_pose (line 42): Fresh(service: "ndd.GoTo", port: "pom.pose", max_age: 2)`; without
+/// a name, `line 42: Fresh(…)`.
+impl core::fmt::Display for ConstraintRef {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match (&self.name, self.line) {
+            (Some(name), Some(line)) => write!(f, "{name} (line {line}): ")?,
+            (Some(name), None) => write!(f, "{name}: ")?,
+            (None, Some(line)) => write!(f, "line {line}: ")?,
+            (None, None) => {}
+        }
+        f.write_str(&self.written)
+    }
+}
+
+impl core::fmt::Display for Condition {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.reason.fmt(f)
     }
 }
 

@@ -7,7 +7,7 @@ pub mod map;
 mod stuck;
 
 pub use map::{
-    AgeMap, CodelMap, Condition, GenomMap, IdsField, IdsWrite, ModuleMap, PortMap, Reason,
-    ServiceKind, ServiceMap, TaskMap, YieldMap,
+    AgeMap, CodelMap, Condition, ConstraintRef, GenomMap, IdsField, IdsWrite, ModuleMap, PortMap,
+    Reason, ServiceKind, ServiceMap, TaskMap, YieldMap,
 };
 pub use stuck::Stuck;

@@ -62,13 +62,33 @@ fn replay_rejects_a_step_that_is_not_enabled_or_leads_elsewhere() {
     trace.steps[1].step = "right[0]".into(); // fork[1] is free but recorded changes differ
     let err = trace.replay(&sys).expect_err("wrong state");
     assert_eq!(err.step, 2);
+    // each differing variable, with the recorded and the actual value
     assert!(
-        err.message.contains("does not lead to the recorded state"),
+        err.message.contains(
+            "`right[0]` is enabled but does not lead to the recorded state: \
+             `phil[1]` recorded hungry, the step gives thinking"
+        ),
+        "{err}"
+    );
+    assert!(
+        err.message
+            .contains("`phil[0]` recorded unchanged (hungry), the step gives eating"),
         "{err}"
     );
     trace.steps[1].step = "release[3]".into();
     let err = trace.replay(&sys).expect_err("not enabled");
     assert!(err.message.contains("`release[3]` is not enabled"), "{err}");
+    // a name no step has, with the closest one
+    trace.steps[1].step = "lfet[1]".into();
+    let err = trace.replay(&sys).expect_err("no such interaction");
+    assert_eq!(
+        err.message,
+        "no such interaction: `lfet[1]` (did you mean `left[1]`?)"
+    );
+    trace.steps[1].step = "juggle".into();
+    let err = trace.replay(&sys).expect_err("no such interaction");
+    assert_eq!(err.message, "no such interaction: `juggle`");
+    trace.steps[1].step = "release[3]".into();
     // the prefix that replays is kept
     let (prefix, err) = trace.replay_prefix(&sys);
     assert_eq!(prefix.len(), 1);
@@ -123,4 +143,88 @@ fn display_shows_old_and_new_values() {
 fn malformed_trace_text_is_an_error() {
     assert!(bip_lang::trace_file::from_ron("Trace(system: \"x\")").is_err());
     assert!(bip_lang::trace_file::from_ron("not ron at all").is_err());
+}
+
+#[test]
+fn a_value_changed_in_a_trace_is_named() {
+    let sys = system(include_str!("../../../robots/pipeline.ron"));
+    let mut trace = Trace::from_path(&sys, Verdict::None, &path(&sys, &["tick", "put"]));
+    trace.steps[1]
+        .state
+        .push("buf.items".into(), TraceValue::Int(2));
+    let err = trace.replay(&sys).expect_err("tampered");
+    assert_eq!(err.step, 2);
+    assert!(
+        err.message.ends_with(
+            "does not lead to the recorded state: `buf.items` recorded 2, the step gives 1"
+        ),
+        "{err}"
+    );
+}
+
+/// The GenoM expansion's `req` and `paused` are shown only when asked.
+#[test]
+fn bookkeeping_variables_are_shown_on_request() {
+    let sys = system(include_str!("../../../robots/tests/mini.ron"));
+    let init = sys.initial_state();
+    let request = sys
+        .successors(&init)
+        .expect("no range error")
+        .into_iter()
+        .find(|(_, next)| {
+            sys.diff(&init, next)
+                .iter()
+                .any(|(k, _)| k.ends_with(".req"))
+        })
+        .expect("a request to an activity is enabled");
+    let trace = Trace::from_path(&sys, Verdict::None, &[request]);
+    let all = trace.display(Some(&sys)).all_variables(true).to_string();
+    assert!(all.contains(".req: false → true"), "{all}");
+    let short = trace.display(Some(&sys)).to_string();
+    assert!(
+        !short.contains(".req") && !short.contains(".paused"),
+        "{short}"
+    );
+    assert!(short.starts_with("recording after 1 step\n"), "{short}");
+}
+
+/// The last steps of a run are shown with their numbers in the run and replay from the
+/// state they start in.
+#[test]
+fn a_window_of_a_run_shows_and_replays_from_its_start() {
+    let sys = system(include_str!("../../../robots/philosophers.ron"));
+    let p = path(&sys, &["left[0]", "right[0]", "release[0]", "left[1]"]);
+    let start = p[1].1.clone();
+    let window = Trace::from_path_at(&sys, &start, Verdict::None, &p[2..]);
+    let shown = window.display(Some(&sys)).from(&start, 2).to_string();
+    assert!(
+        shown.starts_with("recording after 4 steps (the last 2 shown)\n"),
+        "{shown}"
+    );
+    assert!(
+        shown.contains("3  release[0]  phil[0]: eating → thinking"),
+        "{shown}"
+    );
+    let replayed = window.replay_from(&sys, start.clone()).expect("replays");
+    assert_eq!(replayed.last().map(|(_, s)| s), p.last().map(|(_, s)| s));
+    assert!(window.replay(&sys).is_err(), "not from the initial state");
+}
+
+/// The file format: the verdict last, a recording's verdict written `Recording`; files of
+/// the earlier format (verdict first, `r#None`) still read.
+#[test]
+fn trace_files_read_in_both_formats() {
+    let sys = system(include_str!("../../../robots/philosophers.ron"));
+    let trace = Trace::from_path(&sys, Verdict::None, &path(&sys, &["left[0]"]));
+    let text = bip_lang::trace_file::to_ron(&trace);
+    assert_eq!(
+        text,
+        "Trace(\n    system: \"philosophers\",\n    steps: [\n        \
+         (step: \"left[0]\", state: {\"phil[0]\": \"hungry\", \"fork[0]\": \"taken\"}),\n    \
+         ],\n    verdict: Recording,\n)\n"
+    );
+    assert_eq!(bip_lang::trace_file::from_ron(&text), Ok(trace.clone()));
+    let old = "Trace(\n    system: \"philosophers\",\n    verdict: r#None,\n    steps: [\n        \
+               (step: \"left[0]\", state: {\"phil[0]\": \"hungry\", \"fork[0]\": \"taken\"}),\n    ],\n)\n";
+    assert_eq!(bip_lang::trace_file::from_ron(old), Ok(trace));
 }
