@@ -8,8 +8,9 @@ use std::fmt;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use miette::{Diagnostic, LabeledSpan, NamedSource, SourceCode};
+use miette::{Diagnostic, LabeledSpan, SourceCode};
 
+use crate::excerpt::Excerpt;
 use crate::source::{line_col, Span};
 
 /// One problem in a model file.
@@ -167,8 +168,20 @@ impl std::error::Error for LoadError {
 
 /// One error rendered against its file.
 struct Rendered {
-    src: NamedSource<Arc<String>>,
+    src: Excerpt,
     error: ModelError,
+}
+
+impl Rendered {
+    fn new(name: &str, text: &Arc<String>, error: &ModelError) -> Rendered {
+        let spans: Vec<Span> = std::iter::once(error.span)
+            .chain(error.notes.iter().map(|(s, _)| *s).filter(|s| !s.is_none()))
+            .collect();
+        Rendered {
+            src: Excerpt::new(name, text, error.span, &spans),
+            error: error.clone(),
+        }
+    }
 }
 
 impl fmt::Debug for Rendered {
@@ -193,14 +206,14 @@ impl Diagnostic for Rendered {
     fn labels(&self) -> Option<Box<dyn Iterator<Item = LabeledSpan> + '_>> {
         let main = LabeledSpan::new_primary_with_span(
             self.error.label.clone(),
-            (self.error.span.start, self.error.span.len()),
+            self.src.span(self.error.span),
         );
         let notes = self
             .error
             .notes
             .iter()
             .filter(|(s, _)| !s.is_none())
-            .map(|(s, n)| LabeledSpan::new_with_span(Some(n.clone()), (s.start, s.len())));
+            .map(|(s, n)| LabeledSpan::new_with_span(Some(n.clone()), self.src.span(*s)));
         Some(Box::new(std::iter::once(main).chain(notes)))
     }
 
@@ -229,10 +242,7 @@ impl LoadError {
                 text: self.to_string(),
             },
             LoadError::Model(m) => {
-                let mut rendered = m.errors.iter().map(|e| Rendered {
-                    src: NamedSource::new(&m.name, Arc::clone(&m.text)),
-                    error: e.clone(),
-                });
+                let mut rendered = m.errors.iter().map(|e| Rendered::new(&m.name, &m.text, e));
                 let first = rendered.next();
                 LoadDiagnostic {
                     first,

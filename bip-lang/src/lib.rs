@@ -7,7 +7,7 @@
 //! user's file, reported together as a [`LoadError`] ([`diag`]).
 //!
 //! Modules import down these layers only (`tests/suite/layering.rs` checks it), lowest first:
-//! positions (`source`, `diag`); the file format (`syntax`, `expr`, `genom::syntax`);
+//! positions (`source`, `excerpt`, `diag`); the file format (`syntax`, `expr`, `genom::syntax`);
 //! `compile`, which knows only BIP core; `genom`, whose expansion evaluates constants and
 //! compiles its result through `compile`; files (`load`, which chooses between compiling a
 //! core model and expanding a GenoM layer first, and `trace_file`).
@@ -18,6 +18,7 @@
 
 mod compile;
 pub mod diag;
+mod excerpt;
 pub mod expr;
 pub mod genom;
 mod load;

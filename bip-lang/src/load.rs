@@ -7,7 +7,7 @@ use std::sync::Arc;
 use crate::compile::compile_core;
 use crate::diag::{LoadError, ModelError};
 use crate::genom;
-use crate::source::{offset_of, with_positions, Span};
+use crate::source::{normalized, offset_of, with_positions, Span};
 use crate::syntax::{ron_options, SystemDef};
 use bip_model::System;
 
@@ -36,7 +36,7 @@ pub fn read_model_file(path: &Path) -> Result<String, LoadError> {
 
 /// Parses a model's text into its file-format types, without compiling it.
 pub fn parse_str(name: &str, text: &str) -> Result<SystemDef, LoadError> {
-    let shared = Arc::new(text.to_string());
+    let shared = Arc::new(normalized(text).into_owned());
     parse_shared(name, &shared)
 }
 
@@ -68,7 +68,7 @@ fn parse_shared(name: &str, text: &Arc<String>) -> Result<SystemDef, LoadError> 
 
 /// Parses and compiles a model's text; `name` is how diagnostics call the file.
 pub fn load_str(name: &str, text: &str) -> Result<System, LoadError> {
-    let shared = Arc::new(text.to_string());
+    let shared = Arc::new(normalized(text).into_owned());
     let def = parse_shared(name, &shared)?;
     compile_def(name, &shared, &def)
 }
@@ -76,7 +76,7 @@ pub fn load_str(name: &str, text: &str) -> Result<System, LoadError> {
 /// Parses a model and expands its GenoM layer into BIP core (a model without one comes
 /// back as written). The expanded model is compiled too, so that it is known to load.
 pub fn expand_str(name: &str, text: &str) -> Result<SystemDef, LoadError> {
-    let shared = Arc::new(text.to_string());
+    let shared = Arc::new(normalized(text).into_owned());
     let def = parse_shared(name, &shared)?;
     if !def.has_genom_layer() {
         compile_def(name, &shared, &def)?;

@@ -642,6 +642,26 @@ pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
     (line, col)
 }
 
+/// The text a model is read as: without a UTF-8 byte-order mark, and with old Mac line
+/// endings (a lone CR) read as LF. Replacing one byte by one keeps every later offset, so
+/// positions in the normalized text are lines and columns of the file as an editor shows it.
+pub fn normalized(text: &str) -> std::borrow::Cow<'_, str> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let b = text.as_bytes();
+    let lone_cr = |i: usize| b[i] == b'\r' && b.get(i + 1) != Some(&b'\n');
+    if !(0..b.len()).any(lone_cr) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = b.to_vec();
+    for (i, c) in out.iter_mut().enumerate() {
+        if lone_cr(i) {
+            *c = b'\n';
+        }
+    }
+    // only ASCII bytes were replaced by ASCII bytes
+    std::borrow::Cow::Owned(String::from_utf8(out).unwrap_or_else(|_| text.to_string()))
+}
+
 /// Byte offset of a 1-based line and column (column in characters).
 pub fn offset_of(text: &str, line: usize, col: usize) -> usize {
     let mut offset = 0;

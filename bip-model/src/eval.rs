@@ -27,6 +27,9 @@ pub enum Expr {
     Not(Box<Expr>),
     Neg(Box<Expr>),
     Binary(BinOp, Box<Expr>, Box<Expr>),
+    /// `a op b op c …` read left to right, for long chains of arithmetic operators of one
+    /// precedence: flat, so that evaluating it does not recurse once per operand.
+    Chain(Box<Expr>, Vec<(BinOp, Expr)>),
     Cond(Box<Expr>, Box<Expr>, Box<Expr>),
     Quant(Box<Quant>),
 }
@@ -150,6 +153,18 @@ impl Expr {
                 BinOp::Implies => (a.eval_as(env)? == 0 || b.eval_as(env)? != 0) as i64,
                 _ => binary(*op, a.eval_as(env)?, b.eval_as(env)?).map_err(F::of)?,
             },
+            Expr::Chain(first, rest) => {
+                let mut acc = first.eval_as(env)?;
+                for (op, x) in rest {
+                    acc = match op {
+                        BinOp::And if acc == 0 => return Ok(0),
+                        BinOp::Or if acc != 0 => return Ok(1),
+                        BinOp::And | BinOp::Or => (x.eval_as(env)? != 0) as i64,
+                        _ => binary(*op, acc, x.eval_as(env)?).map_err(F::of)?,
+                    };
+                }
+                acc
+            }
             Expr::Cond(c, a, b) => {
                 if c.eval_as(env)? != 0 {
                     a.eval_as(env)?
@@ -204,6 +219,10 @@ impl Expr {
                     _ => Expr::Binary(op, Box::new(a), Box::new(b)),
                 }
             }
+            Expr::Chain(first, rest) => Expr::Chain(
+                Box::new(first.fold()),
+                rest.into_iter().map(|(op, x)| (op, x.fold())).collect(),
+            ),
             Expr::Cond(c, a, b) => match c.fold() {
                 Expr::Const(0) => b.fold(),
                 Expr::Const(_) => a.fold(),
@@ -237,6 +256,9 @@ impl Expr {
             }
             Expr::Not(e) | Expr::Neg(e) => e.reads_nothing(),
             Expr::Binary(_, a, b) => a.reads_nothing() && b.reads_nothing(),
+            Expr::Chain(first, rest) => {
+                first.reads_nothing() && rest.iter().all(|(_, x)| x.reads_nothing())
+            }
             Expr::Cond(c, a, b) => c.reads_nothing() && a.reads_nothing() && b.reads_nothing(),
             Expr::Quant(q) => q.body.reads_nothing_but_bound(q.depth),
         }
@@ -250,6 +272,10 @@ impl Expr {
             Expr::Not(e) | Expr::Neg(e) => e.reads_nothing_but_bound(depth),
             Expr::Binary(_, a, b) => {
                 a.reads_nothing_but_bound(depth) && b.reads_nothing_but_bound(depth)
+            }
+            Expr::Chain(first, rest) => {
+                first.reads_nothing_but_bound(depth)
+                    && rest.iter().all(|(_, x)| x.reads_nothing_but_bound(depth))
             }
             Expr::Cond(c, a, b) => {
                 c.reads_nothing_but_bound(depth)
@@ -277,6 +303,12 @@ impl Expr {
             Expr::Binary(_, a, b) => {
                 a.for_each_slot(base, f);
                 b.for_each_slot(base, f);
+            }
+            Expr::Chain(first, rest) => {
+                first.for_each_slot(base, f);
+                for (_, x) in rest {
+                    x.for_each_slot(base, f);
+                }
             }
             Expr::Cond(c, a, b) => {
                 c.for_each_slot(base, f);
@@ -365,6 +397,40 @@ mod tests {
         }))
         .fold();
         assert_eq!(q, Expr::Const(6));
+    }
+
+    #[test]
+    fn a_chain_folds_left_to_right() {
+        let mut env = Env::new(&[i64::MAX, 0], 0);
+        let slot = |s| Expr::Slot(s);
+        // MAX + 1 - 1 overflows at its first step, though its value would fit
+        let e = Expr::Chain(
+            Box::new(slot(0)),
+            vec![(BinOp::Add, Expr::Const(1)), (BinOp::Sub, Expr::Const(1))],
+        );
+        assert_eq!(e.eval(&mut env), Err(EvalError::Overflow));
+        let e = Expr::Chain(
+            Box::new(slot(0)),
+            vec![(BinOp::Sub, Expr::Const(1)), (BinOp::Add, Expr::Const(1))],
+        );
+        assert_eq!(e.eval(&mut env), Ok(i64::MAX));
+        let bad = Expr::Binary(BinOp::Div, c(1), Box::new(slot(1)));
+        let e = Expr::Chain(
+            Box::new(Expr::Const(1)),
+            vec![(BinOp::And, slot(1)), (BinOp::And, bad.clone())],
+        );
+        assert_eq!(e.eval(&mut env), Ok(0));
+        let e = Expr::Chain(
+            Box::new(Expr::Const(0)),
+            vec![(BinOp::Or, Expr::Const(1)), (BinOp::Or, bad)],
+        );
+        assert_eq!(e.eval(&mut env), Ok(1));
+        let long = Expr::Chain(
+            Box::new(Expr::Const(0)),
+            (0..100_000).map(|_| (BinOp::Add, Expr::Const(1))).collect(),
+        );
+        assert_eq!(long.clone().fold(), Expr::Const(100_000));
+        assert_eq!(long.eval(&mut env), Ok(100_000));
     }
 
     #[test]

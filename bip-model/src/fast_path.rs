@@ -353,6 +353,7 @@ fn reads(e: &Expr, out: &mut Vec<(u32, bool)>) -> bool {
         Expr::Indexed(_) | Expr::Bound(_) | Expr::Quant(_) => false,
         Expr::Not(a) | Expr::Neg(a) => reads(a, out),
         Expr::Binary(_, a, b) => reads(a, out) && reads(b, out),
+        Expr::Chain(first, rest) => reads(first, out) && rest.iter().all(|(_, x)| reads(x, out)),
         Expr::Cond(c, a, b) => reads(c, out) && reads(a, out) && reads(b, out),
     }
 }
@@ -701,6 +702,7 @@ fn is_boolean(e: &Expr) -> bool {
         Expr::Const(v) => *v == 0 || *v == 1,
         Expr::At(..) | Expr::Not(_) => true,
         Expr::Binary(op, _, _) => matches!(op, Lt | Le | Gt | Ge | Eq | Ne | And | Or | Implies),
+        Expr::Chain(_, rest) => rest.iter().all(|(op, _)| matches!(op, And | Or)),
         _ => false,
     }
 }
@@ -767,6 +769,38 @@ fn emit(e: &Expr, ops: &mut Vec<Op>, depth: usize) -> bool {
                         return false;
                     }
                     ops.push(Op::Bin(*op));
+                }
+            }
+        }
+        Expr::Chain(first, rest) => {
+            if !emit(first, ops, depth) {
+                return false;
+            }
+            for (op, x) in rest {
+                if let BinOp::And | BinOp::Or = op {
+                    let at = ops.len();
+                    ops.push(if *op == BinOp::And {
+                        Op::And(0)
+                    } else {
+                        Op::Or(0)
+                    });
+                    if !emit(x, ops, depth) {
+                        return false;
+                    }
+                    if !is_boolean(x) {
+                        ops.push(Op::Bool);
+                    }
+                    patch(ops, at);
+                    continue;
+                }
+                match *x {
+                    Expr::Const(c) => ops.push(Op::BinConst(*op, c)),
+                    _ => {
+                        if !emit(x, ops, depth + 1) {
+                            return false;
+                        }
+                        ops.push(Op::Bin(*op));
+                    }
                 }
             }
         }
@@ -966,7 +1000,20 @@ mod tests {
             BinOp::Or,
             BinOp::Implies,
         ];
-        match rng.below(5) {
+        let groups: [&[BinOp]; 4] = [
+            &[BinOp::Add, BinOp::Sub],
+            &[BinOp::Mul, BinOp::Div, BinOp::Rem],
+            &[BinOp::And],
+            &[BinOp::Or],
+        ];
+        match rng.below(6) {
+            5 => {
+                let group = groups[rng.below(groups.len())];
+                let rest = (0..2 + rng.below(3))
+                    .map(|_| (group[rng.below(group.len())], random_expr(rng, depth - 1)))
+                    .collect();
+                Chain(b(random_expr(rng, depth - 1)), rest)
+            }
             0 => Not(b(random_expr(rng, depth - 1))),
             1 => Neg(b(random_expr(rng, depth - 1))),
             2 => Cond(

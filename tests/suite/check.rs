@@ -197,3 +197,31 @@ fn a_closed_pipe_is_no_panic() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_ne!(out.status.code(), Some(101), "{stderr}");
 }
+
+/// An error far into a long line (past miette's 65,535 columns) and a huge quantifier are
+/// diagnostics with exit 2, not a panic or a hang.
+#[test]
+fn long_lines_and_huge_quantifiers_are_diagnostics() {
+    let dir = std::env::temp_dir().join(format!("bip-check-long-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary directory");
+    let long = dir.join("long.ron");
+    std::fs::write(
+        &long,
+        format!("System(name: \"m\",\n{}x)\n", " ".repeat(65_536)),
+    )
+    .expect("written");
+    let quant = dir.join("quant.ron");
+    std::fs::write(
+        &quant,
+        r#"System(name: "m", constants: {"Q": "forall i in 0..9223372036854775807: true"})"#,
+    )
+    .expect("written");
+    for (file, at) in [(&long, "long.ron:2:65537"), (&quant, "quant.ron:1:37")] {
+        let out = bip(&["check", file.to_str().expect("utf-8 path")]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(at), "{stderr}");
+        assert!(stderr.lines().all(|l| l.chars().count() < 400), "{stderr}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

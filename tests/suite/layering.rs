@@ -112,7 +112,7 @@ const CRATES: &[Layers] = &[
     Layers {
         src: "bip-lang/src",
         layers: &[
-            ("positions", &["source", "diag"]),
+            ("positions", &["source", "excerpt", "diag"]),
             ("syntax", &["syntax", "expr", "genom::syntax"]),
             ("compile", &["compile"]),
             ("expansion", &["genom"]),

@@ -569,6 +569,14 @@ impl<'a> Exporter<'a> {
                     op => format!("({a} {} {b})", op.symbol()),
                 }
             }
+            Expr::Chain(first, rest) => {
+                // operators of one precedence, left-associative as in Promela
+                let mut out = format!("({}", self.expr(first, base, bound)?);
+                for (op, x) in rest {
+                    out.push_str(&format!(" {} {}", op.symbol(), self.expr(x, base, bound)?));
+                }
+                out + ")"
+            }
             Expr::Cond(c, a, b) => format!(
                 "({} -> {} : {})",
                 self.expr(c, base, bound)?,

@@ -229,3 +229,67 @@ fn data_refined_places_prove_what_locations_alone_cannot() {
     assert!(dl.verdict.holds(), "{:?}", dl.verdict);
     assert_eq!(dl.method, Method::Symbolic);
 }
+
+/// Long chains of one operator (compiled flat or balanced, not as deep trees) mean the same
+/// to both methods, also where a left-to-right sum overflows on the way.
+#[test]
+fn long_chains_get_the_explicit_verdicts() {
+    let n = 10;
+    let terms = |f: &dyn Fn(usize) -> String, op: &str| {
+        (0..n).map(f).collect::<Vec<_>>().join(&format!(" {op} "))
+    };
+    let sum = terms(&|k| format!("p[{k}].x"), "+");
+    let properties = [
+        ("sum_bounded", format!("{sum} <= {n}")),
+        ("sum_small", format!("{sum} <= {}", n - 1)),
+        ("all_small", terms(&|k| format!("p[{k}].x <= 1"), "&&")),
+        ("some_zero", terms(&|k| format!("p[{k}].x == 0"), "||")),
+        (
+            "near_max",
+            format!("9223372036854775806 + {sum} - {n} < 0 || true"),
+        ),
+    ];
+    let props: Vec<String> = properties
+        .iter()
+        .map(|(name, e)| format!(r#"Invariant(name: "{name}", expr: "{e}")"#))
+        .collect();
+    let text = format!(
+        r#"System(
+    name: "chains",
+    atoms: {{
+        "P": Atom(locations: ["s"], initial: "s", ports: ["go"],
+            vars: [(name: "x", ty: Int(0, 1), init: 0)],
+            transitions: [(from: "s", port: "go", to: "s", guard: "x == 0", action: "x = 1")]),
+    }},
+    components: [(name: "p", atom: "P", count: {n})],
+    connectors: [(name: "c", forall: "i in 0..{n}", ports: ["p[i].go"])],
+    properties: [{}],
+)"#,
+        props.join(", ")
+    );
+    let sys = load_str("chains.ron", &text).unwrap_or_else(|e| panic!("{}", e.summary()));
+    let e = explicit(&sys);
+    let s = symbolic(&sys, &symbolic_options());
+    let verdicts = |r: &Report| -> Vec<(String, &'static str)> {
+        r.properties
+            .iter()
+            .map(|p| (p.name.clone(), kind(&p.verdict)))
+            .collect()
+    };
+    let want = [
+        ("sum_bounded", "holds"),
+        ("sum_small", "fails"),
+        ("all_small", "holds"),
+        ("some_zero", "fails"),
+        // `|| true` would hold: it fails only because the sum overflows on the way
+        ("near_max", "fails"),
+    ];
+    for (name, verdict) in want {
+        assert!(
+            verdicts(&e).contains(&(name.to_string(), verdict)),
+            "explicit {name}: {:?}",
+            verdicts(&e)
+        );
+    }
+    assert_eq!(verdicts(&e), verdicts(&s));
+}

@@ -30,6 +30,15 @@ use resolve::{ConstInfo, Names, Place, ResolveError, Resolver};
 /// enough that a typo (`count: "10000000000"`) is an error rather than an out-of-memory.
 const MAX_COUNT: i64 = 10_000_000;
 
+/// The most components (and the most connector instances) a model may declare in all, over
+/// every family (and every `forall`): the per-family limit alone lets a few families
+/// together exhaust memory.
+const MAX_TOTAL: usize = 10_000_000;
+
+/// The most state slots (a location per component, and its variables) a model may have:
+/// the state's tables take about 24 bytes a slot before any state is explored.
+const MAX_SLOTS: usize = 50_000_000;
+
 /// Compiles a core model (its GenoM layer, if any, is ignored: it must have been expanded
 /// first), plus `extra` global boolean expressions over it (the GenoM layer's conditions,
 /// for the engine's map). On failure, returns every error found.
@@ -505,6 +514,50 @@ impl Compiler {
             def.components.iter().map(|c| &c.name),
             "component",
         );
+        // the total is checked before any family is built: building them is what exhausts
+        // memory
+        let (mut total, mut slots): (i64, i64) = (0, 0);
+        for cd in &def.components {
+            let n = match &cd.count {
+                None => 1,
+                Some(c) => match self.const_value(c, Ty::Int, &[]) {
+                    Ok(n) if (1..=MAX_COUNT).contains(&n) => n,
+                    _ => continue, // reported with its family
+                },
+            };
+            total += n;
+            if let Some(&a) = self.atom_by_name.get(cd.atom.as_str()) {
+                slots += n * (1 + self.atoms[a as usize].vars.len() as i64);
+            }
+            if slots > MAX_SLOTS as i64 {
+                self.errors.push(
+                    ModelError::new(
+                        format!(
+                            "the families hold {slots} locations and variables up to here; at \
+                             most {MAX_SLOTS} are allowed in all"
+                        ),
+                        cd.count.as_ref().map_or(cd.name.span, |c| c.span),
+                    )
+                    .with_help(
+                        "each component holds its location and each of its atom's variables",
+                    ),
+                );
+                return;
+            }
+            if total > MAX_TOTAL as i64 {
+                self.errors.push(
+                    ModelError::new(
+                        format!(
+                            "the families declare {total} components up to here; at most \
+                             {MAX_TOTAL} are allowed in all"
+                        ),
+                        cd.count.as_ref().map_or(cd.name.span, |c| c.span),
+                    )
+                    .with_help("the limit is on the sum of the `count`s of all families"),
+                );
+                return;
+            }
+        }
         for cd in &def.components {
             if !check_name(&mut self.errors, &cd.name, "component")
                 || self.family_by_name.contains_key(cd.name.as_str())
@@ -648,11 +701,19 @@ impl Compiler {
                 let mut res = Resolver::new(&names, Place::Constant, &[]);
                 let lo = res.constant(&r.lo, Ty::Int).map_err(forall_bound)?;
                 let hi = res.constant(&r.hi, Ty::Int).map_err(forall_bound)?;
-                if hi.saturating_sub(lo) > MAX_COUNT {
+                let size = i128::from(hi) - i128::from(lo);
+                if size > i128::from(MAX_COUNT) {
+                    return Err(ModelError::new(
+                        format!("`forall` over {size} values; at most {MAX_COUNT} are allowed"),
+                        f.span,
+                    ));
+                }
+                let total = self.interactions.len() as i128 + size.max(0);
+                if total > MAX_TOTAL as i128 {
                     return Err(ModelError::new(
                         format!(
-                            "`forall` over {} values; at most {MAX_COUNT} are allowed",
-                            hi - lo
+                            "this `forall` brings the model to {total} connector instances; at \
+                             most {MAX_TOTAL} are allowed in all"
                         ),
                         f.span,
                     ));

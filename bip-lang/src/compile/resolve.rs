@@ -84,12 +84,66 @@ enum CompRef {
     Dynamic { family: u32, index: eval::Expr },
 }
 
+/// How many quantifier bodies one expression may evaluate, all its quantifiers together (a
+/// nested quantifier counts once per run of its outer one's body). Enough to quantify over
+/// the largest family; beyond it, one evaluation would run for seconds, and constants and
+/// guards are evaluated at load time and in every state.
+pub const MAX_QUANT_WORK: i128 = 10_000_000;
+
+/// A chain of more operands than this is compiled flat or balanced rather than as the
+/// left-leaning tree of binary nodes that short chains keep.
+const SHORT_CHAIN: usize = 8;
+
+/// A compiled chain: `&&` and `||` are associative, also in what they evaluate and when they
+/// fail, so a long one becomes a balanced tree; arithmetic is not (an intermediate result may
+/// overflow), so a long one stays a left-to-right chain.
+fn chain(first: eval::Expr, rest: Vec<(BinOp, eval::Expr)>) -> eval::Expr {
+    use eval::Expr as C;
+    if rest.len() < SHORT_CHAIN {
+        return rest.into_iter().fold(first, |acc, (op, x)| {
+            C::Binary(op, Box::new(acc), Box::new(x))
+        });
+    }
+    match rest[0].0 {
+        op @ (BinOp::And | BinOp::Or) => {
+            let items: Vec<C> = std::iter::once(first)
+                .chain(rest.into_iter().map(|(_, x)| x))
+                .collect();
+            balanced(op, items)
+        }
+        _ => C::Chain(Box::new(first), rest),
+    }
+}
+
+/// `x0 op x1 op … op xn` as a tree of depth log2(n), built without recursion: pairs are
+/// joined level by level.
+fn balanced(op: BinOp, mut items: Vec<eval::Expr>) -> eval::Expr {
+    while items.len() > 1 {
+        let mut next = Vec::with_capacity(items.len().div_ceil(2));
+        let mut it = items.into_iter();
+        while let Some(a) = it.next() {
+            next.push(match it.next() {
+                Some(b) => eval::Expr::Binary(op, Box::new(a), Box::new(b)),
+                None => a,
+            });
+        }
+        items = next;
+    }
+    items
+        .pop()
+        .unwrap_or(eval::Expr::Const(i64::from(op == BinOp::And)))
+}
+
 pub struct Resolver<'a> {
     pub names: &'a Names<'a>,
     pub place: Place<'a>,
     /// Names bound to fixed values: the `forall` variable of a connector, `self_index`.
     pub fixed: &'a [(&'a str, i64)],
     quant: Vec<String>,
+    /// How many times each enclosing quantifier's body runs in one evaluation.
+    runs: Vec<i128>,
+    /// Body evaluations of all quantifiers resolved so far, per evaluation.
+    work: i128,
 }
 
 impl<'a> Resolver<'a> {
@@ -99,6 +153,8 @@ impl<'a> Resolver<'a> {
             place,
             fixed,
             quant: Vec::new(),
+            runs: Vec::new(),
+            work: 0,
         }
     }
 
@@ -205,34 +261,20 @@ impl<'a> Resolver<'a> {
             ExprKind::Binary(op, a, b) => {
                 let (ca, ta) = self.resolve(a)?;
                 let (cb, tb) = self.resolve(b)?;
-                let what = format!("`{}`", op.symbol());
-                let ty = match op {
-                    BinOp::And | BinOp::Or | BinOp::Implies => {
-                        self.want(a.span, ta, Ty::Bool, &what)?;
-                        self.want(b.span, tb, Ty::Bool, &what)?;
-                        Ty::Bool
-                    }
-                    BinOp::Eq | BinOp::Ne => {
-                        if ta != tb {
-                            return err(
-                                e.span,
-                                format!("cannot compare {} with {}", ta.article(), tb.article()),
-                            );
-                        }
-                        Ty::Bool
-                    }
-                    BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge => {
-                        self.want(a.span, ta, Ty::Int, &what)?;
-                        self.want(b.span, tb, Ty::Int, &what)?;
-                        Ty::Bool
-                    }
-                    BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem => {
-                        self.want(a.span, ta, Ty::Int, &what)?;
-                        self.want(b.span, tb, Ty::Int, &what)?;
-                        Ty::Int
-                    }
-                };
+                let ty = self.operator(*op, e.span, (a.span, ta), (b.span, tb))?;
                 (C::Binary(*op, Box::new(ca), Box::new(cb)), ty)
+            }
+            ExprKind::Chain(first, rest) => {
+                let (c0, mut ty) = self.resolve(first)?;
+                let mut left = first.span;
+                let mut out = Vec::with_capacity(rest.len());
+                for (op, x) in rest {
+                    let (cx, tx) = self.resolve(x)?;
+                    ty = self.operator(*op, e.span, (left, ty), (x.span, tx))?;
+                    left = Span::new(left.start, x.span.end);
+                    out.push((*op, cx));
+                }
+                (chain(c0, out), ty)
             }
             ExprKind::Cond(c, a, b) => {
                 let (cc, tc) = self.resolve(c)?;
@@ -261,8 +303,24 @@ impl<'a> Resolver<'a> {
                         format!("quantifiers nest at most {MAX_QUANT_DEPTH} deep"),
                     );
                 }
+                let size = (i128::from(hi) - i128::from(lo)).max(0);
+                let runs = self.runs.last().copied().unwrap_or(1).saturating_mul(size);
+                self.work = self.work.saturating_add(runs);
+                if self.work > MAX_QUANT_WORK {
+                    return err_help(
+                        e.span,
+                        format!(
+                            "`{}` over {size} values: the quantifiers of one expression may \
+                             evaluate their bodies at most {MAX_QUANT_WORK} times in all",
+                            kind.keyword()
+                        ),
+                        "narrow the range, e.g. to the count of the family it quantifies over",
+                    );
+                }
                 self.quant.push(range.var.name.clone());
+                self.runs.push(runs);
                 let body = self.resolve(body);
+                self.runs.pop();
                 self.quant.pop();
                 let (cbody, tbody) = body?;
                 let ty = match kind {
@@ -289,6 +347,43 @@ impl<'a> Resolver<'a> {
                     })),
                     ty,
                 )
+            }
+        })
+    }
+
+    /// The type of `a op b`, given the operands' spans and types.
+    fn operator(
+        &self,
+        op: BinOp,
+        whole: Span,
+        (a, ta): (Span, Ty),
+        (b, tb): (Span, Ty),
+    ) -> Result<Ty, ResolveError> {
+        let what = format!("`{}`", op.symbol());
+        Ok(match op {
+            BinOp::And | BinOp::Or | BinOp::Implies => {
+                self.want(a, ta, Ty::Bool, &what)?;
+                self.want(b, tb, Ty::Bool, &what)?;
+                Ty::Bool
+            }
+            BinOp::Eq | BinOp::Ne => {
+                if ta != tb {
+                    return err(
+                        whole,
+                        format!("cannot compare {} with {}", ta.article(), tb.article()),
+                    );
+                }
+                Ty::Bool
+            }
+            BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge => {
+                self.want(a, ta, Ty::Int, &what)?;
+                self.want(b, tb, Ty::Int, &what)?;
+                Ty::Bool
+            }
+            BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem => {
+                self.want(a, ta, Ty::Int, &what)?;
+                self.want(b, tb, Ty::Int, &what)?;
+                Ty::Int
             }
         })
     }

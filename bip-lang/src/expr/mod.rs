@@ -8,7 +8,7 @@ mod parse;
 
 use std::fmt;
 
-pub use parse::{parse_action, parse_expr, parse_range, ParseError};
+pub use parse::{check_depth, parse_action, parse_expr, parse_range, ParseError, MAX_DEPTH};
 
 use crate::source::Span;
 pub use bip_model::ops::{BinOp, QuantKind};
@@ -42,6 +42,10 @@ pub enum ExprKind {
     Call(Ident, Vec<Expr>),
     Unary(UnOp, Box<Expr>),
     Binary(BinOp, Box<Expr>, Box<Expr>),
+    /// `a op b op c …`, three operands or more joined by operators of one precedence, read
+    /// left to right (`a - b + c` is `(a - b) + c`): a long chain is one flat node, so that
+    /// no pass over it recurses once per operand.
+    Chain(Box<Expr>, Vec<(BinOp, Expr)>),
     /// `c ? a : b`
     Cond(Box<Expr>, Box<Expr>, Box<Expr>),
     /// `forall i in lo..hi: body` and its kin
@@ -87,6 +91,9 @@ impl Expr {
         match &self.kind {
             ExprKind::Cond(..) => PREC_COND,
             ExprKind::Binary(op, ..) => op.precedence(),
+            ExprKind::Chain(_, rest) => {
+                rest.first().map_or(PREC_POSTFIX, |(op, _)| op.precedence())
+            }
             ExprKind::Unary(..) => PREC_UNARY,
             // A quantifier's body extends to the right as far as it can, so it is printed
             // in parentheses unless it is the whole expression.
@@ -149,6 +156,15 @@ impl Expr {
                 a.fmt_prec(f, lp)?;
                 write!(f, " {} ", op.symbol())?;
                 b.fmt_prec(f, rp)
+            }
+            ExprKind::Chain(first, rest) => {
+                let p = self.precedence();
+                first.fmt_prec(f, p)?;
+                for (op, x) in rest {
+                    write!(f, " {} ", op.symbol())?;
+                    x.fmt_prec(f, p + 1)?;
+                }
+                Ok(())
             }
             ExprKind::Cond(c, a, b) => {
                 c.fmt_prec(f, PREC_COND + 1)?;

@@ -55,9 +55,20 @@ pub fn parse_range(text: &str) -> PResult<Range> {
     Ok(r)
 }
 
+/// The magnitude of `i64::MIN`: a literal may be this large only right after a minus.
+const MIN_MAGNITUDE: u64 = 1 << 63;
+
+fn too_big(span: Span) -> ParseError {
+    ParseError {
+        message: "integer literal does not fit in 64 bits".into(),
+        span,
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 enum Tok {
-    Int(i64),
+    /// A literal's magnitude, at most [`MIN_MAGNITUDE`].
+    Int(u64),
     Ident(String),
     LParen,
     RParen,
@@ -124,10 +135,11 @@ fn lex(text: &str) -> PResult<Vec<(Tok, Span)>> {
                 });
             }
             let digits: String = text[i..j].chars().filter(|&c| c != '_').collect();
-            let v = digits.parse::<i64>().map_err(|_| ParseError {
-                message: "integer literal does not fit in 64 bits".into(),
-                span: Span::new(i, j),
-            })?;
+            let v = digits
+                .parse::<u64>()
+                .ok()
+                .filter(|&v| v <= MIN_MAGNITUDE)
+                .ok_or_else(|| too_big(Span::new(i, j)))?;
             (Tok::Int(v), j - i)
         } else if c.is_ascii_alphabetic() || c == b'_' {
             let mut j = i;
@@ -194,20 +206,24 @@ fn lex(text: &str) -> PResult<Vec<(Tok, Span)>> {
     Ok(out)
 }
 
-/// Expressions nest by recursion; this bound turns a pathological input into an error
-/// instead of a stack overflow, here and in every later pass over the tree.
-const MAX_DEPTH: usize = 200;
+/// Real nesting (parentheses, the operands of `!`, `-`, `=>` and `?:`, indices, call
+/// arguments, quantifier bodies, postfix chains) is bounded, so that every pass over a tree,
+/// here and later, recurses at most this deep: a pathological input is an error instead of a
+/// stack overflow. A chain of operators of one precedence (`a && b && …`, `x + y - z + …`)
+/// is one node however long, and one level deep.
+pub const MAX_DEPTH: usize = 200;
 
-/// Left-associative chains (`1 + 1 + … + 1`) are parsed by a loop, not by recursion, but
-/// they still build deep trees; every tree is checked once, without recursion.
-fn check_depth(e: &Expr) -> PResult<()> {
+/// Checks a tree's depth once, without recursion (trees are also built by the GenoM
+/// expansion, not only by this parser).
+pub fn check_depth(e: &Expr) -> PResult<()> {
     let mut stack = vec![(e, 1usize)];
     while let Some((e, d)) = stack.pop() {
         if d > MAX_DEPTH {
             return Err(ParseError {
                 message: format!(
-                    "expression nested more than {MAX_DEPTH} levels deep (split long chains \
-                     of operators, or use a quantifier)"
+                    "expression nested more than {MAX_DEPTH} levels deep (parentheses, \
+                     `!`, `-`, `=>`, `?:`, indices and quantifiers count; a chain of `&&`, \
+                     `||`, `+` or `*` does not)"
                 ),
                 span: e.span,
             });
@@ -217,6 +233,10 @@ fn check_depth(e: &Expr) -> PResult<()> {
             ExprKind::Index(a, b) | ExprKind::Binary(_, a, b) => {
                 stack.push((a, d + 1));
                 stack.push((b, d + 1));
+            }
+            ExprKind::Chain(first, rest) => {
+                stack.push((first, d + 1));
+                stack.extend(rest.iter().map(|(_, x)| (x, d + 1)));
             }
             ExprKind::Member(a, _) | ExprKind::At(a, _) | ExprKind::Unary(_, a) => {
                 stack.push((a, d + 1))
@@ -333,9 +353,9 @@ impl Parser {
     }
 
     fn cond(&mut self) -> PResult<Expr> {
-        let c = self.binary(2)?;
+        let c = self.implies()?;
         if self.eat(&Tok::Question) {
-            let a = self.binary(2)?;
+            let a = self.implies()?;
             self.expect(Tok::Colon)?;
             let b = self.expr()?;
             let span = Span::new(c.span.start, b.span.end);
@@ -347,22 +367,34 @@ impl Parser {
         Ok(c)
     }
 
-    /// Precedence climbing over the binary operators with precedence >= `min`.
-    fn binary(&mut self, min: u8) -> PResult<Expr> {
-        let mut lhs = self.unary()?;
+    /// `a => b => c` is `a => (b => c)`: each `=>` to the right nests one level.
+    fn implies(&mut self) -> PResult<Expr> {
+        let lhs = self.chain(BinOp::Or.precedence())?;
+        if !self.eat(&Tok::Op(BinOp::Implies)) {
+            return Ok(lhs);
+        }
+        self.enter()?;
+        let rhs = self.implies();
+        self.depth -= 1;
+        let rhs = rhs?;
+        let span = Span::new(lhs.span.start, rhs.span.end);
+        Ok(Expr::new(
+            ExprKind::Binary(BinOp::Implies, Box::new(lhs), Box::new(rhs)),
+            span,
+        ))
+    }
+
+    /// The operands joined by operators of precedence `p` (each operand made of tighter
+    /// operators), read by a loop: a chain of any length is one node.
+    fn chain(&mut self, p: u8) -> PResult<Expr> {
+        let first = self.operand(p)?;
+        let mut rest = Vec::new();
         while let Tok::Op(op) = *self.peek() {
-            let p = op.precedence();
-            if p < min {
+            if op.precedence() != p {
                 break;
             }
             self.bump();
-            self.enter()?;
-            let rhs = match op {
-                BinOp::Implies => self.binary(p),
-                _ => self.binary(p + 1),
-            };
-            self.depth -= 1;
-            let rhs = rhs?;
+            let x = self.operand(p)?;
             if op.is_comparison() {
                 if let Tok::Op(next) = *self.peek() {
                     if next.is_comparison() {
@@ -373,10 +405,17 @@ impl Parser {
                     }
                 }
             }
-            let span = Span::new(lhs.span.start, rhs.span.end);
-            lhs = Expr::new(ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span);
+            rest.push((op, x));
         }
-        Ok(lhs)
+        Ok(join(first, rest))
+    }
+
+    fn operand(&mut self, p: u8) -> PResult<Expr> {
+        if p >= BinOp::Mul.precedence() {
+            self.unary()
+        } else {
+            self.chain(p + 1)
+        }
     }
 
     fn unary(&mut self) -> PResult<Expr> {
@@ -387,15 +426,23 @@ impl Parser {
             _ => return self.postfix(),
         };
         self.bump();
+        if let (UnOp::Neg, Tok::Int(MIN_MAGNITUDE)) = (op, self.peek()) {
+            // the minus belongs to the literal: this is i64::MIN, whose magnitude alone
+            // does not fit
+            let end = self.bump().1.end;
+            return Ok(Expr::new(ExprKind::Int(i64::MIN), Span::new(start, end)));
+        }
         self.enter()?;
         let e = self.unary();
         self.depth -= 1;
         let e = e?;
-        // fold `-literal` so that i64::MIN-adjacent literals and printing stay simple
-        if let (UnOp::Neg, ExprKind::Int(v)) = (op, &e.kind) {
-            return Ok(Expr::new(ExprKind::Int(-v), Span::new(start, e.span.end)));
-        }
         let span = Span::new(start, e.span.end);
+        // fold `-literal` so that printing stays simple
+        if let (UnOp::Neg, ExprKind::Int(v)) = (op, &e.kind) {
+            if let Some(neg) = v.checked_neg() {
+                return Ok(Expr::new(ExprKind::Int(neg), span));
+            }
+        }
         Ok(Expr::new(ExprKind::Unary(op, Box::new(e)), span))
     }
 
@@ -432,6 +479,7 @@ impl Parser {
         match tok {
             Tok::Int(v) => {
                 self.bump();
+                let v = i64::try_from(v).map_err(|_| too_big(span))?;
                 Ok(Expr::new(ExprKind::Int(v), span))
             }
             Tok::LParen => {
@@ -499,13 +547,26 @@ impl Parser {
             }
             _ => return Err(self.error_here("expected `in`")),
         }
-        let lo = self.binary(6)?;
+        let lo = self.chain(BinOp::Add.precedence())?;
         if !self.eat(&Tok::DotDot) {
             return Err(self.error_here("expected `..` in the range `lo..hi`"));
         }
-        let hi = self.binary(6)?;
+        let hi = self.chain(BinOp::Add.precedence())?;
         Ok(Range { var, lo, hi })
     }
+}
+
+/// One operand alone, two as a binary node, more as a chain.
+fn join(first: Expr, mut rest: Vec<(BinOp, Expr)>) -> Expr {
+    let Some((_, last)) = rest.last() else {
+        return first;
+    };
+    let span = Span::new(first.span.start, last.span.end);
+    if rest.len() == 1 {
+        let (op, x) = rest.pop().expect("one operand");
+        return Expr::new(ExprKind::Binary(op, Box::new(first), Box::new(x)), span);
+    }
+    Expr::new(ExprKind::Chain(Box::new(first), rest), span)
 }
 
 fn is_keyword(s: &str) -> bool {
@@ -551,10 +612,16 @@ mod tests {
         };
         assert!(matches!(r.kind, ExprKind::Binary(BinOp::Implies, ..)));
         let e = parse_expr("a - b - c").unwrap();
-        let ExprKind::Binary(BinOp::Sub, l, _) = &e.kind else {
+        let ExprKind::Chain(first, rest) = &e.kind else {
             panic!()
         };
-        assert!(matches!(l.kind, ExprKind::Binary(BinOp::Sub, ..)));
+        assert!(matches!(first.kind, ExprKind::Name(_)));
+        assert_eq!(rest.len(), 2);
+        assert_eq!(e.to_string(), "a - b - c");
+        assert_eq!(
+            parse_expr("a - (b - c)").unwrap().to_string(),
+            "a - (b - c)"
+        );
     }
 
     #[test]
@@ -585,6 +652,9 @@ mod tests {
         assert!(e.message.contains("chain"));
         let e = err("99999999999999999999");
         assert!(e.message.contains("64 bits"));
+        let e = err("9223372036854775808");
+        assert!(e.message.contains("64 bits"));
+        assert_eq!(e.span, Span::new(0, 19));
         let e = err("");
         assert!(e.message.contains("expected an expression"));
     }
@@ -595,10 +665,51 @@ mod tests {
         assert!(err(&text).message.contains("nested"));
         let text = "!".repeat(10_000) + "x";
         assert!(err(&text).message.contains("nested"));
-        let text = vec!["1"; 10_000].join(" + ");
+        let text = "-(".repeat(10_000) + "1" + &")".repeat(10_000);
         assert!(err(&text).message.contains("nested"));
-        let text = vec!["1"; 150].join(" + ");
+        let text = "a[".repeat(10_000) + "1" + &"]".repeat(10_000);
+        assert!(err(&text).message.contains("nested"));
+        let text = vec!["a"; 10_000].join(" => ");
+        assert!(err(&text).message.contains("nested"));
+        let text = "(".repeat(MAX_DEPTH - 1) + "1" + &")".repeat(MAX_DEPTH - 1);
         assert!(parse_expr(&text).is_ok());
+        let text = "(".repeat(MAX_DEPTH) + "1" + &")".repeat(MAX_DEPTH);
+        assert!(err(&text).message.contains("nested"));
+    }
+
+    #[test]
+    fn a_flat_chain_is_one_level_however_long() {
+        for op in ["&&", "||", "+", "*"] {
+            let text = vec!["a"; 100_000].join(&format!(" {op} "));
+            let e = parse_expr(&text).expect("a long chain parses");
+            let ExprKind::Chain(_, rest) = &e.kind else {
+                panic!("expected a chain")
+            };
+            assert_eq!(rest.len(), 99_999);
+            assert_eq!(e.to_string(), text);
+        }
+        let e = parse_expr("a + b - c * d / e + f").unwrap();
+        let ExprKind::Chain(first, rest) = &e.kind else {
+            panic!()
+        };
+        assert!(matches!(first.kind, ExprKind::Name(_)));
+        let ops: Vec<_> = rest.iter().map(|(op, _)| *op).collect();
+        assert_eq!(ops, [BinOp::Add, BinOp::Sub, BinOp::Add]);
+        assert!(matches!(rest[1].1.kind, ExprKind::Chain(..)));
+    }
+
+    #[test]
+    fn the_minus_belongs_to_the_literal() {
+        let e = parse_expr("-9223372036854775808").unwrap();
+        assert_eq!(e.kind, ExprKind::Int(i64::MIN));
+        assert_eq!(e.to_string(), "-9223372036854775808");
+        let e = parse_expr("x - -9223372036854775808").unwrap();
+        assert_eq!(e.to_string(), "x - -9223372036854775808");
+        let e = parse_expr("--9223372036854775808").unwrap();
+        assert!(matches!(e.kind, ExprKind::Unary(UnOp::Neg, _)));
+        assert_eq!(parse_expr(&e.to_string()).unwrap(), e);
+        let a = parse_action("x = -9223372036854775808").unwrap();
+        assert_eq!(a[0].value.kind, ExprKind::Int(i64::MIN));
     }
 
     #[test]

@@ -334,6 +334,14 @@ impl<'a, 'd> Rewriter<'a, 'd> {
             }
             ExprKind::Unary(op, a) => ExprKind::Unary(*op, w(a, bound)?),
             ExprKind::Binary(op, a, b) => ExprKind::Binary(*op, w(a, bound)?, w(b, bound)?),
+            ExprKind::Chain(first, rest) => {
+                let first = w(first, bound)?;
+                let mut out = Vec::with_capacity(rest.len());
+                for (op, x) in rest {
+                    out.push((*op, *w(x, bound)?));
+                }
+                ExprKind::Chain(first, out)
+            }
             ExprKind::Cond(c, a, b) => ExprKind::Cond(w(c, bound)?, w(a, bound)?, w(b, bound)?),
             ExprKind::Quant(k, r, body) => {
                 let lo = *w(&r.lo, bound)?;

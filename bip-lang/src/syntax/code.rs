@@ -188,6 +188,10 @@ fn in_file(t: &Text, e: &mut Expr) {
                 stack.push(a);
                 stack.push(b);
             }
+            ExprKind::Chain(first, rest) => {
+                stack.push(first);
+                stack.extend(rest.iter_mut().map(|(_, x)| x));
+            }
             ExprKind::Member(a, x) | ExprKind::At(a, x) => {
                 ident(x);
                 stack.push(a);

@@ -1,10 +1,13 @@
 //! bip-lang's integration tests, in one binary: every kind of bad input with its message and
 //! position (`diagnostics`, `genom`, `genom_terms`, `timing`), and the GenoM expansion on
-//! random layers (`genom_random`).
+//! random layers (`genom_random`); reproducers of crashes and hangs (`robustness`) and
+//! mutated example models through the loader (`fuzz`).
 
 mod diagnostics;
+mod fuzz;
 mod genom;
 mod genom_random;
 mod genom_terms;
+mod robustness;
 mod support;
 mod timing;

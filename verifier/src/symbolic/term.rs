@@ -459,7 +459,17 @@ impl Translator<'_> {
                 let t = a.int_term().unary_minus();
                 Sym::of_int(t, (-a.hi).max(I64_MIN), (-a.lo).min(I64_MAX)).with_err(err)
             }
-            Expr::Binary(op, a, b) => self.binary(*op, a, b, bound),
+            Expr::Binary(op, a, b) => {
+                let a = self.expr(a, bound);
+                self.binary(*op, a, b, bound)
+            }
+            Expr::Chain(first, rest) => {
+                let mut acc = self.expr(first, bound);
+                for (op, x) in rest {
+                    acc = self.binary(*op, acc, x, bound);
+                }
+                acc
+            }
             Expr::Cond(c, a, b) => {
                 let c = self.expr(c, bound);
                 let cb = c.bool_term();
@@ -484,8 +494,8 @@ impl Translator<'_> {
         }
     }
 
-    fn binary(&self, op: BinOp, a: &Expr, b: &Expr, bound: &mut [i64; MAX_QUANT_DEPTH]) -> Sym {
-        let a = self.expr(a, bound);
+    /// `a op b`, with `a` already translated.
+    fn binary(&self, op: BinOp, a: Sym, b: &Expr, bound: &mut [i64; MAX_QUANT_DEPTH]) -> Sym {
         match op {
             // short-circuit operators evaluate `b` only when needed, so its failure counts
             // only then
