@@ -1,5 +1,5 @@
 //! Wide models load within bounds: long chains of priorities (a functional layer of 99
-//! modules, an `AtMost` over 150 activities) load in a few seconds, and a connector whose
+//! modules, an `AtMost` over 300 activities) load in a few seconds, and a connector whose
 //! steps in one state would be too many to list (28 ports, a broadcast to 40 receivers) is
 //! refused with its place and its count. Each runs `bip check` in a child process capped
 //! in memory and time: before these limits held, such models took the machine's memory.
@@ -78,13 +78,13 @@ fn activities(modules: usize, per: usize, at_most: usize) -> String {
 }
 
 #[test]
-fn at_most_over_150_activities_loads() {
-    // 150 activities in a chain of priorities (each below the one declared before), and a
-    // guard on each start over the 149 others
-    let (code, stdout, stderr) = check_text("atmost.ron", &activities(15, 10, 150));
+fn at_most_over_300_activities_loads() {
+    // 300 activities in a chain of priorities (each below the one declared before), and a
+    // guard on each start over the 299 others
+    let (code, stdout, stderr) = check_text("atmost.ron", &activities(30, 10, 300));
     assert_eq!(code, Some(0), "{stdout}{stderr}");
     assert!(
-        stdout.contains("chains of up to 150 in their closure"),
+        stdout.contains("chains of up to 300 in their closure"),
         "{stdout}"
     );
 }
