@@ -20,7 +20,7 @@ use std::error::Error;
 use std::sync::{Arc, Mutex};
 
 use bip_engine::{
-    Engine, Event, Next, Outcome, RealClock, Refusal, Reply, Ticket, Until, VirtualClock,
+    CodelId, Engine, Event, Next, Outcome, RealClock, Refusal, Reply, Ticket, Until, VirtualClock,
 };
 use bip_model::{PropertyKind, System, Trace};
 
@@ -336,6 +336,24 @@ pub fn run(
         "end: {} steps ({} ticks, {} codels, {} exceptions, {} faults, {} overruns); rover at x = {x:.2} m, {sent} packets sent",
         stats.steps, stats.ticks, stats.codels, stats.exceptions, stats.faults, stats.overruns
     ));
+    // each codel's run times against its WCET, the slowest first
+    let inspect = engine.inspect();
+    let mut timed: Vec<_> = (0..inspect.codel_count() as u32)
+        .map(CodelId)
+        .map(|c| (c, inspect.codel_times(c)))
+        .filter(|(_, t)| t.runs > 0)
+        .collect();
+    timed.sort_by_key(|(_, t)| std::cmp::Reverse(t.max_us));
+    for (c, t) in timed.iter().take(5) {
+        let (m, s, k) = inspect.codel_name(*c);
+        say(format!(
+            "codel {m}.{s}.{k}: {} runs, mean {:.0} µs, max {} µs, {} over its WCET",
+            t.runs,
+            t.mean_us(),
+            t.max_us,
+            t.over_wcet
+        ));
+    }
 
     // the recording is a path of the model, and every invariant holds along it
     report.trace = engine.record();
