@@ -14,7 +14,7 @@ use bip_model::System;
 use crate::error::VerifyError;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::report::{Method, PropertyVerdict, Report};
+use crate::report::{Method, PropertyVerdict, Report, Stop};
 use crate::{explore, symbolic};
 
 /// States the explicit phase may store.
@@ -40,7 +40,15 @@ pub(crate) fn verify(
         .properties
         .iter()
         .any(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }));
-    if !open || explicit.properties.iter().any(|p| p.verdict.fails()) && options.stop_at_first {
+    // the user's interrupt and time limit end the whole run, not just the explicit phase
+    let ended = matches!(
+        explicit.stopped,
+        Some(Stop::Interrupted | Stop::Timeout { .. })
+    );
+    if !open
+        || ended
+        || explicit.properties.iter().any(|p| p.verdict.fails()) && options.stop_at_first
+    {
         return Ok(Report {
             method: Method::Auto,
             ..explicit
@@ -69,6 +77,5 @@ pub(crate) fn verify(
     }
     report.method = Method::Auto;
     report.symbolic = symbolic.symbolic;
-    report.stats.seconds = started.elapsed().as_secs_f64();
     Ok(report)
 }

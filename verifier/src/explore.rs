@@ -17,6 +17,7 @@
 //! store the same states under the same numbers and report the same traces.
 
 use std::borrow::Cow;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -34,6 +35,7 @@ use crate::progress::Progress;
 use crate::properties::{checked_properties, RANGE_ERRORS};
 use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 use crate::visited::{hash, shard_of, Chunk, ShardFull, StateId, Visited, SHARDS};
+use crate::watch::Watch;
 
 /// States per chunk: large enough to amortise scheduling, small enough to balance.
 const CHUNK_STATES: u32 = 1024;
@@ -41,6 +43,12 @@ const CHUNK_STATES: u32 = 1024;
 const CHUNKS_PER_WORKER: usize = 8;
 /// Memory the liveness checker of one worker may use for its memory of states.
 const LIVENESS_MEMO_BYTES: usize = 32 << 20;
+/// Successors fired between two looks at the limits, within one state (a state of a wide
+/// model has as many successors as components).
+const SUCCESSORS_PER_LOOK: usize = 256;
+/// A candidate record is held three times before it is stored: found, sorted by shard,
+/// and stored; announced to the watch at that cost.
+const RECORD_COPIES: u64 = 3;
 
 /// What one property checks, with its compiled expression.
 enum Check<'a> {
@@ -129,10 +137,13 @@ struct ChunkOut {
     transitions: u64,
     findings: Vec<Option<Finding>>,
     liveness_unknown: u64,
+    /// The chunk stopped before its end because a limit was reached.
+    cut: bool,
 }
 
 impl ChunkOut {
     fn reset(&mut self, targets: usize) {
+        self.cut = false;
         self.raw.clear();
         self.sorted.clear();
         self.offsets.clear();
@@ -209,7 +220,11 @@ pub(crate) fn verify(
         .thread_name(|i| format!("bip-verify-{i}"))
         .build()
         .map_err(|e| VerifyError::Threads(e.to_string()))?;
-    pool.install(|| Explorer::new(system, options, jobs).run(progress))
+    let watch = Watch::new(options, options.max_memory.or_else(memory::default_limit));
+    watch.around(
+        || {},
+        || pool.install(|| Explorer::new(system, options, jobs, &watch).run(progress)),
+    )
 }
 
 struct Explorer<'a> {
@@ -224,7 +239,7 @@ struct Explorer<'a> {
     liveness_unknown: u64,
     transitions: u64,
     depth: u32,
-    max_memory: Option<u64>,
+    watch: &'a Watch,
     started: Instant,
     /// Time spent in each phase, for `-v` logs and profiles.
     expand_time: Duration,
@@ -234,7 +249,12 @@ struct Explorer<'a> {
 }
 
 impl<'a> Explorer<'a> {
-    fn new(system: &'a System, options: &'a Options, jobs: usize) -> Explorer<'a> {
+    fn new(
+        system: &'a System,
+        options: &'a Options,
+        jobs: usize,
+        watch: &'a Watch,
+    ) -> Explorer<'a> {
         let targets = targets(system);
         let slots = system.slot_count();
         let memo = (LIVENESS_MEMO_BYTES / (slots * 8 + 64)).clamp(1_000, 1_000_000);
@@ -267,8 +287,8 @@ impl<'a> Explorer<'a> {
             liveness_unknown: 0,
             transitions: 0,
             depth: 0,
-            max_memory: options.max_memory.or_else(memory::default_limit),
-            started: Instant::now(),
+            watch,
+            started: watch.started(),
             expand_time: Duration::ZERO,
             insert_time: Duration::ZERO,
             stopped_decided: false,
@@ -297,23 +317,44 @@ impl<'a> Explorer<'a> {
             let level_states = self.visited.level_len(level);
             let mut level_done = 0u64;
             self.visited.start_level();
-            for group in chunks.chunks(batch) {
+            let mut groups = chunks.chunks(batch);
+            let mut next_group = groups.next();
+            while let Some(group) = next_group {
                 if let Some(stop) = self.limit_reached(last_growth) {
                     stopped = Some(stop);
                     break 'levels;
                 }
                 let before = self.visited.allocated_bytes();
                 let t0 = Instant::now();
-                self.expand(group);
+                let room = self.room();
+                self.expand(group, room);
                 let t1 = Instant::now();
-                let inserted = self.insert();
                 self.expand_time += t1 - t0;
+                let cut = self.outs.iter().any(|o| o.cut);
+                if let Some(stop) = self.watch.stopped() {
+                    // the states expanded so far were checked: keep what was found
+                    self.merge_findings(group.len());
+                    stopped = Some(stop.clone());
+                    break 'levels;
+                }
+                let inserted = self.insert();
                 self.insert_time += t1.elapsed();
                 if let Err(ShardFull) = inserted {
                     stopped = Some(Stop::TooManyStates);
                     break 'levels;
                 }
                 last_growth = self.visited.allocated_bytes().saturating_sub(before);
+                if cut {
+                    // the batch stopped at the state limit; if the states it found were
+                    // fewer (duplicates), expand it again: the stored ones are known now
+                    if let Some(stop) = self.limit_reached(0) {
+                        self.merge_findings(group.len());
+                        stopped = Some(stop);
+                        break 'levels;
+                    }
+                    continue;
+                }
+                next_group = groups.next();
                 self.merge_findings(group.len());
                 level_done += group
                     .iter()
@@ -330,7 +371,7 @@ impl<'a> Explorer<'a> {
                 }
                 if last_progress.elapsed() >= Duration::from_millis(250) {
                     last_progress = Instant::now();
-                    progress(&Progress {
+                    progress(&Progress::Exploring {
                         states: self.visited.len(),
                         transitions: self.transitions,
                         depth: self.depth,
@@ -356,41 +397,50 @@ impl<'a> Explorer<'a> {
                 return Some(Stop::MaxStates { limit });
             }
         }
-        if let Some(t) = self.options.timeout {
-            if self.started.elapsed() >= t {
-                return Some(Stop::Timeout {
-                    seconds: t.as_secs_f64(),
-                });
-            }
-        }
-        if let Some(limit) = self.max_memory {
+        if let Some(limit) = self.watch.max_memory() {
             // the next batch may grow the set by about as much as the last one; leave room
             // for twice that, and for what the process holds besides (read from /proc)
             let projected = self.store_bytes() + 2 * last_growth;
             let resident = memory::resident_bytes().unwrap_or(0) + 2 * last_growth;
             if projected.max(resident) > limit {
-                return Some(Stop::MaxMemory { limit });
+                self.watch.raise(Stop::MaxMemory { limit });
             }
         }
-        None
+        self.watch.look().cloned()
+    }
+
+    /// New states a batch may find before it stops at the state limit: what remains below
+    /// the limit, and a margin, so that a batch whose finds are partly duplicates still
+    /// reaches the limit.
+    fn room(&self) -> u64 {
+        self.options.max_states.map_or(u64::MAX, |limit| {
+            let left = limit.saturating_sub(self.visited.len());
+            left.saturating_add(limit / 16).max(1)
+        })
     }
 
     fn store_bytes(&self) -> u64 {
         self.visited.allocated_bytes() + self.outs.iter().map(|o| o.allocated() as u64).sum::<u64>()
     }
 
-    /// Phase 1: expands the chunks of a batch in parallel.
-    fn expand(&mut self, group: &[Chunk]) {
+    /// Phase 1: expands the chunks of a batch in parallel, until they end or a limit is
+    /// reached (the run's, or `room` new states found).
+    fn expand(&mut self, group: &[Chunk], room: u64) {
         let n = self.targets.len();
         if self.outs.len() < group.len() {
             self.outs.resize_with(group.len(), ChunkOut::default);
         }
         let open: Vec<bool> = self.findings.iter().map(Option::is_none).collect();
+        self.watch.rebase();
         let ctx = Ctx {
             system: self.system,
             targets: &self.targets,
             visited: &self.visited,
             open: &open,
+            watch: self.watch,
+            room,
+            found: AtomicU64::new(0),
+            full: AtomicBool::new(false),
         };
         let scratch = &self.scratch;
         self.outs[..group.len()]
@@ -472,7 +522,6 @@ impl<'a> Explorer<'a> {
             bytes_per_state: self.visited.used_bytes() as f64 / states.max(1) as f64,
             state_bytes: self.visited.width(),
             store_bytes: self.store_bytes(),
-            peak_memory_bytes: memory::peak_resident_bytes(),
             jobs: self.jobs,
         };
         let mut properties = Vec::with_capacity(self.targets.len());
@@ -506,6 +555,8 @@ impl<'a> Explorer<'a> {
             stats,
             stopped,
             symbolic: None,
+            seconds,
+            peak_memory_bytes: None,
         })
     }
 
@@ -567,6 +618,12 @@ struct Ctx<'a, 'b> {
     visited: &'b Visited,
     /// The properties still undecided when the batch started.
     open: &'b [bool],
+    watch: &'b Watch,
+    /// New states the batch may find; `found` counts them (duplicates too) and `full` is
+    /// raised once they reach `room`.
+    room: u64,
+    found: AtomicU64,
+    full: AtomicBool,
 }
 
 impl Ctx<'_, '_> {
@@ -576,7 +633,12 @@ impl Ctx<'_, '_> {
         let width = self.visited.width();
         let rec = REC_HEADER + width;
         let range_target = self.targets.len() - 1;
+        let mut announced = 0usize;
         for local in chunk.start..chunk.end {
+            if self.must_stop(out, &mut announced, rec) {
+                out.cut = true;
+                break;
+            }
             let id = self.visited.id(chunk.shard, local);
             let current = self.visited.state(id);
             layout.decode(current, &mut s.state);
@@ -638,7 +700,14 @@ impl Ctx<'_, '_> {
                 packed,
                 ..
             } = s;
-            for step in steps.iter() {
+            for (k, step) in steps.iter().enumerate() {
+                if k % SUCCESSORS_PER_LOOK == SUCCESSORS_PER_LOOK - 1
+                    && self.must_stop(out, &mut announced, rec)
+                {
+                    // the state is only partly expanded: its chunk ends here
+                    out.cut = true;
+                    break;
+                }
                 if let Err(err) = sys.fire(state, step, next) {
                     found(range_target, Found::RangeError(err.to_string()), out);
                     continue;
@@ -653,7 +722,24 @@ impl Ctx<'_, '_> {
                 }
             }
         }
+        self.must_stop(out, &mut announced, rec);
         out.sort_by_shard(rec);
+    }
+
+    /// Announces the records found since the last call, and says whether the chunk must
+    /// stop: a limit of the run is reached, or the batch has found `room` new states.
+    fn must_stop(&self, out: &ChunkOut, announced: &mut usize, rec: usize) -> bool {
+        let new = out.raw.len() - *announced;
+        *announced = out.raw.len();
+        if new > 0 {
+            let records = (new / rec) as u64;
+            let found = self.found.fetch_add(records, Ordering::Relaxed) + records;
+            if found >= self.room {
+                self.full.store(true, Ordering::Relaxed);
+            }
+            self.watch.expect(new as u64 * RECORD_COPIES);
+        }
+        self.watch.stopped().is_some() || self.full.load(Ordering::Relaxed)
     }
 }
 
