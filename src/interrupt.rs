@@ -15,7 +15,9 @@ const SECOND_INTERRUPT: i32 = 130;
 /// Installs the handler (once) and returns the flag it raises, for the library to poll.
 #[allow(dead_code)] // until the verifier and the simulation take a stop flag
 pub fn stop_flag() -> Arc<AtomicBool> {
-    let flag = FLAG.get_or_init(|| Arc::new(AtomicBool::new(false))).clone();
+    let flag = FLAG
+        .get_or_init(|| Arc::new(AtomicBool::new(false)))
+        .clone();
     install();
     flag
 }

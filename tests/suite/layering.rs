@@ -77,6 +77,7 @@ const CRATES: &[Layers] = &[
                     "properties",
                     "report",
                     "memory",
+                    "watch",
                 ],
             ),
             ("stores", &["visited", "promela"]),
