@@ -97,7 +97,8 @@ impl Watch {
         }
         if let Some(limit) = self.max_memory {
             let resident = memory::resident_bytes().unwrap_or(0);
-            let expected = self.base.load(Ordering::Relaxed) + self.expected.load(Ordering::Relaxed);
+            let expected =
+                self.base.load(Ordering::Relaxed) + self.expected.load(Ordering::Relaxed);
             if resident.max(expected) > limit {
                 self.raise(Stop::MaxMemory { limit });
             }
@@ -136,9 +137,12 @@ impl Watch {
     pub fn call_started(&self, limit: Option<Duration>) {
         self.call_timed_out.store(false, Ordering::Relaxed);
         let end = limit.map_or(0, |l| {
-            (self.started.elapsed() + l).as_micros().min(u128::from(u64::MAX)) as u64
+            (self.started.elapsed() + l)
+                .as_micros()
+                .min(u128::from(u64::MAX)) as u64
         });
-        self.call_deadline.store(end.max(u64::from(limit.is_some())), Ordering::Release);
+        self.call_deadline
+            .store(end.max(u64::from(limit.is_some())), Ordering::Release);
     }
 
     /// Marks the end of the solver call; true if the watchdog interrupted it for its own

@@ -78,7 +78,9 @@ pub(crate) fn verify(
                     let why = match z3_mib {
                         Some(mib) => {
                             out_of_memory(&watch);
-                            format!("z3 could not start in the {mib} MiB the memory limit leaves it")
+                            format!(
+                                "z3 could not start in the {mib} MiB the memory limit leaves it"
+                            )
                         }
                         None => "z3 could not start".into(),
                     };
@@ -230,7 +232,9 @@ fn run(
             ),
             ModelKind::Reachable(e) => (
                 CheckKind::Reachable,
-                decide(&mut p, &prop.name, &|p| safety(p, Goal::Reach(e, &prop.name))),
+                decide(&mut p, &prop.name, &|p| {
+                    safety(p, Goal::Reach(e, &prop.name))
+                }),
             ),
         };
         properties.push(PropertyResult {
