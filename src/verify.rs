@@ -27,7 +27,8 @@ pub enum MethodArg {
     /// Prove with z3 without enumerating states (compositional deadlock freedom,
     /// k-induction, bounded model checking).
     Symbolic,
-    /// Explicit within a budget, then symbolic for what is left open.
+    /// Explicit within a budget (1,000,000 states and 256 MiB of stored states, or a
+    /// smaller --max-states), then symbolic for what is left open.
     Auto,
 }
 
@@ -36,7 +37,8 @@ pub struct Args {
     /// The model file (RON).
     pub file: PathBuf,
     /// How to verify: explicit exploration, symbolic proofs (z3), or explicit within a
-    /// budget and symbolic for what it leaves open.
+    /// budget (1,000,000 states and 256 MiB of stored states) and symbolic for what it
+    /// leaves open.
     #[arg(long, value_enum, default_value = "auto")]
     pub method: MethodArg,
     /// Worker threads (default: one per core; at most 1024).
