@@ -425,6 +425,14 @@ fn text_report(
             kind_name(p.kind),
             trace.display(Some(system))
         );
+        if let Some(step) = &p.error_step {
+            // the failing step has no successor, so the trace cannot list it: it is next
+            let _ = writeln!(
+                s,
+                "  {}  {step}  ✗ firing it makes the range error",
+                trace.steps.len() + 1
+            );
+        }
         if p.kind == CheckKind::DeadlockFree && p.verdict.fails() {
             write_why_stuck(&mut s, system, trace);
         }
@@ -634,6 +642,13 @@ fn junit_report(args: &Args, system: &System, report: &Report) -> String {
                     .as_ref()
                     .map(|t| t.display(None).to_string())
                     .unwrap_or_default();
+                if let (Some(step), Some(t)) = (&p.error_step, trace) {
+                    let _ = writeln!(
+                        body,
+                        "  {}  {step}  (firing it makes the range error)",
+                        t.steps.len() + 1
+                    );
+                }
                 let why = why_lines(system, p);
                 if !why.is_empty() {
                     body.push_str("why:\n");

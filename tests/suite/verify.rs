@@ -542,3 +542,45 @@ fn counts_and_words_agree() {
     assert!(!stderr(&o).contains('\u{1b}'), "{}", stderr(&o));
     assert!(!stdout(&o).contains(" 1 steps"), "{}", stdout(&o));
 }
+
+/// A range error made by firing a step: the counterexample lists that step last, marked
+/// as the error and named by its connector, with either method.
+#[test]
+fn a_range_error_trace_ends_with_the_step_that_makes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_model(
+        dir.path(),
+        "buf.ron",
+        r#"System(
+            name: "buf",
+            atoms: {
+                "Buf": Atom(locations: ["on"], initial: "on", vars: [(name: "n", ty: Int(0, 3))],
+                            ports: ["put"],
+                            transitions: [(from: "on", port: "put", to: "on", action: "n = n + 1")]),
+                "Src": Atom(locations: ["s"], initial: "s", ports: ["give"],
+                            transitions: [(from: "s", port: "give", to: "s")]),
+            },
+            components: [(name: "buf", atom: "Buf"), (name: "src", atom: "Src")],
+            connectors: [(name: "put", ports: ["src.give", "buf.put"])],
+        )"#,
+    );
+    let o = bip(&["verify", &path, "--method", "explicit", "-q"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stdout(&o).contains("  3  put  buf.n: 2 → 3\n  4  put  ✗ firing it makes the range error"),
+        "{}",
+        stdout(&o)
+    );
+    for method in ["explicit", "symbolic"] {
+        let o = bip(&["verify", &path, "--method", method, "--format", "json"]);
+        let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        let range = doc["properties"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == "RangeErrors")
+            .unwrap();
+        assert_eq!(range["error_step"], "put", "{method}: {range}");
+        assert_eq!(range["trace"]["steps"].as_array().unwrap().len(), 3);
+    }
+}

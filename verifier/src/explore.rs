@@ -32,7 +32,7 @@ use crate::error::VerifyError;
 use crate::memory;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::properties::{checked_properties, RANGE_ERRORS};
+use crate::properties::{checked_properties, error_step, RANGE_ERRORS};
 use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 use crate::visited::{hash, shard_of, Chunk, ShardFull, StateId, Visited, SHARDS};
 use crate::watch::Watch;
@@ -530,6 +530,7 @@ impl<'a> Explorer<'a> {
                 Some(f) => self.verdict_of(t, f)?,
                 None => self.open_verdict(t, stopped.as_ref(), states),
             };
+            let error_step = verdict.trace().and_then(|tr| error_step(self.system, tr));
             properties.push(PropertyResult {
                 name: t.name.clone(),
                 kind: t.kind,
@@ -537,6 +538,7 @@ impl<'a> Explorer<'a> {
                 verdict,
                 method: Method::Explicit,
                 note: None,
+                error_step,
             });
         }
         tracing::info!(

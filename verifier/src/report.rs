@@ -91,6 +91,10 @@ pub struct PropertyResult {
     /// How the verdict was obtained, when there is more to say (`2-induction`, ...).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+    /// For a range error made by firing a step: the step (an interaction, or
+    /// `component.internal`), the one after the trace's last.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_step: Option<String>,
 }
 
 /// Why a run ended before it had looked at every reachable state.
@@ -253,6 +257,7 @@ mod tests {
             verdict,
             method: Method::Explicit,
             note: None,
+            error_step: None,
         }
     }
 

@@ -43,7 +43,7 @@ use crate::error::VerifyError;
 use crate::memory;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::properties::{checked_properties, RANGE_ERRORS};
+use crate::properties::{checked_properties, error_step, RANGE_ERRORS};
 use crate::report::{
     CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, SymbolicStats,
 };
@@ -241,6 +241,7 @@ fn run(
             name: prop.name.clone(),
             kind,
             expr: prop.text.clone(),
+            error_step: outcome.verdict.trace().and_then(|t| error_step(system, t)),
             verdict: outcome.verdict,
             method: outcome.method,
             note: outcome.note,
@@ -250,6 +251,7 @@ fn run(
         name: RANGE_ERRORS.into(),
         kind: CheckKind::RangeErrors,
         expr: String::new(),
+        error_step: range.verdict.trace().and_then(|t| error_step(system, t)),
         verdict: range.verdict,
         method: range.method,
         note: range.note,
@@ -324,6 +326,7 @@ fn undecided(system: &System, why: &str, watch: &Watch) -> Report {
             verdict: PropertyVerdict::Inconclusive { reason: why.into() },
             method: Method::Symbolic,
             note: None,
+            error_step: None,
         })
         .collect();
     properties.push(PropertyResult {
@@ -333,6 +336,7 @@ fn undecided(system: &System, why: &str, watch: &Watch) -> Report {
         verdict: PropertyVerdict::Inconclusive { reason: why.into() },
         method: Method::Symbolic,
         note: None,
+        error_step: None,
     });
     Report {
         model: system.name.clone(),
