@@ -584,3 +584,46 @@ fn a_range_error_trace_ends_with_the_step_that_makes_it() {
         assert_eq!(range["trace"]["steps"].as_array().unwrap().len(), 3);
     }
 }
+
+/// `--method auto` says which methods ran and gives each phase's figures, then the whole
+/// run's: the explicit phase's seconds are its own, within the run's.
+#[test]
+fn auto_reports_each_phase_and_the_whole_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let huge = write_model(
+        dir.path(),
+        "huge.ron",
+        r#"System(
+            name: "huge",
+            atoms: { "C": Atom(locations: ["s"], initial: "s", vars: [(name: "v", ty: Int(0, 9))],
+                               transitions: [(from: "s", to: "s", action: "v = (v + 1) % 10")]) },
+            components: [(name: "c", atom: "C", count: 8)],
+        )"#,
+    );
+    let o = bip(&["verify", &huge, "--max-states", "10000"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    let text = stdout(&o);
+    assert!(
+        text.contains("auto: explicit-state exploration") && text.contains("then symbolic proofs"),
+        "{text}"
+    );
+    assert!(
+        text.contains("\nexplicit: ") && text.contains("\nsymbolic: "),
+        "{text}"
+    );
+    assert!(text.contains(" s in all, peak memory "), "{text}");
+    let o = bip(&["verify", &huge, "--max-states", "10000", "--format", "json"]);
+    let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let explicit = doc["stats"]["seconds"].as_f64().unwrap();
+    let symbolic = doc["symbolic"]["seconds"].as_f64().unwrap();
+    let all = doc["seconds"].as_f64().unwrap();
+    assert!(explicit + symbolic <= all + 0.01, "{doc}");
+    assert!(doc["peak_memory_bytes"].as_u64().unwrap() > 0);
+    // a model the explicit phase decides: no symbolic proof, and the header says so
+    let o = bip(&["verify", &robot("philosophers.ron")]);
+    assert!(
+        stdout(&o).contains("it decided every property") && !stdout(&o).contains("\nsymbolic: "),
+        "{}",
+        stdout(&o)
+    );
+}
