@@ -46,6 +46,9 @@ const LIVENESS_MEMO_BYTES: usize = 32 << 20;
 /// Successors fired between two looks at the limits, within one state (a state of a wide
 /// model has as many successors as components).
 const SUCCESSORS_PER_LOOK: usize = 256;
+/// Candidate records a chunk finds before it announces them (bytes, records).
+const ANNOUNCED_BYTES: usize = 64 << 10;
+const ANNOUNCED_RECORDS: usize = 256;
 /// A candidate record is held three times before it is stored: found, sorted by shard,
 /// and stored; announced to the watch at that cost.
 const RECORD_COPIES: u64 = 3;
@@ -637,7 +640,7 @@ impl Ctx<'_, '_> {
         let range_target = self.targets.len() - 1;
         let mut announced = 0usize;
         for local in chunk.start..chunk.end {
-            if self.must_stop(out, &mut announced, rec) {
+            if self.must_stop(out, &mut announced, rec, false) {
                 out.cut = true;
                 break;
             }
@@ -704,7 +707,7 @@ impl Ctx<'_, '_> {
             } = s;
             for (k, step) in steps.iter().enumerate() {
                 if k % SUCCESSORS_PER_LOOK == SUCCESSORS_PER_LOOK - 1
-                    && self.must_stop(out, &mut announced, rec)
+                    && self.must_stop(out, &mut announced, rec, false)
                 {
                     // the state is only partly expanded: its chunk ends here
                     out.cut = true;
@@ -724,16 +727,18 @@ impl Ctx<'_, '_> {
                 }
             }
         }
-        self.must_stop(out, &mut announced, rec);
+        self.must_stop(out, &mut announced, rec, true);
         out.sort_by_shard(rec);
     }
 
     /// Announces the records found since the last call, and says whether the chunk must
     /// stop: a limit of the run is reached, or the batch has found `room` new states.
-    fn must_stop(&self, out: &ChunkOut, announced: &mut usize, rec: usize) -> bool {
+    /// The records are announced in groups (or all, with `flush`), to keep the shared
+    /// counters off the path of every state.
+    fn must_stop(&self, out: &ChunkOut, announced: &mut usize, rec: usize, flush: bool) -> bool {
         let new = out.raw.len() - *announced;
-        *announced = out.raw.len();
-        if new > 0 {
+        if new >= ANNOUNCED_BYTES || new >= ANNOUNCED_RECORDS * rec || (flush && new > 0) {
+            *announced = out.raw.len();
             let records = (new / rec) as u64;
             let found = self.found.fetch_add(records, Ordering::Relaxed) + records;
             if found >= self.room {
