@@ -346,6 +346,11 @@ impl<'a> Explorer<'a> {
                     stopped = Some(Stop::TooManyStates);
                     break 'levels;
                 }
+                if let Some(stop) = self.watch.stopped() {
+                    self.merge_findings(group.len());
+                    stopped = Some(stop.clone());
+                    break 'levels;
+                }
                 last_growth = self.visited.allocated_bytes().saturating_sub(before);
                 if cut {
                     // the batch stopped at the state limit; if the states it found were
@@ -459,9 +464,12 @@ impl<'a> Explorer<'a> {
     }
 
     /// Phase 2: stores the new states, shards in parallel, chunks in order within a shard.
+    /// A shard stops early if the run must stop (what it stored is consistent: states
+    /// with their parents).
     fn insert(&mut self) -> Result<(), ShardFull> {
         let rec = REC_HEADER + self.visited.width();
         let outs = &self.outs;
+        let watch = self.watch;
         let visited = &mut self.visited;
         visited
             .shards_mut()
@@ -469,7 +477,10 @@ impl<'a> Explorer<'a> {
             .enumerate()
             .try_for_each(|(s, shard)| {
                 for out in outs {
-                    for r in out.bucket(s, rec).chunks_exact(rec) {
+                    for (k, r) in out.bucket(s, rec).chunks_exact(rec).enumerate() {
+                        if k % SUCCESSORS_PER_LOOK == 0 && watch.stopped().is_some() {
+                            return Ok(());
+                        }
                         let parent = StateId::from_bits(read_parent(r));
                         shard.insert(read_hash(r), &r[REC_HEADER..], parent)?;
                     }

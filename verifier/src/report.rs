@@ -125,7 +125,11 @@ impl std::fmt::Display for Stop {
             Stop::MaxMemory { limit } => {
                 write!(f, "the memory limit ({}) was reached", human_bytes(*limit))
             }
-            Stop::Timeout { seconds } => write!(f, "the time limit ({seconds} s) was reached"),
+            Stop::Timeout { seconds } => write!(
+                f,
+                "the time limit ({} s) was reached",
+                (seconds * 1000.0).round() / 1000.0
+            ),
             Stop::FirstFailure => write!(f, "the run stopped at the first failure"),
             Stop::TooManyStates => write!(
                 f,

@@ -18,6 +18,9 @@ use crate::memory;
 use crate::options::Options;
 use crate::report::Stop;
 
+/// The payload of [`Watch::halt_if_stopped`]'s unwinding.
+struct Halted;
+
 /// How often the watchdog looks.
 const TICK: Duration = Duration::from_millis(5);
 
@@ -104,6 +107,16 @@ impl Watch {
             }
         }
         self.stopped()
+    }
+
+    /// Ends the computation in progress by unwinding (no panic message: not a panic) once
+    /// the run must stop; for long work that has no early result to return (the symbolic
+    /// encoding of a wide model), caught where the method turns the stop into inconclusive
+    /// verdicts.
+    pub fn halt_if_stopped(&self) {
+        if self.stopped().is_some() {
+            std::panic::resume_unwind(Box::new(Halted));
+        }
     }
 
     /// Stops the run for `stop`, unless it has stopped already.

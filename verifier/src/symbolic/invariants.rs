@@ -361,6 +361,7 @@ impl ComponentInvariants {
         let sys = enc.sys;
         let mut out = Vec::new();
         for (c, inv) in self.per_component.iter().enumerate() {
+            enc.poll();
             let comp = &sys.components[c];
             let atom = &sys.atoms[comp.atom as usize];
             for (l, &reach) in inv.locations.iter().enumerate() {

@@ -63,7 +63,8 @@ impl<'s> Prover<'s> {
             elapsed: watch.started().elapsed(),
         });
         let stop = || watch.stopped().is_some();
-        let enc = Encoding::new(sys);
+        let mut enc = Encoding::new(sys);
+        enc.watch = Some(watch.clone());
         let ci = invariants::compute(&enc, &stop);
         let net = Net::new(&enc, &ci, &stop);
         let semiflows = semiflows::compute(&net, &stop);
@@ -136,12 +137,15 @@ impl<'s> Prover<'s> {
             traps_given: 0,
         };
         for d in domain {
+            self.enc.poll();
             solver.assert(&d);
         }
         for c in self.ci.constraints(&self.enc, &placed.frame) {
+            self.enc.poll();
             solver.assert(&c);
         }
         for s in &self.semiflows {
+            self.enc.poll();
             solver.assert(s.constraint(&self.enc, &self.net, &placed.frame));
         }
         self.give_traps(solver, &mut placed);
