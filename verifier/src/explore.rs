@@ -739,7 +739,10 @@ impl Ctx<'_, '_> {
             }
         }
         self.must_stop(out, &mut announced, rec, true);
-        out.sort_by_shard(rec);
+        // a stopped run inserts nothing: sorting a wide batch's records would cost time
+        if self.watch.stopped().is_none() {
+            out.sort_by_shard(rec);
+        }
     }
 
     /// Announces the records found since the last call, and says whether the chunk must
