@@ -37,14 +37,17 @@ pub enum Answer {
 }
 
 impl Budget {
-    /// A new solver with this budget's resource limit.
+    /// A new solver with this budget's resource limit, which leaves Ctrl-C alone: by
+    /// default z3 takes SIGINT over during a call (and swallows it, the call answering
+    /// "canceled"), where the command's own handler must see it.
     pub fn solver(&self) -> Solver {
         let s = Solver::new();
+        let mut p = Params::new();
+        p.set_bool("ctrl_c", false);
         if let Some(r) = self.rlimit {
-            let mut p = Params::new();
             p.set_u32("rlimit", r);
-            s.set_params(&p);
         }
+        s.set_params(&p);
         s
     }
 }
