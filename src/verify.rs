@@ -153,20 +153,24 @@ pub fn run(args: &Args) -> u8 {
     let show_progress =
         !args.quiet && args.format == Format::Text && std::io::stderr().is_terminal();
     let bar: Mutex<Option<ProgressBar>> = Mutex::new(None);
-    // without a terminal, progress goes to the log (`-v`), once every few seconds
-    let logged: Mutex<Duration> = Mutex::new(Duration::ZERO);
+    // without a terminal, progress goes to the log (`-v`)
+    let logged: Mutex<(Option<Duration>, String)> = Mutex::new((None, String::new()));
     let on_progress = |p: &Progress| {
-        if p.elapsed() < Duration::from_secs(1) {
-            return;
-        }
-        if show_progress {
+        if show_progress && p.elapsed() >= Duration::from_secs(1) {
             let mut bar = bar.lock().unwrap_or_else(|e| e.into_inner());
             let bar = bar.get_or_insert_with(new_bar);
             bar.set_message(progress_line(p));
-        } else {
+        } else if !show_progress {
+            // at once for each new property, else every few seconds
+            let property = match p {
+                Progress::Proving { property, .. } => property.as_str(),
+                Progress::Exploring { .. } => "",
+            };
             let mut last = logged.lock().unwrap_or_else(|e| e.into_inner());
-            if *last == Duration::ZERO || p.elapsed() >= *last + LOG_EVERY {
-                *last = p.elapsed();
+            let (when, about) = &mut *last;
+            if when.is_none_or(|l| p.elapsed() >= l + LOG_EVERY) || about != property {
+                *when = Some(p.elapsed());
+                property.clone_into(about);
                 tracing::info!("progress: {}", progress_line(p));
             }
         }

@@ -318,3 +318,54 @@ fn ctrl_c_ends_an_auto_run() {
 fn ctrl_c_ends_a_symbolic_run() {
     ctrl_c_ends_the_run_like_a_limit("symbolic", "progress: symbolic:");
 }
+
+/// Ctrl-C reaches a symbolic run inside a long solver call (z3 must not take SIGINT over):
+/// a nonlinear invariant keeps the solver busy until its own limit, a minute away.
+#[test]
+fn ctrl_c_reaches_a_symbolic_run_inside_a_solver_call() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("fermat.ron");
+    std::fs::write(
+        &model,
+        r#"System(
+    name: "fermat",
+    atoms: { "C": Atom(locations: ["s"], initial: "s",
+        vars: [(name: "a", ty: Int(1, 100000)), (name: "b", ty: Int(1, 100000)),
+               (name: "c", ty: Int(1, 100000))],
+        transitions: [
+            (from: "s", to: "s", guard: "a < 100000", action: "a = a + 1"),
+            (from: "s", to: "s", guard: "b < 100000", action: "b = b + 1"),
+            (from: "s", to: "s", guard: "c < 100000", action: "c = c + 1"),
+        ]) },
+    components: [(name: "x", atom: "C")],
+    properties: [Invariant(name: "fermat",
+                           expr: "x.a * x.a * x.a + x.b * x.b * x.b != x.c * x.c * x.c")],
+)"#,
+    )
+    .unwrap();
+    let mut run = Running::start(&[
+        model.to_str().unwrap(),
+        "--method",
+        "symbolic",
+        "--solver-timeout",
+        "60",
+    ]);
+    run.wait_for("fermat: implied by the invariants?");
+    std::thread::sleep(Duration::from_millis(500));
+    run.interrupt();
+    let (code, stdout) = run.finish(Duration::from_secs(30));
+    assert_eq!(code, Some(3), "{stdout}");
+    assert!(
+        stdout.contains("fermat        inconclusive  the run was interrupted")
+            || stdout.contains("fermat       inconclusive  the run was interrupted")
+            || stdout
+                .lines()
+                .any(|l| l.trim_start().starts_with("fermat")
+                    && l.ends_with("the run was interrupted")),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("stopped: the run was interrupted"),
+        "{stdout}"
+    );
+}
