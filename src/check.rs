@@ -32,12 +32,21 @@ fn print_summary(path: &std::path::Path, system: &bip_model::System) {
         "  priorities    {} declared, chains of up to {} in their closure",
         s.priorities_declared, s.priority_depth
     );
-    let names: Vec<&str> = system.properties.iter().map(|p| p.name.as_str()).collect();
-    if names.is_empty() {
-        println!("  properties    0 (verify checks deadlock freedom)");
+    // the list `bip verify` checks, in its order: range errors are always checked, and
+    // deadlock freedom when the model declares nothing
+    let mut names: Vec<&str> = system.properties.iter().map(|p| p.name.as_str()).collect();
+    let declared = if names.is_empty() {
+        names.push("DeadlockFree");
+        "none declared: deadlock freedom"
     } else {
-        println!("  properties    {}: {}", s.properties, names.join(", "));
-    }
+        "declared"
+    };
+    names.push(bip_verifier::RANGE_ERRORS);
+    println!(
+        "  properties    {} checked ({declared}, and range errors): {}",
+        names.len(),
+        names.join(", ")
+    );
     println!(
         "  state         {} bits ({} bytes packed)",
         s.bits_per_state,

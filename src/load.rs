@@ -14,6 +14,14 @@ pub fn system(file: &Path) -> Option<System> {
     reported(bip_lang::load_file(file))
 }
 
+/// The compiled model in `file`; `None` once its diagnostic is printed on stdout as a
+/// JSON document (for `--format json`: a reader of stdout gets a document either way).
+pub fn system_or_json(file: &Path) -> Option<System> {
+    bip_lang::load_file(file)
+        .map_err(|e| println!("{}", report::load_error_json(file, &e)))
+        .ok()
+}
+
 /// The model in `file` with its GenoM layer expanded into BIP core, not compiled; `None`
 /// once its diagnostic is printed.
 pub fn expanded(file: &Path) -> Option<SystemDef> {

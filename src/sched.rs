@@ -11,7 +11,7 @@ use bip_sched::{
 };
 use bip_verifier::{schedulability, DemandChoice, DemandMethod, Options, Schedulability};
 
-use crate::verify::{parse_seconds, parse_size, Format};
+use crate::verify::{parse_memory, parse_seconds, Format};
 use crate::{exit, load};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -53,7 +53,7 @@ pub struct Args {
     #[arg(long, value_name = "N")]
     pub max_states: Option<u64>,
     /// Exact demand: use the bound before using more memory than SIZE.
-    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    #[arg(long, value_name = "SIZE", value_parser = parse_memory)]
     pub max_memory: Option<u64>,
     /// Exact demand: use the bound after SECS seconds of exploration.
     #[arg(long, value_name = "SECS", value_parser = parse_seconds)]
@@ -71,6 +71,7 @@ pub fn run(args: &Args) -> u8 {
         max_states: args.max_states,
         max_memory: args.max_memory,
         timeout: args.timeout,
+        interrupt: Some(crate::interrupt::stop_flag()),
         ..Options::default()
     };
     let assignment = match args.assign {

@@ -12,7 +12,7 @@ use bip_verifier::{
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::{exit, load};
+use crate::{exit, interrupt, load};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Format {
@@ -27,7 +27,8 @@ pub enum MethodArg {
     /// Prove with z3 without enumerating states (compositional deadlock freedom,
     /// k-induction, bounded model checking).
     Symbolic,
-    /// Explicit within a budget, then symbolic for what is left open.
+    /// Explicit within a budget (1,000,000 states and 256 MiB of stored states, or a
+    /// smaller --max-states), then symbolic for what is left open.
     Auto,
 }
 
@@ -36,20 +37,22 @@ pub struct Args {
     /// The model file (RON).
     pub file: PathBuf,
     /// How to verify: explicit exploration, symbolic proofs (z3), or explicit within a
-    /// budget and symbolic for what it leaves open.
+    /// budget (1,000,000 states and 256 MiB of stored states) and symbolic for what it
+    /// leaves open.
     #[arg(long, value_enum, default_value = "auto")]
     pub method: MethodArg,
-    /// Worker threads (default: one per core).
-    #[arg(short, long, value_name = "N")]
+    /// Worker threads (default: one per core; at most 1024).
+    #[arg(short, long, value_name = "N", value_parser = parse_jobs)]
     pub jobs: Option<usize>,
-    /// Stop, inconclusive, once N states are stored.
+    /// Stop, inconclusive, once N states are stored (with --method auto, the explicit
+    /// phase stores at most 1,000,000 states and 256 MiB of them anyway).
     #[arg(long, value_name = "N")]
     pub max_states: Option<u64>,
-    /// Stop, inconclusive, before using more memory than SIZE (like 512M or 4G; default:
-    /// 3/4 of the memory available at start).
-    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    /// Stop, inconclusive, before the process uses more memory than SIZE, z3 included
+    /// (like 512M or 4G, at least 16M; default: 3/4 of the memory available at start).
+    #[arg(long, value_name = "SIZE", value_parser = parse_memory)]
     pub max_memory: Option<u64>,
-    /// Stop, inconclusive, after SECS seconds.
+    /// Stop, inconclusive, after SECS seconds (Ctrl-C stops the same way).
     #[arg(long, value_name = "SECS", value_parser = parse_seconds)]
     pub timeout: Option<Duration>,
     /// Stop at the first property that fails.
@@ -88,8 +91,32 @@ pub struct Args {
     pub rlimit: Option<u32>,
 }
 
-pub(crate) fn parse_size(s: &str) -> Result<u64, String> {
-    bip_verifier::parse_size(s)
+/// Less memory than this cannot hold a run; a bare number below it is most likely a
+/// forgotten unit (`--max-memory 10` meaning 10 GiB, not 10 bytes).
+const MIN_MEMORY: u64 = 16 << 20;
+
+pub(crate) fn parse_memory(s: &str) -> Result<u64, String> {
+    let bytes = bip_verifier::parse_size(s)?;
+    if bytes < MIN_MEMORY {
+        return Err(format!(
+            "`{s}` is {}, too little for a run (at least 16M); give a unit, like {}G",
+            human_bytes(bytes),
+            s.trim()
+        ));
+    }
+    Ok(bytes)
+}
+
+/// More workers than this is a typing error (and spawning them would take minutes).
+const MAX_JOBS: usize = 1024;
+
+fn parse_jobs(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if (1..=MAX_JOBS).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "`{s}`: give a number of workers from 1 to {MAX_JOBS}"
+        )),
+    }
 }
 
 pub(crate) fn parse_seconds(s: &str) -> Result<Duration, String> {
@@ -100,23 +127,23 @@ pub(crate) fn parse_seconds(s: &str) -> Result<Duration, String> {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let Some(system) = load::system(&args.file) else {
+    let loaded = match args.format {
+        Format::Text => load::system(&args.file),
+        Format::Json => load::system_or_json(&args.file),
+    };
+    let Some(system) = loaded else {
         return exit::ERROR;
     };
-    if let Some(dir) = &args.trace_dir {
-        if let Err(e) = std::fs::create_dir_all(dir) {
-            eprintln!(
-                "error: cannot create the trace directory {}: {e}",
-                dir.display()
-            );
-            return exit::ERROR;
-        }
+    if let Err(message) = check_outputs(args) {
+        eprintln!("error: {message}");
+        return exit::ERROR;
     }
     let options = bip_verifier::Options {
         jobs: args.jobs.unwrap_or(0),
         max_states: args.max_states,
         max_memory: args.max_memory,
         timeout: args.timeout,
+        interrupt: Some(interrupt::stop_flag()),
         stop_at_first: args.stop_at_first,
         liveness_bound: 0,
         symbolic: bip_verifier::SymbolicOptions {
@@ -130,19 +157,26 @@ pub fn run(args: &Args) -> u8 {
     let show_progress =
         !args.quiet && args.format == Format::Text && std::io::stderr().is_terminal();
     let bar: Mutex<Option<ProgressBar>> = Mutex::new(None);
+    // without a terminal, progress goes to the log (`-v`)
+    let logged: Mutex<(Option<Duration>, String)> = Mutex::new((None, String::new()));
     let on_progress = |p: &Progress| {
-        if show_progress && p.elapsed >= Duration::from_secs(1) {
+        if show_progress && p.elapsed() >= Duration::from_secs(1) {
             let mut bar = bar.lock().unwrap_or_else(|e| e.into_inner());
             let bar = bar.get_or_insert_with(new_bar);
-            bar.set_message(format!(
-                "{} states, {} transitions, depth {} ({}/{} of the level), {}",
-                p.states,
-                p.transitions,
-                p.depth,
-                p.level_done,
-                p.level_states,
-                human_bytes(p.store_bytes)
-            ));
+            bar.set_message(progress_line(p));
+        } else if !show_progress {
+            // at once for each new property, else every few seconds
+            let property = match p {
+                Progress::Proving { property, .. } => property.as_str(),
+                Progress::Exploring { .. } => "",
+            };
+            let mut last = logged.lock().unwrap_or_else(|e| e.into_inner());
+            let (when, about) = &mut *last;
+            if when.is_none_or(|l| p.elapsed() >= l + LOG_EVERY) || about != property {
+                *when = Some(p.elapsed());
+                property.clone_into(about);
+                tracing::info!("progress: {}", progress_line(p));
+            }
         }
     };
     let method = match args.method {
@@ -174,6 +208,68 @@ pub fn run(args: &Args) -> u8 {
     }
 }
 
+/// How often progress is logged when there is no terminal to show it on.
+const LOG_EVERY: Duration = Duration::from_secs(5);
+
+fn progress_line(p: &Progress) -> String {
+    match p {
+        Progress::Exploring {
+            states,
+            transitions,
+            depth,
+            level_states,
+            level_done,
+            store_bytes,
+            ..
+        } => format!(
+            "{states} states, {transitions} transitions, depth {depth} ({level_done}/{level_states} of the level), {}",
+            human_bytes(*store_bytes)
+        ),
+        Progress::Proving {
+            property,
+            step,
+            solver_calls,
+            ..
+        } if property.is_empty() => format!("symbolic: {step} ({})", count(*solver_calls, "solver call")),
+        Progress::Proving {
+            property,
+            step,
+            solver_calls,
+            ..
+        } => format!("symbolic: {property}: {step} ({})", count(*solver_calls, "solver call")),
+    }
+}
+
+/// `1 step`, `2 steps`, `3 properties`.
+fn count(n: u64, what: &str) -> String {
+    match (n, what.strip_suffix('y')) {
+        (1, _) => format!("1 {what}"),
+        (_, Some(stem)) => format!("{n} {stem}ies"),
+        (_, None) => format!("{n} {what}s"),
+    }
+}
+
+/// Checks before the run that its outputs can be written: a report found after an hour
+/// must not be lost to a mistyped path.
+fn check_outputs(args: &Args) -> Result<(), String> {
+    if let Some(dir) = &args.trace_dir {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("cannot create the trace directory {}: {e}", dir.display()))?;
+    }
+    if let Some(path) = &args.junit {
+        let existed = path.exists();
+        std::fs::OpenOptions::new()
+            .append(true)
+            .create(true)
+            .open(path)
+            .map_err(|e| format!("cannot write the JUnit report {}: {e}", path.display()))?;
+        if !existed {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+    Ok(())
+}
+
 fn new_bar() -> ProgressBar {
     let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr_with_hz(1));
     bar.set_style(
@@ -190,7 +286,7 @@ fn write_outputs(args: &Args, system: &System, report: &Report) -> Result<(), St
     }
     let text = match args.format {
         Format::Text => text_report(args, system, report, &saved),
-        Format::Json => json_report(args, report)?,
+        Format::Json => json_report(args, system, report)?,
     };
     let mut stdout = std::io::stdout().lock();
     stdout
@@ -198,7 +294,7 @@ fn write_outputs(args: &Args, system: &System, report: &Report) -> Result<(), St
         .and_then(|()| stdout.flush())
         .map_err(|e| format!("cannot write the report: {e}"))?;
     if let Some(path) = &args.junit {
-        std::fs::write(path, junit_report(args, report))
+        std::fs::write(path, junit_report(args, system, report))
             .map_err(|e| format!("cannot write the JUnit report {}: {e}", path.display()))?;
     }
     Ok(())
@@ -207,11 +303,15 @@ fn write_outputs(args: &Args, system: &System, report: &Report) -> Result<(), St
 /// Writes `<property>.trace.ron` for each property with a trace; returns the paths.
 fn save_traces(dir: &Path, report: &Report) -> Result<Vec<(String, PathBuf)>, String> {
     let mut out = Vec::new();
+    let mut taken = std::collections::HashSet::new();
     for p in &report.properties {
         let Some(trace) = p.verdict.trace() else {
             continue;
         };
-        let path = dir.join(format!("{}.trace.ron", file_name(&p.name)));
+        let path = dir.join(format!(
+            "{}.trace.ron",
+            unique_file_name(&p.name, &mut taken)
+        ));
         std::fs::write(&path, bip_lang::trace_file::to_ron(trace) + "\n")
             .map_err(|e| format!("cannot write the trace {}: {e}", path.display()))?;
         out.push((p.name.clone(), path));
@@ -230,6 +330,19 @@ fn file_name(name: &str) -> String {
             }
         })
         .collect()
+}
+
+/// [`file_name`], with `-2`, `-3`, ... added when two names would give the same file
+/// (`p!` and `p?`; also `P` and `p`, on a file system that ignores case).
+fn unique_file_name(name: &str, taken: &mut std::collections::HashSet<String>) -> String {
+    let base = file_name(name);
+    let mut candidate = base.clone();
+    let mut n = 1;
+    while !taken.insert(candidate.to_lowercase()) {
+        n += 1;
+        candidate = format!("{base}-{n}");
+    }
+    candidate
 }
 
 fn method_name(method: Method) -> &'static str {
@@ -257,14 +370,22 @@ fn text_report(
 ) -> String {
     let mut s = String::new();
     let st = &report.stats;
+    let explicit = format!(
+        "explicit-state exploration, {}",
+        count(st.jobs as u64, "worker")
+    );
     let how = match report.method {
-        Method::Explicit => format!(
-            "explicit-state exploration, {} worker{}",
-            st.jobs,
-            if st.jobs == 1 { "" } else { "s" }
-        ),
+        Method::Explicit => explicit,
         Method::Symbolic => "symbolic proofs (z3)".to_string(),
-        Method::Auto => "explicit exploration within a budget, then symbolic proofs".to_string(),
+        Method::Auto if report.symbolic.is_some() => {
+            format!(
+                "auto: {explicit} within a budget, then symbolic proofs (z3) for what it left open"
+            )
+        }
+        Method::Auto if report.stopped.is_some() => {
+            format!("auto: {explicit}, stopped before any symbolic proof")
+        }
+        Method::Auto => format!("auto: {explicit}; it decided every property"),
     };
     let _ = writeln!(
         s,
@@ -280,9 +401,10 @@ fn text_report(
         .unwrap_or(0);
     for p in &report.properties {
         let (word, mut detail) = match &p.verdict {
-            PropertyVerdict::Holds { witness: Some(t) } => {
-                ("holds", format!("witness after {} steps", t.steps.len()))
-            }
+            PropertyVerdict::Holds { witness: Some(t) } => (
+                "holds",
+                format!("witness after {}", count(t.steps.len() as u64, "step")),
+            ),
             PropertyVerdict::Holds { witness: None } => {
                 ("holds", p.note.clone().unwrap_or_default())
             }
@@ -313,6 +435,14 @@ fn text_report(
                 .display(Some(system))
                 .all_variables(args.all_variables)
         );
+        if let Some(step) = &p.error_step {
+            // the failing step has no successor, so the trace cannot list it: it is next
+            let _ = writeln!(
+                s,
+                "  {}  {step}  ✗ firing it makes the range error",
+                trace.steps.len() + 1
+            );
+        }
         if p.kind == CheckKind::DeadlockFree && p.verdict.fails() {
             write_why_stuck(&mut s, system, trace);
         }
@@ -330,37 +460,8 @@ fn text_report(
             "\nnote: steps that make range errors have no successor; the other verdicts are about the states reachable without them"
         );
     }
-    if !args.quiet && report.method != Method::Symbolic {
-        let _ = writeln!(
-            s,
-            "\n{} states, {} transitions, depth {}, {:.2} s ({:.0} states/s), {:.1} bytes/state ({} B packed), store {}, peak memory {}",
-            st.states,
-            st.transitions,
-            st.depth,
-            st.seconds,
-            st.states_per_second,
-            st.bytes_per_state,
-            st.state_bytes,
-            human_bytes(st.store_bytes),
-            st.peak_memory_bytes.map_or("unknown".into(), human_bytes)
-        );
-    }
-    if let (false, Some(y)) = (args.quiet, &report.symbolic) {
-        let _ = writeln!(
-            s,
-            "{}symbolic: {} components ({} with approximate values), {} places, {} semiflows, {} traps learned, {} solver calls ({:.2} s), invariants in {:.2} s, {:.2} s in all, peak memory {}",
-            if report.method == Method::Symbolic { "\n" } else { "" },
-            y.components,
-            y.approximate_components,
-            y.places,
-            y.semiflows,
-            y.traps,
-            y.solver_calls,
-            y.solver_seconds,
-            y.invariant_seconds,
-            y.seconds,
-            st.peak_memory_bytes.map_or("unknown".into(), human_bytes)
-        );
+    if !args.quiet {
+        write_figures(&mut s, report);
     }
     if let Some(stop) = &report.stopped {
         let _ = writeln!(s, "stopped: {stop}");
@@ -375,20 +476,66 @@ fn text_report(
         .iter()
         .filter(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }))
         .count();
+    let all = report.properties.len() as u64;
     let _ = match report.outcome() {
-        VerifyOutcome::AllHold => {
-            writeln!(s, "result: all {} properties hold", report.properties.len())
+        VerifyOutcome::AllHold if all == 1 => writeln!(s, "result: the 1 property holds"),
+        VerifyOutcome::AllHold => writeln!(s, "result: all {all} properties hold"),
+        VerifyOutcome::SomeFail => {
+            writeln!(s, "result: {fails} of {} fail", count(all, "property"))
         }
-        VerifyOutcome::SomeFail => writeln!(
+        VerifyOutcome::Inconclusive => writeln!(
             s,
-            "result: {fails} of {} properties fail",
-            report.properties.len()
+            "result: inconclusive ({} undecided)",
+            count(undecided as u64, "property")
         ),
-        VerifyOutcome::Inconclusive => {
-            writeln!(s, "result: inconclusive ({undecided} properties undecided)")
-        }
     };
     s
+}
+
+/// The figures of each phase that ran, then the whole run's time and the process's peak
+/// memory (z3's included).
+fn write_figures(s: &mut String, report: &Report) {
+    let st = &report.stats;
+    let y = report.symbolic.as_ref();
+    let _ = writeln!(s);
+    if report.method != Method::Symbolic {
+        let _ = writeln!(
+            s,
+            "{}{} states, {} transitions, depth {}, {:.2} s ({:.0} states/s), {:.1} bytes/state ({} B packed), store {}",
+            if report.method == Method::Auto { "explicit: " } else { "" },
+            st.states,
+            st.transitions,
+            st.depth,
+            st.seconds,
+            st.states_per_second,
+            st.bytes_per_state,
+            st.state_bytes,
+            human_bytes(st.store_bytes),
+        );
+    }
+    if let Some(y) = y {
+        let _ = writeln!(
+            s,
+            "symbolic: {} ({} with approximate values), {} places, {}, {} learned, {} ({:.2} s), invariants in {:.2} s, {:.2} s",
+            count(y.components as u64, "component"),
+            y.approximate_components,
+            y.places,
+            count(y.semiflows as u64, "semiflow"),
+            count(y.traps as u64, "trap"),
+            count(y.solver_calls, "solver call"),
+            y.solver_seconds,
+            y.invariant_seconds,
+            y.seconds,
+        );
+    }
+    let _ = writeln!(
+        s,
+        "{:.2} s in all, peak memory {}",
+        report.seconds,
+        report
+            .peak_memory_bytes
+            .map_or("unknown".into(), human_bytes)
+    );
 }
 
 /// Under a GenoM deadlock: the codels that are ready but held back, and by what.
@@ -419,7 +566,24 @@ fn write_why_stuck(s: &mut String, system: &System, trace: &bip_model::Trace) {
     }
 }
 
-fn json_report(args: &Args, report: &Report) -> Result<String, String> {
+/// Why a GenoM model deadlocks (the codels ready but held, and by what), as the text
+/// report shows it, one line each; empty for other properties and models.
+fn why_lines(system: &System, p: &bip_verifier::PropertyResult) -> Vec<String> {
+    let (CheckKind::DeadlockFree, PropertyVerdict::Fails { trace: Some(t), .. }) =
+        (p.kind, &p.verdict)
+    else {
+        return Vec::new();
+    };
+    let mut text = String::new();
+    write_why_stuck(&mut text, system, t);
+    text.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && *l != "why:")
+        .map(|l| l.strip_prefix("why: ").unwrap_or(l).to_string())
+        .collect()
+}
+
+fn json_report(args: &Args, system: &System, report: &Report) -> Result<String, String> {
     #[derive(serde::Serialize)]
     struct Doc<'a> {
         file: String,
@@ -432,12 +596,22 @@ fn json_report(args: &Args, report: &Report) -> Result<String, String> {
         outcome: report.outcome(),
         report,
     };
+    let mut doc =
+        serde_json::to_value(&doc).map_err(|e| format!("cannot write the JSON report: {e}"))?;
+    if let Some(props) = doc["properties"].as_array_mut() {
+        for (json, p) in props.iter_mut().zip(&report.properties) {
+            let why = why_lines(system, p);
+            if !why.is_empty() {
+                json["why"] = why.into();
+            }
+        }
+    }
     serde_json::to_string_pretty(&doc)
         .map(|s| s + "\n")
         .map_err(|e| format!("cannot write the JSON report: {e}"))
 }
 
-fn junit_report(args: &Args, report: &Report) -> String {
+fn junit_report(args: &Args, system: &System, report: &Report) -> String {
     let props = &report.properties;
     let failures = props.iter().filter(|p| p.verdict.fails()).count();
     let errors = props
@@ -452,14 +626,14 @@ fn junit_report(args: &Args, report: &Report) -> String {
         r#"<testsuites name="{}" tests="{}" failures="{failures}" errors="{errors}" time="{:.3}">"#,
         xml(&suite),
         props.len(),
-        report.stats.seconds
+        report.seconds
     );
     let _ = writeln!(
         s,
         r#"  <testsuite name="{}" tests="{}" failures="{failures}" errors="{errors}" skipped="0" time="{:.3}">"#,
         xml(&report.model),
         props.len(),
-        report.stats.seconds
+        report.seconds
     );
     for p in props {
         let _ = write!(
@@ -467,17 +641,31 @@ fn junit_report(args: &Args, report: &Report) -> String {
             r#"    <testcase classname="{}" name="{}" time="{:.3}""#,
             xml(&report.model),
             xml(&p.name),
-            report.stats.seconds
+            report.seconds
         );
         match &p.verdict {
             PropertyVerdict::Holds { .. } => {
                 let _ = writeln!(s, "/>");
             }
             PropertyVerdict::Fails { reason, trace } => {
-                let body = trace
+                let mut body = trace
                     .as_ref()
                     .map(|t| t.display(None).to_string())
                     .unwrap_or_default();
+                if let (Some(step), Some(t)) = (&p.error_step, trace) {
+                    let _ = writeln!(
+                        body,
+                        "  {}  {step}  (firing it makes the range error)",
+                        t.steps.len() + 1
+                    );
+                }
+                let why = why_lines(system, p);
+                if !why.is_empty() {
+                    body.push_str("why:\n");
+                    for line in why {
+                        let _ = writeln!(body, "  {line}");
+                    }
+                }
                 let _ = writeln!(
                     s,
                     ">\n      <failure message=\"{}\" type=\"{}\">{}</failure>\n    </testcase>",

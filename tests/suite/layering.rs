@@ -91,6 +91,7 @@ const CRATES: &[Layers] = &[
                     "properties",
                     "report",
                     "memory",
+                    "watch",
                 ],
             ),
             ("stores", &["visited", "promela"]),

@@ -1,7 +1,8 @@
-//! The `bip` command end to end (`check`, `engine`, `genom`, `sched`, `verify`: the binary run as a
-//! user runs it, with SPIN as a cross-check where it is installed), and the architecture's
-//! layering read from the sources (`layering`), and wide models within memory and time
-//! bounds (`wide_models`), in one binary.
+//! The `bip` command end to end (`check`, `engine`, `genom`, `sched`, `verify`: the binary
+//! run as a user runs it, with SPIN as a cross-check where it is installed; `limits`: every
+//! limit and Ctrl-C on wide models, in capped child processes), the architecture's layering
+//! read from the sources (`layering`), and wide models within memory and time bounds
+//! (`wide_models`), in one binary.
 
 mod check;
 mod common;
@@ -9,6 +10,7 @@ mod engine;
 mod export;
 mod genom;
 mod layering;
+mod limits;
 mod sched;
 mod verify;
 mod wide_models;

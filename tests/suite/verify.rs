@@ -358,3 +358,256 @@ fn spin_agrees_on_the_examples() {
         assert_eq!(dl["verdict"] == "fails", deadlocks, "{model}");
     }
 }
+
+/// Arguments that cannot be meant, and outputs that cannot be written, fail before the run
+/// (exit 2, at once), not after it.
+#[test]
+fn arguments_and_outputs_are_checked_before_the_run() {
+    let started = std::time::Instant::now();
+    let o = bip(&["verify", &robot("rover.ron"), "--max-memory", "10"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("10G"), "{}", stderr(&o));
+    let o = bip(&["verify", &robot("rover.ron"), "--jobs", "100000"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("1 to 1024"), "{}", stderr(&o));
+    let o = bip(&[
+        "verify",
+        &robot("rover.ron"),
+        "--junit",
+        "/no/such/dir/x.xml",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("cannot write the JUnit report /no/such/dir/x.xml"),
+        "{}",
+        stderr(&o)
+    );
+    // the rover takes seconds to verify: none of these started it
+    assert!(started.elapsed().as_secs() < 10);
+    // a JUnit path checked but not yet written is not left behind
+    let dir = tempfile::tempdir().unwrap();
+    let junit = dir.path().join("x.xml");
+    let o = bip(&[
+        "verify",
+        &robot("philosophers.ron"),
+        "--junit",
+        junit.to_str().unwrap(),
+        "--jobs",
+        "0",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!junit.exists());
+}
+
+/// With `--format json`, a model that does not load is a JSON document of its
+/// diagnostics on stdout, exit 2.
+#[test]
+fn a_model_error_in_json_mode_is_a_json_document() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(robot("philosophers.ron"))
+        .unwrap()
+        .replace(
+            "exists i in 0..N: phil[i]@eating",
+            "exists i in 0..N: phil[i]@eatin",
+        );
+    let path = write_model(dir.path(), "bad.ron", &text);
+    let o = bip(&["verify", &path, "--format", "json"]);
+    assert_eq!(o.status.code(), Some(2));
+    let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(doc["outcome"], "error");
+    let e = &doc["errors"][0];
+    assert_eq!(e["file"], path.as_str());
+    assert!(e["message"].as_str().unwrap().contains("eatin"), "{e}");
+    assert!(e["line"].as_u64().unwrap() > 1 && e["column"].as_u64().unwrap() > 1);
+    let line = text.lines().position(|l| l.contains("@eatin\"")).unwrap() as u64 + 1;
+    assert_eq!(e["line"].as_u64(), Some(line));
+    let o = bip(&["verify", "/no/such/model.ron", "--format", "json"]);
+    assert_eq!(o.status.code(), Some(2));
+    let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(doc["outcome"], "error");
+    assert!(doc["errors"][0]["line"].is_null());
+}
+
+/// The deadlock "why" of a GenoM model is in the JSON and JUnit reports as in the text.
+#[test]
+fn json_and_junit_carry_the_deadlock_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let junit = dir.path().join("report.xml");
+    let o = bip(&[
+        "verify",
+        &robot("rover-deadlock.ron"),
+        "--method",
+        "explicit",
+        "--stop-at-first",
+        "--format",
+        "json",
+        "--junit",
+        junit.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let dl = doc["properties"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "DeadlockFree")
+        .unwrap();
+    let why: Vec<&str> = dl["why"]
+        .as_array()
+        .expect("a why")
+        .iter()
+        .map(|l| l.as_str().unwrap())
+        .collect();
+    assert!(
+        why.iter()
+            .any(|l| l.contains("ndd.GoTo codel start is ready") && l.contains("held by")),
+        "{why:?}"
+    );
+    let xml = std::fs::read_to_string(&junit).unwrap();
+    assert!(
+        xml.contains("why:") && xml.contains("ndd.GoTo codel start"),
+        "{xml}"
+    );
+}
+
+/// Two properties whose names make the same file name each get their own trace file.
+#[test]
+fn trace_files_have_unique_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(robot("philosophers.ron")).unwrap();
+    let start = text.find("properties: [").expect("a property list") + "properties: [".len();
+    let mut model = text.clone();
+    model.insert_str(
+        start,
+        r#"Reachable(name: "p!", expr: "phil[0]@eating"), Reachable(name: "p?", expr: "phil[1]@eating"),"#,
+    );
+    let path = write_model(dir.path(), "named.ron", &model);
+    let traces = dir.path().join("traces");
+    let o = bip(&["verify", &path, "--trace-dir", traces.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}{}", stdout(&o), stderr(&o));
+    let first = std::fs::read_to_string(traces.join("p_.trace.ron")).unwrap();
+    let second = std::fs::read_to_string(traces.join("p_-2.trace.ron")).unwrap();
+    assert!(
+        first.contains("p!") && second.contains("p?"),
+        "{first}\n{second}"
+    );
+    assert!(stdout(&o).contains("saved as") && stdout(&o).contains("p_-2.trace.ron"));
+}
+
+/// `bip check` counts the properties `bip verify` lists; the report's words agree with
+/// their numbers; a `-v` log into a pipe has no colour codes.
+#[test]
+fn counts_and_words_agree() {
+    let o = bip(&["check", &robot("rover.ron")]);
+    assert!(
+        stdout(&o).contains("properties    9 checked"),
+        "{}",
+        stdout(&o)
+    );
+    let o = bip(&[
+        "verify",
+        &robot("philosophers.ron"),
+        "-v",
+        "--method",
+        "explicit",
+    ]);
+    let listed = stdout(&o)
+        .lines()
+        .take_while(|l| !l.is_empty())
+        .filter(|l| l.starts_with("  "))
+        .count();
+    assert_eq!(listed, 4);
+    let o2 = bip(&["check", &robot("philosophers.ron")]);
+    assert!(
+        stdout(&o2).contains("properties    4 checked"),
+        "{}",
+        stdout(&o2)
+    );
+    assert!(!stderr(&o).contains('\u{1b}'), "{}", stderr(&o));
+    assert!(!stdout(&o).contains(" 1 steps"), "{}", stdout(&o));
+}
+
+/// A range error made by firing a step: the counterexample lists that step last, marked
+/// as the error and named by its connector, with either method.
+#[test]
+fn a_range_error_trace_ends_with_the_step_that_makes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_model(
+        dir.path(),
+        "buf.ron",
+        r#"System(
+            name: "buf",
+            atoms: {
+                "Buf": Atom(locations: ["on"], initial: "on", vars: [(name: "n", ty: Int(0, 3))],
+                            ports: ["put"],
+                            transitions: [(from: "on", port: "put", to: "on", action: "n = n + 1")]),
+                "Src": Atom(locations: ["s"], initial: "s", ports: ["give"],
+                            transitions: [(from: "s", port: "give", to: "s")]),
+            },
+            components: [(name: "buf", atom: "Buf"), (name: "src", atom: "Src")],
+            connectors: [(name: "put", ports: ["src.give", "buf.put"])],
+        )"#,
+    );
+    let o = bip(&["verify", &path, "--method", "explicit", "-q"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stdout(&o).contains("  3  put  buf.n: 2 → 3\n  4  put  ✗ firing it makes the range error"),
+        "{}",
+        stdout(&o)
+    );
+    for method in ["explicit", "symbolic"] {
+        let o = bip(&["verify", &path, "--method", method, "--format", "json"]);
+        let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        let range = doc["properties"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == "RangeErrors")
+            .unwrap();
+        assert_eq!(range["error_step"], "put", "{method}: {range}");
+        assert_eq!(range["trace"]["steps"].as_array().unwrap().len(), 3);
+    }
+}
+
+/// `--method auto` says which methods ran and gives each phase's figures, then the whole
+/// run's: the explicit phase's seconds are its own, within the run's.
+#[test]
+fn auto_reports_each_phase_and_the_whole_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let huge = write_model(
+        dir.path(),
+        "huge.ron",
+        r#"System(
+            name: "huge",
+            atoms: { "C": Atom(locations: ["s"], initial: "s", vars: [(name: "v", ty: Int(0, 9))],
+                               transitions: [(from: "s", to: "s", action: "v = (v + 1) % 10")]) },
+            components: [(name: "c", atom: "C", count: 8)],
+        )"#,
+    );
+    let o = bip(&["verify", &huge, "--max-states", "10000"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    let text = stdout(&o);
+    assert!(
+        text.contains("auto: explicit-state exploration") && text.contains("then symbolic proofs"),
+        "{text}"
+    );
+    assert!(
+        text.contains("\nexplicit: ") && text.contains("\nsymbolic: "),
+        "{text}"
+    );
+    assert!(text.contains(" s in all, peak memory "), "{text}");
+    let o = bip(&["verify", &huge, "--max-states", "10000", "--format", "json"]);
+    let doc: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let explicit = doc["stats"]["seconds"].as_f64().unwrap();
+    let symbolic = doc["symbolic"]["seconds"].as_f64().unwrap();
+    let all = doc["seconds"].as_f64().unwrap();
+    assert!(explicit + symbolic <= all + 0.01, "{doc}");
+    assert!(doc["peak_memory_bytes"].as_u64().unwrap() > 0);
+    // a model the explicit phase decides: no symbolic proof, and the header says so
+    let o = bip(&["verify", &robot("philosophers.ron")]);
+    assert!(
+        stdout(&o).contains("it decided every property") && !stdout(&o).contains("\nsymbolic: "),
+        "{}",
+        stdout(&o)
+    );
+}

@@ -14,7 +14,7 @@ use bip_model::System;
 use crate::error::VerifyError;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::report::{Method, PropertyVerdict, Report};
+use crate::report::{Method, PropertyVerdict, Report, Stop};
 use crate::{explore, symbolic};
 
 /// States the explicit phase may store.
@@ -40,7 +40,15 @@ pub(crate) fn verify(
         .properties
         .iter()
         .any(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }));
-    if !open || explicit.properties.iter().any(|p| p.verdict.fails()) && options.stop_at_first {
+    // the user's interrupt and time limit end the whole run, not just the explicit phase
+    let ended = matches!(
+        explicit.stopped,
+        Some(Stop::Interrupted | Stop::Timeout { .. })
+    );
+    if !open
+        || ended
+        || explicit.properties.iter().any(|p| p.verdict.fails()) && options.stop_at_first
+    {
         return Ok(Report {
             method: Method::Auto,
             ..explicit
@@ -51,7 +59,18 @@ pub(crate) fn verify(
         timeout: options.timeout.map(|t| t.saturating_sub(started.elapsed())),
         ..options.clone()
     };
-    let symbolic = symbolic::verify(system, &symbolic_options, progress)?;
+    let mut symbolic = symbolic::verify(system, &symbolic_options, progress)?;
+    // the symbolic phase's time limit is what remained of the user's: say the user's
+    if let (Some(Stop::Timeout { seconds }), Some(t)) = (&mut symbolic.stopped, options.timeout) {
+        let theirs = Stop::Timeout { seconds: *seconds }.to_string();
+        *seconds = t.as_secs_f64();
+        let mine = Stop::Timeout { seconds: *seconds }.to_string();
+        for p in &mut symbolic.properties {
+            if let PropertyVerdict::Inconclusive { reason } = &mut p.verdict {
+                *reason = reason.replace(&theirs, &mine);
+            }
+        }
+    }
     let mut report = explicit;
     for (mine, theirs) in report.properties.iter_mut().zip(symbolic.properties) {
         if matches!(mine.verdict, PropertyVerdict::Inconclusive { .. }) {
@@ -62,13 +81,14 @@ pub(crate) fn verify(
         .properties
         .iter()
         .any(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }));
+    // what stopped the run: the symbolic phase's limit if it reached one, else the
+    // explicit phase's budget
     if !undecided {
         report.stopped = None;
-    } else if report.stopped.is_none() {
+    } else if symbolic.stopped.is_some() {
         report.stopped = symbolic.stopped;
     }
     report.method = Method::Auto;
     report.symbolic = symbolic.symbolic;
-    report.stats.seconds = started.elapsed().as_secs_f64();
     Ok(report)
 }

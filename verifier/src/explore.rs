@@ -17,6 +17,7 @@
 //! store the same states under the same numbers and report the same traces.
 
 use std::borrow::Cow;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -31,9 +32,10 @@ use crate::error::VerifyError;
 use crate::memory;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::properties::{checked_properties, default_terminal, RANGE_ERRORS};
+use crate::properties::{checked_properties, default_terminal, error_step, RANGE_ERRORS};
 use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 use crate::visited::{hash, shard_of, Chunk, ShardFull, StateId, Visited, SHARDS};
+use crate::watch::Watch;
 
 /// States per chunk: large enough to amortise scheduling, small enough to balance.
 const CHUNK_STATES: u32 = 1024;
@@ -41,6 +43,15 @@ const CHUNK_STATES: u32 = 1024;
 const CHUNKS_PER_WORKER: usize = 8;
 /// Memory the liveness checker of one worker may use for its memory of states.
 const LIVENESS_MEMO_BYTES: usize = 32 << 20;
+/// Successors fired between two looks at the limits, within one state (a state of a wide
+/// model has as many successors as components).
+const SUCCESSORS_PER_LOOK: usize = 256;
+/// Candidate records a chunk finds before it announces them (bytes, records).
+const ANNOUNCED_BYTES: usize = 64 << 10;
+const ANNOUNCED_RECORDS: usize = 256;
+/// A candidate record is held three times before it is stored: found, sorted by shard,
+/// and stored; announced to the watch at that cost.
+const RECORD_COPIES: u64 = 3;
 
 /// What one property checks, with its compiled expression.
 enum Check<'a> {
@@ -134,10 +145,13 @@ struct ChunkOut {
     transitions: u64,
     findings: Vec<Option<Finding>>,
     liveness_unknown: u64,
+    /// The chunk stopped before its end because a limit was reached.
+    cut: bool,
 }
 
 impl ChunkOut {
     fn reset(&mut self, targets: usize) {
+        self.cut = false;
         self.raw.clear();
         self.sorted.clear();
         self.offsets.clear();
@@ -214,7 +228,11 @@ pub(crate) fn verify(
         .thread_name(|i| format!("bip-verify-{i}"))
         .build()
         .map_err(|e| VerifyError::Threads(e.to_string()))?;
-    pool.install(|| Explorer::new(system, options, jobs).run(progress))
+    let watch = Watch::new(options, options.max_memory.or_else(memory::default_limit));
+    watch.around(
+        || {},
+        || pool.install(|| Explorer::new(system, options, jobs, &watch).run(progress)),
+    )
 }
 
 struct Explorer<'a> {
@@ -229,7 +247,7 @@ struct Explorer<'a> {
     liveness_unknown: u64,
     transitions: u64,
     depth: u32,
-    max_memory: Option<u64>,
+    watch: &'a Watch,
     started: Instant,
     /// Time spent in each phase, for `-v` logs and profiles.
     expand_time: Duration,
@@ -239,7 +257,12 @@ struct Explorer<'a> {
 }
 
 impl<'a> Explorer<'a> {
-    fn new(system: &'a System, options: &'a Options, jobs: usize) -> Explorer<'a> {
+    fn new(
+        system: &'a System,
+        options: &'a Options,
+        jobs: usize,
+        watch: &'a Watch,
+    ) -> Explorer<'a> {
         let targets = targets(system);
         let slots = system.slot_count();
         let memo = (LIVENESS_MEMO_BYTES / (slots * 8 + 64)).clamp(1_000, 1_000_000);
@@ -272,8 +295,8 @@ impl<'a> Explorer<'a> {
             liveness_unknown: 0,
             transitions: 0,
             depth: 0,
-            max_memory: options.max_memory.or_else(memory::default_limit),
-            started: Instant::now(),
+            watch,
+            started: watch.started(),
             expand_time: Duration::ZERO,
             insert_time: Duration::ZERO,
             stopped_decided: false,
@@ -302,23 +325,49 @@ impl<'a> Explorer<'a> {
             let level_states = self.visited.level_len(level);
             let mut level_done = 0u64;
             self.visited.start_level();
-            for group in chunks.chunks(batch) {
+            let mut groups = chunks.chunks(batch);
+            let mut next_group = groups.next();
+            while let Some(group) = next_group {
                 if let Some(stop) = self.limit_reached(last_growth) {
                     stopped = Some(stop);
                     break 'levels;
                 }
                 let before = self.visited.allocated_bytes();
                 let t0 = Instant::now();
-                self.expand(group);
+                let room = self.room();
+                self.expand(group, room);
                 let t1 = Instant::now();
-                let inserted = self.insert();
                 self.expand_time += t1 - t0;
+                let cut = self.outs.iter().any(|o| o.cut);
+                if let Some(stop) = self.watch.stopped() {
+                    // the states expanded so far were checked: keep what was found
+                    self.merge_findings(group.len());
+                    stopped = Some(stop.clone());
+                    break 'levels;
+                }
+                let inserted = self.insert();
                 self.insert_time += t1.elapsed();
                 if let Err(ShardFull) = inserted {
                     stopped = Some(Stop::TooManyStates);
                     break 'levels;
                 }
+                if let Some(stop) = self.watch.stopped() {
+                    self.merge_findings(group.len());
+                    stopped = Some(stop.clone());
+                    break 'levels;
+                }
                 last_growth = self.visited.allocated_bytes().saturating_sub(before);
+                if cut {
+                    // the batch stopped at the state limit; if the states it found were
+                    // fewer (duplicates), expand it again: the stored ones are known now
+                    if let Some(stop) = self.limit_reached(0) {
+                        self.merge_findings(group.len());
+                        stopped = Some(stop);
+                        break 'levels;
+                    }
+                    continue;
+                }
+                next_group = groups.next();
                 self.merge_findings(group.len());
                 level_done += group
                     .iter()
@@ -335,7 +384,7 @@ impl<'a> Explorer<'a> {
                 }
                 if last_progress.elapsed() >= Duration::from_millis(250) {
                     last_progress = Instant::now();
-                    progress(&Progress {
+                    progress(&Progress::Exploring {
                         states: self.visited.len(),
                         transitions: self.transitions,
                         depth: self.depth,
@@ -361,41 +410,50 @@ impl<'a> Explorer<'a> {
                 return Some(Stop::MaxStates { limit });
             }
         }
-        if let Some(t) = self.options.timeout {
-            if self.started.elapsed() >= t {
-                return Some(Stop::Timeout {
-                    seconds: t.as_secs_f64(),
-                });
-            }
-        }
-        if let Some(limit) = self.max_memory {
+        if let Some(limit) = self.watch.max_memory() {
             // the next batch may grow the set by about as much as the last one; leave room
             // for twice that, and for what the process holds besides (read from /proc)
             let projected = self.store_bytes() + 2 * last_growth;
             let resident = memory::resident_bytes().unwrap_or(0) + 2 * last_growth;
             if projected.max(resident) > limit {
-                return Some(Stop::MaxMemory { limit });
+                self.watch.raise(Stop::MaxMemory { limit });
             }
         }
-        None
+        self.watch.look().cloned()
+    }
+
+    /// New states a batch may find before it stops at the state limit: what remains below
+    /// the limit, and a margin, so that a batch whose finds are partly duplicates still
+    /// reaches the limit.
+    fn room(&self) -> u64 {
+        self.options.max_states.map_or(u64::MAX, |limit| {
+            let left = limit.saturating_sub(self.visited.len());
+            left.saturating_add(limit / 16).max(1)
+        })
     }
 
     fn store_bytes(&self) -> u64 {
         self.visited.allocated_bytes() + self.outs.iter().map(|o| o.allocated() as u64).sum::<u64>()
     }
 
-    /// Phase 1: expands the chunks of a batch in parallel.
-    fn expand(&mut self, group: &[Chunk]) {
+    /// Phase 1: expands the chunks of a batch in parallel, until they end or a limit is
+    /// reached (the run's, or `room` new states found).
+    fn expand(&mut self, group: &[Chunk], room: u64) {
         let n = self.targets.len();
         if self.outs.len() < group.len() {
             self.outs.resize_with(group.len(), ChunkOut::default);
         }
         let open: Vec<bool> = self.findings.iter().map(Option::is_none).collect();
+        self.watch.rebase();
         let ctx = Ctx {
             system: self.system,
             targets: &self.targets,
             visited: &self.visited,
             open: &open,
+            watch: self.watch,
+            room,
+            found: AtomicU64::new(0),
+            full: AtomicBool::new(false),
         };
         let scratch = &self.scratch;
         self.outs[..group.len()]
@@ -411,9 +469,12 @@ impl<'a> Explorer<'a> {
     }
 
     /// Phase 2: stores the new states, shards in parallel, chunks in order within a shard.
+    /// A shard stops early if the run must stop (what it stored is consistent: states
+    /// with their parents).
     fn insert(&mut self) -> Result<(), ShardFull> {
         let rec = REC_HEADER + self.visited.width();
         let outs = &self.outs;
+        let watch = self.watch;
         let visited = &mut self.visited;
         visited
             .shards_mut()
@@ -421,7 +482,10 @@ impl<'a> Explorer<'a> {
             .enumerate()
             .try_for_each(|(s, shard)| {
                 for out in outs {
-                    for r in out.bucket(s, rec).chunks_exact(rec) {
+                    for (k, r) in out.bucket(s, rec).chunks_exact(rec).enumerate() {
+                        if k % SUCCESSORS_PER_LOOK == 0 && watch.stopped().is_some() {
+                            return Ok(());
+                        }
                         let parent = StateId::from_bits(read_parent(r));
                         shard.insert(read_hash(r), &r[REC_HEADER..], parent)?;
                     }
@@ -477,7 +541,6 @@ impl<'a> Explorer<'a> {
             bytes_per_state: self.visited.used_bytes() as f64 / states.max(1) as f64,
             state_bytes: self.visited.width(),
             store_bytes: self.store_bytes(),
-            peak_memory_bytes: memory::peak_resident_bytes(),
             jobs: self.jobs,
         };
         let mut properties = Vec::with_capacity(self.targets.len());
@@ -486,6 +549,7 @@ impl<'a> Explorer<'a> {
                 Some(f) => self.verdict_of(t, f)?,
                 None => self.open_verdict(t, stopped.as_ref(), states),
             };
+            let error_step = verdict.trace().and_then(|tr| error_step(self.system, tr));
             properties.push(PropertyResult {
                 name: t.name.clone(),
                 kind: t.kind,
@@ -493,6 +557,7 @@ impl<'a> Explorer<'a> {
                 verdict,
                 method: Method::Explicit,
                 note: None,
+                error_step,
             });
         }
         tracing::info!(
@@ -511,6 +576,8 @@ impl<'a> Explorer<'a> {
             stats,
             stopped,
             symbolic: None,
+            seconds,
+            peak_memory_bytes: None,
         })
     }
 
@@ -572,6 +639,12 @@ struct Ctx<'a, 'b> {
     visited: &'b Visited,
     /// The properties still undecided when the batch started.
     open: &'b [bool],
+    watch: &'b Watch,
+    /// New states the batch may find; `found` counts them (duplicates too) and `full` is
+    /// raised once they reach `room`.
+    room: u64,
+    found: AtomicU64,
+    full: AtomicBool,
 }
 
 impl Ctx<'_, '_> {
@@ -581,7 +654,12 @@ impl Ctx<'_, '_> {
         let width = self.visited.width();
         let rec = REC_HEADER + width;
         let range_target = self.targets.len() - 1;
+        let mut announced = 0usize;
         for local in chunk.start..chunk.end {
+            if self.must_stop(out, &mut announced, rec, false) {
+                out.cut = true;
+                break;
+            }
             let id = self.visited.id(chunk.shard, local);
             let current = self.visited.state(id);
             layout.decode(current, &mut s.state);
@@ -643,7 +721,14 @@ impl Ctx<'_, '_> {
                 packed,
                 ..
             } = s;
-            for step in steps.iter() {
+            for (k, step) in steps.iter().enumerate() {
+                if k % SUCCESSORS_PER_LOOK == SUCCESSORS_PER_LOOK - 1
+                    && self.must_stop(out, &mut announced, rec, false)
+                {
+                    // the state is only partly expanded: its chunk ends here
+                    out.cut = true;
+                    break;
+                }
                 if let Err(err) = sys.fire(state, step, next) {
                     found(range_target, Found::RangeError(err.to_string()), out);
                     continue;
@@ -658,7 +743,29 @@ impl Ctx<'_, '_> {
                 }
             }
         }
-        out.sort_by_shard(rec);
+        self.must_stop(out, &mut announced, rec, true);
+        // a stopped run inserts nothing: sorting a wide batch's records would cost time
+        if self.watch.stopped().is_none() {
+            out.sort_by_shard(rec);
+        }
+    }
+
+    /// Announces the records found since the last call, and says whether the chunk must
+    /// stop: a limit of the run is reached, or the batch has found `room` new states.
+    /// The records are announced in groups (or all, with `flush`), to keep the shared
+    /// counters off the path of every state.
+    fn must_stop(&self, out: &ChunkOut, announced: &mut usize, rec: usize, flush: bool) -> bool {
+        let new = out.raw.len() - *announced;
+        if new >= ANNOUNCED_BYTES || new >= ANNOUNCED_RECORDS * rec || (flush && new > 0) {
+            *announced = out.raw.len();
+            let records = (new / rec) as u64;
+            let found = self.found.fetch_add(records, Ordering::Relaxed) + records;
+            if found >= self.room {
+                self.full.store(true, Ordering::Relaxed);
+            }
+            self.watch.expect(new as u64 * RECORD_COPIES);
+        }
+        self.watch.stopped().is_some() || self.full.load(Ordering::Relaxed)
     }
 }
 

@@ -25,6 +25,7 @@ mod report;
 mod schedulability;
 mod symbolic;
 mod visited;
+mod watch;
 
 use bip_model::System;
 
@@ -50,9 +51,13 @@ pub fn verify(
     options: &Options,
     progress: &(dyn Fn(&Progress) + Sync),
 ) -> Result<Report, VerifyError> {
-    match method {
+    let started = std::time::Instant::now();
+    let mut report = match method {
         Method::Explicit => explore::verify(system, options, progress),
         Method::Symbolic => symbolic::verify(system, options, progress),
         Method::Auto => auto::verify(system, options, progress),
-    }
+    }?;
+    report.seconds = started.elapsed().as_secs_f64();
+    report.peak_memory_bytes = memory::peak_resident_bytes();
+    Ok(report)
 }

@@ -1,6 +1,8 @@
 //! How to run a verification. One set of options serves every method; each method reads
 //! the fields that apply to it, so that `--method auto` hands the same limits to both.
 
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// How to run, whatever the method.
@@ -12,11 +14,14 @@ pub struct Options {
     /// Explicit method: stop (inconclusive) once this many states are stored and more
     /// remain to explore.
     pub max_states: Option<u64>,
-    /// Explicit method: stop (inconclusive) before the run would use more memory; `None`
-    /// takes 3/4 of the memory available when the run starts.
+    /// Stop (inconclusive) before the process would use more memory (resident, z3's
+    /// included); `None` takes 3/4 of the memory available when the run starts.
     pub max_memory: Option<u64>,
     /// Stop (inconclusive) after this long.
     pub timeout: Option<Duration>,
+    /// Stop (inconclusive, "interrupted") once this flag is raised, as by Ctrl-C. Every
+    /// method polls it, inside its batches and solver calls too.
+    pub interrupt: Option<Arc<AtomicBool>>,
     /// Explicit method: stop as soon as one property fails.
     pub stop_at_first: bool,
     /// Explicit method: bound on the states the deadlock check explores by time steps

@@ -4,7 +4,7 @@
 use std::borrow::Cow;
 
 use bip_model::eval::Expr;
-use bip_model::{Property, PropertyKind as ModelKind, System};
+use bip_model::{Property, PropertyKind as ModelKind, Steps, System, Trace, Verdict};
 
 /// The name of the result that reports range errors.
 pub const RANGE_ERRORS: &str = "RangeErrors";
@@ -30,4 +30,26 @@ pub(crate) fn checked_properties(system: &System) -> Vec<Cow<'_, Property>> {
 /// The states the default `DeadlockFree` excuses: the idle GenoM layer's, if any.
 pub(crate) fn default_terminal(system: &System) -> Option<&Expr> {
     system.genom.as_ref()?.idle.as_ref()
+}
+
+/// For a range-error trace whose last state has a step that fails when fired: that step's
+/// name (the connector's interaction, or `component.internal`), which the trace cannot
+/// list (a failing step has no successor). `None` for other traces, and for a range error
+/// in a guard or a property, which the last state itself shows.
+pub(crate) fn error_step(system: &System, trace: &Trace) -> Option<String> {
+    if !matches!(trace.verdict, Verdict::RangeError(_)) {
+        return None;
+    }
+    let path = trace.replay(system).ok()?;
+    let last = path
+        .last()
+        .map_or_else(|| system.initial_state(), |(_, s)| s.clone());
+    let mut steps = Steps::new();
+    system.enabled_steps(&last, &mut steps).ok()?;
+    let mut next = last.clone();
+    let failing = steps
+        .iter()
+        .find(|s| system.fire(&last, *s, &mut next).is_err())
+        .map(|s| system.label_name(s.label));
+    failing
 }

@@ -91,6 +91,10 @@ pub struct PropertyResult {
     /// How the verdict was obtained, when there is more to say (`2-induction`, ...).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+    /// For a range error made by firing a step: the step (an interaction, or
+    /// `component.internal`), the one after the trace's last.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_step: Option<String>,
 }
 
 /// Why a run ended before it had looked at every reachable state.
@@ -110,6 +114,8 @@ pub enum Stop {
     FirstFailure,
     /// More states than the visited set can number.
     TooManyStates,
+    /// The user interrupted the run (Ctrl-C).
+    Interrupted,
 }
 
 impl std::fmt::Display for Stop {
@@ -119,18 +125,23 @@ impl std::fmt::Display for Stop {
             Stop::MaxMemory { limit } => {
                 write!(f, "the memory limit ({}) was reached", human_bytes(*limit))
             }
-            Stop::Timeout { seconds } => write!(f, "the time limit ({seconds} s) was reached"),
+            Stop::Timeout { seconds } => write!(
+                f,
+                "the time limit ({} s) was reached",
+                (seconds * 1000.0).round() / 1000.0
+            ),
             Stop::FirstFailure => write!(f, "the run stopped at the first failure"),
             Stop::TooManyStates => write!(
                 f,
                 "the model has more states than the visited set can number"
             ),
+            Stop::Interrupted => write!(f, "the run was interrupted"),
         }
     }
 }
 
-/// Figures of one run: an exploration's; a symbolic run fills only the time, the memory
-/// and the workers (its own figures are [`SymbolicStats`]).
+/// Figures of an exploration (all zero when none ran; the symbolic method's figures are
+/// [`SymbolicStats`], the whole run's are in [`Report`]).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct RunStats {
     /// Distinct states stored.
@@ -151,8 +162,6 @@ pub struct RunStats {
     pub state_bytes: usize,
     /// Bytes allocated by the visited set and the work buffers at the end.
     pub store_bytes: u64,
-    /// Peak resident memory of the process, where the system reports it.
-    pub peak_memory_bytes: Option<u64>,
     /// Worker threads.
     pub jobs: usize,
 }
@@ -169,6 +178,10 @@ pub struct Report {
     /// Figures of the symbolic method, when it ran.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub symbolic: Option<SymbolicStats>,
+    /// Seconds of the whole run (with `--method auto`, both phases).
+    pub seconds: f64,
+    /// Peak resident memory of the process (z3's included), where the system reports it.
+    pub peak_memory_bytes: Option<u64>,
 }
 
 /// Figures of a symbolic run.
@@ -248,6 +261,7 @@ mod tests {
             verdict,
             method: Method::Explicit,
             note: None,
+            error_step: None,
         }
     }
 
@@ -259,6 +273,8 @@ mod tests {
             stats: RunStats::default(),
             stopped: None,
             symbolic: None,
+            seconds: 0.0,
+            peak_memory_bytes: None,
         }
     }
 

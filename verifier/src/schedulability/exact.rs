@@ -10,6 +10,7 @@
 //! form a DAG, costed from its sinks up in the order Tarjan's algorithm completes them.
 
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use bip_model::{Label, State, Steps, System};
@@ -18,10 +19,12 @@ use super::tasks::TaskTable;
 
 /// What the exploration may use.
 #[derive(Clone, Copy, Debug)]
-pub struct Limits {
+pub struct Limits<'a> {
     pub max_states: u64,
     pub max_bytes: u64,
     pub deadline: Option<Instant>,
+    /// Raised by Ctrl-C.
+    pub interrupt: Option<&'a AtomicBool>,
 }
 
 /// The exact demands, and the size of what was explored.
@@ -48,7 +51,11 @@ struct Graph {
 
 /// Explores `system` and computes every task's demand; `Err` says why it could not
 /// (a limit, or a range error in the model).
-pub fn exact_demands(system: &System, table: &TaskTable, limits: Limits) -> Result<Exact, String> {
+pub fn exact_demands(
+    system: &System,
+    table: &TaskTable,
+    limits: Limits<'_>,
+) -> Result<Exact, String> {
     let graph = explore(system, table.tick, limits)?;
     let states = graph.offsets.len() as u64 - 1;
     let transitions = graph.targets.len() as u64;
@@ -63,7 +70,7 @@ pub fn exact_demands(system: &System, table: &TaskTable, limits: Limits) -> Resu
     })
 }
 
-fn explore(system: &System, tick: u32, limits: Limits) -> Result<Graph, String> {
+fn explore(system: &System, tick: u32, limits: Limits<'_>) -> Result<Graph, String> {
     let layout = &system.layout;
     let mut ids: HashMap<Box<[u8]>, u32> = HashMap::new();
     let mut queue: Vec<Box<[u8]>> = Vec::new();
@@ -124,6 +131,9 @@ fn explore(system: &System, tick: u32, limits: Limits) -> Result<Graph, String> 
             }
             if limits.deadline.is_some_and(|d| Instant::now() >= d) {
                 return Err("the time limit".into());
+            }
+            if limits.interrupt.is_some_and(|i| i.load(Ordering::Relaxed)) {
+                return Err("interrupted".into());
             }
         }
     }

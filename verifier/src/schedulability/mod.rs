@@ -92,6 +92,7 @@ pub fn schedulability(
                     .or_else(memory::default_limit)
                     .unwrap_or(4 << 30),
                 deadline: options.timeout.map(|t| Instant::now() + t),
+                interrupt: options.interrupt.as_deref(),
             };
             match exact::exact_demands(system, &table, limits) {
                 Ok(found) => (

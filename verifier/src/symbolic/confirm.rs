@@ -22,6 +22,7 @@ use bip_model::{
 use crate::explore;
 use crate::options::Options;
 use crate::report::PropertyVerdict;
+use crate::watch::Watch;
 
 /// The trace through `states` (the first is the initial state), each step found with the
 /// step relation; an error names the first pair no step connects.
@@ -66,20 +67,26 @@ pub struct Bounded {
     pub states: u64,
 }
 
-/// Explores at most `max_states` states (and `max_memory` bytes) for `property` alone.
+/// Explores at most `max_states` states (and `max_memory` bytes) for `property` alone,
+/// within what remains of the run's limits (`run`, watched by `watch`).
 pub fn bounded_explicit(
     sys: &System,
     property: &Property,
     max_states: u64,
     max_memory: u64,
-    jobs: usize,
+    run: &Options,
+    watch: &Watch,
 ) -> Option<Bounded> {
     let mut one = sys.clone();
     one.properties = vec![property.clone()];
     let options = Options {
-        jobs,
+        jobs: run.jobs,
         max_states: Some(max_states),
-        max_memory: Some(max_memory),
+        max_memory: Some(watch.max_memory().map_or(max_memory, |m| m.min(max_memory))),
+        timeout: run
+            .timeout
+            .map(|t| t.saturating_sub(watch.started().elapsed())),
+        interrupt: run.interrupt.clone(),
         ..Options::default()
     };
     let report = explore::verify(&one, &options, &|_| {}).ok()?;
@@ -99,6 +106,7 @@ pub fn greedy_deadlock(
     target: &State,
     terminal: Option<&Expr>,
     max_steps: u64,
+    watch: &Watch,
 ) -> Option<Trace> {
     let mut state = sys.initial_state();
     let mut steps = Steps::new();
@@ -109,6 +117,9 @@ pub fn greedy_deadlock(
     let mut next = state.clone();
     let slots = sys.slot_count();
     for _ in 0..max_steps {
+        if watch.stopped().is_some() {
+            return None;
+        }
         sys.enabled_steps(&state, &mut steps).ok()?;
         if let Ok(Liveness::Deadlock) = sys.liveness(&state, &steps, &mut checker) {
             let excused = terminal.is_some_and(|t| sys.holds(t, &state, "").unwrap_or(false));

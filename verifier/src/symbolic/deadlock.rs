@@ -113,6 +113,16 @@ pub fn deadlock_free(p: &mut Prover<'_>, prop: &Property, range_errors_proved: b
         let mut steps = Steps::new();
         let mut checker = LivenessChecker::default();
         loop {
+            p.step(format!(
+                "{} candidate deadlock{} examined{}",
+                candidates,
+                if candidates == 1 { "" } else { "s" },
+                if lookahead > 0 {
+                    format!(", looking {lookahead} time steps ahead")
+                } else {
+                    String::new()
+                }
+            ));
             for f in &mut frames {
                 p.give_traps(&solver, f);
             }
@@ -189,24 +199,33 @@ pub fn deadlock_free(p: &mut Prover<'_>, prop: &Property, range_errors_proved: b
             // confirm by explicit search
             let opts = &p.options;
             if opts.symbolic.confirm_states > 0 {
+                p.step("confirming a candidate deadlock by explicit search");
                 if let Some(b) = confirm::bounded_explicit(
                     sys,
                     prop,
                     opts.symbolic.confirm_states,
                     opts.symbolic.confirm_memory,
-                    opts.jobs,
+                    opts,
+                    &p.budget.watch,
                 ) {
                     if b.verdict.fails() || (b.complete && b.verdict.holds()) {
                         return Finding::Explicit(b.verdict, b.states);
                     }
                 }
             }
-            if let Some(trace) =
-                confirm::greedy_deadlock(sys, &state, terminal, p.options.symbolic.confirm_states)
-            {
+            if let Some(trace) = confirm::greedy_deadlock(
+                sys,
+                &state,
+                terminal,
+                p.options.symbolic.confirm_states,
+                &p.budget.watch,
+            ) {
                 if trace.replay(sys).is_ok() {
                     return Finding::Deadlock(trace);
                 }
+            }
+            if let Some(stop) = p.budget.watch.look() {
+                return Finding::Unknown(stop.to_string());
             }
             return Finding::Possible(state);
         }

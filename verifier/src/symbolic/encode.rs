@@ -19,14 +19,18 @@
 //!   zero): connector action first, then the participants' actions in port order, then the
 //!   moves.
 
+use std::sync::Arc;
+
 use bip_model::eval::Expr;
 use bip_model::{Assign, Label, Role, State, System, Target, VarType};
+
 use z3::ast::{Bool, Int};
 
 use super::term::{
     and, and2, err_formula, err_or, err_when, ff, iff, implies, lit, lt_const, not, or, translate,
     tt, width, Choice, Slots, Sym, Term,
 };
+use crate::watch::Watch;
 
 /// What a state slot holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -63,6 +67,9 @@ pub struct Encoding<'s> {
     /// Per component, the interactions it takes part in and its position in their ports.
     pub inters_of: Vec<Vec<(u32, u32)>>,
     pub roles: Vec<Role>,
+    /// The run's limits: the loops over components stop (by unwinding) once it must stop,
+    /// since a wide model's terms take long to build.
+    pub watch: Option<Arc<Watch>>,
 }
 
 /// One state as terms: one [`Sym`] per slot.
@@ -228,6 +235,14 @@ impl<'s> Encoding<'s> {
             groups_above,
             inters_of,
             roles,
+            watch: None,
+        }
+    }
+
+    /// Ends the encoding in progress if the run must stop ([`Watch::halt_if_stopped`]).
+    pub fn poll(&self) {
+        if let Some(w) = &self.watch {
+            w.halt_if_stopped();
         }
     }
 
@@ -251,6 +266,7 @@ impl<'s> Encoding<'s> {
         let mut slots = Vec::with_capacity(self.kinds.len());
         let mut domain = Vec::new();
         for (s, kind) in self.kinds.iter().enumerate() {
+            self.poll();
             let (lo, hi) = kind.range();
             if lo == hi {
                 slots.push(Sym::int(lo));
@@ -348,6 +364,7 @@ impl<'s> Encoding<'s> {
         let mut port_here = Vec::with_capacity(sys.components.len());
         let mut port_err = Vec::with_capacity(sys.components.len());
         for comp in &sys.components {
+            self.poll();
             let atom = &sys.atoms[comp.atom as usize];
             let loc = &f.slots[comp.slot as usize];
             let base = comp.slot + 1;
@@ -576,6 +593,7 @@ impl<'s> Encoding<'s> {
             }
         }
         for (c, comp) in self.sys.components.iter().enumerate() {
+            self.poll();
             let internal = self.by_port[comp.atom as usize].len() - 1;
             parts.push(not(&en.port_en[c][internal]));
         }
@@ -667,6 +685,7 @@ impl<'s> Encoding<'s> {
         }
         let mut next = f.slots.clone();
         for (c, comp) in sys.components.iter().enumerate() {
+            self.poll();
             let atom = &sys.atoms[comp.atom as usize];
             let mut joins = Vec::new();
             let mut ports: Vec<Option<u32>> = Vec::new();

@@ -116,6 +116,7 @@ impl Goal<'_> {
 pub fn prove(p: &mut Prover<'_>, goal: Goal<'_>) -> Finding {
     let sys = p.sys();
     // 1. the invariants alone
+    p.step("implied by the invariants?");
     let mut unknown: Option<String> = None;
     {
         let solver = p.solver();
@@ -162,6 +163,14 @@ pub fn prove(p: &mut Prover<'_>, goal: Goal<'_>) -> Finding {
     for k in 1..=max.max(1) {
         // base: no bad state at depth k - 1
         let d = k - 1;
+        p.step(format!(
+            "bounded model checking at depth {d}{}",
+            if induction_open {
+                format!(", k-induction at k = {k}")
+            } else {
+                String::new()
+            }
+        ));
         let bad = goal.bad(p, &path[d], &path_en[d]);
         bmc.push();
         bmc.assert(&bad);
@@ -264,8 +273,8 @@ pub fn prove(p: &mut Prover<'_>, goal: Goal<'_>) -> Finding {
         bmc.assert(p.enc.transition(&path[d], &path_en[d], &v, &all, &next));
         path_en.push(p.enc.enabling(&next));
         path.push(next);
-        if p.budget.expired() {
-            return Finding::Unknown("the time limit was reached".into());
+        if let Some(stop) = p.budget.watch.look() {
+            return Finding::Unknown(stop.to_string());
         }
     }
     let mut why = format!(

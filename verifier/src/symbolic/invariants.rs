@@ -74,13 +74,18 @@ struct Key {
     passive: Vec<u32>,
 }
 
-pub fn compute(enc: &Encoding<'_>) -> ComponentInvariants {
+/// Stops early (with the components seen so far) once `stop` says so; the caller must not
+/// use an incomplete result.
+pub fn compute(enc: &Encoding<'_>, stop: &dyn Fn() -> bool) -> ComponentInvariants {
     let sys = enc.sys;
     let init = sys.initial_state();
     let mut cache: HashMap<Key, ComponentInvariant> = HashMap::new();
     let mut per_component = Vec::with_capacity(sys.components.len());
     let mut approximate = 0;
     for (c, comp) in sys.components.iter().enumerate() {
+        if stop() {
+            break;
+        }
         let atom = &sys.atoms[comp.atom as usize];
         let nv = atom.vars.len();
         let start = comp.slot as usize;
@@ -356,6 +361,7 @@ impl ComponentInvariants {
         let sys = enc.sys;
         let mut out = Vec::new();
         for (c, inv) in self.per_component.iter().enumerate() {
+            enc.poll();
             let comp = &sys.components[c];
             let atom = &sys.atoms[comp.atom as usize];
             for (l, &reach) in inv.locations.iter().enumerate() {

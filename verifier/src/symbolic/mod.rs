@@ -34,7 +34,8 @@ mod solver;
 mod term;
 mod traps;
 
-use std::time::Instant;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::Arc;
 
 use bip_model::{PropertyKind as ModelKind, System, Trace};
 
@@ -42,32 +43,125 @@ use crate::error::VerifyError;
 use crate::memory;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::properties::{checked_properties, RANGE_ERRORS};
+use crate::properties::{checked_properties, error_step, RANGE_ERRORS};
 use crate::report::{
-    CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop, SymbolicStats,
+    CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, SymbolicStats,
 };
+use crate::watch::Watch;
 use induction::Goal;
 use prover::Prover;
 
-/// Verifies every property of `system` symbolically. Reads `options.symbolic`, the time
-/// limit and, for the explicit confirmation of deadlock candidates, the workers. Takes a
-/// progress callback as every method does, and never calls it: [`Progress`] counts the
-/// states of an exploration.
+/// Verifies every property of `system` symbolically. Reads `options.symbolic`, the limits
+/// of time and memory, the interrupt flag and, for the explicit confirmation of deadlock
+/// candidates, the workers. Reports progress at every step of a proof.
 pub(crate) fn verify(
     system: &System,
     options: &Options,
-    _progress: &(dyn Fn(&Progress) + Sync),
+    progress: &(dyn Fn(&Progress) + Sync),
 ) -> Result<Report, VerifyError> {
+    let watch = Arc::new(Watch::new(
+        options,
+        options.max_memory.or_else(memory::default_limit),
+    ));
+    let z3_mib = limit_z3_memory(&watch);
     // z3's context is per thread, and deep terms recurse: one thread with a large stack
     std::thread::scope(|scope| {
         std::thread::Builder::new()
-            .name("bip-symbolic".into())
+            .name(THREAD.into())
             .stack_size(256 << 20)
-            .spawn_scoped(scope, || run(system, options))
+            .spawn_scoped(scope, || {
+                quiet_panics();
+                // z3 fails by panics of the z3 crate (creating the context too, when
+                // memory is short): each is caught and makes the rest undecided
+                let ctx = catch_unwind(z3::Context::thread_local).ok();
+                let Some(ctx) = ctx else {
+                    let why = match z3_mib {
+                        Some(mib) => {
+                            out_of_memory(&watch);
+                            format!(
+                                "z3 could not start in the {mib} MiB the memory limit leaves it"
+                            )
+                        }
+                        None => "z3 could not start".into(),
+                    };
+                    return undecided(system, &why, &watch);
+                };
+                let handle = ctx.handle();
+                watch.around(
+                    || handle.interrupt(),
+                    || run(system, options, watch.clone(), progress, &ctx),
+                )
+            })
             .map_err(|e| VerifyError::Threads(e.to_string()))?
             .join()
             .map_err(|_| VerifyError::Internal("the symbolic verifier panicked".into()))
     })
+}
+
+/// Gives z3 what remains of the memory limit (in MiB, returned), so that it fails (and the
+/// property is inconclusive) rather than the process. z3 counts its own allocations, for
+/// the whole process; the watchdog watches the rest.
+fn limit_z3_memory(watch: &Watch) -> Option<u64> {
+    let limit = watch.max_memory()?;
+    let left = limit.saturating_sub(memory::resident_bytes().unwrap_or(0));
+    let mib = (left >> 20).max(1);
+    z3::set_global_param("memory_max_size", &mib.to_string());
+    Some(mib)
+}
+
+/// z3 ran out of the memory it was given: the run has reached its memory limit.
+fn out_of_memory(watch: &Watch) {
+    if let Some(limit) = watch.max_memory() {
+        watch.raise(crate::report::Stop::MaxMemory { limit });
+    }
+}
+
+/// Keeps the panics of the symbolic thread off stderr (they are z3's failures, reported as
+/// inconclusive verdicts with their reason); any other thread's go to the previous hook.
+fn quiet_panics() {
+    static INSTALL: std::sync::Once = std::sync::Once::new();
+    INSTALL.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if std::thread::current().name() != Some(THREAD) {
+                previous(info);
+            }
+        }));
+    });
+}
+
+/// The name of the thread that calls z3.
+const THREAD: &str = "bip-symbolic";
+
+/// Why a z3 call failed (the z3 crate panics on a failed call), or why the run stopped.
+fn failure(watch: &Watch, ctx: Option<&z3::Context>) -> String {
+    if let Some(stop) = watch.look() {
+        return stop.to_string();
+    }
+    let Some(ctx) = ctx else {
+        return "z3 failed to start (out of memory?)".into();
+    };
+    // SAFETY: the context is this thread's, alive while `ctx` is; z3 returns a static
+    // string for an error code, or null.
+    let message = unsafe {
+        let raw = ctx.get_z3_context();
+        let code = z3_sys::Z3_get_error_code(raw);
+        if code == z3_sys::ErrorCode::Ok {
+            None
+        } else {
+            z3_sys::Z3_get_error_msg(raw, code)
+                .as_ref()
+                .map(|m| std::ffi::CStr::from_ptr(m).to_string_lossy().into_owned())
+        }
+    };
+    match message {
+        Some(m) if m.contains("memory") || m.contains("memout") => {
+            out_of_memory(watch);
+            "z3 ran out of the memory the memory limit leaves it".into()
+        }
+        Some(m) => format!("z3 failed ({m})"),
+        None => "the symbolic verifier failed (an internal error)".into(),
+    }
 }
 
 /// One property's outcome.
@@ -96,40 +190,58 @@ fn after(trace: &Trace) -> String {
     format!("after {n} step{}", if n == 1 { "" } else { "s" })
 }
 
-fn run(system: &System, options: &Options) -> Report {
-    let started = Instant::now();
-    let mut p = Prover::new(system, options.clone());
-    let invariant_seconds = started.elapsed().as_secs_f64();
+fn run(
+    system: &System,
+    options: &Options,
+    watch: Arc<Watch>,
+    progress: &(dyn Fn(&Progress) + Sync),
+    ctx: &z3::Context,
+) -> Report {
+    let started = watch.started();
     let props = checked_properties(system);
-    // range errors first: deadlock freedom with time steps relies on their absence
-    let range = {
-        let _span = tracing::info_span!("property", name = RANGE_ERRORS).entered();
-        safety(&mut p, Goal::RangeError)
+    let mut p = match catch_unwind(AssertUnwindSafe(|| {
+        Prover::new(system, options.clone(), watch.clone(), progress)
+    })) {
+        Ok(Ok(p)) => p,
+        Ok(Err(stop)) => return undecided(system, &stop.to_string(), &watch),
+        Err(_) => {
+            let why = failure(&watch, Some(ctx));
+            return undecided(system, &why, &watch);
+        }
     };
+    let invariant_seconds = started.elapsed().as_secs_f64();
+    let mut failed: Option<String> = None;
+    let decide = &mut |p: &mut Prover<'_>, name: &str, f: &dyn Fn(&mut Prover<'_>) -> Outcome| {
+        decide(p, &mut failed, ctx, name, f)
+    };
+    // range errors first: deadlock freedom with time steps relies on their absence
+    let range = decide(&mut p, RANGE_ERRORS, &|p| safety(p, Goal::RangeError));
     let range_proved = range.verdict.holds();
     let mut properties = Vec::with_capacity(props.len() + 1);
     for prop in &props {
-        let _span = tracing::info_span!("property", name = %prop.name).entered();
-        let t0 = Instant::now();
         let (kind, outcome) = match &prop.kind {
             ModelKind::DeadlockFree { .. } => (
                 CheckKind::DeadlockFree,
-                deadlock(&mut p, prop, range_proved),
+                decide(&mut p, &prop.name, &|p| deadlock(p, prop, range_proved)),
             ),
             ModelKind::Invariant(e) => (
                 CheckKind::Invariant,
-                safety(&mut p, Goal::Invariant(e, &prop.name)),
+                decide(&mut p, &prop.name, &|p| {
+                    safety(p, Goal::Invariant(e, &prop.name))
+                }),
             ),
             ModelKind::Reachable(e) => (
                 CheckKind::Reachable,
-                safety(&mut p, Goal::Reach(e, &prop.name)),
+                decide(&mut p, &prop.name, &|p| {
+                    safety(p, Goal::Reach(e, &prop.name))
+                }),
             ),
         };
-        tracing::info!(seconds = t0.elapsed().as_secs_f64(), verdict = ?outcome.verdict, "decided");
         properties.push(PropertyResult {
             name: prop.name.clone(),
             kind,
             expr: prop.text.clone(),
+            error_step: outcome.verdict.trace().and_then(|t| error_step(system, t)),
             verdict: outcome.verdict,
             method: outcome.method,
             note: outcome.note,
@@ -139,25 +251,18 @@ fn run(system: &System, options: &Options) -> Report {
         name: RANGE_ERRORS.into(),
         kind: CheckKind::RangeErrors,
         expr: String::new(),
+        error_step: range.verdict.trace().and_then(|t| error_step(system, t)),
         verdict: range.verdict,
         method: range.method,
         note: range.note,
     });
     let seconds = started.elapsed().as_secs_f64();
-    let stopped = p.budget.expired().then(|| Stop::Timeout {
-        seconds: options.timeout.map_or(0.0, |t| t.as_secs_f64()),
-    });
     Report {
         model: system.name.clone(),
         method: Method::Symbolic,
         properties,
-        stats: RunStats {
-            seconds,
-            peak_memory_bytes: memory::peak_resident_bytes(),
-            jobs: 1,
-            ..RunStats::default()
-        },
-        stopped,
+        stats: RunStats::default(),
+        stopped: watch.stopped().cloned(),
         symbolic: Some(SymbolicStats {
             components: system.components.len(),
             approximate_components: p.ci.approximate,
@@ -170,6 +275,82 @@ fn run(system: &System, options: &Options) -> Report {
             invariant_seconds,
             seconds,
         }),
+        seconds,
+        peak_memory_bytes: None,
+    }
+}
+
+/// Decides one property with `f`, unless the run has stopped or z3 has failed before (its
+/// context cannot be trusted then: the rest is undecided).
+fn decide(
+    p: &mut Prover<'_>,
+    failed: &mut Option<String>,
+    ctx: &z3::Context,
+    name: &str,
+    f: &dyn Fn(&mut Prover<'_>) -> Outcome,
+) -> Outcome {
+    if let Some(why) = failed {
+        return Outcome::unknown(why.clone());
+    }
+    if let Some(stop) = p.budget.watch.look() {
+        return Outcome::unknown(stop.to_string());
+    }
+    let _span = tracing::info_span!("property", name).entered();
+    p.start(name);
+    let t0 = std::time::Instant::now();
+    let outcome = match catch_unwind(AssertUnwindSafe(|| f(p))) {
+        Ok(o) => o,
+        Err(_) => {
+            let why = failure(&p.budget.watch, Some(ctx));
+            *failed = Some(why.clone());
+            Outcome::unknown(why)
+        }
+    };
+    tracing::info!(seconds = t0.elapsed().as_secs_f64(), verdict = ?outcome.verdict, "decided");
+    outcome
+}
+
+/// The report of a run that could not start its proofs: every property undecided.
+fn undecided(system: &System, why: &str, watch: &Watch) -> Report {
+    let seconds = watch.started().elapsed().as_secs_f64();
+    let mut properties: Vec<PropertyResult> = checked_properties(system)
+        .iter()
+        .map(|prop| PropertyResult {
+            name: prop.name.clone(),
+            kind: match prop.kind {
+                ModelKind::DeadlockFree { .. } => CheckKind::DeadlockFree,
+                ModelKind::Invariant(_) => CheckKind::Invariant,
+                ModelKind::Reachable(_) => CheckKind::Reachable,
+            },
+            expr: prop.text.clone(),
+            verdict: PropertyVerdict::Inconclusive { reason: why.into() },
+            method: Method::Symbolic,
+            note: None,
+            error_step: None,
+        })
+        .collect();
+    properties.push(PropertyResult {
+        name: RANGE_ERRORS.into(),
+        kind: CheckKind::RangeErrors,
+        expr: String::new(),
+        verdict: PropertyVerdict::Inconclusive { reason: why.into() },
+        method: Method::Symbolic,
+        note: None,
+        error_step: None,
+    });
+    Report {
+        model: system.name.clone(),
+        method: Method::Symbolic,
+        properties,
+        stats: RunStats::default(),
+        stopped: watch.stopped().cloned(),
+        symbolic: Some(SymbolicStats {
+            components: system.components.len(),
+            seconds,
+            ..SymbolicStats::default()
+        }),
+        seconds,
+        peak_memory_bytes: None,
     }
 }
 
@@ -181,7 +362,10 @@ fn deadlock(p: &mut Prover<'_>, prop: &bip_model::Property, range_proved: bool) 
             Some(if candidates == 0 {
                 "invariants ∧ deadlock predicate unsatisfiable".into()
             } else {
-                format!("invariants ∧ deadlock predicate unsatisfiable after {candidates} candidates ruled out")
+                format!(
+                    "invariants ∧ deadlock predicate unsatisfiable after {candidates} candidate{} ruled out",
+                    if candidates == 1 { "" } else { "s" }
+                )
             }),
         ),
         Finding::Deadlock(trace) => Outcome::symbolic(

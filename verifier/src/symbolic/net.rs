@@ -71,7 +71,8 @@ pub struct Member {
 }
 
 impl Net {
-    pub fn new(enc: &Encoding<'_>, ci: &ComponentInvariants) -> Net {
+    /// Stops early once `stop` says so; the caller must not use an incomplete net.
+    pub fn new(enc: &Encoding<'_>, ci: &ComponentInvariants, stop: &dyn Fn() -> bool) -> Net {
         let sys = enc.sys;
         let init = sys.initial_state();
         let mut net = Net {
@@ -89,6 +90,9 @@ impl Net {
             producers: Vec::new(),
         };
         for (c, comp) in sys.components.iter().enumerate() {
+            if stop() {
+                return net;
+            }
             let atom = &sys.atoms[comp.atom as usize];
             net.place_of.push(net.comp_of.len() as u32);
             let inv = &ci.per_component[c];
@@ -157,6 +161,9 @@ impl Net {
             out
         };
         for (i, inter) in sys.interactions.iter().enumerate() {
+            if stop() {
+                return net;
+            }
             let mut ms = Vec::new();
             let mut trigger = None;
             let mut dead = false;
@@ -180,10 +187,16 @@ impl Net {
             }
         }
         for c in 0..sys.components.len() as u32 {
+            if stop() {
+                return net;
+            }
             let mv = moves(c, None, false, &net);
             if !mv.is_empty() {
                 net.push_group(vec![mv], None);
             }
+        }
+        if stop() {
+            return net;
         }
         let places = net.comp_of.len();
         net.consumers = vec![Vec::new(); places];

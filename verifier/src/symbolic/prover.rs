@@ -2,6 +2,7 @@
 //! invariants, semiflows, learned traps), the solver budget and the statistics.
 
 use std::collections::HashSet;
+use std::sync::Arc;
 use std::time::Instant;
 
 use bip_model::{State, System};
@@ -16,6 +17,9 @@ use super::solver::{self, Answer, Budget, Calls};
 use super::term::{or, Sym};
 use super::traps;
 use crate::options::Options;
+use crate::progress::Progress;
+use crate::report::Stop;
+use crate::watch::Watch;
 
 /// Traps learned from one candidate at most.
 const TRAPS_PER_CANDIDATE: usize = 4096;
@@ -33,6 +37,9 @@ pub struct Prover<'s> {
     pub options: Options,
     /// Frames created so far (their names must differ).
     frames: u64,
+    progress: &'s (dyn Fn(&Progress) + Sync),
+    /// The property being decided, for progress reports.
+    property: String,
 }
 
 /// A frame in a solver: its terms, and how many learned traps it has been given.
@@ -42,12 +49,28 @@ pub struct Placed {
 }
 
 impl<'s> Prover<'s> {
-    pub fn new(sys: &'s System, options: Options) -> Prover<'s> {
+    pub fn new(
+        sys: &'s System,
+        options: Options,
+        watch: Arc<Watch>,
+        progress: &'s (dyn Fn(&Progress) + Sync),
+    ) -> Result<Prover<'s>, Stop> {
         let started = Instant::now();
-        let enc = Encoding::new(sys);
-        let ci = invariants::compute(&enc);
-        let net = Net::new(&enc, &ci);
-        let semiflows = semiflows::compute(&net);
+        progress(&Progress::Proving {
+            property: String::new(),
+            step: "computing the component and interaction invariants".into(),
+            solver_calls: 0,
+            elapsed: watch.started().elapsed(),
+        });
+        let stop = || watch.stopped().is_some();
+        let mut enc = Encoding::new(sys);
+        enc.watch = Some(watch.clone());
+        let ci = invariants::compute(&enc, &stop);
+        let net = Net::new(&enc, &ci, &stop);
+        let semiflows = semiflows::compute(&net, &stop);
+        if let Some(why) = watch.look() {
+            return Err(why.clone());
+        }
         tracing::info!(
             components = sys.components.len(),
             approximate = ci.approximate,
@@ -59,10 +82,10 @@ impl<'s> Prover<'s> {
         );
         let budget = Budget {
             per_call: options.symbolic.solver_timeout,
-            deadline: options.timeout.map(|t| started + t),
+            watch,
             rlimit: options.symbolic.rlimit,
         };
-        Prover {
+        Ok(Prover {
             enc,
             ci,
             net,
@@ -73,7 +96,24 @@ impl<'s> Prover<'s> {
             calls: Calls::default(),
             options,
             frames: 0,
-        }
+            progress,
+            property: String::new(),
+        })
+    }
+
+    /// Starts deciding `property` (for progress reports).
+    pub fn start(&mut self, property: &str) {
+        self.property = property.to_string();
+    }
+
+    /// Reports the step the proof of the current property is at.
+    pub fn step(&self, step: impl Into<String>) {
+        (self.progress)(&Progress::Proving {
+            property: self.property.clone(),
+            step: step.into(),
+            solver_calls: self.calls.count,
+            elapsed: self.budget.watch.started().elapsed(),
+        });
     }
 
     pub fn sys(&self) -> &'s System {
@@ -97,12 +137,15 @@ impl<'s> Prover<'s> {
             traps_given: 0,
         };
         for d in domain {
+            self.enc.poll();
             solver.assert(&d);
         }
         for c in self.ci.constraints(&self.enc, &placed.frame) {
+            self.enc.poll();
             solver.assert(&c);
         }
         for s in &self.semiflows {
+            self.enc.poll();
             solver.assert(s.constraint(&self.enc, &self.net, &placed.frame));
         }
         self.give_traps(solver, &mut placed);

@@ -111,8 +111,12 @@ fn gcd(a: i128, b: i128) -> i128 {
 }
 
 /// The semiflows of the net, each normalised and none trivial (a component's locations
-/// summing to one is known without them).
-pub fn compute(net: &Net) -> Vec<Semiflow> {
+/// summing to one is known without them). Once `stop` says so, the elimination ends as at
+/// its work budget: the semiflows found by then are semiflows still.
+pub fn compute(net: &Net, stop: &dyn Fn() -> bool) -> Vec<Semiflow> {
+    if stop() {
+        return Vec::new();
+    }
     let cols = columns(net);
     // rows: one per place touched by a column
     let mut row_of: HashMap<u32, usize> = HashMap::new();
@@ -140,7 +144,7 @@ pub fn compute(net: &Net) -> Vec<Semiflow> {
     order.sort_by_key(|&j| col_rows[j].len());
     let mut work = 0u64;
     for j in order {
-        if work > WORK_BUDGET {
+        if work > WORK_BUDGET || stop() {
             tracing::debug!("semiflow elimination stopped at its work budget");
             break;
         }

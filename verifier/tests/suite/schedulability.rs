@@ -172,7 +172,7 @@ fn the_exact_demand_is_the_costliest_period_and_the_bound_is_above_it() {
 #[test]
 fn the_robots_demands_match_the_oracle() {
     // mini.ron with a WCET on every codel
-    let text = include_str!("../../robots/tests/mini.ron");
+    let text = include_str!("../../../robots/tests/mini.ron");
     let mut k = 0;
     let timed: String = text
         .split("(state: ")

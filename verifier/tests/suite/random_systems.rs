@@ -166,8 +166,9 @@ fn without_timing(mut r: Report) -> Report {
     r.stats.seconds = 0.0;
     r.stats.states_per_second = 0.0;
     r.stats.store_bytes = 0;
-    r.stats.peak_memory_bytes = None;
     r.stats.jobs = 0;
+    r.seconds = 0.0;
+    r.peak_memory_bytes = None;
     r
 }
 

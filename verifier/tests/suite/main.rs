@@ -1,0 +1,14 @@
+//! bip-verifier's integration tests, in one binary (one link instead of five):
+//!
+//! - `known_answers`: verdicts, state counts and trace lengths known independently of bip;
+//! - `random_systems`: every worker count gives the same report, equal to a naive search;
+//! - `schedulability`: each task's demand per period against an oracle walking every path
+//!   between two ticks, and the analysis on top;
+//! - `symbolic_known_answers`: the symbolic method on models whose answers are known;
+//! - `symbolic_verdicts`: the symbolic method never contradicts the explicit one.
+
+mod known_answers;
+mod random_systems;
+mod schedulability;
+mod symbolic_known_answers;
+mod symbolic_verdicts;
