@@ -42,9 +42,14 @@ fn print_summary(path: &std::path::Path, system: &bip_model::System) {
         "declared"
     };
     names.push(bip_verifier::RANGE_ERRORS);
+    let budgets = bip_verifier::has_time_budgets(system);
+    if budgets {
+        names.push(bip_verifier::SCHEDULABLE);
+    }
     println!(
-        "  properties    {} checked ({declared}, and range errors): {}",
+        "  properties    {} checked ({declared}, range errors{}): {}",
         names.len(),
+        if budgets { ", schedulability" } else { "" },
         names.join(", ")
     );
     println!(

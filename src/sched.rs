@@ -242,7 +242,7 @@ fn text(title: &str, sched: &Schedulability, assignment: Assignment) -> String {
                 .join(", ")
         );
     }
-    let _ = writeln!(out, "result: {}", verdict(sched));
+    let _ = writeln!(out, "result: {}", sched.verdict());
     out
 }
 
@@ -262,50 +262,6 @@ fn proposed(sched: &Schedulability) -> Vec<(String, usize)> {
                 .map(move |(rank, &i)| (sched.set.tasks[i].name.clone(), n - rank))
         })
         .collect()
-}
-
-fn verdict(sched: &Schedulability) -> String {
-    let set = &sched.set;
-    let Some(a) = &sched.analysis else {
-        let looping: Vec<&str> = (0..set.tasks.len())
-            .filter(|&i| sched.demands[i].is_none())
-            .map(|i| set.tasks[i].name.as_str())
-            .collect();
-        return format!(
-            "not schedulable: {} can run without end in one period",
-            looping.join(", ")
-        );
-    };
-    let misses: Vec<String> = a
-        .misses(set)
-        .map(|i| {
-            let t = &set.tasks[i];
-            match a.tasks[i].response {
-                ResponseTime::Exact(r) => format!(
-                    "{} misses its deadline by {} (responds in {}, deadline {})",
-                    t.name,
-                    show(r - t.deadline),
-                    show(r),
-                    show(t.deadline)
-                ),
-                ResponseTime::Unbounded => format!(
-                    "{} never catches up: it and the tasks above it need more than the CPU",
-                    t.name
-                ),
-                ResponseTime::AtLeast(r) => format!(
-                    "{} responds in at least {}, past its deadline {}",
-                    t.name,
-                    show(r),
-                    show(t.deadline)
-                ),
-            }
-        })
-        .collect();
-    if misses.is_empty() {
-        "schedulable: every task meets its deadline".into()
-    } else {
-        format!("not schedulable: {}", misses.join("; "))
-    }
 }
 
 fn json(
@@ -369,7 +325,7 @@ fn json(
         "demand": demand,
         "cpus": cpus,
         "schedulable": sched.schedulable(),
-        "result": verdict(sched),
+        "result": sched.verdict(),
     });
     serde_json::to_string_pretty(&doc).unwrap_or_default()
 }

@@ -359,6 +359,7 @@ fn kind_name(kind: CheckKind) -> &'static str {
         CheckKind::Invariant => "invariant",
         CheckKind::Reachable => "reachability",
         CheckKind::RangeErrors => "range errors",
+        CheckKind::Schedulable => "schedulability",
     }
 }
 

@@ -39,10 +39,14 @@ pub use report::{
     human_bytes, CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop,
     SymbolicStats, VerifyOutcome,
 };
-pub use schedulability::{schedulability, DemandChoice, DemandMethod, LayerTask, Schedulability};
+pub use schedulability::{
+    has_time_budgets, schedulability, DemandChoice, DemandMethod, LayerTask, Schedulability,
+    SCHEDULABLE,
+};
 
-/// Verifies every property of `system` (deadlock freedom if it declares none, and range
-/// errors always) with `method`, within the limits of `options`.
+/// Verifies every property of `system` (deadlock freedom if it declares none, range
+/// errors always, and schedulability when its GenoM layer has time budgets) with
+/// `method`, within the limits of `options`.
 ///
 /// `progress` is called from time to time during long runs, from any thread.
 pub fn verify(
@@ -57,6 +61,9 @@ pub fn verify(
         Method::Symbolic => symbolic::verify(system, options, progress),
         Method::Auto => auto::verify(system, options, progress),
     }?;
+    report
+        .properties
+        .extend(schedulability::as_property(system, options, method));
     report.seconds = started.elapsed().as_secs_f64();
     report.peak_memory_bytes = memory::peak_resident_bytes();
     Ok(report)

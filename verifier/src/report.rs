@@ -37,6 +37,9 @@ pub enum CheckKind {
     Reachable,
     /// Range errors are always checked (docs/model.md, "Range errors"); reported as a property of their own.
     RangeErrors,
+    /// With time budgets: every task's work of a period ends by its deadline
+    /// (docs/sched.md); reported after range errors.
+    Schedulable,
 }
 
 /// The verdict on one property.

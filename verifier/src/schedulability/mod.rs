@@ -13,12 +13,18 @@ mod tasks;
 use std::time::Instant;
 
 use bip_model::System;
-use bip_sched::{analyse, Analysis, Assignment, SchedError, Task, TaskSet};
+use bip_sched::{
+    analyse, show_micros as show, Analysis, Assignment, ResponseTime, SchedError, Task, TaskSet,
+};
 
 pub use tasks::LayerTask;
 
 use crate::memory;
 use crate::options::Options;
+use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict};
+
+/// The name of the result that reports schedulability.
+pub const SCHEDULABLE: &str = "Schedulable";
 
 /// How a demand was found.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -63,6 +69,125 @@ impl Schedulability {
             .as_ref()
             .is_some_and(|a| a.schedulable(&self.set))
     }
+
+    /// The verdict in words: schedulable, or which tasks miss their deadline and by how
+    /// much.
+    pub fn verdict(&self) -> String {
+        let set = &self.set;
+        let Some(a) = &self.analysis else {
+            let looping: Vec<&str> = (0..set.tasks.len())
+                .filter(|&i| self.demands[i].is_none())
+                .map(|i| set.tasks[i].name.as_str())
+                .collect();
+            return format!(
+                "not schedulable: {} can run without end in one period",
+                looping.join(", ")
+            );
+        };
+        let misses: Vec<String> = a
+            .misses(set)
+            .map(|i| {
+                let t = &set.tasks[i];
+                match a.tasks[i].response {
+                    ResponseTime::Exact(r) => format!(
+                        "{} misses its deadline by {} (responds in {}, deadline {})",
+                        t.name,
+                        show(r - t.deadline),
+                        show(r),
+                        show(t.deadline)
+                    ),
+                    ResponseTime::Unbounded => format!(
+                        "{} never catches up: it and the tasks above it need more than the CPU",
+                        t.name
+                    ),
+                    ResponseTime::AtLeast(r) => format!(
+                        "{} responds in at least {}, past its deadline {}",
+                        t.name,
+                        show(r),
+                        show(t.deadline)
+                    ),
+                }
+            })
+            .collect();
+        if misses.is_empty() {
+            "schedulable: every task meets its deadline".into()
+        } else {
+            format!("not schedulable: {}", misses.join("; "))
+        }
+    }
+}
+
+/// True if `system` declares time budgets that a verification checks as `Schedulable`.
+pub fn has_time_budgets(system: &System) -> bool {
+    tasks::TaskTable::new(system).is_some()
+}
+
+/// `Schedulable` as a property of a verification: `None` if the model declares no WCET.
+/// The demands bounded from the codel automata settle it when they fit; else the exact
+/// demands decide, within the run's limits, and a bound that misses with exact demands out
+/// of reach is inconclusive, never "fails".
+pub(crate) fn as_property(
+    system: &System,
+    options: &Options,
+    method: Method,
+) -> Option<PropertyResult> {
+    let result = |verdict, method, note: String| PropertyResult {
+        name: SCHEDULABLE.into(),
+        kind: CheckKind::Schedulable,
+        expr: String::new(),
+        verdict,
+        method,
+        note: Some(note),
+        error_step: None,
+    };
+    let failed = |e: SchedError| {
+        result(
+            PropertyVerdict::Inconclusive {
+                reason: format!("the task set cannot be analysed: {e}"),
+            },
+            method,
+            String::new(),
+        )
+    };
+    let bound = match schedulability(system, options, Assignment::Given, DemandChoice::Bound) {
+        Ok(s) => s?,
+        Err(e) => return Some(failed(e)),
+    };
+    if bound.schedulable() {
+        return Some(result(
+            PropertyVerdict::Holds { witness: None },
+            method,
+            "response-time analysis, demands bounded from the codel automata".into(),
+        ));
+    }
+    let exact = match schedulability(system, options, Assignment::Given, DemandChoice::Exact) {
+        Ok(s) => s?,
+        Err(e) => return Some(failed(e)),
+    };
+    Some(match &exact.method {
+        DemandMethod::Exact { states, .. } => {
+            let note = format!("response-time analysis, exact demands ({states} states)");
+            let verdict = if exact.schedulable() {
+                PropertyVerdict::Holds { witness: None }
+            } else {
+                PropertyVerdict::Fails {
+                    reason: exact.verdict(),
+                    trace: None,
+                }
+            };
+            result(verdict, Method::Explicit, note)
+        }
+        DemandMethod::Bound { why } => result(
+            PropertyVerdict::Inconclusive {
+                reason: format!(
+                    "with demands bounded from the codel automata, {}; the exact demands were not computed ({why})",
+                    bound.verdict().trim_start_matches("not schedulable: ")
+                ),
+            },
+            method,
+            String::new(),
+        ),
+    })
 }
 
 /// The schedulability of `system`'s GenoM layer; `Ok(None)` if it declares no WCET (or
