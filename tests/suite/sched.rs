@@ -129,3 +129,44 @@ fn a_model_without_wcets_is_refused() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no time budgets to analyse"));
 }
+
+/// `bip verify` checks the same as `Schedulable`: a short deadline fails with its miss
+/// (the exact demands decide once the bound misses), and with the exact demands out of
+/// reach a missing bound is inconclusive, never a failure.
+#[test]
+fn verify_checks_schedulability_too() {
+    let (_dir, path) = rover_with((
+        r#"(name: "thermal", period: 2, cpu: "payload")"#,
+        r#"(name: "thermal", period: 2, cpu: "payload", deadline: "150ms")"#,
+    ));
+    let line = |text: &str| {
+        text.lines()
+            .find(|l| l.trim_start().starts_with("Schedulable"))
+            .unwrap_or("")
+            .to_string()
+    };
+    let out = bip(&["verify", &path, "--method", "explicit", "-q"]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(line(&text).contains("FAILS"), "{text}");
+    assert!(
+        text.contains("heating.thermal misses its deadline by 42 ms"),
+        "{text}"
+    );
+    let out = bip(&[
+        "verify",
+        &path,
+        "--method",
+        "explicit",
+        "-q",
+        "--max-states",
+        "1000",
+    ]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(3), "{text}");
+    assert!(line(&text).contains("inconclusive"), "{text}");
+    assert!(
+        text.contains("the exact demands were not computed"),
+        "{text}"
+    );
+}
