@@ -5,19 +5,126 @@
 //! relation is acyclic when the graph has an order; if not, the graph names a cycle of
 //! declared priorities, each one's high side meeting the next one's low side.
 
+use super::resolve::{one_of, Place, Resolver, Ty};
+use super::{expr_error, Compiler};
 use crate::diag::ModelError;
+use crate::expr::ExprKind;
 use crate::source::Span;
+use crate::syntax::{ExprDef, SystemDef};
 use bip_model::{Priority, PriorityGraph, MAX_INCIDENCES};
 
+impl Compiler {
+    pub(super) fn priorities(&mut self, def: &SystemDef) -> Vec<Priority> {
+        let mut declared = Vec::new();
+        for p in &def.priorities {
+            let low = self.priority_target(&p.low);
+            let high = self.priority_target(&p.high);
+            let when = match &p.when {
+                None => Some(None),
+                Some(w) => self.global_bool(w).map(Some),
+            };
+            if let (Some(low), Some(high), Some(when)) = (low, high, when) {
+                declared.push(Declared {
+                    priority: Priority {
+                        low,
+                        high,
+                        when,
+                        text: format!("{} < {}", p.low, p.high),
+                    },
+                    span: p.low.span(),
+                });
+            }
+        }
+        match check(declared) {
+            Ok(r) => r,
+            Err(e) => {
+                self.errors.push(e);
+                Vec::new()
+            }
+        }
+    }
+
+    /// `"left"` (every instance of a connector) or `"left[3]"` (the instance for the
+    /// `forall` value 3) as a range of interactions.
+    fn priority_target(&mut self, t: &ExprDef) -> Option<std::ops::Range<u32>> {
+        let e = match t.tree() {
+            Ok(e) => e,
+            Err(e) => {
+                self.errors.push(e);
+                return None;
+            }
+        };
+        let (name, index) = match &e.kind {
+            ExprKind::Name(n) => (n, None),
+            ExprKind::Index(base, idx) => match &base.kind {
+                ExprKind::Name(n) => (n, Some(idx)),
+                _ => (&String::new(), None),
+            },
+            _ => (&String::new(), None),
+        };
+        let Some(&c) = self.connector_by_name.get(name.as_str()) else {
+            if self.failed_connectors.contains(name.as_str()) {
+                return None;
+            }
+            let msg = if name.is_empty() {
+                "expected a connector name or `connector[index]`".to_string()
+            } else {
+                format!("unknown connector `{name}`")
+            };
+            self.errors
+                .push(ModelError::new(msg, t.span()).with_help(one_of(
+                    "the connectors are",
+                    self.connectors.iter().map(|c| c.name.as_str()),
+                )));
+            return None;
+        };
+        let conn = &self.connectors[c as usize];
+        let Some(idx) = index else {
+            return Some(conn.interactions.clone());
+        };
+        if conn.indices.is_empty() && conn.interactions.len() == 1 {
+            self.errors.push(
+                ModelError::new(
+                    format!("connector `{name}` has no `forall`; it has no instances"),
+                    t.span(),
+                )
+                .with_help(format!("write `{name}`")),
+            );
+            return None;
+        }
+        let names = self.names();
+        let value = match Resolver::new(&names, Place::Constant, &[]).constant(idx, Ty::Int) {
+            Ok(v) => v,
+            Err(e) => {
+                self.errors.push(expr_error(e));
+                return None;
+            }
+        };
+        match conn.indices.iter().position(|&v| v == value) {
+            Some(k) => {
+                let i = conn.interactions.start + k as u32;
+                Some(i..i + 1)
+            }
+            None => {
+                self.errors.push(ModelError::new(
+                    format!("connector `{name}` has no instance {value}"),
+                    idx.span,
+                ));
+                None
+            }
+        }
+    }
+}
+
 /// A priority as declared, resolved, with where it is written.
-pub(super) struct Declared {
+struct Declared {
     pub priority: Priority,
     pub span: Span,
 }
 
 /// The declared priorities, checked: an error if they form a cycle, or if their graph
 /// would be too large to build.
-pub(super) fn check(declared: Vec<Declared>) -> Result<Vec<Priority>, ModelError> {
+fn check(declared: Vec<Declared>) -> Result<Vec<Priority>, ModelError> {
     let (priorities, spans): (Vec<Priority>, Vec<Span>) =
         declared.into_iter().map(|d| (d.priority, d.span)).unzip();
     let incidences = PriorityGraph::incidences(&priorities);

@@ -3,13 +3,16 @@
 //! priorities. docs/genom.md describes the expansion and its generated names.
 //!
 //! - `syntax`: the file format of modules and constraints;
-//! - `check`: validation with positions;
+//! - `check`: validation with positions (modules, codel automata and constraints, a file
+//!   each);
 //! - `names`: the generated names;
 //! - `rewrite`: the rewriting of GenoM names in users' expressions into generated ones;
 //! - `tree`: the expressions the expansion generates, as syntax trees;
 //! - `build`: the expansion itself, which builds guards, actions and conditions as trees
 //!   holding the user's own subtrees with their positions in the file, so that the
-//!   compiler reports an error in them where the user wrote it;
+//!   compiler reports an error in them where the user wrote it; a file per part (the
+//!   clock and tick, modules, activities, services' connectors, the assembly with user
+//!   connectors, priorities, properties);
 //! - `timing`: the time budgets (CPUs, priorities, deadlines, WCETs), checked;
 //! - `recipe`: the engine's map of the layer by names, as the expansion writes it; once
 //!   the expanded model is compiled it becomes a [`bip_model::GenomMap`].

@@ -1,0 +1,221 @@
+//! An activity's atom: `ether` and one location per place its codels run from, the
+//! request, interrupt and abort paths (through `stop` if the activity has one), the tick,
+//! and one transition per yield of each codel with its error path beside it.
+
+use super::{set, text, tr, var, Builder};
+use crate::expr::{Assign, Expr};
+use crate::genom::check::{ServiceRef, Yield, ETHER};
+use crate::genom::names::*;
+use crate::genom::tree::{and, assign, name, not};
+use crate::syntax::{AtomDef, TransitionDef, TypeDef};
+
+impl<'a, 'd> Builder<'a, 'd> {
+    /// True if some service other than `r` interrupts activity `r`.
+    fn interrupted_by_others(&self, r: ServiceRef) -> bool {
+        self.layer.modules[r.module]
+            .services
+            .iter()
+            .enumerate()
+            .any(|(k, s)| k != r.service && s.interrupts.contains(&r.service))
+    }
+
+    pub(super) fn activity(&mut self, r: ServiceRef) {
+        let s = self.service(r);
+        let m = self.module_name(r);
+        let has_stop = s.stop.is_some();
+        let self_int = s.interrupts_itself(r.service);
+        let locs: Vec<&str> = s.locations.iter().map(|&k| s.codels[k].state).collect();
+        let mut locations = vec![text(ETHER)];
+        locations.extend(locs.iter().map(|l| text(*l)));
+        let mut vars = vec![
+            var(REQ, TypeDef::Bool, Some(0)),
+            var(PAUSED, TypeDef::Bool, Some(0)),
+        ];
+        if has_stop {
+            vars.push(var(STOPPING, TypeDef::Bool, Some(0)));
+        }
+        let tracked = self.tracked.contains(&r);
+        if tracked {
+            vars.push(var(DONE, TypeDef::Bool, Some(0)));
+        }
+        let mut ports = vec![text("request")];
+        let mut t = Vec::new();
+        // requests
+        t.push(tr(
+            ETHER,
+            "request",
+            ETHER,
+            Some(not(name(REQ))),
+            vec![set(REQ, true), set(PAUSED, true)],
+        ));
+        if self_int {
+            t.push(tr(ETHER, "request", ETHER, Some(name(REQ)), Vec::new()));
+            for l in &locs {
+                if has_stop {
+                    t.push(tr(
+                        l,
+                        "request",
+                        "stop",
+                        Some(not(name(STOPPING))),
+                        vec![set(STOPPING, true), set(REQ, true)],
+                    ));
+                    t.push(tr(
+                        l,
+                        "request",
+                        l,
+                        Some(name(STOPPING)),
+                        vec![set(REQ, true)],
+                    ));
+                } else {
+                    t.push(tr(
+                        l,
+                        "request",
+                        ETHER,
+                        None,
+                        vec![set(REQ, true), set(PAUSED, true)],
+                    ));
+                }
+            }
+        }
+        // interrupts by other services' requests: always enabled, so that a target never
+        // holds back the request that interrupts it
+        let stop_or_end = |t: &mut Vec<TransitionDef>, port: &str, l: &str| {
+            if has_stop {
+                t.push(tr(
+                    l,
+                    port,
+                    "stop",
+                    Some(not(name(STOPPING))),
+                    vec![set(STOPPING, true), set(REQ, false)],
+                ));
+            } else {
+                t.push(tr(
+                    l,
+                    port,
+                    ETHER,
+                    None,
+                    vec![set(REQ, false), set(PAUSED, false)],
+                ));
+            }
+        };
+        if self.interrupted_by_others(r) {
+            ports.push(text("interrupt"));
+            t.push(tr(
+                ETHER,
+                "interrupt",
+                ETHER,
+                None,
+                vec![set(REQ, false), set(PAUSED, false)],
+            ));
+            for l in &locs {
+                stop_or_end(&mut t, "interrupt", l);
+                if has_stop {
+                    t.push(tr(
+                        l,
+                        "interrupt",
+                        l,
+                        Some(name(STOPPING)),
+                        vec![set(REQ, false)],
+                    ));
+                }
+            }
+        }
+        // abort, for components of the model (a supervisor, a safety rule): enabled only
+        // when there is something to abort, so that it never fires for nothing
+        ports.push(text("abort"));
+        t.push(tr(
+            ETHER,
+            "abort",
+            ETHER,
+            Some(name(REQ)),
+            vec![set(REQ, false), set(PAUSED, false)],
+        ));
+        for l in &locs {
+            stop_or_end(&mut t, "abort", l);
+            if has_stop {
+                t.push(tr(
+                    l,
+                    "abort",
+                    l,
+                    Some(and(name(STOPPING), name(REQ))),
+                    vec![set(REQ, false)],
+                ));
+            }
+        }
+        // time: the tick connector's action clears `paused` at the task's period
+        ports.push(text("tick"));
+        t.push(tr(ETHER, "tick", ETHER, None, Vec::new()));
+        for l in &locs {
+            t.push(tr(l, "tick", l, None, Vec::new()));
+        }
+        // codels: one transition per yield, from each place the codel runs from
+        for c in &s.codels {
+            ports.push(text(c.state));
+            // every codel has an error path: a declared exception, or what the engine does
+            // with a codel that panics, yields something undeclared or leaves a range
+            ports.push(text(fail_port(c.state)));
+            let mut sources: Vec<(&str, Expr, Vec<Assign>)> = Vec::new();
+            if c.state == "start" {
+                sources.push((
+                    ETHER,
+                    and(name(REQ), not(name(PAUSED))),
+                    vec![set(REQ, false)],
+                ));
+            }
+            if locs.contains(&c.state) {
+                sources.push((c.state, not(name(PAUSED)), Vec::new()));
+            }
+            let mut end = Vec::new();
+            if has_stop {
+                end.push(set(STOPPING, false));
+            }
+            end.push(assign(name(PAUSED), name(REQ)));
+            for (from, guard, pre) in &sources {
+                for y in &c.yields {
+                    let mut action = pre.clone();
+                    let to = match *y {
+                        Yield::Go(k) => s.codels[k].state,
+                        Yield::Pause(k) => {
+                            action.push(set(PAUSED, true));
+                            s.codels[k].state
+                        }
+                        Yield::Ether => {
+                            if tracked {
+                                action.push(set(DONE, true));
+                            }
+                            action.extend(end.iter().cloned());
+                            ETHER
+                        }
+                    };
+                    t.push(tr(from, c.state, to, Some(guard.clone()), action));
+                }
+                let mut action = pre.clone();
+                action.extend(end.iter().cloned());
+                t.push(tr(
+                    from,
+                    &fail_port(c.state),
+                    ETHER,
+                    Some(guard.clone()),
+                    action,
+                ));
+            }
+        }
+        let atom = AtomDef {
+            locations,
+            initial: text(ETHER),
+            ports,
+            vars,
+            transitions: t,
+        };
+        let what = format!("activity `{m}.{}`", s.name);
+        let comp = self.comp(r);
+        self.activity_components.insert(comp.clone());
+        self.add_atom(
+            activity_atom(m, s.name),
+            atom,
+            s.def.name.span,
+            what.clone(),
+        );
+        self.add_component(comp, activity_atom(m, s.name), s.def.name.span, what);
+    }
+}

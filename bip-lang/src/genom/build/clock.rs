@@ -1,0 +1,147 @@
+//! The clock: one atom whose `tick` port is the trigger of the tick broadcast, with the
+//! phase of the tasks' common cycle when their periods differ; and the tick connector,
+//! whose action ages the ports that constraints read and clears each activity's `paused`
+//! at its task's period. Both depend on the same least common multiple of the periods.
+
+use super::{connector, port, text, tr, var, Builder};
+use crate::diag::ModelError;
+use crate::expr::BinOp;
+use crate::genom::names::*;
+use crate::genom::tree::{and, assign, binary, boolean, cond, int, member};
+use crate::source::{ConstExpr, Span};
+use crate::syntax::{AtomDef, ConnectorDef, ConnectorKindDef, Role, TypeDef};
+
+fn gcd(a: i64, b: i64) -> i64 {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+/// The clock's phase wraps at this many ticks at most (least common multiple of periods).
+const MAX_PHASE: i64 = 1 << 20;
+
+impl<'a, 'd> Builder<'a, 'd> {
+    /// The least common multiple of the periods of tasks that have activities.
+    fn phase_len(&self) -> i64 {
+        let mut l = 1i64;
+        for m in &self.layer.modules {
+            for s in m.services.iter().filter(|s| s.is_activity()) {
+                if let Some(t) = s.task {
+                    let p = m.tasks[t].1;
+                    l = (l / gcd(l, p)).saturating_mul(p).min(MAX_PHASE + 1);
+                }
+            }
+        }
+        l
+    }
+
+    pub(super) fn clock(&mut self) {
+        let l = self.phase_len();
+        if l > MAX_PHASE {
+            let span = self
+                .layer
+                .modules
+                .first()
+                .map_or(Span::NONE, |m| m.def.name.span);
+            self.errors.push(
+                ModelError::new(
+                    format!("the task periods have a common cycle longer than {MAX_PHASE} ticks"),
+                    span,
+                )
+                .with_help("use periods with a small least common multiple"),
+            );
+        }
+        let vars = if l > 1 {
+            vec![var(
+                PHASE,
+                TypeDef::Int(ConstExpr::int(0), ConstExpr::int(l - 1)),
+                Some(0),
+            )]
+        } else {
+            Vec::new()
+        };
+        let atom = AtomDef {
+            locations: vec![text("on")],
+            initial: text("on"),
+            ports: vec![text("tick")],
+            vars,
+            transitions: vec![tr("on", "tick", "on", None, Vec::new())],
+        };
+        let span = self
+            .layer
+            .modules
+            .first()
+            .map_or(Span::NONE, |m| m.def.name.span);
+        self.add_atom(CLOCK_ATOM.into(), atom, span, "the clock".into());
+        self.add_component(CLOCK.into(), CLOCK_ATOM.into(), span, "the clock".into());
+    }
+
+    pub(super) fn tick(&mut self) {
+        let l = self.phase_len();
+        let mut ports = vec![port(CLOCK, "tick")];
+        let mut action = Vec::new();
+        if l > 1 {
+            let phase = member(CLOCK, PHASE);
+            let next = binary(BinOp::Add, phase.clone(), int(1));
+            action.push(assign(phase, binary(BinOp::Rem, next, int(l))));
+        }
+        for (mi, m) in self.layer.modules.iter().enumerate() {
+            for s in &m.services {
+                let Some(task) = s.task.filter(|_| s.is_activity()) else {
+                    continue;
+                };
+                let c = activity_component(m.name, s.name);
+                ports.push(port(&c, "tick"));
+                let p = m.tasks[task].1;
+                let paused = member(&c, PAUSED);
+                if p == 1 {
+                    action.push(assign(paused, boolean(false)));
+                } else {
+                    let off_period = binary(
+                        BinOp::Ne,
+                        binary(BinOp::Rem, member(CLOCK, PHASE), int(p)),
+                        int(0),
+                    );
+                    action.push(assign(paused.clone(), and(paused, off_period)));
+                }
+            }
+            let aged: Vec<(usize, i64)> = self
+                .caps
+                .iter()
+                .filter(|(p, _)| p.module == mi)
+                .map(|(p, &cap)| (p.port, cap))
+                .collect();
+            if !aged.is_empty() {
+                let c = module_component(m.name);
+                ports.push(port(&c, "tick"));
+                for (p, cap) in aged {
+                    let a = member(&c, &age_var(m.ports[p]));
+                    let older = cond(
+                        binary(BinOp::Lt, a.clone(), int(cap)),
+                        binary(BinOp::Add, a.clone(), int(1)),
+                        int(cap),
+                    );
+                    action.push(assign(a, older));
+                }
+            }
+        }
+        let span = self
+            .layer
+            .modules
+            .first()
+            .map_or(Span::NONE, |m| m.def.name.span);
+        self.claim(TICK, span, "the clock's tick".into());
+        self.connectors.push((
+            ConnectorDef {
+                kind: ConnectorKindDef::Broadcast {
+                    trigger: port(CLOCK, "tick"),
+                },
+                ..connector(TICK, ports, Role::Time)
+            },
+            None,
+            action,
+        ));
+    }
+}

@@ -1,0 +1,61 @@
+//! The generated priorities (codels urgent, requests when the layer is quiescent,
+//! activities in declaration order), followed by the user's.
+
+use super::{Builder, UserTexts};
+use crate::genom::names::TICK;
+use crate::genom::tree::name;
+use crate::syntax::{ExprDef, PriorityDef};
+
+impl<'a, 'd> Builder<'a, 'd> {
+    /// Codels are urgent (the tick is below every codel step), requests wait for the
+    /// functional layer to be quiescent (below every codel step), and codels of different
+    /// activities run in declaration order (earlier activities above later ones). The
+    /// declared priorities form a chain through the last activity; the core closes them
+    /// transitively. Then the user's priorities.
+    pub(super) fn priorities(&mut self, user: &UserTexts) -> Vec<PriorityDef> {
+        let mut levels: Vec<Vec<String>> = Vec::new(); // codel connectors per activity
+        let mut requests: Vec<String> = Vec::new();
+        for m in &self.recipe.modules {
+            for s in &m.services {
+                requests.push(s.request.clone());
+                if s.component.is_some() {
+                    let mut level = Vec::new();
+                    for c in &s.codels {
+                        level.push(c.run.clone());
+                        level.push(c.fail.clone());
+                    }
+                    levels.push(level);
+                }
+            }
+        }
+        let pr = |low: &str, high: &str| PriorityDef {
+            low: ExprDef::Built(name(low)),
+            high: ExprDef::Built(name(high)),
+            when: None,
+        };
+        let mut out = Vec::new();
+        if let Some(last) = levels.last() {
+            for high in last {
+                out.push(pr(TICK, high));
+                for r in &requests {
+                    out.push(pr(r, high));
+                }
+            }
+        }
+        for pair in levels.windows(2) {
+            for low in &pair[1] {
+                for high in &pair[0] {
+                    out.push(pr(low, high));
+                }
+            }
+        }
+        for (k, p) in self.def.priorities.iter().enumerate() {
+            let mut p = p.clone();
+            if let (Some(u), Some(written)) = (user.priority_whens.get(&k), &p.when) {
+                p.when = Some(u.def(written));
+            }
+            out.push(p);
+        }
+        out
+    }
+}

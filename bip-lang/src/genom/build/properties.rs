@@ -1,0 +1,74 @@
+//! The user's properties in the core's names, and the idle states of the layer that
+//! `DeadlockFree` excuses when every request comes from the environment.
+
+use std::collections::HashSet;
+
+use super::{Builder, UserTexts};
+use crate::genom::check::ETHER;
+use crate::genom::names::*;
+use crate::genom::tree::{all, and, at, boolean, member, not, or};
+use crate::syntax::{ConnectorDef, ExprDef, PropertyDef, Role};
+
+impl<'a, 'd> Builder<'a, 'd> {
+    /// The user's properties with GenoM names rewritten; `DeadlockFree` excuses the states
+    /// where no activity has work outstanding, if every request comes from the environment
+    /// (once a component of the model sends requests, it is responsible for the layer's
+    /// progress, and an idle layer may be a supervisor stuck: the user says when it is not
+    /// with `terminal`).
+    pub(super) fn properties(
+        &mut self,
+        connectors: &[ConnectorDef],
+        user: &UserTexts,
+    ) -> Vec<PropertyDef> {
+        let requests: HashSet<&str> = self
+            .recipe
+            .modules
+            .iter()
+            .flat_map(|m| m.services.iter().map(|s| s.request.as_str()))
+            .collect();
+        let open = !requests.is_empty()
+            && connectors
+                .iter()
+                .filter(|c| requests.contains(c.name.as_str()))
+                .all(|c| c.role == Role::Environment);
+        // with no activity at all, nothing is ever outstanding
+        let idle = open.then(|| {
+            let activities = self
+                .recipe
+                .modules
+                .iter()
+                .flat_map(|m| m.services.iter())
+                .filter_map(|s| s.component.as_deref());
+            all(activities.map(|c| and(at(c, ETHER), not(member(c, REQ)))))
+                .unwrap_or_else(|| boolean(true))
+        });
+        self.recipe.idle = idle.clone();
+        let mut out = Vec::with_capacity(self.def.properties.len());
+        for (k, p) in self.def.properties.iter().enumerate() {
+            let rewritten = |written: &ExprDef| match user.properties.get(&k) {
+                Some(u) => u.def(written),
+                None => written.clone(),
+            };
+            out.push(match p {
+                PropertyDef::DeadlockFree { terminal } => {
+                    let user_terminal = user.properties.get(&k).map(|u| u.tree.clone());
+                    let terminal = match (user_terminal, &idle) {
+                        (Some(t), Some(idle)) => Some(ExprDef::Built(or(t, idle.clone()))),
+                        (None, Some(idle)) => Some(ExprDef::Built(idle.clone())),
+                        (_, None) => terminal.as_ref().map(rewritten),
+                    };
+                    PropertyDef::DeadlockFree { terminal }
+                }
+                PropertyDef::Invariant { name, expr } => PropertyDef::Invariant {
+                    name: name.clone(),
+                    expr: rewritten(expr),
+                },
+                PropertyDef::Reachable { name, expr } => PropertyDef::Reachable {
+                    name: name.clone(),
+                    expr: rewritten(expr),
+                },
+            });
+        }
+        out
+    }
+}

@@ -1,0 +1,261 @@
+//! A service's connectors and its part of the engine's map: the request (with the
+//! interrupts it sends and the `after` it waits for), and for each codel its run and its
+//! error path, guarded by the constraints that apply to it. The same conditions go to the
+//! recipe, each with its reason, so that the engine says why a request is refused or a
+//! codel held.
+
+use super::{connector, port, Builder, Cond, UserTexts};
+use crate::expr::{BinOp, Expr};
+use crate::genom::check::{ConstraintKind, PortRef, ServiceRef, ETHER};
+use crate::genom::names::*;
+use crate::genom::recipe::{RecipeCodel, RecipeCondition, RecipeService};
+use crate::genom::tree::{all, and, assign, at, binary, chain, cond, int, member, not, or};
+use crate::syntax::Role;
+use bip_model::genom::map::Reason;
+
+impl<'a, 'd> Builder<'a, 'd> {
+    /// The conditions on starting activity `r` (waiting for what it interrupts, Exclusive,
+    /// AtMost) and on running its codels (Requires, Fresh, Guard).
+    fn conditions(&self, r: ServiceRef, user: &UserTexts) -> (Vec<Cond>, Vec<Cond>) {
+        let mut start = Vec::new();
+        let mut run = Vec::new();
+        let s = self.service(r);
+        let m = self.module_name(r);
+        if s.is_activity() {
+            for &x in s.interrupts.iter().filter(|&&x| x != r.service) {
+                let target = ServiceRef {
+                    module: r.module,
+                    service: x,
+                };
+                start.push(Cond {
+                    reason: Reason::Interrupting {
+                        service: format!("{m}.{}", self.service(target).name),
+                    },
+                    expr: at(&self.comp(target), ETHER),
+                });
+            }
+        }
+        for (ci, c) in self.layer.constraints.iter().enumerate() {
+            let reason = c.reason.clone();
+            let others = |list: &[ServiceRef], f: &dyn Fn(String) -> Expr| -> Vec<Expr> {
+                list.iter()
+                    .filter(|&&y| y != r)
+                    .map(|&y| f(self.comp(y)))
+                    .collect()
+            };
+            let expr = match &c.kind {
+                ConstraintKind::Exclusive(list) if list.contains(&r) => {
+                    all(others(list, &|c| at(&c, ETHER)))
+                }
+                ConstraintKind::AtMost { max, services } if services.contains(&r) => {
+                    let active = |c: String| cond(at(&c, ETHER), int(0), int(1));
+                    chain(BinOp::Add, others(services, &active))
+                        .map(|count| binary(BinOp::Lt, count, int(*max)))
+                }
+                ConstraintKind::Requires { service, active } if *service == r => {
+                    all(active.iter().map(|&y| not(at(&self.comp(y), ETHER))))
+                }
+                ConstraintKind::Fresh {
+                    service,
+                    port,
+                    max_age,
+                } if *service == r => {
+                    let pm = &self.layer.modules[port.module];
+                    let age = member(&module_component(pm.name), &age_var(pm.ports[port.port]));
+                    Some(binary(BinOp::Le, age, int(*max_age)))
+                }
+                ConstraintKind::Guard { service, .. } if *service == r => {
+                    user.guards.get(&ci).cloned()
+                }
+                _ => None,
+            };
+            let Some(expr) = expr else { continue };
+            let cond = Cond { reason, expr };
+            match &c.kind {
+                ConstraintKind::Exclusive(_) | ConstraintKind::AtMost { .. } => start.push(cond),
+                _ => run.push(cond),
+            }
+        }
+        (start, run)
+    }
+
+    pub(super) fn service_connectors(&mut self, r: ServiceRef, user: &UserTexts) {
+        let s = self.service(r);
+        let m = self.module_name(r);
+        let (start_conds, run_conds) = self.conditions(r, user);
+        // the request
+        let mut ports = Vec::new();
+        let mut refusals = Vec::new();
+        if s.is_activity() {
+            let comp = self.comp(r);
+            ports.push(port(&comp, "request"));
+            if !s.interrupts_itself(r.service) {
+                refusals.push(Cond {
+                    reason: Reason::AlreadyRequested,
+                    expr: and(at(&comp, ETHER), not(member(&comp, REQ))),
+                });
+            }
+        } else {
+            ports.push(port(&module_component(m), s.name));
+        }
+        for &x in s.interrupts.iter().filter(|&&x| x != r.service) {
+            let target = ServiceRef {
+                module: r.module,
+                service: x,
+            };
+            ports.push(port(&self.comp(target), "interrupt"));
+        }
+        for &a in &s.after {
+            let target = ServiceRef {
+                module: r.module,
+                service: a,
+            };
+            let t = self.service(target);
+            let flag = if t.is_activity() {
+                member(&self.comp(target), DONE)
+            } else {
+                member(&module_component(m), &done_var(t.name))
+            };
+            refusals.push(Cond {
+                reason: Reason::After {
+                    service: format!("{m}.{}", t.name),
+                },
+                expr: flag,
+            });
+        }
+        if !s.is_activity() {
+            refusals.extend(run_conds.iter().cloned());
+        }
+        // the request port's own guards say "already requested"; the others guard the
+        // connector
+        let guard = all(refusals
+            .iter()
+            .filter(|c| c.reason != Reason::AlreadyRequested)
+            .map(|c| c.expr.clone()));
+        let name = request_connector(m, s.name);
+        self.claim(
+            &name,
+            s.def.name.span,
+            format!("requests of `{m}.{}`", s.name),
+        );
+        self.connectors.push((
+            connector(&name, ports, Role::Environment),
+            guard,
+            Vec::new(),
+        ));
+        let refusals = refusals.into_iter().map(RecipeCondition::from).collect();
+        let mut service = RecipeService {
+            name: s.name.to_string(),
+            kind: s.kind,
+            task: s.task,
+            component: s.is_activity().then(|| self.comp(r)),
+            request: name,
+            owned_by_model: false,
+            refusals,
+            codels: Vec::new(),
+            interrupts: s
+                .interrupts
+                .iter()
+                .map(|&x| self.layer.modules[r.module].services[x].name.to_string())
+                .collect(),
+        };
+        // the codels
+        let comp = self.comp(r);
+        let start_is_location = s.is_location("start");
+        for c in &s.codels {
+            let mut holds = Vec::new();
+            if c.state == "start" {
+                for sc in &start_conds {
+                    // a start condition applies to starting, not to re-entering `start`
+                    let expr = if start_is_location {
+                        or(not(at(&comp, ETHER)), sc.expr.clone())
+                    } else {
+                        sc.expr.clone()
+                    };
+                    holds.push(Cond {
+                        reason: sc.reason.clone(),
+                        expr,
+                    });
+                }
+            }
+            for rc in &run_conds {
+                // the stop path is not gated
+                let expr = if s.stop.is_some() {
+                    or(member(&comp, STOPPING), rc.expr.clone())
+                } else {
+                    rc.expr.clone()
+                };
+                holds.push(Cond {
+                    reason: rc.reason.clone(),
+                    expr,
+                });
+            }
+            let guard = all(holds.iter().map(|h| h.expr.clone()));
+            let mut ports = vec![port(&comp, c.state)];
+            let mut action = Vec::new();
+            let mi = r.module;
+            for &w in &c.writes {
+                if self.caps.contains_key(&PortRef {
+                    module: mi,
+                    port: w,
+                }) {
+                    let age = age_var(self.layer.modules[mi].ports[w]);
+                    action.push(assign(member(&module_component(m), &age), int(0)));
+                }
+            }
+            if !c.ids.is_empty() {
+                ports.push(port(&module_component(m), &ids_port(s.name, c.state)));
+            } else if !action.is_empty() {
+                ports.push(port(&module_component(m), "write"));
+            }
+            let run = codel_connector(m, s.name, c.state);
+            let span = c.def.state.span;
+            self.claim(
+                &run,
+                span,
+                format!("codel `{}` of `{m}.{}`", c.state, s.name),
+            );
+            self.connectors.push((
+                connector(&run, ports, Role::Progress),
+                guard.clone(),
+                action,
+            ));
+            let fail = fail_connector(m, s.name, c.state);
+            self.claim(
+                &fail,
+                span,
+                format!("error path of codel `{}` of `{m}.{}`", c.state, s.name),
+            );
+            let fail_ports = vec![port(&comp, &fail_port(c.state))];
+            self.connectors.push((
+                connector(&fail, fail_ports, Role::Progress),
+                guard,
+                Vec::new(),
+            ));
+            let holds = holds.into_iter().map(RecipeCondition::from).collect();
+            service.codels.push(RecipeCodel {
+                state: c.state.to_string(),
+                run,
+                fail,
+                yields: c.def.yields.iter().map(|y| y.value.clone()).collect(),
+                from_ether: c.state == "start",
+                from_location: s.is_location(c.state),
+                throws: c.throws.iter().map(|t| t.to_string()).collect(),
+                writes: c
+                    .writes
+                    .iter()
+                    .map(|&w| self.layer.modules[mi].ports[w].to_string())
+                    .collect(),
+                ids: c
+                    .ids
+                    .iter()
+                    .map(|&k| self.layer.modules[mi].ids[k].0.to_string())
+                    .collect(),
+                ids_port: (!c.ids.is_empty()).then(|| ids_port(s.name, c.state)),
+                holds,
+            });
+        }
+        let recipe_module = self.recipe_module(r.module);
+        recipe_module.services.push(service);
+    }
+}

@@ -1,0 +1,317 @@
+//! An activity's codel automaton: its codels, their yields, writes, ids and exceptions,
+//! the places it runs from, and the checks on its graph (`start` and `stop` reach
+//! `ether`, every codel is reached, no loop without a pause).
+
+use super::{Codel, Service, Yield, ACTIVITY_PORTS, ETHER, MAX_IDS_VALUES, PAUSE};
+use crate::compile::{check_name, one_of, unique};
+use crate::diag::{Errors, ModelError};
+use crate::source::Span;
+use crate::syntax::ServiceDef;
+
+/// Checks an activity's codel automaton and fills in its codels and locations.
+pub(super) fn codels<'d>(
+    errors: &mut Errors,
+    ports: &[&str],
+    ids: &[(&str, Option<(i64, i64)>)],
+    s: &'d ServiceDef,
+    out: &mut Service<'d>,
+) {
+    let before = errors.list.len();
+    unique(errors, s.codels.iter().map(|c| &c.state), "codel state");
+    let states: Vec<&str> = s.codels.iter().map(|c| c.state.as_str()).collect();
+    let state_index = |name: &str| states.iter().position(|&x| x == name);
+    for c in &s.codels {
+        if !check_name(errors, &c.state, "codel state") {
+            continue;
+        }
+        let n = c.state.as_str();
+        if n == ETHER {
+            errors.push(
+                ModelError::new("`ether` is the final state; it has no codel", c.state.span)
+                    .with_help("yield `ether` to end the activity"),
+            );
+        } else if ACTIVITY_PORTS.contains(&n) {
+            errors.push(
+                ModelError::new(format!("a codel state cannot be named `{n}`"), c.state.span)
+                    .with_help(format!(
+                        "`{n}` names a port of the activity's generated atom (docs/genom.md)"
+                    )),
+            );
+        } else if let Some(base) = n.strip_suffix("_fail") {
+            if s.codels.iter().any(|o| o.state.as_str() == base) {
+                errors.push(
+                    ModelError::new(format!("a codel state cannot be named `{n}`"), c.state.span)
+                        .with_help(format!("`{n}` names the error port of codel `{base}`")),
+                );
+            }
+        }
+    }
+    if state_index("start").is_none() {
+        errors.push(
+            ModelError::new(
+                format!("activity `{}` has no `start` codel", s.name),
+                s.name.span,
+            )
+            .with_help("every activity begins at its `start` codel state"),
+        );
+    }
+    for c in &s.codels {
+        let mut yields = Vec::new();
+        if c.yields.is_empty() {
+            errors.push(
+                ModelError::new(format!("codel `{}` yields nothing", c.state), c.state.span)
+                    .with_help(
+                        "list the states it may go to, e.g. `yields: [\"pause::main\", \"ether\"]`",
+                    ),
+            );
+        }
+        unique(errors, c.yields.iter(), "yield");
+        for y in &c.yields {
+            let (paused, target) = match y.as_str().strip_prefix(PAUSE) {
+                Some(t) => (true, t),
+                None => (false, y.as_str()),
+            };
+            if target == ETHER {
+                if paused {
+                    errors.push(
+                        ModelError::new("`pause::ether` is not a yield", y.span)
+                            .with_help("an activity ends at once: yield `ether`"),
+                    );
+                } else {
+                    yields.push(Yield::Ether);
+                }
+                continue;
+            }
+            match state_index(target) {
+                Some(k) => yields.push(if paused { Yield::Pause(k) } else { Yield::Go(k) }),
+                None => errors.push(
+                    ModelError::new(
+                        format!(
+                            "codel `{}` yields to `{target}`, which is not a codel state of `{}`",
+                            c.state, s.name
+                        ),
+                        y.span,
+                    )
+                    .with_label("undeclared state")
+                    .with_help(one_of(
+                        "yield `ether`, a codel state or `pause::` and a codel state; the codel states are",
+                        states.iter().copied(),
+                    )),
+                ),
+            }
+        }
+        let mut writes = Vec::new();
+        let mut written_ids = Vec::new();
+        let mut combinations: u128 = 1;
+        unique(errors, c.writes.iter(), "written port or ids field");
+        for w in &c.writes {
+            let port = ports.iter().position(|&p| p == w.as_str());
+            let field = ids.iter().position(|&(x, _)| x == w.as_str());
+            match (port, field) {
+                (Some(_), Some(_)) => errors.push(
+                    ModelError::new(
+                        format!("`{w}` is both an out port and an ids field of the module"),
+                        w.span,
+                    )
+                    .with_help("rename one of them: `writes` would not say which it writes"),
+                ),
+                (Some(k), None) => {
+                    if !writes.contains(&k) {
+                        writes.push(k);
+                    }
+                }
+                (None, Some(k)) => {
+                    if written_ids.contains(&k) {
+                        continue;
+                    }
+                    written_ids.push(k);
+                    if let Some((lo, hi)) = ids[k].1 {
+                        // a full 64-bit range has 2^64 values: count in 128 bits
+                        let values = u128::try_from(i128::from(hi) - i128::from(lo) + 1)
+                            .unwrap_or(0)
+                            .max(1);
+                        combinations = combinations.saturating_mul(values);
+                        if combinations > MAX_IDS_VALUES {
+                            errors.push(
+                                ModelError::new(
+                                    format!(
+                                        "codel `{}` may write {combinations} combinations of ids values; at most {MAX_IDS_VALUES}",
+                                        c.state
+                                    ),
+                                    w.span,
+                                )
+                                .with_label("here the count passes the limit")
+                                .with_help("a codel's step takes every value its written ids may hold, so that the verifier covers them all: narrow the ranges, or write fewer fields"),
+                            );
+                        }
+                    }
+                }
+                (None, None) => errors.push(
+                    ModelError::new(
+                        format!("the module has no out port or ids field `{w}`"),
+                        w.span,
+                    )
+                    .with_help(one_of(
+                        "its ports and ids fields are",
+                        ports.iter().copied().chain(ids.iter().map(|&(x, _)| x)),
+                    )),
+                ),
+            }
+        }
+        written_ids.sort_unstable();
+        unique(errors, c.throws.iter(), "exception");
+        for t in &c.throws {
+            check_name(errors, t, "exception");
+        }
+        out.codels.push(Codel {
+            def: c,
+            state: c.state.as_str(),
+            yields,
+            writes,
+            ids: written_ids,
+            throws: c.throws.iter().map(|t| t.as_str()).collect(),
+        });
+    }
+    if errors.list.len() > before {
+        return; // the graph checks need every yield resolved
+    }
+    out.stop = state_index("stop");
+    let mut locations: Vec<usize> = Vec::new();
+    for c in &out.codels {
+        for y in &c.yields {
+            if let Yield::Go(k) | Yield::Pause(k) = *y {
+                if !locations.contains(&k) {
+                    locations.push(k);
+                }
+            }
+        }
+    }
+    if let Some(k) = out.stop {
+        if !locations.contains(&k) {
+            locations.push(k);
+        }
+    }
+    locations.sort_unstable();
+    out.locations = locations;
+    paths(errors, s, out);
+}
+
+/// The checks on the codel graph: `start` → `ether` and `stop` → `ether`, every codel
+/// reached, and no loop without a pause (which would stop time).
+fn paths(errors: &mut Errors, s: &ServiceDef, out: &Service<'_>) {
+    let n = out.codels.len();
+    let next = |k: usize, with_pause: bool| -> Vec<usize> {
+        out.codels[k]
+            .yields
+            .iter()
+            .filter_map(|y| match *y {
+                Yield::Go(t) => Some(t),
+                Yield::Pause(t) if with_pause => Some(t),
+                _ => None,
+            })
+            .collect()
+    };
+    let reach = |from: usize| -> Vec<bool> {
+        let mut seen = vec![false; n];
+        let mut stack = vec![from];
+        seen[from] = true;
+        while let Some(k) = stack.pop() {
+            for t in next(k, true) {
+                if !seen[t] {
+                    seen[t] = true;
+                    stack.push(t);
+                }
+            }
+        }
+        seen
+    };
+    let ends =
+        |seen: &[bool]| (0..n).any(|k| seen[k] && out.codels[k].yields.contains(&Yield::Ether));
+    let mut reached = vec![false; n];
+    for root in ["start", "stop"] {
+        let Some(k) = out.codel(root) else { continue };
+        let seen = reach(k);
+        if !ends(&seen) {
+            errors.push(
+                ModelError::new(
+                    format!("no path from `{root}` to `ether` in activity `{}`", s.name),
+                    out.codels[k].def.state.span,
+                )
+                .with_label("the activity could never end from here")
+                .with_help("some codel reachable from here must yield `ether`"),
+            );
+        }
+        for (r, x) in reached.iter_mut().zip(seen) {
+            *r |= x;
+        }
+    }
+    for (k, c) in out.codels.iter().enumerate() {
+        if !reached[k] {
+            errors.push(
+                ModelError::new(
+                    format!(
+                        "codel `{}` is never reached from `start` or `stop`",
+                        c.state
+                    ),
+                    c.def.state.span,
+                )
+                .with_help("no codel yields to it; remove it or yield to it"),
+            );
+        }
+    }
+    // a cycle of yields without `pause::` would run forever within one instant
+    let mut colour = vec![0u8; n]; // 0 new, 1 on the stack, 2 done
+    for root in 0..n {
+        if colour[root] != 0 {
+            continue;
+        }
+        let mut stack: Vec<(usize, usize)> = vec![(root, 0)];
+        colour[root] = 1;
+        while let Some(top) = stack.last_mut() {
+            let (k, i) = *top;
+            let succ = next(k, false);
+            if i < succ.len() {
+                top.1 += 1;
+                let t = succ[i];
+                if colour[t] == 1 {
+                    let from = stack.iter().position(|&(x, _)| x == t).unwrap_or(0);
+                    let mut names: Vec<&str> = stack[from..]
+                        .iter()
+                        .map(|&(x, _)| out.codels[x].state)
+                        .collect();
+                    names.push(out.codels[t].state);
+                    let span = yield_span(out, k, t).unwrap_or(out.codels[k].def.state.span);
+                    errors.push(
+                        ModelError::new(
+                            format!("the codels {} loop without a pause", names.join(" → ")),
+                            span,
+                        )
+                        .with_label("this yield closes the loop")
+                        .with_help(format!(
+                            "time cannot pass while a codel can run; yield `pause::{}` to wait for the next period",
+                            out.codels[t].state
+                        )),
+                    );
+                    return;
+                }
+                if colour[t] == 0 {
+                    colour[t] = 1;
+                    stack.push((t, 0));
+                }
+            } else {
+                colour[k] = 2;
+                stack.pop();
+            }
+        }
+    }
+}
+
+/// The span of codel `from`'s plain yield to codel `to`.
+fn yield_span(out: &Service<'_>, from: usize, to: usize) -> Option<Span> {
+    let c = &out.codels[from];
+    c.def
+        .yields
+        .iter()
+        .find(|y| y.as_str() == out.codels[to].state)
+        .map(|y| y.span)
+}

@@ -1,0 +1,203 @@
+//! A module and its services: tasks and their periods, ports, the `ids` fields and their
+//! bounds, and each service's kind, task, `interrupts` and `after`, resolved to indices
+//! within the module.
+
+use std::collections::HashMap;
+
+use super::codels::codels;
+use super::{Module, Service, MODULE_PORTS};
+use crate::compile::{check_name, one_of, unique, Constants};
+use crate::diag::{Errors, ModelError};
+use crate::syntax::{ModuleDef, ServiceDef, ServiceKind, Text, TypeDef};
+
+pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleDef) -> Module<'d> {
+    let what = |kind: &str| format!("{kind} of module `{}`", m.name);
+    unique(errors, m.tasks.iter().map(|t| &t.name), &what("task"));
+    unique(errors, m.ports.iter().map(|p| &p.name), &what("port"));
+    unique(errors, m.services.iter().map(|s| &s.name), &what("service"));
+    let mut tasks = Vec::new();
+    for t in &m.tasks {
+        check_name(errors, &t.name, "task");
+        let period = match consts.int(&t.period) {
+            Ok(p) if p >= 1 => p,
+            Ok(p) => {
+                errors.push(
+                    ModelError::new(format!("task `{}` has period {p}", t.name), t.period.span)
+                        .with_label("a period is at least 1 tick")
+                        .with_help("a task releases its paused activities every `period` ticks"),
+                );
+                1
+            }
+            Err(e) => {
+                errors.push(e);
+                1
+            }
+        };
+        tasks.push((t.name.as_str(), period));
+    }
+    for p in &m.ports {
+        check_name(errors, &p.name, "port");
+    }
+    let ports: Vec<&str> = m.ports.iter().map(|p| p.name.as_str()).collect();
+    let ids: Vec<(&str, Option<(i64, i64)>)> = m
+        .ids
+        .iter()
+        .map(|v| {
+            let range = match &v.ty {
+                TypeDef::Bool => Some((0, 1)),
+                TypeDef::Int(lo, hi) => consts.int(lo).ok().zip(consts.int(hi).ok()),
+            };
+            (v.name.as_str(), range)
+        })
+        .collect();
+    let index: HashMap<&str, usize> = m
+        .services
+        .iter()
+        .enumerate()
+        .rev() // the first of duplicates wins
+        .map(|(k, s)| (s.name.as_str(), k))
+        .collect();
+    let services: Vec<Service> = m
+        .services
+        .iter()
+        .map(|s| service(errors, m, &tasks, &ports, &ids, &index, s))
+        .collect();
+    // the port of the module atom through which a codel writes ids must be free
+    for s in services.iter().filter(|s| s.is_activity()) {
+        for c in s.codels.iter().filter(|c| !c.ids.is_empty()) {
+            let port = crate::genom::names::ids_port(s.name, c.state);
+            if let Some(f) = services.iter().find(|f| !f.is_activity() && f.name == port) {
+                errors.push(
+                    ModelError::new(
+                        format!("a function or attribute cannot be named `{port}`"),
+                        f.def.name.span,
+                    )
+                    .with_note(c.def.state.span, "this codel writes ids through that port")
+                    .with_help("docs/genom.md, \"Codels that write ids\""),
+                );
+            }
+        }
+    }
+    Module {
+        def: m,
+        name: m.name.as_str(),
+        tasks,
+        ports,
+        ids,
+        services,
+    }
+}
+
+fn service<'d>(
+    errors: &mut Errors,
+    m: &'d ModuleDef,
+    tasks: &[(&str, i64)],
+    ports: &[&str],
+    ids: &[(&str, Option<(i64, i64)>)],
+    index: &HashMap<&str, usize>,
+    s: &'d ServiceDef,
+) -> Service<'d> {
+    check_name(errors, &s.name, "service");
+    let activity = s.kind == ServiceKind::Activity;
+    if !activity && MODULE_PORTS.contains(&s.name.as_str()) {
+        errors.push(
+            ModelError::new(
+                format!("a function or attribute cannot be named `{}`", s.name),
+                s.name.span,
+            )
+            .with_help(format!(
+                "`{}` names a port of the module's generated atom (docs/genom.md)",
+                s.name
+            )),
+        );
+    }
+    let lookup = |errors: &mut Errors, t: &Text, what: &str| -> Option<usize> {
+        let found = index.get(t.as_str()).copied();
+        if found.is_none() {
+            errors.push(
+                ModelError::new(format!("module `{}` has no service `{t}`", m.name), t.span)
+                    .with_label(format!("unknown service in `{what}`"))
+                    .with_help(one_of(
+                        "its services are",
+                        m.services.iter().map(|s| s.name.as_str()),
+                    )),
+            );
+        }
+        found
+    };
+    let mut interrupts = Vec::new();
+    unique(errors, s.interrupts.iter(), "service in `interrupts`");
+    for t in &s.interrupts {
+        if let Some(k) = lookup(errors, t, "interrupts") {
+            if m.services[k].kind != ServiceKind::Activity {
+                errors.push(
+                    ModelError::new(format!("`{t}` is not an activity"), t.span)
+                        .with_help("only activities run long enough to be interrupted"),
+                );
+            } else if !interrupts.contains(&k) {
+                interrupts.push(k);
+            }
+        }
+    }
+    let mut after = Vec::new();
+    unique(errors, s.after.iter(), "service in `after`");
+    for t in &s.after {
+        if let Some(k) = lookup(errors, t, "after") {
+            if k == index.get(s.name.as_str()).copied().unwrap_or(usize::MAX) {
+                errors.push(
+                    ModelError::new(format!("`{t}` cannot come after itself"), t.span)
+                        .with_help("`after` lists services that must have completed before"),
+                );
+            } else if !after.contains(&k) {
+                after.push(k);
+            }
+        }
+    }
+    let mut out = Service {
+        def: s,
+        name: s.name.as_str(),
+        kind: s.kind,
+        task: None,
+        interrupts,
+        after,
+        codels: Vec::new(),
+        locations: Vec::new(),
+        stop: None,
+    };
+    if !activity {
+        if let Some(t) = &s.task {
+            errors.push(
+                ModelError::new(
+                    format!("`{}` is not an activity; it has no task", s.name),
+                    t.span,
+                )
+                .with_help("functions and attributes run in the control task"),
+            );
+        }
+        if let Some(c) = s.codels.first() {
+            errors.push(
+                ModelError::new(
+                    format!("`{}` is not an activity; it has no codel states", s.name),
+                    c.state.span,
+                )
+                .with_help("a function or attribute runs at once when requested; declare it `kind: Activity` to give it codels"),
+            );
+        }
+        return out;
+    }
+    match &s.task {
+        None => errors.push(
+            ModelError::new(format!("activity `{}` has no `task`", s.name), s.name.span)
+                .with_help(one_of("the module's tasks are", tasks.iter().map(|t| t.0))),
+        ),
+        Some(t) => match tasks.iter().position(|x| x.0 == t.as_str()) {
+            Some(k) => out.task = Some(k),
+            None => errors.push(
+                ModelError::new(format!("module `{}` has no task `{t}`", m.name), t.span)
+                    .with_help(one_of("its tasks are", tasks.iter().map(|t| t.0))),
+            ),
+        },
+    }
+    codels(errors, ports, ids, s, &mut out);
+    out
+}
