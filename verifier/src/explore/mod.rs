@@ -1,0 +1,415 @@
+//! Explicit-state verification: breadth-first exploration of the reachable states with the
+//! step relation of `bip-model`, level by level, in parallel.
+//!
+//! Each level is cut into chunks of states in a fixed order (see [`Visited::chunks`]), and
+//! chunks are handled in batches, each in two phases:
+//!
+//! 1. *expand* (chunks in parallel, the visited set read-only): check the properties on each
+//!    state of the chunk, compute its steps, fire them, and keep the successors that are not
+//!    stored yet as candidates, bucketed by shard;
+//! 2. *insert* (shards in parallel): each shard takes its candidates, chunk by chunk in order,
+//!    and stores the new ones with their parent.
+//!
+//! Every state of level `d` is checked before any of level `d + 1`, so the first state found
+//! violating a property is at the smallest depth, and following parent links gives a
+//! shortest counterexample. States are numbered and findings chosen in chunk order, which
+//! does not depend on the number of workers: a run with one worker and a run with eight
+//! store the same states under the same numbers and report the same traces.
+//!
+//! This module holds the driver (levels, batches, the two phases, the limits) and the
+//! data it hands each batch; `expand` is phase 1 on one chunk, `targets` the properties a
+//! run checks and how its findings become verdicts and traces.
+
+mod expand;
+mod targets;
+
+use std::sync::atomic::{AtomicBool, AtomicU64};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use bip_model::{LivenessChecker, State, Steps, System};
+use rayon::prelude::*;
+
+use crate::error::VerifyError;
+use crate::memory;
+use crate::options::Options;
+use crate::progress::Progress;
+use crate::report::{Report, Stop};
+use crate::visited::{Chunk, ShardFull, StateId, Visited};
+use crate::watch::Watch;
+
+use expand::{read_hash, read_parent, REC_HEADER};
+use targets::{targets, Target};
+
+/// States per chunk: large enough to amortise scheduling, small enough to balance.
+const CHUNK_STATES: u32 = 1024;
+/// Chunks per worker in one batch; limits are checked between batches.
+const CHUNKS_PER_WORKER: usize = 8;
+/// Memory the liveness checker of one worker may use for its memory of states.
+const LIVENESS_MEMO_BYTES: usize = 32 << 20;
+/// Successors fired between two looks at the limits, within one state (a state of a wide
+/// model has as many successors as components).
+const SUCCESSORS_PER_LOOK: usize = 256;
+
+/// What was found about a property in a state.
+#[derive(Clone, Debug)]
+struct Finding {
+    state: StateId,
+    what: Found,
+}
+
+#[derive(Clone, Debug)]
+enum Found {
+    Deadlock,
+    Violation,
+    Witness,
+    RangeError(String),
+}
+
+/// Per-worker scratch, reused across chunks.
+struct Scratch {
+    state: State,
+    next: State,
+    steps: Steps,
+    checker: LivenessChecker,
+    packed: Vec<u8>,
+}
+
+/// The output of expanding one chunk.
+#[derive(Default)]
+struct ChunkOut {
+    /// Candidate records `[hash: 8][parent: 4][packed state]`, in the order found...
+    raw: Vec<u8>,
+    /// ... and grouped by shard: shard `s` holds records `offsets[s]..offsets[s + 1]`.
+    sorted: Vec<u8>,
+    offsets: Vec<u32>,
+    transitions: u64,
+    findings: Vec<Option<Finding>>,
+    liveness_unknown: u64,
+    /// The chunk stopped before its end because a limit was reached.
+    cut: bool,
+}
+
+/// Verifies every property of `system` by explicit-state exploration.
+///
+/// `progress` is called from time to time (about four times a second) during long runs.
+pub(crate) fn verify(
+    system: &System,
+    options: &Options,
+    progress: &(dyn Fn(&Progress) + Sync),
+) -> Result<Report, VerifyError> {
+    let jobs = if options.jobs == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        options.jobs
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .thread_name(|i| format!("bip-verify-{i}"))
+        .build()
+        .map_err(|e| VerifyError::Threads(e.to_string()))?;
+    let watch = Watch::new(options, options.max_memory.or_else(memory::default_limit));
+    watch.around(
+        || {},
+        || pool.install(|| Explorer::new(system, options, jobs, &watch).run(progress)),
+    )
+}
+
+struct Explorer<'a> {
+    system: &'a System,
+    options: &'a Options,
+    jobs: usize,
+    targets: Vec<Target<'a>>,
+    visited: Visited,
+    scratch: Vec<Mutex<Scratch>>,
+    outs: Vec<ChunkOut>,
+    findings: Vec<Option<Finding>>,
+    liveness_unknown: u64,
+    transitions: u64,
+    depth: u32,
+    watch: &'a Watch,
+    started: Instant,
+    /// Time spent in each phase, for `-v` logs and profiles.
+    expand_time: Duration,
+    insert_time: Duration,
+    /// The run ended early because every verdict was final.
+    stopped_decided: bool,
+}
+
+impl<'a> Explorer<'a> {
+    fn new(
+        system: &'a System,
+        options: &'a Options,
+        jobs: usize,
+        watch: &'a Watch,
+    ) -> Explorer<'a> {
+        let targets = targets(system);
+        let slots = system.slot_count();
+        let memo = (LIVENESS_MEMO_BYTES / (slots * 8 + 64)).clamp(1_000, 1_000_000);
+        let scratch = (0..jobs)
+            .map(|_| {
+                let mut checker = LivenessChecker::default();
+                checker.max_memo = memo;
+                if options.liveness_bound > 0 {
+                    checker.max_time_states = options.liveness_bound;
+                }
+                Mutex::new(Scratch {
+                    state: system.initial_state(),
+                    next: system.initial_state(),
+                    steps: Steps::new(),
+                    checker,
+                    packed: vec![0; system.layout.bytes()],
+                })
+            })
+            .collect();
+        let n = targets.len();
+        Explorer {
+            system,
+            options,
+            jobs,
+            targets,
+            visited: Visited::new(system.layout.bytes()),
+            scratch,
+            outs: Vec::new(),
+            findings: vec![None; n],
+            liveness_unknown: 0,
+            transitions: 0,
+            depth: 0,
+            watch,
+            started: watch.started(),
+            expand_time: Duration::ZERO,
+            insert_time: Duration::ZERO,
+            stopped_decided: false,
+        }
+    }
+
+    fn run(mut self, progress: &(dyn Fn(&Progress) + Sync)) -> Result<Report, VerifyError> {
+        let initial = self.system.layout.pack(&self.system.initial_state());
+        self.visited.start_level();
+        if self.visited.insert(&initial, StateId::NONE).is_err() {
+            return Err(VerifyError::Internal(
+                "cannot store the initial state".into(),
+            ));
+        }
+        let batch = self.jobs * CHUNKS_PER_WORKER;
+        let mut last_progress = Instant::now();
+        let mut last_growth = 0u64;
+        let mut stopped = None;
+        let mut level = 0usize;
+        'levels: loop {
+            let chunks = self.visited.chunks(level, CHUNK_STATES);
+            if chunks.is_empty() {
+                break;
+            }
+            self.depth = level as u32;
+            let level_states = self.visited.level_len(level);
+            let mut level_done = 0u64;
+            self.visited.start_level();
+            let mut groups = chunks.chunks(batch);
+            let mut next_group = groups.next();
+            while let Some(group) = next_group {
+                if let Some(stop) = self.limit_reached(last_growth) {
+                    stopped = Some(stop);
+                    break 'levels;
+                }
+                let before = self.visited.allocated_bytes();
+                let t0 = Instant::now();
+                let room = self.room();
+                self.expand(group, room);
+                let t1 = Instant::now();
+                self.expand_time += t1 - t0;
+                let cut = self.outs.iter().any(|o| o.cut);
+                if let Some(stop) = self.watch.stopped() {
+                    // the states expanded so far were checked: keep what was found
+                    self.merge_findings(group.len());
+                    stopped = Some(stop.clone());
+                    break 'levels;
+                }
+                let inserted = self.insert();
+                self.insert_time += t1.elapsed();
+                if let Err(ShardFull) = inserted {
+                    stopped = Some(Stop::TooManyStates);
+                    break 'levels;
+                }
+                if let Some(stop) = self.watch.stopped() {
+                    self.merge_findings(group.len());
+                    stopped = Some(stop.clone());
+                    break 'levels;
+                }
+                last_growth = self.visited.allocated_bytes().saturating_sub(before);
+                if cut {
+                    // the batch stopped at the state limit; if the states it found were
+                    // fewer (duplicates), expand it again: the stored ones are known now
+                    if let Some(stop) = self.limit_reached(0) {
+                        self.merge_findings(group.len());
+                        stopped = Some(stop);
+                        break 'levels;
+                    }
+                    continue;
+                }
+                next_group = groups.next();
+                self.merge_findings(group.len());
+                level_done += group
+                    .iter()
+                    .map(|c| u64::from(c.end - c.start))
+                    .sum::<u64>();
+                if self.options.stop_at_first && self.any_failure() {
+                    stopped = Some(Stop::FirstFailure);
+                    break 'levels;
+                }
+                // finish the level first: where a batch ends depends on the worker count,
+                // and the states stored must not
+                if self.all_decided() {
+                    self.stopped_decided = true;
+                }
+                if last_progress.elapsed() >= Duration::from_millis(250) {
+                    last_progress = Instant::now();
+                    progress(&Progress::Exploring {
+                        states: self.visited.len(),
+                        transitions: self.transitions,
+                        depth: self.depth,
+                        level_states,
+                        level_done,
+                        elapsed: self.started.elapsed(),
+                        store_bytes: self.store_bytes(),
+                    });
+                }
+            }
+            if self.stopped_decided {
+                break;
+            }
+            level += 1;
+        }
+        self.report(stopped)
+    }
+
+    /// A limit that stops the run before the next batch, if any.
+    fn limit_reached(&self, last_growth: u64) -> Option<Stop> {
+        if let Some(limit) = self.options.max_states {
+            if self.visited.len() >= limit {
+                return Some(Stop::MaxStates { limit });
+            }
+        }
+        if let Some(limit) = self.watch.max_memory() {
+            // the next batch may grow the set by about as much as the last one; leave room
+            // for twice that, and for what the process holds besides (read from /proc)
+            let projected = self.store_bytes() + 2 * last_growth;
+            let resident = memory::resident_bytes().unwrap_or(0) + 2 * last_growth;
+            if projected.max(resident) > limit {
+                self.watch.raise(Stop::MaxMemory { limit });
+            }
+        }
+        self.watch.look().cloned()
+    }
+
+    /// New states a batch may find before it stops at the state limit: what remains below
+    /// the limit, and a margin, so that a batch whose finds are partly duplicates still
+    /// reaches the limit.
+    fn room(&self) -> u64 {
+        self.options.max_states.map_or(u64::MAX, |limit| {
+            let left = limit.saturating_sub(self.visited.len());
+            left.saturating_add(limit / 16).max(1)
+        })
+    }
+
+    fn store_bytes(&self) -> u64 {
+        self.visited.allocated_bytes() + self.outs.iter().map(|o| o.allocated() as u64).sum::<u64>()
+    }
+
+    /// Phase 1: expands the chunks of a batch in parallel, until they end or a limit is
+    /// reached (the run's, or `room` new states found).
+    fn expand(&mut self, group: &[Chunk], room: u64) {
+        let n = self.targets.len();
+        if self.outs.len() < group.len() {
+            self.outs.resize_with(group.len(), ChunkOut::default);
+        }
+        let open: Vec<bool> = self.findings.iter().map(Option::is_none).collect();
+        self.watch.rebase();
+        let ctx = Ctx {
+            system: self.system,
+            targets: &self.targets,
+            visited: &self.visited,
+            open: &open,
+            watch: self.watch,
+            room,
+            found: AtomicU64::new(0),
+            full: AtomicBool::new(false),
+        };
+        let scratch = &self.scratch;
+        self.outs[..group.len()]
+            .par_iter_mut()
+            .zip(group.par_iter())
+            .for_each(|(out, chunk)| {
+                out.reset(n);
+                let worker = rayon::current_thread_index().unwrap_or(0) % scratch.len();
+                let mut s = scratch[worker].lock().unwrap_or_else(|p| p.into_inner());
+                ctx.expand_chunk(*chunk, &mut s, out);
+            });
+        self.outs.truncate(group.len());
+    }
+
+    /// Phase 2: stores the new states, shards in parallel, chunks in order within a shard.
+    /// A shard stops early if the run must stop (what it stored is consistent: states
+    /// with their parents).
+    fn insert(&mut self) -> Result<(), ShardFull> {
+        let rec = REC_HEADER + self.visited.width();
+        let outs = &self.outs;
+        let watch = self.watch;
+        let visited = &mut self.visited;
+        visited
+            .shards_mut()
+            .par_iter_mut()
+            .enumerate()
+            .try_for_each(|(s, shard)| {
+                for out in outs {
+                    for (k, r) in out.bucket(s, rec).chunks_exact(rec).enumerate() {
+                        if k % SUCCESSORS_PER_LOOK == 0 && watch.stopped().is_some() {
+                            return Ok(());
+                        }
+                        let parent = StateId::from_bits(read_parent(r));
+                        shard.insert(read_hash(r), &r[REC_HEADER..], parent)?;
+                    }
+                }
+                Ok(())
+            })
+    }
+
+    /// Takes, for each open property, the first finding in chunk order.
+    fn merge_findings(&mut self, chunks: usize) {
+        for out in &self.outs[..chunks] {
+            self.transitions += out.transitions;
+            self.liveness_unknown += out.liveness_unknown;
+            for (mine, theirs) in self.findings.iter_mut().zip(&out.findings) {
+                if mine.is_none() {
+                    mine.clone_from(theirs);
+                }
+            }
+        }
+    }
+
+    fn any_failure(&self) -> bool {
+        self.findings
+            .iter()
+            .any(|f| matches!(f, Some(Finding { what, .. }) if !matches!(what, Found::Witness)))
+    }
+
+    /// True if no further state can change a verdict.
+    fn all_decided(&self) -> bool {
+        self.findings.iter().all(Option::is_some)
+    }
+}
+
+/// What phase 1 reads.
+struct Ctx<'a, 'b> {
+    system: &'a System,
+    targets: &'b [Target<'a>],
+    visited: &'b Visited,
+    /// The properties still undecided when the batch started.
+    open: &'b [bool],
+    watch: &'b Watch,
+    /// New states the batch may find; `found` counts them (duplicates too) and `full` is
+    /// raised once they reach `room`.
+    room: u64,
+    found: AtomicU64,
+    full: AtomicBool,
+}

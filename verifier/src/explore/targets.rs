@@ -1,0 +1,225 @@
+//! What a run checks and what it concludes: the properties as targets, and the findings
+//! made verdicts, with the trace to the state each was found in.
+
+use std::borrow::Cow;
+
+use bip_model::eval::Expr;
+use bip_model::{OwnedStep, Property, PropertyKind as ModelKind, State, Steps, System, Trace};
+
+use crate::error::VerifyError;
+use crate::properties::{checked_properties, default_terminal, error_step, RANGE_ERRORS};
+use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
+use crate::visited::{StateId, Visited};
+
+use super::{Explorer, Finding, Found};
+
+/// What one property checks, with its compiled expression.
+pub(super) enum Check<'a> {
+    Deadlock { terminal: Option<&'a Expr> },
+    Invariant(&'a Expr),
+    Reachable(&'a Expr),
+    RangeErrors,
+}
+
+pub(super) struct Target<'a> {
+    pub(super) name: String,
+    kind: CheckKind,
+    expr: String,
+    pub(super) check: Check<'a>,
+}
+
+/// The properties a run checks: the model's (deadlock freedom if it has none), and range
+/// errors, which are always checked.
+pub(super) fn targets(system: &System) -> Vec<Target<'_>> {
+    let mut out: Vec<Target<'_>> = checked_properties(system)
+        .into_iter()
+        .map(|p| {
+            let (kind, check) = match &p {
+                Cow::Borrowed(Property { kind, .. }) => match kind {
+                    ModelKind::DeadlockFree { terminal } => (
+                        CheckKind::DeadlockFree,
+                        Check::Deadlock {
+                            terminal: terminal.as_ref(),
+                        },
+                    ),
+                    ModelKind::Invariant(e) => (CheckKind::Invariant, Check::Invariant(e)),
+                    ModelKind::Reachable(e) => (CheckKind::Reachable, Check::Reachable(e)),
+                },
+                // the default property, which borrows nothing from the system's list
+                Cow::Owned(_) => (
+                    CheckKind::DeadlockFree,
+                    Check::Deadlock {
+                        terminal: default_terminal(system),
+                    },
+                ),
+            };
+            Target {
+                name: p.name.clone(),
+                kind,
+                expr: p.text.clone(),
+                check,
+            }
+        })
+        .collect();
+    out.push(Target {
+        name: RANGE_ERRORS.into(),
+        kind: CheckKind::RangeErrors,
+        expr: String::new(),
+        check: Check::RangeErrors,
+    });
+    out
+}
+
+impl Explorer<'_> {
+    pub(super) fn report(self, stopped: Option<Stop>) -> Result<Report, VerifyError> {
+        let seconds = self.started.elapsed().as_secs_f64();
+        let states = self.visited.len();
+        // the deepest level with a stored state (the run may have stopped before expanding it)
+        let depth = (0..self.visited.levels())
+            .rev()
+            .find(|&l| self.visited.level_len(l) > 0)
+            .unwrap_or(0) as u32;
+        let complete = stopped.is_none() && !self.stopped_decided;
+        let stats = RunStats {
+            states,
+            complete,
+            transitions: self.transitions,
+            depth,
+            seconds,
+            states_per_second: if seconds > 0.0 {
+                states as f64 / seconds
+            } else {
+                0.0
+            },
+            bytes_per_state: self.visited.used_bytes() as f64 / states.max(1) as f64,
+            state_bytes: self.visited.width(),
+            store_bytes: self.store_bytes(),
+            jobs: self.jobs,
+        };
+        let mut properties = Vec::with_capacity(self.targets.len());
+        for (t, f) in self.targets.iter().zip(&self.findings) {
+            let verdict = match f {
+                Some(f) => self.verdict_of(t, f)?,
+                None => self.open_verdict(t, stopped.as_ref(), states),
+            };
+            let error_step = verdict.trace().and_then(|tr| error_step(self.system, tr));
+            properties.push(PropertyResult {
+                name: t.name.clone(),
+                kind: t.kind,
+                expr: t.expr.clone(),
+                verdict,
+                method: Method::Explicit,
+                note: None,
+                error_step,
+            });
+        }
+        tracing::info!(
+            states,
+            transitions = self.transitions,
+            depth,
+            seconds,
+            expand_seconds = self.expand_time.as_secs_f64(),
+            insert_seconds = self.insert_time.as_secs_f64(),
+            "explored"
+        );
+        Ok(Report {
+            model: self.system.name.clone(),
+            method: Method::Explicit,
+            properties,
+            stats,
+            stopped,
+            symbolic: None,
+            seconds,
+            peak_memory_bytes: None,
+        })
+    }
+
+    fn verdict_of(&self, t: &Target<'_>, f: &Finding) -> Result<PropertyVerdict, VerifyError> {
+        use bip_model::Verdict as TraceVerdict;
+        let (trace_verdict, reason) = match &f.what {
+            Found::Deadlock => (TraceVerdict::Deadlock, "deadlock".to_string()),
+            Found::Violation => (
+                TraceVerdict::Violation(t.name.clone()),
+                "violated".to_string(),
+            ),
+            Found::Witness => (TraceVerdict::Witness(t.name.clone()), String::new()),
+            Found::RangeError(m) => (
+                TraceVerdict::RangeError(m.clone()),
+                format!("range error: {m}"),
+            ),
+        };
+        let trace = trace_to(self.system, &self.visited, f.state, trace_verdict)?;
+        let n = trace.steps.len();
+        let after = format!("after {n} step{}", if n == 1 { "" } else { "s" });
+        Ok(match f.what {
+            Found::Witness => PropertyVerdict::Holds {
+                witness: Some(trace),
+            },
+            _ => PropertyVerdict::Fails {
+                reason: format!("{reason} {after}"),
+                trace: Some(trace),
+            },
+        })
+    }
+
+    /// The verdict of a property nothing was found about.
+    fn open_verdict(&self, t: &Target<'_>, stopped: Option<&Stop>, states: u64) -> PropertyVerdict {
+        if let Some(stop) = stopped {
+            return PropertyVerdict::Inconclusive {
+                reason: format!("{stop} after {states} states"),
+            };
+        }
+        match t.check {
+            Check::Reachable(_) => PropertyVerdict::Fails {
+                reason: format!("no reachable state satisfies it ({states} states explored)"),
+                trace: None,
+            },
+            Check::Deadlock { .. } if self.liveness_unknown > 0 => PropertyVerdict::Inconclusive {
+                reason: format!(
+                    "in {} states without a progress step, the states reached by time steps alone exceed the liveness check's bound",
+                    self.liveness_unknown
+                ),
+            },
+            _ => PropertyVerdict::Holds { witness: None },
+        }
+    }
+}
+
+/// The trace from the initial state to stored state `id`. The steps are found again by
+/// firing the enabled steps of each state on the path until one leads to the next state.
+fn trace_to(
+    system: &System,
+    visited: &Visited,
+    id: StateId,
+    verdict: bip_model::Verdict,
+) -> Result<Trace, VerifyError> {
+    let layout = &system.layout;
+    let path = visited.path_to(id);
+    let mut steps = Steps::new();
+    let mut next = system.initial_state();
+    let mut packed = vec![0u8; layout.bytes()];
+    let mut out: Vec<(OwnedStep, State)> = Vec::with_capacity(path.len());
+    let mut state = layout.unpack(visited.state(path[0]));
+    for &to in &path[1..] {
+        let target = visited.state(to);
+        system.enabled_steps(&state, &mut steps).map_err(|e| {
+            VerifyError::Internal(format!("a state on a trace has a range error: {e}"))
+        })?;
+        let mut taken = None;
+        for step in steps.iter() {
+            if system.fire(&state, step, &mut next).is_ok() {
+                layout.encode(&next, &mut packed);
+                if packed == target {
+                    taken = Some(step.to_owned());
+                    break;
+                }
+            }
+        }
+        let step = taken.ok_or_else(|| {
+            VerifyError::Internal("no step leads to the next state of a trace".into())
+        })?;
+        state = next.clone();
+        out.push((step, next.clone()));
+    }
+    Ok(Trace::from_path(system, verdict, &out))
+}
