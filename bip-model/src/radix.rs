@@ -1,6 +1,6 @@
 //! Mixed-radix keys over a few slots of small ranges: the index of a table that holds a
 //! function of those slots for every combination of their values. The step tables
-//! (`step_tables.rs`) and the expression and action tables (`fast_path.rs`) are indexed
+//! (`step_tables.rs`) and the expression and action tables (`fast_path/`) are indexed
 //! this way.
 
 #[allow(unused_imports)]

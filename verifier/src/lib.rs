@@ -2,7 +2,7 @@
 //!
 //! [`verify`] is the one entry point, for every [`Method`]:
 //! - explicit-state verification, breadth-first and parallel, with shortest
-//!   counterexamples (`explore.rs`, over the visited set of `visited.rs`);
+//!   counterexamples (`explore/`, over the visited set of `visited.rs`);
 //! - symbolic proofs with z3 (compositional deadlock freedom, k-induction, bounded model
 //!   checking), with candidates confirmed explicitly (`symbolic/`);
 //! - auto: explicit within a budget, symbolic for what it leaves open (`auto.rs`).

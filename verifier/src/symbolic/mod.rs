@@ -1,6 +1,6 @@
 //! Symbolic verification with z3: proofs that do not enumerate the global states.
 //!
-//! - `encode.rs`, `term.rs`: the z3 encoding of states, guards, actions, priorities and
+//! - `encode/`, `term/`: the z3 encoding of states, guards, actions, priorities and
 //!   steps, a second description of `bip-model`'s step relation (cross-checked against it
 //!   by a property test);
 //! - `invariants.rs`: component invariants (each component explored alone);
