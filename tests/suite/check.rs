@@ -2,15 +2,8 @@
 //! file, line, column and a caret, and exit code 2.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn bip(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bip"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("bip runs")
-}
+use crate::common::bip;
 
 fn examples() -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> =

@@ -1,14 +1,7 @@
 //! End-to-end tests of `bip simulate` and `bip replay`.
 
+use crate::common::bip;
 use std::process::{Command, Output};
-
-fn bip(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bip"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("bip runs")
-}
 
 fn stdout(out: &Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()

@@ -3,18 +3,11 @@
 //! bound on unrolled quantifiers.
 
 use std::path::Path;
-use std::process::{Command, Output};
+
 use std::time::{Duration, Instant};
 
 use crate::common;
-
-fn bip(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bip"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("bip runs")
-}
+use crate::common::bip;
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()

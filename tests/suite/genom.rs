@@ -4,16 +4,9 @@
 
 use crate::common;
 
+use crate::common::bip;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn bip(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bip"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("bip runs")
-}
+use std::process::Output;
 
 /// `bip check`'s summary without its first line (which names the file).
 fn summary(out: &Output) -> String {

@@ -2,15 +2,8 @@
 //! deadline too short is missed, and deadline-monotonic priorities mend it; a WCET
 //! raised past what the CPU gives never catches up; the JSON and the picture say the same.
 
-use std::process::{Command, Output};
-
-fn bip(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bip"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("bip runs")
-}
+use crate::common::bip;
+use std::process::Output;
 
 fn stdout(out: &Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()

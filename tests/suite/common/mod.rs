@@ -4,6 +4,15 @@
 
 use std::process::Command;
 
+/// Runs the `bip` binary in the repository's root and waits for it.
+pub fn bip(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_bip"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("bip runs")
+}
+
 /// True if `tool` is on PATH (the SPIN cross-checks run only where SPIN and gcc are).
 pub fn have(tool: &str) -> bool {
     Command::new("sh")
