@@ -1,6 +1,7 @@
 //! `expand`: validation, rewriting of GenoM names and the expansion into core; compiling an
 //! expansion with its engine map.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 use super::build::{Expansion, UserExpr, UserTexts};
@@ -35,23 +36,8 @@ pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion
     let mut user = UserTexts::default();
     // each user text as a tree, rewritten if it names GenoM things
     let mut expr = |errors: &mut Errors, t: &ExprDef| -> Option<UserExpr<Expr>> {
-        match rw.expr(errors, t) {
-            Ok(Some(tree)) => Some(UserExpr {
-                tree,
-                rewritten: true,
-            }),
-            Ok(None) => match t.tree() {
-                Ok(tree) => Some(UserExpr {
-                    tree: tree.into_owned(),
-                    rewritten: false,
-                }),
-                Err(e) => {
-                    errors.push(e);
-                    None
-                }
-            },
-            Err(()) => None,
-        }
+        let rewritten = rw.expr(errors, t);
+        user_tree(errors, rewritten, || t.tree())
     };
     for (k, c) in layer.constraints.iter().enumerate() {
         if let ConstraintKind::Guard { when, .. } = &c.kind {
@@ -118,12 +104,23 @@ fn action(
     errors: &mut Errors,
     a: &ActionDef,
 ) -> Option<UserExpr<Vec<Assign>>> {
-    match rw.action(errors, a) {
+    let rewritten = rw.action(errors, a);
+    user_tree(errors, rewritten, || a.tree())
+}
+
+/// A user's expression or action as a tree: as the rewriter made it if it named GenoM
+/// things, else as written (parsed only then). `None` once its error is reported.
+fn user_tree<'a, T: ToOwned + ?Sized + 'a>(
+    errors: &mut Errors,
+    rewritten: Result<Option<T::Owned>, ()>,
+    written: impl FnOnce() -> Result<Cow<'a, T>, ModelError>,
+) -> Option<UserExpr<T::Owned>> {
+    match rewritten {
         Ok(Some(tree)) => Some(UserExpr {
             tree,
             rewritten: true,
         }),
-        Ok(None) => match a.tree() {
+        Ok(None) => match written() {
             Ok(tree) => Some(UserExpr {
                 tree: tree.into_owned(),
                 rewritten: false,
