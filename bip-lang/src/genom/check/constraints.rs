@@ -10,15 +10,7 @@ use crate::syntax::{ConstraintDef, Text};
 /// Resolves `"module.Service"`.
 pub fn service_ref(errors: &mut Errors, layer: &Layer<'_>, t: &Text) -> Option<ServiceRef> {
     let (m, s, ms, ss) = split_dotted(errors, t, "`module.Service`")?;
-    let Some(mi) = layer.modules.iter().position(|x| x.name == m) else {
-        errors.push(
-            ModelError::new(format!("unknown module `{m}`"), ms).with_help(one_of(
-                "the modules are",
-                layer.modules.iter().map(|x| x.name),
-            )),
-        );
-        return None;
-    };
+    let mi = module_index(errors, layer, m, ms)?;
     let module = &layer.modules[mi];
     let Some(si) = module.services.iter().position(|x| x.name == s) else {
         errors.push(
@@ -40,15 +32,7 @@ pub fn service_ref(errors: &mut Errors, layer: &Layer<'_>, t: &Text) -> Option<S
 /// Resolves `"module.port"`.
 fn port_ref(errors: &mut Errors, layer: &Layer<'_>, t: &Text) -> Option<PortRef> {
     let (m, p, ms, ps) = split_dotted(errors, t, "`module.port`")?;
-    let Some(mi) = layer.modules.iter().position(|x| x.name == m) else {
-        errors.push(
-            ModelError::new(format!("unknown module `{m}`"), ms).with_help(one_of(
-                "the modules are",
-                layer.modules.iter().map(|x| x.name),
-            )),
-        );
-        return None;
-    };
+    let mi = module_index(errors, layer, m, ms)?;
     let module = &layer.modules[mi];
     let Some(pi) = module.ports.iter().position(|&x| x == p) else {
         errors.push(
@@ -61,6 +45,20 @@ fn port_ref(errors: &mut Errors, layer: &Layer<'_>, t: &Text) -> Option<PortRef>
         module: mi,
         port: pi,
     })
+}
+
+/// The index of module `m` (written at `span`), or an error listing the modules.
+fn module_index(errors: &mut Errors, layer: &Layer<'_>, m: &str, span: Span) -> Option<usize> {
+    let found = layer.modules.iter().position(|x| x.name == m);
+    if found.is_none() {
+        errors.push(
+            ModelError::new(format!("unknown module `{m}`"), span).with_help(one_of(
+                "the modules are",
+                layer.modules.iter().map(|x| x.name),
+            )),
+        );
+    }
+    found
 }
 
 /// Splits `"a.b"` into its two names and their spans in the file.
