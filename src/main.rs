@@ -9,6 +9,7 @@ mod check;
 mod exit;
 mod expand;
 mod export;
+mod graph;
 mod interrupt;
 mod load;
 mod replay;
@@ -71,6 +72,8 @@ enum Command {
     /// step by step, and show where the property fails. Exit code 0: a recording replayed,
     /// 1: the trace's failure (or witness) is reached, 2: the trace does not fit the model.
     Replay(replay::Args),
+    /// Draw the model: its GenoM layer, its BIP core or one activity's codels, as SVG or DOT.
+    Graph(graph::Args),
 }
 
 fn main() -> ExitCode {
@@ -85,6 +88,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(&args),
         Command::Replay(args) => replay::run(&args),
         Command::Sched(args) => sched::run(&args),
+        Command::Graph(args) => graph::run(&args),
     };
     ExitCode::from(code)
 }

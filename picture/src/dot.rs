@@ -97,15 +97,20 @@ fn node_attributes(node: &Node) -> String {
         } else {
             attrs.push(format!("label={}", quoted(&label)));
         }
-        let mut style = vec!["filled"];
+        let mut style = vec![];
+        if node.shape != Shape::Point {
+            style.push("filled");
+        }
         if node.shape == Shape::Box {
             style.push("rounded");
         }
         if node.line == Line::Dashed {
             style.push("dashed");
         }
-        attrs.push(format!("style={}", quoted(&style.join(","))));
-        attrs.push(format!("fillcolor={}", quoted(node.fill)));
+        if !style.is_empty() {
+            attrs.push(format!("style={}", quoted(&style.join(","))));
+            attrs.push(format!("fillcolor={}", quoted(node.fill)));
+        }
     } else {
         attrs.push("shape=plain".into());
         let mut table = format!(

@@ -137,7 +137,7 @@ pub fn to_svg(graph: &Graph) -> String {
         svg.close();
     }
     for (k, node) in graph.nodes.iter().enumerate() {
-        draw_node(&mut svg, node, centres[k], sizes[k]);
+        draw_node(&mut svg, node, centres[k], sizes[k], graph.direction);
     }
     let heading = text_width(&graph.title, 14.0) * 1.05 + 2.0 * MARGIN;
     svg.finish(width.max(heading), height, &graph.title)
@@ -205,20 +205,13 @@ fn attach(
     if let Some(row) = end.row {
         let y = row_y(node, c, size, row);
         let side = if towards.x >= c.x { 1.0 } else { -1.0 };
-        let _ = direction;
         return Point {
             x: c.x + side * size.w / 2.0,
             y,
         };
     }
     match node.shape {
-        Shape::Point => {
-            let dot = Point {
-                x: c.x,
-                y: c.y - size.h / 2.0 + DOT + 1.0,
-            };
-            along(dot, towards, DOT)
-        }
+        Shape::Point => along(dot_centre(c, size, direction), towards, DOT),
         Shape::Ellipse | Shape::DoubleCircle => {
             let (rx, ry) = (size.w / 2.0, size.h / 2.0);
             let (dx, dy) = (towards.x - c.x, towards.y - c.y);
@@ -255,6 +248,16 @@ fn attach(
             }
         }
     }
+}
+
+/// A point node's dot: under its label when layers go down (the edges then leave the label
+/// alone), above it when they go right.
+fn dot_centre(c: Point, size: Size, direction: Direction) -> Point {
+    let y = match direction {
+        Direction::TopDown => c.y + size.h / 2.0 - DOT - 1.0,
+        Direction::LeftRight => c.y - size.h / 2.0 + DOT + 1.0,
+    };
+    Point { x: c.x, y }
 }
 
 /// The point `r` away from `from` towards `to`.
@@ -301,7 +304,7 @@ fn smooth(points: &[Point]) -> String {
     d
 }
 
-fn draw_node(svg: &mut Svg, node: &Node, c: Point, size: Size) {
+fn draw_node(svg: &mut Svg, node: &Node, c: Point, size: Size, direction: Direction) {
     svg.open(&format!("node {}", node.class), Some(&node.id));
     let left = c.x - size.w / 2.0;
     let top = c.y - size.h / 2.0;
@@ -310,11 +313,24 @@ fn draw_node(svg: &mut Svg, node: &Node, c: Point, size: Size) {
     let title_font = Font::new(TITLE).bold().anchor(Anchor::Middle);
     match node.shape {
         Shape::Point => {
-            let dot_y = top + DOT + 1.0;
-            svg.ellipse(c.x, dot_y, DOT, DOT, Paint::filled("#333333", "#333333"));
+            let dot = dot_centre(c, size, direction);
+            let w = text_width(&node.title, TEXT);
+            let base = match direction {
+                Direction::TopDown => top + TEXT,
+                Direction::LeftRight => dot.y + DOT + TEXT,
+            };
+            svg.rect(
+                c.x - w / 2.0 - 1.0,
+                base - TEXT,
+                w + 2.0,
+                TEXT + 3.0,
+                2.0,
+                Paint::filled("#ffffff", "none"),
+            );
+            svg.ellipse(dot.x, dot.y, DOT, DOT, Paint::filled("#333333", "#333333"));
             svg.text(
                 c.x,
-                dot_y + DOT + TEXT,
+                base,
                 &node.title,
                 Font::new(TEXT).anchor(Anchor::Middle),
             );
