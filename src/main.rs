@@ -17,6 +17,7 @@ mod report;
 mod sched;
 mod simulate;
 mod startup;
+mod trace;
 mod verify;
 
 use std::path::PathBuf;
@@ -74,6 +75,8 @@ enum Command {
     Replay(replay::Args),
     /// Draw the model: its GenoM layer, its BIP core or one activity's codels, as SVG or DOT.
     Graph(graph::Args),
+    /// Show a trace in the model's terms, as text and as a sequence chart (SVG).
+    Trace(trace::Args),
 }
 
 fn main() -> ExitCode {
@@ -89,6 +92,7 @@ fn main() -> ExitCode {
         Command::Replay(args) => replay::run(&args),
         Command::Sched(args) => sched::run(&args),
         Command::Graph(args) => graph::run(&args),
+        Command::Trace(args) => trace::run(&args),
     };
     ExitCode::from(code)
 }

@@ -284,6 +284,7 @@ fn write_outputs(args: &Args, system: &System, report: &Report) -> Result<(), St
     let mut saved = Vec::new();
     if let Some(dir) = &args.trace_dir {
         saved = save_traces(dir, report)?;
+        crate::trace::save_charts(system, report, &saved)?;
     }
     let text = match args.format {
         Format::Text => text_report(args, system, report, &saved),
@@ -541,7 +542,7 @@ fn write_figures(s: &mut String, report: &Report) {
 }
 
 /// Under a GenoM deadlock: the codels that are ready but held back, and by what.
-fn write_why_stuck(s: &mut String, system: &System, trace: &bip_model::Trace) {
+pub(crate) fn write_why_stuck(s: &mut String, system: &System, trace: &bip_model::Trace) {
     let Some(genom) = &system.genom else {
         return;
     };

@@ -116,7 +116,7 @@ const CRATES: &[Layers] = &[
             ("text", &["xml"]),
             ("parts", &["svg", "graph"]),
             ("layout", &["layout"]),
-            ("pictures", &["dot", "render"]),
+            ("pictures", &["dot", "render", "chart"]),
         ],
     },
     Layers {
