@@ -272,10 +272,13 @@ pub fn to_svg(chart: &Chart) -> String {
             Font::new(FONT).bold().colour(c),
         );
         for (k, line) in note.lines.iter().enumerate() {
+            // SVG collapses spaces: a line's indentation becomes its offset
+            let text = line.trim_start();
+            let indent = (line.len() - text.len()) as f64 * FONT * 0.5;
             svg.text(
-                left + 10.0,
+                left + 10.0 + indent,
                 at + LINE * (k as f64 + 2.0),
-                line,
+                text,
                 Font::new(FONT),
             );
         }
