@@ -172,3 +172,34 @@ fn a_wrong_request_is_an_error_with_help() {
     let out = bip(&["graph", "robots/tests/no-such-model.ron"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// Where graphviz is installed, it reads every golden DOT file without a warning; where it
+/// is not, the skip is said on stderr (graphviz is never needed by bip itself).
+#[test]
+fn graphviz_reads_the_dot_where_it_is_installed() {
+    if !crate::common::have("dot") {
+        use std::io::Write;
+        let _ = writeln!(
+            std::io::stderr().lock(),
+            "SKIPPED graphviz_reads_the_dot_where_it_is_installed: `dot` is not on PATH (apt-get install graphviz)"
+        );
+        return;
+    }
+    for name in ["genom.dot", "core.dot", "activity.dot"] {
+        let path = format!("{}/tests/golden/graph/{name}", env!("CARGO_MANIFEST_DIR"));
+        let out = std::process::Command::new("dot")
+            .args(["-Tsvg", &path])
+            .output()
+            .expect("dot runs");
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            out.stderr.is_empty(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
