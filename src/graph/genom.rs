@@ -211,9 +211,11 @@ fn mentions(text: &str, name: &str) -> bool {
     })
 }
 
-/// The model's connectors that involve its own components: joined to the service whose
-/// generated connector they extend (or to the clock's tick), or drawn as a dot joining
-/// the components; a port age they read, as an arrow from the port.
+/// The model's own connectors. One that extends a generated connector (a codel's, a
+/// request's, the tick) is an edge from its service (or the clock) to each component of
+/// the model's own it adds; another is a dot joining its components and the activities
+/// whose ports it takes (`abort`, …). What its guard and action read is drawn too: a
+/// port's age, an activity's being active.
 fn connector_edges(
     g: &mut Graph,
     def: &SystemDef,
@@ -226,6 +228,8 @@ fn connector_edges(
     // each interaction of the layer, with the service (or the tick) it belongs to
     let mut owner: BTreeMap<u32, String> = BTreeMap::new();
     owner.insert(map.tick, "tick".to_string());
+    // each activity's component, with its service
+    let mut activity: BTreeMap<u32, String> = BTreeMap::new();
     for module in &map.modules {
         for service in &module.services {
             let name = format!("{}.{}", module.name, service.name);
@@ -233,6 +237,9 @@ fn connector_edges(
             for codel in &service.codels {
                 owner.insert(codel.run, name.clone());
                 owner.insert(codel.fail, name.clone());
+            }
+            if let Some(c) = service.component {
+                activity.insert(c, name.clone());
             }
         }
     }
@@ -249,19 +256,20 @@ fn connector_edges(
         let Some(c) = system.connectors.iter().find(|c| c.name == name) else {
             continue;
         };
-        let mut mine: Vec<usize> = c
+        let port_refs: Vec<bip_model::PortRef> = c
             .interactions
             .clone()
-            .flat_map(|i| system.interactions[i as usize].ports.iter())
+            .flat_map(|i| system.interactions[i as usize].ports.iter().copied())
+            .collect();
+        let mut mine: Vec<usize> = port_refs
+            .iter()
             .filter_map(|p| user_of(p.component))
             .collect();
         mine.sort_unstable();
         mine.dedup();
-        if mine.is_empty() {
-            continue;
-        }
         let target = c.interactions.clone().find_map(|i| owner.get(&i)).cloned();
-        match target.as_deref() {
+        // where what the connector reads goes: its dot, or the components it adds
+        let readers: Vec<End> = match target.as_deref() {
             Some("tick") => {
                 let to = *clock.get_or_insert_with(|| {
                     g.add(
@@ -271,10 +279,9 @@ fn connector_edges(
                     )
                 });
                 for &from in &mine {
-                    if drawn.insert((from, to, name.to_string())) {
-                        g.connect(user_edge(End::node(to), End::node(from), name));
-                    }
+                    g.connect(user_edge(End::node(to), End::node(from), name));
                 }
+                mine.iter().map(|&n| End::node(n)).collect()
             }
             Some(service) => {
                 if let Some(&to) = services.get(service) {
@@ -282,6 +289,7 @@ fn connector_edges(
                         g.connect(user_edge(to, End::node(from), name));
                     }
                 }
+                mine.iter().map(|&n| End::node(n)).collect()
             }
             None => {
                 let dot = g.add(
@@ -294,8 +302,25 @@ fn connector_edges(
                             .colour(USER),
                     );
                 }
+                let mut taken = BTreeSet::new();
+                for p in &port_refs {
+                    let Some(service) = activity.get(&p.component) else {
+                        continue;
+                    };
+                    let port = &system.atom_of(p.component).ports[p.port as usize];
+                    if let Some(&to) = services.get(service) {
+                        if taken.insert((service.clone(), port.clone())) {
+                            g.connect(
+                                Edge::new(End::node(dot), to, "connector")
+                                    .label(port.as_str())
+                                    .colour(USER),
+                            );
+                        }
+                    }
+                }
+                vec![End::node(dot)]
             }
-        }
+        };
         let text = format!(
             "{} {}",
             connector
@@ -309,17 +334,26 @@ fn connector_edges(
                 .map(|a| a.to_string())
                 .unwrap_or_default()
         );
-        for (port, &p) in ports {
-            if text.contains(&format!("age({port})")) {
-                for &to in &mine {
-                    if drawn.insert((p, to, format!("reads {port}"))) {
-                        g.connect(
-                            Edge::new(End::node(p), End::node(to), "reads")
-                                .label("reads")
-                                .colour(PORT)
-                                .line(Line::Dotted),
-                        );
-                    }
+        let mut read: Vec<(End, String)> = ports
+            .iter()
+            .filter(|(port, _)| text.contains(&format!("age({port})")))
+            .map(|(port, &p)| (End::node(p), port.clone()))
+            .collect();
+        read.extend(
+            services
+                .iter()
+                .filter(|(service, _)| text.contains(&format!("active({service})")))
+                .map(|(service, &end)| (end, service.clone())),
+        );
+        for (from, what) in read {
+            for &to in &readers {
+                if drawn.insert((format!("{from:?}"), format!("{to:?}"), what.clone())) {
+                    g.connect(
+                        Edge::new(from, to, "reads")
+                            .label("reads")
+                            .colour(PORT)
+                            .line(Line::Dotted),
+                    );
                 }
             }
         }
