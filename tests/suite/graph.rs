@@ -99,6 +99,10 @@ fn the_svg_of_the_genom_level_names_every_module_service_and_port() {
     assert_eq!(count(&classes, "node port"), 1);
     assert_eq!(count(&classes, "edge constraint"), 5);
     assert_eq!(count(&classes, "edge writes"), 1);
+    // the abort connector: a dot taking eye.Look's abort, reading arm.Move and arm.joints
+    assert!(texts.iter().any(|t| t == "abort_blind"), "{texts:?}");
+    assert!(texts.iter().any(|t| t == "abort"), "{texts:?}");
+    assert_eq!(count(&classes, "edge reads"), 2);
     // in the user's names only: nothing of the expansion
     assert!(
         !texts
