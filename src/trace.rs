@@ -1,7 +1,9 @@
 //! `bip trace show FILE TRACE`: a trace (a counterexample, a witness, a recording) in the
 //! user's terms, as text and, with `--svg`, as a sequence chart; `bip verify --trace-dir`
-//! draws the same chart beside each trace it saves.
+//! draws the same chart beside each trace it saves. `--timeline` (and `bip simulate
+//! --svg`) draws a run along its steps, one lane per activity.
 
+mod timeline;
 mod view;
 
 use std::path::{Path, PathBuf};
@@ -33,6 +35,9 @@ pub struct ShowArgs {
     /// Also draw the trace as a sequence chart into FILE (SVG).
     #[arg(long, value_name = "FILE")]
     pub svg: Option<PathBuf>,
+    /// Also draw the trace as a timeline into FILE (SVG): one lane per activity.
+    #[arg(long, value_name = "FILE")]
+    pub timeline: Option<PathBuf>,
     /// Show the GenoM expansion's bookkeeping variables (`req`, `paused`, the clock) too.
     #[arg(long)]
     pub all_variables: bool,
@@ -76,7 +81,23 @@ fn run_show(args: &ShowArgs) -> u8 {
             return exit::ERROR;
         }
     }
+    if let Some(path) = &args.timeline {
+        if let Err(e) = write_timeline(&system, &trace, path) {
+            eprintln!("error: {e}");
+            return exit::ERROR;
+        }
+    }
     exit::OK
+}
+
+/// Draws the run saved in `trace` as a timeline into `svg` (`bip simulate --svg`).
+pub fn save_timeline(system: &System, trace: &Path, svg: &Path) -> Result<(), String> {
+    write_timeline(system, &read(trace)?, svg)
+}
+
+fn write_timeline(system: &System, trace: &Trace, svg: &Path) -> Result<(), String> {
+    let picture = bip_picture::timeline::to_svg(&timeline::timeline(system, trace)?);
+    std::fs::write(svg, picture).map_err(|e| format!("cannot write {}: {e}", svg.display()))
 }
 
 fn read(path: &Path) -> Result<Trace, String> {

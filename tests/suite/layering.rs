@@ -116,7 +116,7 @@ const CRATES: &[Layers] = &[
             ("text", &["xml"]),
             ("parts", &["svg", "graph"]),
             ("layout", &["layout"]),
-            ("pictures", &["dot", "render", "chart"]),
+            ("pictures", &["dot", "render", "chart", "timeline"]),
         ],
     },
     Layers {

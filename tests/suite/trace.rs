@@ -204,3 +204,73 @@ fn a_trace_that_is_not_one_or_does_not_fit_is_an_error() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a trace"));
 }
+
+#[test]
+fn simulate_draws_its_run_as_a_timeline_with_a_lane_per_activity() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let trace = dir.path().join("run.trace.ron");
+    let svg = dir.path().join("run.svg");
+    let (trace_arg, svg_arg) = (trace.to_str().unwrap(), svg.to_str().unwrap());
+    let model = "robots/tests/mini.ron";
+    let out = bip(&[
+        "simulate", model, "--steps", "30", "--seed", "1", "--trace", trace_arg, "--svg", svg_arg,
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).expect("the timeline");
+    let doc = roxmltree::Document::parse(&text).expect("the timeline parses as XML");
+    let class = |n: &roxmltree::Node| n.attribute("class").unwrap_or_default().to_string();
+    let lanes: Vec<String> = doc
+        .descendants()
+        .filter(|n| class(n) == "lane")
+        .filter_map(|n| {
+            n.children()
+                .find(|c| c.has_tag_name("title"))?
+                .text()
+                .map(str::to_string)
+        })
+        .collect();
+    assert_eq!(lanes, ["rflex.TrackSpeed", "antenna.Communicate"]);
+    // the same run as text: each request of an activity is a mark, each tick a rule
+    let shown = bip(&["trace", "show", model, trace_arg]);
+    let shown = String::from_utf8(shown.stdout).expect("utf-8");
+    let requests = shown
+        .lines()
+        .filter(|l| {
+            l.contains("request rflex.TrackSpeed") || l.contains("request antenna.Communicate")
+        })
+        .count();
+    let ticks = shown
+        .lines()
+        .filter(|l| l.trim_end().ends_with("tick"))
+        .count();
+    let count = |c: &str| doc.descendants().filter(|n| class(n) == c).count();
+    assert!(requests > 0 && ticks > 0, "{shown}");
+    assert_eq!(count("event request"), requests, "{shown}");
+    assert_eq!(count("tick"), ticks);
+    assert!(
+        count("segment paused") > 0 && count("event done") > 0,
+        "{text}"
+    );
+
+    // a timeline is of activities, and drawn from the run's trace
+    let out = bip(&["simulate", model, "--svg", svg_arg]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--trace"));
+    let out = bip(&[
+        "simulate",
+        "robots/philosophers.ron",
+        "--steps",
+        "5",
+        "--trace",
+        trace_arg,
+        "--svg",
+        svg_arg,
+    ]);
+    assert_ne!(out.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no GenoM layer"));
+}
