@@ -12,6 +12,7 @@ mod export;
 mod graph;
 mod interrupt;
 mod load;
+mod names;
 mod replay;
 mod report;
 mod sched;

@@ -203,7 +203,7 @@ fn chart(system: &System, trace: &Trace, user: &view::UserTrace) -> Chart {
         for (k, name) in user.lifelines.iter().enumerate() {
             if std::iter::once(&note.title)
                 .chain(&note.lines)
-                .any(|l| mentions(l, name))
+                .any(|l| crate::names::mentions(l, name))
             {
                 shown[k] = true;
             }
@@ -275,16 +275,6 @@ fn held(system: &System, trace: &Trace, user: &view::UserTrace) -> Vec<usize> {
     out.sort_unstable();
     out.dedup();
     out
-}
-
-/// True if `text` names `name` as a module or component (`name.`, `name@`, `name[`).
-fn mentions(text: &str, name: &str) -> bool {
-    text.match_indices(name).any(|(at, _)| {
-        let before = text[..at].chars().next_back();
-        let after = text[at + name.len()..].chars().next();
-        !before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == '.')
-            && matches!(after, Some('.' | '@' | '['))
-    })
 }
 
 /// What the end of the trace shows: the deadlock and why, the failed or witnessed

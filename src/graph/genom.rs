@@ -170,7 +170,7 @@ fn constraint_edges(
             let text = label(format!("guard: {}", when.as_str()));
             let mentioned: Vec<usize> = users
                 .iter()
-                .filter(|(name, _)| mentions(when.as_str(), name))
+                .filter(|(name, _)| crate::names::mentions(when.as_str(), name))
                 .map(|(_, &n)| n)
                 .collect();
             if mentioned.is_empty() {
@@ -199,16 +199,6 @@ fn pairwise(
             }
         }
     }
-}
-
-/// True if `text` names component `name` (`name.` or `name[`, not inside a longer name).
-fn mentions(text: &str, name: &str) -> bool {
-    text.match_indices(name).any(|(at, _)| {
-        let before = text[..at].chars().next_back();
-        let after = text[at + name.len()..].chars().next();
-        !before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == '.')
-            && matches!(after, Some('.') | Some('['))
-    })
 }
 
 /// The model's own connectors. One that extends a generated connector (a codel's, a
@@ -366,17 +356,4 @@ fn user_edge(from: End, to: End, connector: &str) -> Edge {
     Edge::new(from, to, "connector")
         .label(connector)
         .colour(USER)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::mentions;
-
-    #[test]
-    fn a_component_is_mentioned_by_its_name_and_a_dot() {
-        assert!(mentions("pack.level > RESERVE", "pack"));
-        assert!(mentions("!backpack.x || pack[2].y", "pack"));
-        assert!(!mentions("backpack.level", "pack"));
-        assert!(!mentions("pack > 1", "pack"));
-    }
 }
