@@ -287,21 +287,34 @@ fn order(rows: &mut [Vec<usize>], preds: &[Vec<usize>], succs: &[Vec<usize>]) {
     rows.clone_from_slice(&best);
 }
 
-/// Edge crossings between consecutive layers.
+/// Edge crossings between consecutive layers: for each layer, the edges sorted by their
+/// ends' positions, the inversions among their lower ends (counted with a Fenwick tree,
+/// in O(E log V), so that a wide graph is not quadratic).
 fn crossings(rows: &[Vec<usize>], succs: &[Vec<usize>], pos: &[f64]) -> usize {
     let mut total = 0;
     for row in rows {
-        let mut pairs: Vec<(f64, f64)> = Vec::new();
+        let mut pairs: Vec<(usize, usize)> = Vec::new();
         for &u in row {
             for &v in &succs[u] {
-                pairs.push((pos[u], pos[v]));
+                pairs.push((pos[u] as usize, pos[v] as usize));
             }
         }
-        for (i, a) in pairs.iter().enumerate() {
-            for b in &pairs[i + 1..] {
-                if (a.0 - b.0) * (a.1 - b.1) < 0.0 {
-                    total += 1;
-                }
+        pairs.sort_unstable();
+        let size = pairs.iter().map(|p| p.1 + 1).max().unwrap_or(0);
+        let mut tree = vec![0usize; size + 1];
+        for (seen, &(_, v)) in pairs.iter().enumerate() {
+            // edges seen so far whose lower end is at most v
+            let mut at_most = 0;
+            let mut i = v + 1;
+            while i > 0 {
+                at_most += tree[i];
+                i &= i - 1;
+            }
+            total += seen - at_most;
+            let mut i = v + 1;
+            while i <= size {
+                tree[i] += 1;
+                i += i & i.wrapping_neg();
             }
         }
     }
@@ -433,6 +446,42 @@ mod tests {
         assert!(p.nodes[0].x + BOX.w / 2.0 <= at.x - label.w / 2.0);
         assert!(at.x + label.w / 2.0 <= p.nodes[1].x - BOX.w / 2.0);
         assert!(p.width >= 2.0 * BOX.w + label.w);
+    }
+
+    #[test]
+    fn crossings_are_the_pairs_of_edges_whose_ends_are_in_opposite_orders() {
+        let mut rng = 12345u64;
+        let mut next = |n: usize| {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng % n as u64) as usize
+        };
+        for _ in 0..50 {
+            let (a, b) = (1 + next(6), 1 + next(6));
+            let rows = vec![(0..a).collect::<Vec<_>>(), (a..a + b).collect()];
+            let mut succs = vec![Vec::new(); a + b];
+            for _ in 0..next(12) {
+                succs[next(a)].push(a + next(b));
+            }
+            let mut pos = vec![0.0; a + b];
+            for row in &rows {
+                for (k, &v) in row.iter().enumerate() {
+                    pos[v] = k as f64;
+                }
+            }
+            let edges: Vec<(f64, f64)> = (0..a)
+                .flat_map(|u| succs[u].iter().map(move |&v| (u, v)))
+                .map(|(u, v)| (pos[u], pos[v]))
+                .collect();
+            let quadratic = edges
+                .iter()
+                .enumerate()
+                .flat_map(|(i, x)| edges[i + 1..].iter().map(move |y| (x, y)))
+                .filter(|(x, y)| (x.0 - y.0) * (x.1 - y.1) < 0.0)
+                .count();
+            assert_eq!(crossings(&rows, &succs, &pos), quadratic);
+        }
     }
 
     #[test]
