@@ -124,7 +124,8 @@ fn node_attributes(node: &Node) -> String {
         for (k, row) in node.rows.iter().enumerate() {
             let _ = write!(
                 table,
-                "<tr><td port=\"r{k}\" align=\"left\">{}</td></tr>",
+                "<tr><td port=\"r{k}\" align=\"left\"><font color=\"{}\">{}</font></td></tr>",
+                row.colour(),
                 escape(&row.text)
             );
         }
@@ -156,7 +157,7 @@ mod tests {
         let dot = to_dot(&g);
         assert!(dot.contains("<b>m &lt;1&gt;</b>"), "{dot}");
         assert!(
-            dot.contains("<td port=\"r0\" align=\"left\">S</td>"),
+            dot.contains("<td port=\"r0\" align=\"left\"><font color=\"#222222\">S</font></td>"),
             "{dot}"
         );
         assert!(

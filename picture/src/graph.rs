@@ -35,6 +35,19 @@ pub struct Row {
     pub class: String,
 }
 
+impl Row {
+    /// Rows are coloured by what they stand for, so a module's parts read apart at a
+    /// glance.
+    pub fn colour(&self) -> &'static str {
+        match self.class.as_str() {
+            "task" => "#7a4f01",
+            "port" => "#1d5e8c",
+            "activity" => "#1f6e2e",
+            _ => "#222222",
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Node {
     /// Unique in its graph.

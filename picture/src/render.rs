@@ -376,7 +376,7 @@ fn draw_node(svg: &mut Svg, node: &Node, c: Point, size: Size, direction: Direct
                         left + PAD,
                         y + TEXT * 0.35,
                         &row.text,
-                        Font::new(TEXT).colour(row_colour(&row.class)),
+                        Font::new(TEXT).colour(row.colour()),
                     );
                     svg.close();
                 }
@@ -403,16 +403,6 @@ fn title_and_subtitle(svg: &mut Svg, node: &Node, c: Point, baseline: f64) {
                 .colour("#555555")
                 .anchor(Anchor::Middle),
         );
-    }
-}
-
-/// Rows are coloured by what they stand for, so a module's parts read apart at a glance.
-fn row_colour(class: &str) -> &'static str {
-    match class {
-        "task" => "#7a4f01",
-        "port" => "#1d5e8c",
-        "activity" => "#1f6e2e",
-        _ => "#222222",
     }
 }
 
