@@ -2,7 +2,8 @@
 //! participants it synchronises (a dot on each), ticks of time as horizontal rules, the
 //! step's label at the left and what it changed at the right; a step or an end marked
 //! (a failure in red, a witness in green), an optional loop bracket, and a closing note
-//! (a deadlock and why). Groups: `lifeline`, `step`, `tick`, `loop`, `end`.
+//! (a deadlock and why). Groups: `lifeline`, `step` (`step failing`, `step reached` for a
+//! marked one), `tick`, `loop`, `end`.
 
 use crate::svg::{text_width, Anchor, Font, Paint, Svg};
 
@@ -298,8 +299,13 @@ fn notes_x(step: &Step, centres: &[f64], lanes_at: f64) -> f64 {
 
 fn draw_step(svg: &mut Svg, step: &Step, at: f64, centres: &[f64], lanes_at: f64, lanes_end: f64) {
     let c = colour(step.mark);
+    let class = match step.mark {
+        Mark::Plain => "step",
+        Mark::Failing => "step failing",
+        Mark::Reached => "step reached",
+    };
     svg.open(
-        "step",
+        class,
         Some(&format!("step {}: {}", step.number, step.label)),
     );
     let mid = at + STEP / 2.0;
@@ -414,7 +420,8 @@ mod tests {
                 .count()
         };
         assert_eq!(groups("lifeline"), 3);
-        assert_eq!(groups("step"), 2);
+        assert_eq!(groups("step"), 1);
+        assert_eq!(groups("step failing"), 1);
         assert_eq!(groups("tick"), 1);
         assert_eq!(groups("loop"), 1);
         assert_eq!(groups("end"), 1);

@@ -9,6 +9,8 @@ use crate::common::bip;
 struct Chart {
     lifelines: Vec<String>,
     steps: Vec<String>,
+    /// The tooltips of the marked steps, `failing` or `reached`.
+    marked: Vec<(String, String)>,
     ticks: usize,
     end: Option<String>,
     texts: Vec<String>,
@@ -24,13 +26,26 @@ fn chart(path: &std::path::Path) -> Chart {
             .unwrap_or_default()
             .to_string()
     };
+    // a class and its variants (`step failing`)
     let groups = |class: &str| -> Vec<String> {
         doc.descendants()
-            .filter(|n| n.has_tag_name("g") && n.attribute("class") == Some(class))
+            .filter(|n| {
+                n.has_tag_name("g")
+                    && n.attribute("class")
+                        .is_some_and(|c| c.split(' ').next() == Some(class))
+            })
             .map(tooltip)
             .collect()
     };
+    let marked = doc
+        .descendants()
+        .filter_map(|n| {
+            let mark = n.attribute("class")?.strip_prefix("step ")?;
+            Some((mark.to_string(), tooltip(n)))
+        })
+        .collect();
     Chart {
+        marked,
         lifelines: groups("lifeline"),
         steps: groups("step"),
         ticks: groups("tick").len(),
@@ -166,10 +181,62 @@ fn a_core_models_chart_has_a_lifeline_per_component() {
         "{:?}",
         c.steps
     );
+    assert!(c.marked.is_empty());
     let w = chart(&dir.path().join("someone_eats.svg"));
     assert_eq!(
         w.end.as_deref(),
         Some("someone_eats is reached after the last step")
+    );
+    assert_eq!(
+        w.marked,
+        [("reached".to_string(), "step 2: right[2]".to_string())]
+    );
+    assert!(
+        w.texts.iter().any(|t| t == "phil[2]@eating, fork[3]@taken"),
+        "{:?}",
+        w.texts
+    );
+}
+
+#[test]
+fn a_violation_marks_its_last_step_and_shows_the_property() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let model = dir.path().join("cells.ron");
+    let text = std::fs::read_to_string("robots/tests/graph-core.ron").expect("the model");
+    assert!(text.contains("properties: [DeadlockFree]"));
+    let text = text.replacen(
+        "properties: [DeadlockFree]",
+        "properties: [Invariant(name: \"first_empty\", expr: \"cell[0]@empty\")]",
+        1,
+    );
+    std::fs::write(&model, text).unwrap();
+    let traces = dir.path().to_str().expect("utf-8");
+    let out = bip(&[
+        "verify",
+        model.to_str().unwrap(),
+        "-q",
+        "--trace-dir",
+        traces,
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let c = chart(&dir.path().join("first_empty.svg"));
+    assert_eq!(
+        c.marked,
+        [("failing".to_string(), "step 1: fill[0]".to_string())]
+    );
+    assert_eq!(
+        c.end.as_deref(),
+        Some("first_empty fails after the last step")
+    );
+    assert!(
+        c.texts.iter().any(|t| t == "cell[0]@empty"),
+        "{:?}",
+        c.texts
     );
 }
 
