@@ -9,13 +9,16 @@ mod check;
 mod exit;
 mod expand;
 mod export;
+mod graph;
 mod interrupt;
 mod load;
+mod names;
 mod replay;
 mod report;
 mod sched;
 mod simulate;
 mod startup;
+mod trace;
 mod verify;
 
 use std::path::PathBuf;
@@ -71,6 +74,10 @@ enum Command {
     /// step by step, and show where the property fails. Exit code 0: a recording replayed,
     /// 1: the trace's failure (or witness) is reached, 2: the trace does not fit the model.
     Replay(replay::Args),
+    /// Draw the model: its GenoM layer, its BIP core or one activity's codels, as SVG or DOT.
+    Graph(graph::Args),
+    /// Show a trace in the model's terms, as text and as a sequence chart (SVG).
+    Trace(trace::Args),
 }
 
 fn main() -> ExitCode {
@@ -85,6 +92,8 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(&args),
         Command::Replay(args) => replay::run(&args),
         Command::Sched(args) => sched::run(&args),
+        Command::Graph(args) => graph::run(&args),
+        Command::Trace(args) => trace::run(&args),
     };
     ExitCode::from(code)
 }

@@ -33,6 +33,9 @@ pub struct Args {
     /// `paused`) included.
     #[arg(long)]
     pub all_variables: bool,
+    /// Draw the run saved with --trace as a timeline in FILE (SVG): one lane per activity.
+    #[arg(long, value_name = "FILE", requires = "trace")]
+    pub svg: Option<PathBuf>,
 }
 
 pub fn run(args: &Args) -> u8 {
@@ -147,6 +150,15 @@ pub fn run(args: &Args) -> u8 {
             Ok(()) => println!("  trace saved in {}", out.display()),
             Err(e) => {
                 eprintln!("error: cannot write {}: {e}", out.display());
+                code = exit::ERROR;
+            }
+        }
+    }
+    if let (Some(svg), Some(out)) = (&args.svg, &args.trace) {
+        if let Err(e) = crate::trace::save_timeline(&system, out, svg) {
+            eprintln!("error: {e}");
+            // a failed property's exit code says more than the missing picture
+            if code == exit::OK {
                 code = exit::ERROR;
             }
         }

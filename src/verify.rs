@@ -7,6 +7,7 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 use bip_model::System;
+use bip_picture::xml::escape as xml;
 use bip_verifier::{
     human_bytes, CheckKind, Method, Progress, PropertyVerdict, Report, VerifyOutcome,
 };
@@ -283,6 +284,7 @@ fn write_outputs(args: &Args, system: &System, report: &Report) -> Result<(), St
     let mut saved = Vec::new();
     if let Some(dir) = &args.trace_dir {
         saved = save_traces(dir, report)?;
+        crate::trace::save_charts(system, report, &saved)?;
     }
     let text = match args.format {
         Format::Text => text_report(args, system, report, &saved),
@@ -540,7 +542,7 @@ fn write_figures(s: &mut String, report: &Report) {
 }
 
 /// Under a GenoM deadlock: the codels that are ready but held back, and by what.
-fn write_why_stuck(s: &mut String, system: &System, trace: &bip_model::Trace) {
+pub(crate) fn write_why_stuck(s: &mut String, system: &System, trace: &bip_model::Trace) {
     let Some(genom) = &system.genom else {
         return;
     };
@@ -689,31 +691,9 @@ fn junit_report(args: &Args, system: &System, report: &Report) -> String {
     s
 }
 
-/// Escapes text for XML attributes and content.
-fn xml(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            c if (c as u32) < 0x20 && c != '\n' && c != '\t' && c != '\r' => {}
-            c => out.push(c),
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn xml_escapes_markup_and_drops_control_characters() {
-        assert_eq!(xml("a<b & \"c\"\u{1}"), "a&lt;b &amp; &quot;c&quot;");
-    }
 
     #[test]
     fn property_names_become_file_names() {

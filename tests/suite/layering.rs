@@ -111,6 +111,15 @@ const CRATES: &[Layers] = &[
         ],
     },
     Layers {
+        src: "picture/src",
+        layers: &[
+            ("text", &["xml"]),
+            ("parts", &["svg", "graph"]),
+            ("layout", &["layout"]),
+            ("pictures", &["dot", "render", "chart", "timeline"]),
+        ],
+    },
+    Layers {
         src: "bip-lang/src",
         layers: &[
             ("positions", &["source", "excerpt", "diag"]),
