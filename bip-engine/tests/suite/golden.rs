@@ -87,8 +87,15 @@ fn fingerprint(
             let t = e.request(m, s, k).expect("requestable");
             writeln!(log, "request {m}.{s} {t:?}").expect("writes");
         }
+        let before = e.inspect().now_us();
         let stepped = e.step().expect("steps");
-        writeln!(log, "{stepped:?} at {}", e.inspect().now_us()).expect("writes");
+        // an idle step's time as the engine saw it (on a virtual clock, `step` then moves
+        // time to the next tick)
+        let at = match stepped {
+            Stepped::Idle { .. } => before,
+            _ => e.inspect().now_us(),
+        };
+        writeln!(log, "{stepped:?} at {at}").expect("writes");
         if let Stepped::Idle { next_tick_us } = stepped {
             match next_tick_us {
                 Some(t) => e.wait_until(t),
@@ -106,7 +113,7 @@ fn fingerprint(
                 continue;
             }
             kinds.insert(event_kind(&ev));
-            writeln!(log, "{ev:?}").expect("writes");
+            writeln!(log, "{}", fingerprint_form(&ev)).expect("writes");
         }
     }
     // the counters the fingerprints were taken with, written as `Stats` printed them then
@@ -132,6 +139,40 @@ fn fingerprint(
         writeln!(log, "{:?}", s.stepped).expect("writes");
     }
     fnv(&log)
+}
+
+/// An event as the fingerprints were taken: the `Debug` form the events had then, by ids.
+fn fingerprint_form(ev: &Event) -> String {
+    let fault = |f: &Fault| format!("Fault {{ codel: {:?}, kind: {:?} }}", f.codel, f.kind);
+    match ev {
+        Event::Reply {
+            ticket,
+            service,
+            reply,
+        } => {
+            let reply = match reply {
+                Reply::Accepted => "Accepted".to_string(),
+                Reply::Refused(r) => format!("Refused({r:?})"),
+                Reply::Done(Outcome::Ether) => "Done(Ether)".to_string(),
+                Reply::Done(Outcome::Exception(x)) => format!("Done(Exception({x:?}))"),
+                Reply::Done(Outcome::Interrupted) => "Done(Interrupted)".to_string(),
+                Reply::Done(Outcome::Fault(f)) => format!("Done(Fault({}))", fault(f)),
+            };
+            format!("Reply {{ ticket: {ticket:?}, service: {service:?}, reply: {reply} }}")
+        }
+        Event::Held {
+            codel,
+            ticket,
+            reasons,
+        } => format!("Held {{ codel: {codel:?}, ticket: {ticket:?}, reasons: {reasons:?} }}"),
+        Event::Fault(f) => format!("Fault({})", fault(f)),
+        Event::Overrun {
+            codel,
+            took_us,
+            period_us,
+        } => format!("Overrun {{ codel: {codel:?}, took_us: {took_us}, period_us: {period_us} }}"),
+        other => format!("{other:?}"),
+    }
 }
 
 /// The fingerprint of each case, and the kinds of events the cases saw.
