@@ -19,10 +19,10 @@
 use std::error::Error;
 use std::sync::{Arc, Mutex};
 
+use bip_engine::bip_model::PropertyKind;
 use bip_engine::{
-    CodelId, Engine, Event, Next, Outcome, RealClock, Refusal, Reply, Ticket, Until, VirtualClock,
+    CodelId, Engine, Event, Next, RealClock, Reply, System, Ticket, Trace, Until, VirtualClock,
 };
-use bip_model::{PropertyKind, System, Trace};
 
 /// The arguments the supervisor sends with its requests.
 #[derive(Clone, Copy, Debug)]
@@ -123,7 +123,7 @@ pub fn run(
     real_time: bool,
     say: &mut dyn FnMut(String),
 ) -> Result<Report, Box<dyn Error>> {
-    let system = bip_lang::load_file(model).map_err(|e| e.summary())?;
+    let system = bip_engine::load_file(model)?;
     let world = Arc::new(Mutex::new(World {
         x: 0.0,
         rock_x: 2.0,
@@ -280,7 +280,7 @@ pub fn run(
         system: system.clone(),
         trace: Trace {
             system: system.name.clone(),
-            verdict: bip_model::Verdict::None,
+            verdict: bip_engine::bip_model::Verdict::None,
             steps: Vec::new(),
         },
         replies: Vec::new(),
@@ -301,30 +301,33 @@ pub fn run(
         }
         engine.run_until(Until::Ticks(1))?;
         let now = engine.inspect().now_us() as f64 / 1e6;
-        let events: Vec<Event> = engine.events().collect();
-        for event in events {
+        let mut battery_reported = false;
+        // events name their codel or service: each prints as one line (`Display`)
+        for event in engine.events() {
             let held_before = report.held.len();
-            let line = describe(&engine, &event, &mut report);
+            report.note(&event);
             // a codel held again for the same reasons is said once
             let repeated = report.held.len() > held_before
                 && report.held[..held_before].contains(&report.held[held_before]);
             if !repeated {
-                say(format!("[{now:>5.1} s] {line}"));
+                say(format!("[{now:>5.1} s] {event}"));
             }
-            // the battery module's report: the charge the model's battery atom holds
             if let Event::Reply {
                 service,
-                reply: Reply::Done(_),
+                reply: Reply::Done { .. },
                 ..
-            } = event
+            } = &event
             {
-                if engine.inspect().service_name(service) == ("battery", "Report") {
-                    say(format!(
-                        "[{now:>5.1} s] battery: charge {} of 3",
-                        system.value(engine.inspect().state(), pack, level)
-                    ));
-                }
+                battery_reported |=
+                    (service.module.as_str(), service.name.as_str()) == ("battery", "Report");
             }
+        }
+        // the battery module's report: the charge the model's battery atom holds
+        if battery_reported {
+            say(format!(
+                "[{now:>5.1} s] battery: charge {} of 3",
+                system.value(engine.inspect().state(), pack, level)
+            ));
         }
     }
     let stats = engine.inspect().stats();
@@ -374,78 +377,29 @@ pub fn run(
     Ok(report)
 }
 
-/// One line for an event, noted in the report.
-fn describe(engine: &Engine, event: &Event, report: &mut Report) -> String {
-    match event {
-        Event::Reply {
-            ticket,
-            service,
-            reply,
-        } => {
-            let (m, s) = engine.inspect().service_name(*service);
-            let text = match reply {
-                Reply::Accepted => "accepted".to_string(),
-                Reply::Refused(Refusal::Conditions(r)) => format!(
-                    "REFUSED: {}",
-                    engine
-                        .inspect()
-                        .refusal_texts(*service, *r)
-                        .collect::<Vec<_>>()
-                        .join("; ")
-                ),
-                Reply::Refused(Refusal::NotEnabled) => "REFUSED: not enabled now".to_string(),
-                Reply::Done(Outcome::Ether) => "done: ether".to_string(),
-                Reply::Done(o) => format!("done: {o}"),
-            };
-            report
-                .replies
-                .push((format!("{m}.{s}"), *ticket, text.clone()));
-            format!("reply to #{} {m}.{s}: {text}", ticket.0)
-        }
-        Event::Held { codel, reasons, .. } => {
-            let (m, s, c) = engine.inspect().codel_name(*codel);
-            let why: Vec<String> = engine.inspect().hold_texts(*codel, *reasons).collect();
-            let line = format!("held: {m}.{s} codel `{c}` waits for {}", why.join("; "));
-            report.held.push((format!("{m}.{s}.{c}"), why));
-            line
-        }
-        Event::Fault(f) => {
-            report.faults += 1;
-            let (m, s, c) = engine.inspect().codel_name(f.codel);
-            format!("FAULT: {m}.{s}.{c} {}", f.kind)
-        }
-        Event::Overrun {
-            codel,
-            took_us,
-            period_us,
-        } => {
-            report.overruns += 1;
-            let (m, s, c) = engine.inspect().codel_name(*codel);
-            format!(
-                "overrun: {m}.{s}.{c} took {} ms, its period is {} ms",
-                took_us / 1000,
-                period_us / 1000
-            )
-        }
-        Event::WcetExceeded {
-            codel,
-            took_us,
-            wcet_us,
-        } => {
-            report.over_budget += 1;
-            let (m, s, c) = engine.inspect().codel_name(*codel);
-            format!("over budget: {m}.{s}.{c} took {took_us} µs, its WCET is {wcet_us} µs")
-        }
-        Event::DeadlineMissed {
-            codel,
-            elapsed_us,
-            deadline_us,
-        } => {
-            report.over_budget += 1;
-            let (m, s, _) = engine.inspect().codel_name(*codel);
-            format!(
-                "deadline missed: {m}.{s}'s task ended its period's work {elapsed_us} µs after its release, past {deadline_us} µs"
-            )
+impl Report {
+    /// Notes what the test looks at: replies, held codels, overruns, budgets, faults.
+    fn note(&mut self, event: &Event) {
+        match event {
+            Event::Reply {
+                ticket,
+                service,
+                reply,
+            } => {
+                let text = match reply {
+                    // the refused conditions are named by the event, from its service
+                    Reply::Refused(_) => event.to_string(),
+                    _ => reply.to_string(),
+                };
+                self.replies.push((service.to_string(), *ticket, text));
+            }
+            Event::Held { codel, reasons, .. } => {
+                let why = reasons.iter().map(|k| codel.holds[k].clone()).collect();
+                self.held.push((codel.to_string(), why));
+            }
+            Event::Fault(_) => self.faults += 1,
+            Event::Overrun { .. } => self.overruns += 1,
+            Event::WcetExceeded { .. } | Event::DeadlineMissed { .. } => self.over_budget += 1,
         }
     }
 }

@@ -12,7 +12,7 @@ use bip_model::{Pick, Role, System};
 
 use crate::codel::{CodelInfo, Field};
 use crate::error::BuildError;
-use crate::event::{Reasons, Ticket};
+use crate::event::{Codel, CodelId, Output, Reasons, Service, ServiceId, Ticket};
 
 /// What an interaction is to the engine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,6 +42,8 @@ pub(crate) enum PortKind {
 }
 
 pub(crate) struct CodelTable {
+    /// What events say of it.
+    pub name: Arc<Codel>,
     pub map: CodelMap,
     pub service: u32,
     /// The module's component (where the ids are).
@@ -94,6 +96,8 @@ impl CodelTable {
 }
 
 pub(crate) struct ServiceTable {
+    /// What events say of it.
+    pub name_ref: Arc<Service>,
     pub module: String,
     pub name: String,
     /// The activity's task.
@@ -121,6 +125,8 @@ pub(crate) struct ActivityTable {
     pub pending: Option<Ticket>,
     pub current_args: Option<Box<dyn core::any::Any + Send>>,
     pub pending_args: Option<Box<dyn core::any::Any + Send>>,
+    /// What the current request's codels gave as its output so far.
+    pub output: Option<Output>,
 }
 
 /// An activity as a quiescent point looks at it ([`Rest`]), and the held codel last
@@ -289,6 +295,13 @@ impl Tables {
                         })
                         .collect();
                     t.codels.push(CodelTable {
+                        name: Arc::new(Codel {
+                            id: CodelId(cid),
+                            module: m.name.clone(),
+                            service: s.name.clone(),
+                            state: c.state.clone(),
+                            holds: c.holds.iter().map(ToString::to_string).collect(),
+                        }),
                         map: c.clone(),
                         service: sid,
                         module_component: m.component,
@@ -309,6 +322,12 @@ impl Tables {
                     });
                 }
                 t.services.push(ServiceTable {
+                    name_ref: Arc::new(Service {
+                        id: ServiceId(sid),
+                        module: m.name.clone(),
+                        name: s.name.clone(),
+                        refusals: s.refusals.iter().map(ToString::to_string).collect(),
+                    }),
                     module: m.name.clone(),
                     name: s.name.clone(),
                     task: s.task.and_then(|k| m.tasks.get(k)).map(|t| t.name.clone()),
@@ -473,5 +492,6 @@ fn activity_table(
         pending: None,
         current_args: None,
         pending_args: None,
+        output: None,
     })
 }

@@ -6,6 +6,7 @@ use core::any::Any;
 #[allow(unused_imports)]
 use crate::prelude::*;
 
+use crate::event::Output;
 use crate::ports::PortStore;
 
 /// What a codel returns: where its activity goes next, or an exception.
@@ -64,6 +65,8 @@ pub struct Ctx<'a> {
     pub(crate) fault: &'a mut Option<CtxFault>,
     pub(crate) ports: &'a mut PortStore,
     pub(crate) args: Option<&'a (dyn Any + Send)>,
+    /// The output of the request the activity serves.
+    pub(crate) output: Option<&'a mut Option<Output>>,
     pub(crate) now_us: u64,
     pub(crate) tick: u64,
 }
@@ -156,6 +159,14 @@ impl Ctx<'_> {
     /// The arguments of the request the activity serves, if they are a `T`.
     pub fn args<T: Any>(&self) -> Option<&T> {
         self.args.and_then(|a| a.downcast_ref())
+    }
+
+    /// Gives the output of the request the activity serves: its reply
+    /// ([`crate::Reply::Done`]) carries the last output its codels gave.
+    pub fn set_output<T: Any + Send + Sync>(&mut self, value: T) {
+        if let Some(o) = self.output.as_deref_mut() {
+            *o = Some(Output::new(value));
+        }
     }
 
     /// The engine's time, in microseconds since it started.

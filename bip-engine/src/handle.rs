@@ -65,7 +65,7 @@ impl Remote {
             return;
         };
         let _ = self.waiting[k].1.send((*ticket, reply.clone()));
-        if matches!(reply, Reply::Refused(_) | Reply::Done(_)) {
+        if matches!(reply, Reply::Refused(_) | Reply::Done { .. }) {
             self.waiting.swap_remove(k);
         }
     }

@@ -76,7 +76,13 @@ pub mod simulate;
 #[cfg(feature = "std")]
 mod threads;
 
-pub use bip_model::CacheStats;
+/// Loading a model file into a [`System`] (bip-lang), with errors in the file's terms.
+#[cfg(feature = "std")]
+pub use bip_lang::{load_file, load_str, LoadError};
+/// The compiled model and its step relation (bip-model), which the engine's API hands
+/// out: an embedder depends on bip-engine alone.
+pub use bip_model;
+pub use bip_model::{CacheStats, State, System, Trace};
 pub use budgets::{CodelTimes, BUCKETS as CODEL_TIME_BUCKETS};
 pub use clock::Clock;
 #[cfg(feature = "std")]
@@ -87,7 +93,8 @@ pub use codel::{Args, CodelFn, Ctx, DefaultCodels, Next};
 pub use engine::{Engine, EngineBuilder, Inspect, Stats, Stepped, Until, DEFAULT_STATE_CACHE};
 pub use error::{BuildError, EngineError, RequestError};
 pub use event::{
-    CodelId, Event, EventFn, Fault, FaultKind, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket,
+    Codel, CodelId, Event, EventFn, Fault, FaultKind, Outcome, Output, Reasons, Refusal, Reply,
+    Service, ServiceId, Ticket,
 };
 #[cfg(feature = "std")]
 pub use handle::{Handle, PendingReply};

@@ -2,6 +2,7 @@
 //! model enables their request interaction and refused with the failing conditions when
 //! not (docs/engine.md, "Requests, replies and refusals").
 
+use alloc::sync::Arc;
 use core::any::Any;
 
 #[allow(unused_imports)]
@@ -10,7 +11,7 @@ use crate::prelude::*;
 use super::replies::Cause;
 use super::{Engine, Stepped};
 use crate::error::{EngineError, RequestError};
-use crate::event::{Event, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket};
+use crate::event::{Event, Outcome, Reasons, Refusal, Reply, Ticket};
 
 impl Engine {
     /// Queues a request for `module.service` with arguments its codels can read
@@ -90,7 +91,7 @@ impl Engine {
             service = s.name.as_str(), "request refused");
         self.emit(Event::Reply {
             ticket,
-            service: ServiceId(service),
+            service: Arc::clone(&self.t.services[service as usize].name_ref),
             reply: Reply::Refused(refusal),
         });
         Ok(Stepped::Request {
@@ -109,7 +110,7 @@ impl Engine {
         self.stats.requests_accepted += 1;
         self.emit(Event::Reply {
             ticket,
-            service: ServiceId(service),
+            service: Arc::clone(&self.t.services[service as usize].name_ref),
             reply: Reply::Accepted,
         });
         self.commit(Cause::Request {
@@ -121,8 +122,8 @@ impl Engine {
             // a function or attribute runs at once
             self.emit(Event::Reply {
                 ticket,
-                service: ServiceId(service),
-                reply: Reply::Done(Outcome::Ether),
+                service: Arc::clone(&self.t.services[service as usize].name_ref),
+                reply: Reply::done(Outcome::Ether),
             });
         }
         Ok(())

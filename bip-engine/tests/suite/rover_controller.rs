@@ -26,7 +26,7 @@ fn the_rover_controller_plays_its_script_within_the_model() {
     assert!(
         reply_texts(&r, "rflex.TrackSpeed")
             .first()
-            .is_some_and(|t| t.starts_with("REFUSED: after rflex.Init")),
+            .is_some_and(|t| t.contains("rflex.TrackSpeed: refused: after rflex.Init")),
         "{log}"
     );
     // held by the rover's constraints, each named, with its line in the file
@@ -54,14 +54,15 @@ fn the_rover_controller_plays_its_script_within_the_model() {
         held_by("rflex.TrackSpeed.track", "battery_reserve", "Guard"),
         "{log}"
     );
-    // navigation: aborted without the laser, arrives, then blocked by the rock
+    // navigation: aborted by the rover's rule without the laser (not a client's
+    // interrupt), arrives, then blocked by the rock
     assert_eq!(
         reply_texts(&r, "ndd.GoTo")
             .into_iter()
             .filter(|t| t.starts_with("done"))
             .collect::<Vec<_>>(),
         [
-            "done: interrupted",
+            "done: aborted by a rule of the model",
             "done: ether",
             "done: exception e_blocked"
         ],

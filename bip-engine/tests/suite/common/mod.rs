@@ -12,7 +12,7 @@ pub fn load(name: &str) -> System {
     bip_lang::load_file(std::path::Path::new(&p)).unwrap_or_else(|e| panic!("{}", e.summary()))
 }
 
-pub fn load_str(text: &str) -> System {
+pub fn load_text(text: &str) -> System {
     bip_lang::load_str("test.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()))
 }
 
@@ -180,10 +180,14 @@ pub fn event_kind(e: &Event) -> &'static str {
             Reply::Accepted => "accepted",
             Reply::Refused(Refusal::NotEnabled) => "refused (not enabled)",
             Reply::Refused(_) => "refused",
-            Reply::Done(Outcome::Ether) => "ether",
-            Reply::Done(Outcome::Exception(_)) => "exception",
-            Reply::Done(Outcome::Interrupted) => "interrupted",
-            Reply::Done(Outcome::Fault(_)) => "fault reply",
+            Reply::Started => "started",
+            Reply::Done { outcome, .. } => match outcome {
+                Outcome::Ether => "ether",
+                Outcome::Exception(_) => "exception",
+                Outcome::Interrupted { .. } => "interrupted",
+                Outcome::Aborted => "aborted",
+                Outcome::Fault(_) => "fault reply",
+            },
         },
         Event::Fault(f) => match f.kind {
             FaultKind::Panic(_) => "panic",
