@@ -21,22 +21,36 @@ use std::sync::{Arc, Mutex};
 
 use bip_engine::bip_model::PropertyKind;
 use bip_engine::{
-    CodelId, Engine, Event, Next, RealClock, Reply, System, Ticket, Trace, Until, VirtualClock,
+    CodelId, Engine, Event, Next, RealClock, Reply, RequestError, System, Ticket, Trace, Until,
+    VirtualClock,
 };
 
-/// The arguments the supervisor sends with its requests.
+/// The arguments the supervisor sends with its requests, of the types rover.ron
+/// declares (the engine refuses a request with another type).
 #[derive(Clone, Copy, Debug)]
 pub enum Arg {
     None,
-    /// `rflex.TrackSpeed`: the cruise speed (m/s), unless navigation gives a set point.
+    /// `rflex.TrackSpeed` (`Float`): the cruise speed (m/s), unless navigation gives a
+    /// set point.
     Speed(f64),
-    /// `ndd.GoTo`: the goal on the x axis (m).
+    /// `ndd.GoTo` (`Float`): the goal on the x axis (m).
     Goal(f64),
-    /// `antenna.Communicate`: packets to send.
-    Packets(u32),
+    /// `antenna.Communicate` (`Int(1, 10)`): packets to send.
+    Packets(i64),
 }
 
-/// Port data (GenoM ports): written by one module's codels, read by others.
+impl Arg {
+    fn request(self, engine: &mut Engine, m: &str, s: &str) -> Result<Ticket, RequestError> {
+        match self {
+            Arg::None => engine.request(m, s, ()),
+            Arg::Speed(v) | Arg::Goal(v) => engine.request(m, s, v),
+            Arg::Packets(n) => engine.request(m, s, n),
+        }
+    }
+}
+
+/// Port data (GenoM ports): written by one module's codels, read by others, of the types
+/// rover.ron declares (`Odometry` and `Pose` are records there; the others Rust types).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Odometry {
     pub x: f64,
@@ -86,6 +100,8 @@ pub struct Report {
     pub replies: Vec<(String, Ticket, String)>,
     /// Each held codel (`module.Service.codel`) with the conditions that hold it.
     pub held: Vec<(String, Vec<String>)>,
+    /// Where ndd.GoTo stopped, from each of its replies' output.
+    pub stopped_at: Vec<f64>,
     pub overruns: usize,
     /// Codel runs past their WCET, and task periods past their deadline.
     pub over_budget: usize,
@@ -146,10 +162,7 @@ pub fn run(
             Next::Yield("pause::track")
         })
         .codel(("rflex", "TrackSpeed", "track"), move |ctx| {
-            let cruise = match ctx.args::<Arg>() {
-                Some(Arg::Speed(v)) => *v,
-                _ => 0.0,
-            };
+            let cruise = ctx.args::<f64>().copied().unwrap_or(0.0);
             let mut w = w1.lock().unwrap_or_else(|p| p.into_inner());
             let v = w.nav_speed.unwrap_or(cruise);
             w.x += v * tick_s;
@@ -181,13 +194,12 @@ pub fn run(
         // ndd: drive towards the goal, stop at it, give up before the rock
         .codel(("ndd", "GoTo", "start"), |_| Next::Yield("pause::move"))
         .codel(("ndd", "GoTo", "move"), move |ctx| {
-            let goal = match ctx.args::<Arg>() {
-                Some(Arg::Goal(x)) => *x,
-                _ => 0.0,
-            };
+            let goal = ctx.args::<f64>().copied().unwrap_or(0.0);
             let x = ctx.port::<Pose>("pom", "pose").map_or(0.0, |p| p.x);
             let ahead = ctx.port::<Scan>("sick", "scan").map_or(0.0, |s| s.ahead);
             let mut w = w3.lock().unwrap_or_else(|p| p.into_inner());
+            // GoTo's output (`Float`): where the rover stopped
+            ctx.set_output(x);
             if (goal - x).abs() < 0.05 {
                 w.nav_speed = None;
                 Next::ETHER
@@ -223,13 +235,10 @@ pub fn run(
             Next::Yield("pause::send")
         })
         .codel(("antenna", "Communicate", "send"), move |ctx| {
-            let want = match ctx.args::<Arg>() {
-                Some(Arg::Packets(n)) => *n,
-                _ => 1,
-            };
+            let want = ctx.args::<i64>().copied().unwrap_or(1);
             let mut w = w5.lock().unwrap_or_else(|p| p.into_inner());
             w.sent += 1;
-            if w.sent >= want {
+            if i64::from(w.sent) >= want {
                 Next::ETHER
             } else {
                 Next::Yield("pause::send")
@@ -285,6 +294,7 @@ pub fn run(
         },
         replies: Vec::new(),
         held: Vec::new(),
+        stopped_at: Vec::new(),
         overruns: 0,
         over_budget: 0,
         faults: 0,
@@ -292,7 +302,7 @@ pub fn run(
     let mut script = SCRIPT.iter().peekable();
     for tick in 0..TICKS {
         while let Some((_, m, s, arg)) = script.next_if(|r| r.0 <= tick) {
-            let t = engine.request(m, s, *arg)?;
+            let t = arg.request(&mut engine, m, s)?;
             say(format!(
                 "[{:>5.1} s] supervisor: request #{} {m}.{s} {arg:?}",
                 engine.inspect().now_us() as f64 / 1e6,
@@ -391,6 +401,12 @@ impl Report {
                     Reply::Refused(_) => event.to_string(),
                     _ => reply.to_string(),
                 };
+                if let Reply::Done {
+                    output: Some(out), ..
+                } = reply
+                {
+                    self.stopped_at.extend(out.get::<f64>());
+                }
                 self.replies.push((service.to_string(), *ticket, text));
             }
             Event::Held { codel, reasons, .. } => {

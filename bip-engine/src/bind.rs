@@ -7,12 +7,14 @@ use crate::prelude::*;
 
 use alloc::sync::Arc;
 
+use bip_model::genom::map::DataType;
 use bip_model::genom::{CodelMap, Condition};
 use bip_model::{Pick, Role, System};
 
 use crate::codel::{CodelInfo, Field};
 use crate::error::BuildError;
 use crate::event::{Codel, CodelId, Output, Reasons, Service, ServiceId, Ticket};
+use crate::types::Args;
 
 /// What an interaction is to the engine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,6 +108,8 @@ pub(crate) struct ServiceTable {
     pub request: u32,
     pub owned: bool,
     pub refusals: Vec<Condition>,
+    /// What its requests' arguments may be.
+    pub args: Args,
     pub activity: Option<ActivityTable>,
 }
 
@@ -169,6 +173,8 @@ pub(crate) struct Tables {
     pub activities: Vec<Watched>,
     /// (module, port) per port store entry.
     pub ports: Vec<(String, String)>,
+    /// The declared type of each port's data.
+    pub port_types: Vec<Option<DataType>>,
     /// The system has internal transitions: without any, the engine need not look for
     /// their steps (a GenoM layer has none).
     pub has_internal: bool,
@@ -202,6 +208,7 @@ impl Tables {
             activity_of: vec![None; system.components.len()],
             activities: Vec::new(),
             ports: Vec::new(),
+            port_types: Vec::new(),
             has_internal: system.summary().internal_transitions > 0,
             time: Vec::new(),
             progress_mask: Vec::new(),
@@ -233,6 +240,7 @@ impl Tables {
                 .extend(m.tasks.iter().map(|k| (u64::from(k.period), k.deadline_us)));
             for p in &m.ports {
                 t.ports.push((m.name.clone(), p.name.clone()));
+                t.port_types.push(p.ty.clone());
             }
             for s in &m.services {
                 let sid = t.services.len() as u32;
@@ -313,6 +321,7 @@ impl Tables {
                             fields: fields.clone(),
                             writable,
                             ports,
+                            output: s.output.clone(),
                         },
                         ids_field,
                         period_ticks,
@@ -334,6 +343,11 @@ impl Tables {
                     request: s.request,
                     owned: s.owned_by_model,
                     refusals: s.refusals.clone(),
+                    args: Args {
+                        service: format!("{}.{}", m.name, s.name),
+                        ty: s.args.clone(),
+                        has_codels: !s.codels.is_empty(),
+                    },
                     activity,
                 });
             }

@@ -252,8 +252,18 @@ pub enum FaultKind {
     UndeclaredIdsWrite(String),
     /// It left an ids field out of its range.
     IdsOutOfRange { field: String, value: i64 },
-    /// It wrote a port its `writes` does not list, or gave a port data of another type.
+    /// It wrote a port its `writes` does not list.
     PortWrite(String),
+    /// It read a port (`module.port`) the model does not have.
+    NoSuchPort(String),
+    /// It wrote or read a port, or gave its service an output, with a value of another
+    /// type than the model declares (or than the port holds): `what` it did, the type
+    /// `expected` in words, the Rust type `given`.
+    WrongType {
+        what: String,
+        expected: String,
+        given: &'static str,
+    },
     /// The error path taken because a replayed trace takes it (the trace does not say
     /// whether an exception or a fault led there).
     Replayed,
@@ -277,8 +287,14 @@ impl fmt::Display for FaultKind {
                 write!(f, "left ids field `{field}` at {value}, outside its range")
             }
             FaultKind::PortWrite(p) => {
-                write!(f, "wrote port `{p}` it may not write, or with another type")
+                write!(f, "wrote port `{p}`, which its `writes` does not list")
             }
+            FaultKind::NoSuchPort(p) => write!(f, "read port `{p}`, which the model does not have"),
+            FaultKind::WrongType {
+                what,
+                expected,
+                given,
+            } => write!(f, "{what} with a `{given}`, where the model has {expected}"),
             FaultKind::Replayed => f.write_str("took its error path (replayed)"),
             FaultKind::NotAllowed => f.write_str("its outcome has no step in the model here"),
         }

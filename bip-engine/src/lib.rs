@@ -80,6 +80,7 @@ pub mod replay;
 pub mod simulate;
 #[cfg(feature = "std")]
 mod threads;
+mod types;
 
 /// Loading a model file into a [`System`] (bip-lang), with errors in the file's terms.
 #[cfg(feature = "std")]

@@ -116,7 +116,7 @@ fn serve(mut codels: Vec<(CodelInfo, CodelFn)>, jobs: Receiver<Job>, done: SyncS
                     info,
                     ids: &mut job.ids,
                     written: &mut job.written,
-                    fault: &mut job.fault,
+                    fault: core::cell::Cell::from_mut(&mut job.fault),
                     ports: &mut job.ports,
                     args: job.args.as_deref(),
                     output: Some(&mut job.output),

@@ -166,7 +166,10 @@ impl EngineBuilder {
                 t.step_moves_request(i, &pool[at as usize..(at + width) as usize])
             })
             .collect();
-        let ports = PortStore::new(core::mem::take(&mut t.ports));
+        let ports = PortStore::new(
+            core::mem::take(&mut t.ports),
+            core::mem::take(&mut t.port_types),
+        );
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
         let activities = t.activities.len();
         #[cfg(feature = "std")]

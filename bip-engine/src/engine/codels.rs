@@ -212,7 +212,7 @@ impl Engine {
             info: &self.t.codels[ck].info,
             ids: &mut self.runner.ids,
             written: &mut self.runner.written,
-            fault: &mut self.runner.fault,
+            fault: core::cell::Cell::from_mut(&mut self.runner.fault),
             ports: &mut self.runner.ports,
             args,
             output,
@@ -232,6 +232,16 @@ impl Engine {
             let kind = match f {
                 CtxFault::IdsWrite(x) => FaultKind::UndeclaredIdsWrite(x),
                 CtxFault::PortWrite(p) => FaultKind::PortWrite(p),
+                CtxFault::NoPort(p) => FaultKind::NoSuchPort(p),
+                CtxFault::WrongType {
+                    what,
+                    expected,
+                    given,
+                } => FaultKind::WrongType {
+                    what,
+                    expected,
+                    given,
+                },
             };
             return fault(&c.name, kind);
         }

@@ -18,6 +18,12 @@ impl Engine {
     /// ([`crate::Ctx::args`]). The engine serves it at its next quiescent point: the reply
     /// ([`Event::Reply`]) says whether the model accepted it, and later how the activity
     /// ended.
+    ///
+    /// `()` sends no arguments. Any other value must be of the type the service declares
+    /// (docs/model.md, "Data types": `Float` is an `f64`, `Int` an `i64` within its range,
+    /// a record or a Rust type a type of that name), or, if it declares none, go to an
+    /// activity: a function has no codel to read arguments. Otherwise the request is an
+    /// error that names the service and both types.
     pub fn request<A: Any + Send>(
         &mut self,
         module: &str,
@@ -25,6 +31,7 @@ impl Engine {
         args: A,
     ) -> Result<Ticket, RequestError> {
         let s = self.request_target(module, service)?;
+        self.t.services[s as usize].args.check(&args)?;
         let ticket = self.new_ticket();
         self.requests
             .inbox

@@ -4,7 +4,8 @@
 use crate::common;
 
 use bip_engine::{
-    DefaultCodels, Engine, Event, FaultKind, Next, Outcome, RealClock, Reply, Stepped, Until,
+    DefaultCodels, Engine, EngineBuilder, Event, FaultKind, Next, Outcome, RealClock, Reply,
+    RequestError, Stepped, Until,
 };
 use common::*;
 
@@ -249,4 +250,142 @@ fn bip_engine_alone_loads_a_model_and_names_its_types() {
     let err = bip_engine::load_str("bad.ron", "System(name: 3)").expect_err("bad");
     let debug = format!("{err:?}");
     assert!(debug.starts_with("bad.ron:1:"), "{debug}");
+}
+
+/// rover.ron declares `rflex.TrackSpeed`'s arguments a `Float`: an `f32` is refused when
+/// it is sent (it used to reach the codel as `None`, and the rover drove at speed 0), as
+/// are arguments to a function, and an `Int` outside its range.
+#[test]
+fn request_arguments_are_checked_against_the_declared_type() {
+    let mut e = Engine::builder(load("rover.ron"))
+        .default_codels(DefaultCodels::FirstYield)
+        .build()
+        .expect("builds");
+    let err = e
+        .request("rflex", "TrackSpeed", 0.5f32)
+        .expect_err("an f32 for a Float");
+    assert_eq!(
+        err.to_string(),
+        "rflex.TrackSpeed takes arguments of type Float (a Rust `f64`), not a `f32`"
+    );
+    e.request("rflex", "TrackSpeed", 0.5f64).expect("an f64");
+    e.request("rflex", "TrackSpeed", ()).expect("no arguments");
+    let err = e.request("rflex", "Init", 1.0).expect_err("a function");
+    assert!(
+        matches!(&err, RequestError::NoArguments { service, given: "f64" } if service == "rflex.Init"),
+        "{err}"
+    );
+    let err = e
+        .request("antenna", "Communicate", 20i64)
+        .expect_err("out of Int(1, 10)");
+    assert_eq!(
+        err.to_string(),
+        "antenna.Communicate takes arguments of type Int(1, 10); 20 is outside it"
+    );
+    e.request("antenna", "Communicate", 3i64).expect("in range");
+    // from another thread too
+    let h = e.handle();
+    let err = h
+        .request("ndd", "GoTo", "far away")
+        .err()
+        .expect("a &str for a Float");
+    assert!(
+        matches!(err, RequestError::WrongArguments { given: "&str", .. }),
+        "{err}"
+    );
+}
+
+/// The rover's `odo` is a record `Odometry`: a codel that writes it with another type, or
+/// reads it as another type, or gives GoTo (a `Float` output) an `f32`, is faulty, and
+/// the fault names the port or service and both types.
+#[test]
+fn port_data_and_outputs_of_another_type_are_faults() {
+    #[derive(Default)]
+    struct Odometry {
+        x: f64,
+    }
+    // the faults of a run with these requests, sent in phases six ticks apart
+    let fault_of = |b: EngineBuilder, phases: &[&[(&str, &str)]]| -> Vec<String> {
+        let mut e = b
+            .default_codels(DefaultCodels::FirstYield)
+            .build()
+            .expect("builds");
+        for requests in phases {
+            for (m, s) in *requests {
+                e.request(m, s, ()).expect("queued");
+            }
+            e.run_until(Until::Ticks(6)).expect("runs");
+        }
+        e.events()
+            .filter_map(|ev| match ev {
+                Event::Fault(f) => Some(f.to_string()),
+                _ => None,
+            })
+            .collect()
+    };
+    let drive: &[&[(&str, &str)]] = &[&[("rflex", "Init"), ("rflex", "TrackSpeed")]];
+    let wrong_write =
+        Engine::builder(load("rover.ron")).codel(("rflex", "TrackSpeed", "track"), |ctx| {
+            ctx.write_port("odo", 1.5f32);
+            Next::Yield("pause::track")
+        });
+    let got = fault_of(wrong_write, drive);
+    assert!(
+        got.first().is_some_and(|f| f
+            == "codel rflex.TrackSpeed.track wrote port `rflex.odo` with a `f32`, where the model has Record Odometry (a Rust `Odometry`)"),
+        "{got:?}"
+    );
+    let good_write =
+        Engine::builder(load("rover.ron")).codel(("rflex", "TrackSpeed", "track"), |ctx| {
+            if let Some(odo) = ctx.port_mut::<Odometry>("odo") {
+                odo.x += 1.0;
+            }
+            Next::Yield("pause::track")
+        });
+    assert_eq!(fault_of(good_write, drive), Vec::<String>::new());
+    // pom reads the odometry as an f64
+    let wrong_read = Engine::builder(load("rover.ron"))
+        .codel(("rflex", "TrackSpeed", "track"), |ctx| {
+            ctx.write_port("odo", Odometry { x: 1.0 });
+            Next::Yield("pause::track")
+        })
+        .codel(("pom", "Track", "fuse"), |ctx| {
+            let x = ctx.port::<f64>("rflex", "odo").copied().unwrap_or(0.0);
+            ctx.write_port("pose", x);
+            Next::Yield("pause::fuse")
+        });
+    let got = fault_of(
+        wrong_read,
+        &[&[("rflex", "Init"), ("rflex", "TrackSpeed"), ("pom", "Track")]],
+    );
+    assert!(
+        got.first().is_some_and(|f| f
+            == "codel pom.Track.fuse read port `rflex.odo` with a `f64`, where the model has Record Odometry (a Rust `Odometry`)"),
+        "{got:?}"
+    );
+    let misspelt = Engine::builder(load("rover.ron")).codel(("pom", "Track", "fuse"), |ctx| {
+        let _ = ctx.port::<Odometry>("rflex", "odometry");
+        Next::Yield("pause::fuse")
+    });
+    let got = fault_of(misspelt, &[&[("pom", "Track")]]);
+    assert!(
+        got.first().is_some_and(
+            |f| f.ends_with("read port `rflex.odometry`, which the model does not have")
+        ),
+        "{got:?}"
+    );
+    // an output of another type
+    let wrong_output = Engine::builder(load("rover.ron")).codel(("ndd", "GoTo", "start"), |ctx| {
+        ctx.set_output(1.0f32);
+        Next::Yield("pause::move")
+    });
+    let got = fault_of(
+        wrong_output,
+        &[&[("sick", "Scan"), ("pom", "Track")], &[("ndd", "GoTo")]],
+    );
+    assert!(
+        got.iter().any(|f| f
+            == "codel ndd.GoTo.start gave ndd.GoTo an output with a `f32`, where the model has Float (a Rust `f64`)"),
+        "{got:?}"
+    );
 }

@@ -84,7 +84,19 @@ fn fingerprint(
             (!services.is_empty() && r.below(12) == 0).then(|| services[r.below(services.len())])
         };
         if let Some((m, s)) = request {
-            let t = e.request(m, s, k).expect("requestable");
+            // untyped arguments go to activities that declare none: a function has no
+            // codel to read them (the codels here read none)
+            let untyped = system
+                .genom
+                .as_ref()
+                .and_then(|g| g.service(m, s))
+                .is_some_and(|x| !x.codels.is_empty() && x.args.is_none());
+            let t = if !untyped {
+                e.request(m, s, ())
+            } else {
+                e.request(m, s, k)
+            };
+            let t = t.expect("requestable");
             writeln!(log, "request {m}.{s} {t:?}").expect("writes");
         }
         let before = e.inspect().now_us();

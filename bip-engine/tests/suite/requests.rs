@@ -161,13 +161,19 @@ fn an_exclusive_start_is_held_with_the_constraint_then_runs_when_it_is_free() {
     assert_invariants(e.inspect().system(), &states);
 }
 
+const BLOCKED: f64 = 1.0;
+const LOST: f64 = 2.0;
+const ARRIVE: f64 = 3.0;
+const WANDER: f64 = 4.0;
+
 #[test]
 fn replies_carry_the_outcome_ether_exception_interrupted_and_bad_transition() {
     let mut e = rover()
-        .codel(("ndd", "GoTo", "move"), |ctx| match ctx.args::<&str>() {
-            Some(&"blocked") => Next::Throw("e_blocked"),
-            Some(&"lost") => Next::Yield("nowhere"),
-            Some(&"arrive") => Next::ETHER,
+        // the goal (a `Float`, rover.ron's type of GoTo's arguments) says what happens
+        .codel(("ndd", "GoTo", "move"), |ctx| match ctx.args::<f64>() {
+            Some(&BLOCKED) => Next::Throw("e_blocked"),
+            Some(&LOST) => Next::Yield("nowhere"),
+            Some(&ARRIVE) => Next::ETHER,
             _ => Next::Yield("pause::move"),
         })
         .build()
@@ -176,7 +182,7 @@ fn replies_carry_the_outcome_ether_exception_interrupted_and_bad_transition() {
     e.request("sick", "Scan", ()).expect("queued");
     e.request("pom", "Track", ()).expect("queued");
     e.run_until(Until::Ticks(4)).expect("runs");
-    let mut outcome_of = |args: &'static str| {
+    let mut outcome_of = |args: f64| {
         let t = e.request("ndd", "GoTo", args).expect("queued");
         e.run_until(Until::Ticks(4)).expect("runs");
         let got = replies(&mut e);
@@ -186,12 +192,12 @@ fn replies_carry_the_outcome_ether_exception_interrupted_and_bad_transition() {
             _ => None,
         })
     };
-    assert_eq!(outcome_of("arrive"), Some(Outcome::Ether));
+    assert_eq!(outcome_of(ARRIVE), Some(Outcome::Ether));
     assert_eq!(
-        outcome_of("blocked"),
+        outcome_of(BLOCKED),
         Some(Outcome::Exception("e_blocked".into()))
     );
-    let lost = outcome_of("lost");
+    let lost = outcome_of(LOST);
     assert!(
         matches!(
             &lost,
@@ -203,9 +209,9 @@ fn replies_carry_the_outcome_ether_exception_interrupted_and_bad_transition() {
         "{lost:?}"
     );
     // a goal that never arrives is replaced by the next one: interrupted
-    let first = e.request("ndd", "GoTo", "wander").expect("queued");
+    let first = e.request("ndd", "GoTo", WANDER).expect("queued");
     e.run_until(Until::Ticks(3)).expect("runs");
-    let second = e.request("ndd", "GoTo", "arrive").expect("queued");
+    let second = e.request("ndd", "GoTo", ARRIVE).expect("queued");
     e.run_until(Until::Ticks(5)).expect("runs");
     let got = replies(&mut e);
     // replaced by the next request of the same service

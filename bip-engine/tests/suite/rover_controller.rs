@@ -63,10 +63,17 @@ fn the_rover_controller_plays_its_script_within_the_model() {
             .collect::<Vec<_>>(),
         [
             "done: aborted by a rule of the model",
-            "done: ether",
-            "done: exception e_blocked"
+            "done: ether, with an output",
+            "done: exception e_blocked, with an output"
         ],
         "{log}"
+    );
+    // GoTo's output (a `Float` in rover.ron): where the rover stopped, at the goal (1 m)
+    // then before the rock (2 m)
+    assert!(
+        matches!(r.stopped_at.as_slice(), [a, b] if (a - 1.0).abs() < 0.05 && *b < 2.0),
+        "{:?}",
+        r.stopped_at
     );
     assert!(reply_texts(&r, "antenna.Communicate").contains(&"done: ether"));
     assert_eq!((r.overruns, r.faults), (1, 0), "{log}");

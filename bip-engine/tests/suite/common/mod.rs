@@ -104,7 +104,11 @@ pub fn random_codels(
                 let throws: Vec<&'static str> = c.throws.iter().map(|t| leak(t)).collect();
                 let ids: Vec<(&'static str, i64, i64)> =
                     c.ids.iter().map(|f| (leak(&f.name), f.lo, f.hi)).collect();
-                let ports: Vec<&'static str> = c.writes.iter().map(|p| leak(p)).collect();
+                // a port of a declared type takes only that type: the random `u64` goes to
+                // the others (and is drawn for every port, so that the runs stay the same)
+                let typed = |p: &str| m.ports.iter().any(|x| x.name == p && x.ty.is_some());
+                let ports: Vec<(&'static str, bool)> =
+                    c.writes.iter().map(|p| (leak(p), typed(p))).collect();
                 let rng = rng.clone();
                 let overruns = overruns.clone();
                 b = b.codel((&m.name, &s.name, &c.state), move |ctx| {
@@ -121,8 +125,11 @@ pub fn random_codels(
                             ctx.set(name, v);
                         }
                     }
-                    for &p in &ports {
-                        ctx.write_port(p, r.next_u64());
+                    for &(p, typed) in &ports {
+                        let v = r.next_u64();
+                        if !typed {
+                            ctx.write_port(p, v);
+                        }
                     }
                     if let Some(clock) = &overruns {
                         if r.below(40) == 0 {
