@@ -389,3 +389,12 @@ fn port_data_and_outputs_of_another_type_are_faults() {
         "{got:?}"
     );
 }
+
+#[path = "../../examples/minimal.rs"]
+mod minimal;
+
+/// The minimal example, a newcomer's first copy, runs and its run is a path of the model.
+#[test]
+fn the_minimal_example_runs() {
+    minimal::main().unwrap_or_else(|e| panic!("the minimal example fails: {e}"));
+}
