@@ -38,7 +38,10 @@ pub fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("{event}");
     }
     if let Some(odo) = engine.inspect().port::<Odometry>("rflex", "odo") {
-        println!("odometry: x {:.2} m, travelled {:.2} m", odo.x, odo.travelled);
+        println!(
+            "odometry: x {:.2} m, travelled {:.2} m",
+            odo.x, odo.travelled
+        );
     }
 
     // the run is a path of the model: its step relation accepts every step

@@ -114,6 +114,10 @@ const CRATES: &[Layers] = &[
         ],
     },
     Layers {
+        src: "codegen/src",
+        layers: &[("names", &["names"]), ("text", &["emit"])],
+    },
+    Layers {
         src: "bip-lang/src",
         layers: &[
             ("positions", &["source", "excerpt", "diag"]),
