@@ -6,6 +6,7 @@
 //! command is wrong, 3 the result is inconclusive.
 
 mod check;
+mod codegen;
 mod exit;
 mod expand;
 mod export;
@@ -71,6 +72,9 @@ enum Command {
     /// step by step, and show where the property fails. Exit code 0: a recording replayed,
     /// 1: the trace's failure (or witness) is reached, 2: the trace does not fit the model.
     Replay(replay::Args),
+    /// Write the Rust bindings of the model's GenoM layer (per codel an enum of its
+    /// outcomes, per module a trait of its codels; docs/codegen.md) to a file.
+    Codegen(codegen::Args),
 }
 
 fn main() -> ExitCode {
@@ -85,6 +89,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(&args),
         Command::Replay(args) => replay::run(&args),
         Command::Sched(args) => sched::run(&args),
+        Command::Codegen(args) => codegen::run(&args),
     };
     ExitCode::from(code)
 }
