@@ -81,7 +81,8 @@ pub struct Handle {
     services: Arc<Vec<(String, String, bool, Args)>>,
 }
 
-/// The replies to one request: `Accepted` then `Done`, or `Refused`.
+/// The replies to one request: `Accepted`, then `Started` (an activity) and `Done`; or
+/// `Refused`.
 pub struct PendingReply {
     rx: Receiver<(Ticket, Reply)>,
 }
