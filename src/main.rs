@@ -6,6 +6,7 @@
 //! command is wrong, 3 the result is inconclusive.
 
 mod check;
+mod codegen;
 mod exit;
 mod expand;
 mod export;
@@ -78,6 +79,9 @@ enum Command {
     Graph(graph::Args),
     /// Show a trace in the model's terms, as text and as a sequence chart (SVG).
     Trace(trace::Args),
+    /// Write the Rust bindings of the model's GenoM layer (per codel an enum of its
+    /// outcomes, per module a trait of its codels; docs/codegen.md) to a file.
+    Codegen(codegen::Args),
 }
 
 fn main() -> ExitCode {
@@ -94,6 +98,7 @@ fn main() -> ExitCode {
         Command::Sched(args) => sched::run(&args),
         Command::Graph(args) => graph::run(&args),
         Command::Trace(args) => trace::run(&args),
+        Command::Codegen(args) => codegen::run(&args),
     };
     ExitCode::from(code)
 }

@@ -19,24 +19,38 @@
 use std::error::Error;
 use std::sync::{Arc, Mutex};
 
+use bip_engine::bip_model::PropertyKind;
 use bip_engine::{
-    CodelId, Engine, Event, Next, Outcome, RealClock, Refusal, Reply, Ticket, Until, VirtualClock,
+    CodelId, Engine, Event, Next, RealClock, Reply, RequestError, System, Ticket, Trace, Until,
+    VirtualClock,
 };
-use bip_model::{PropertyKind, System, Trace};
 
-/// The arguments the supervisor sends with its requests.
+/// The arguments the supervisor sends with its requests, of the types rover.ron
+/// declares (the engine refuses a request with another type).
 #[derive(Clone, Copy, Debug)]
 pub enum Arg {
     None,
-    /// `rflex.TrackSpeed`: the cruise speed (m/s), unless navigation gives a set point.
+    /// `rflex.TrackSpeed` (`Float`): the cruise speed (m/s), unless navigation gives a
+    /// set point.
     Speed(f64),
-    /// `ndd.GoTo`: the goal on the x axis (m).
+    /// `ndd.GoTo` (`Float`): the goal on the x axis (m).
     Goal(f64),
-    /// `antenna.Communicate`: packets to send.
-    Packets(u32),
+    /// `antenna.Communicate` (`Int(1, 10)`): packets to send.
+    Packets(i64),
 }
 
-/// Port data (GenoM ports): written by one module's codels, read by others.
+impl Arg {
+    fn request(self, engine: &mut Engine, m: &str, s: &str) -> Result<Ticket, RequestError> {
+        match self {
+            Arg::None => engine.request(m, s, ()),
+            Arg::Speed(v) | Arg::Goal(v) => engine.request(m, s, v),
+            Arg::Packets(n) => engine.request(m, s, n),
+        }
+    }
+}
+
+/// Port data (GenoM ports): written by one module's codels, read by others, of the types
+/// rover.ron declares (`Odometry` and `Pose` are records there; the others Rust types).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Odometry {
     pub x: f64,
@@ -86,6 +100,8 @@ pub struct Report {
     pub replies: Vec<(String, Ticket, String)>,
     /// Each held codel (`module.Service.codel`) with the conditions that hold it.
     pub held: Vec<(String, Vec<String>)>,
+    /// Where ndd.GoTo stopped, from each of its replies' output.
+    pub stopped_at: Vec<f64>,
     pub overruns: usize,
     /// Codel runs past their WCET, and task periods past their deadline.
     pub over_budget: usize,
@@ -123,7 +139,7 @@ pub fn run(
     real_time: bool,
     say: &mut dyn FnMut(String),
 ) -> Result<Report, Box<dyn Error>> {
-    let system = bip_lang::load_file(model).map_err(|e| e.summary())?;
+    let system = bip_engine::load_file(model)?;
     let world = Arc::new(Mutex::new(World {
         x: 0.0,
         rock_x: 2.0,
@@ -146,10 +162,7 @@ pub fn run(
             Next::Yield("pause::track")
         })
         .codel(("rflex", "TrackSpeed", "track"), move |ctx| {
-            let cruise = match ctx.args::<Arg>() {
-                Some(Arg::Speed(v)) => *v,
-                _ => 0.0,
-            };
+            let cruise = ctx.args::<f64>().copied().unwrap_or(0.0);
             let mut w = w1.lock().unwrap_or_else(|p| p.into_inner());
             let v = w.nav_speed.unwrap_or(cruise);
             w.x += v * tick_s;
@@ -181,13 +194,12 @@ pub fn run(
         // ndd: drive towards the goal, stop at it, give up before the rock
         .codel(("ndd", "GoTo", "start"), |_| Next::Yield("pause::move"))
         .codel(("ndd", "GoTo", "move"), move |ctx| {
-            let goal = match ctx.args::<Arg>() {
-                Some(Arg::Goal(x)) => *x,
-                _ => 0.0,
-            };
+            let goal = ctx.args::<f64>().copied().unwrap_or(0.0);
             let x = ctx.port::<Pose>("pom", "pose").map_or(0.0, |p| p.x);
             let ahead = ctx.port::<Scan>("sick", "scan").map_or(0.0, |s| s.ahead);
             let mut w = w3.lock().unwrap_or_else(|p| p.into_inner());
+            // GoTo's output (`Float`): where the rover stopped
+            ctx.set_output(x);
             if (goal - x).abs() < 0.05 {
                 w.nav_speed = None;
                 Next::ETHER
@@ -223,13 +235,10 @@ pub fn run(
             Next::Yield("pause::send")
         })
         .codel(("antenna", "Communicate", "send"), move |ctx| {
-            let want = match ctx.args::<Arg>() {
-                Some(Arg::Packets(n)) => *n,
-                _ => 1,
-            };
+            let want = ctx.args::<i64>().copied().unwrap_or(1);
             let mut w = w5.lock().unwrap_or_else(|p| p.into_inner());
             w.sent += 1;
-            if w.sent >= want {
+            if i64::from(w.sent) >= want {
                 Next::ETHER
             } else {
                 Next::Yield("pause::send")
@@ -280,11 +289,12 @@ pub fn run(
         system: system.clone(),
         trace: Trace {
             system: system.name.clone(),
-            verdict: bip_model::Verdict::None,
+            verdict: bip_engine::bip_model::Verdict::None,
             steps: Vec::new(),
         },
         replies: Vec::new(),
         held: Vec::new(),
+        stopped_at: Vec::new(),
         overruns: 0,
         over_budget: 0,
         faults: 0,
@@ -292,7 +302,7 @@ pub fn run(
     let mut script = SCRIPT.iter().peekable();
     for tick in 0..TICKS {
         while let Some((_, m, s, arg)) = script.next_if(|r| r.0 <= tick) {
-            let t = engine.request(m, s, *arg)?;
+            let t = arg.request(&mut engine, m, s)?;
             say(format!(
                 "[{:>5.1} s] supervisor: request #{} {m}.{s} {arg:?}",
                 engine.inspect().now_us() as f64 / 1e6,
@@ -301,30 +311,33 @@ pub fn run(
         }
         engine.run_until(Until::Ticks(1))?;
         let now = engine.inspect().now_us() as f64 / 1e6;
-        let events: Vec<Event> = engine.events().collect();
-        for event in events {
+        let mut battery_reported = false;
+        // events name their codel or service: each prints as one line (`Display`)
+        for event in engine.events() {
             let held_before = report.held.len();
-            let line = describe(&engine, &event, &mut report);
+            report.note(&event);
             // a codel held again for the same reasons is said once
             let repeated = report.held.len() > held_before
                 && report.held[..held_before].contains(&report.held[held_before]);
             if !repeated {
-                say(format!("[{now:>5.1} s] {line}"));
+                say(format!("[{now:>5.1} s] {event}"));
             }
-            // the battery module's report: the charge the model's battery atom holds
             if let Event::Reply {
                 service,
-                reply: Reply::Done(_),
+                reply: Reply::Done { .. },
                 ..
-            } = event
+            } = &event
             {
-                if engine.inspect().service_name(service) == ("battery", "Report") {
-                    say(format!(
-                        "[{now:>5.1} s] battery: charge {} of 3",
-                        system.value(engine.inspect().state(), pack, level)
-                    ));
-                }
+                battery_reported |=
+                    (service.module.as_str(), service.name.as_str()) == ("battery", "Report");
             }
+        }
+        // the battery module's report: the charge the model's battery atom holds
+        if battery_reported {
+            say(format!(
+                "[{now:>5.1} s] battery: charge {} of 3",
+                system.value(engine.inspect().state(), pack, level)
+            ));
         }
     }
     let stats = engine.inspect().stats();
@@ -374,78 +387,35 @@ pub fn run(
     Ok(report)
 }
 
-/// One line for an event, noted in the report.
-fn describe(engine: &Engine, event: &Event, report: &mut Report) -> String {
-    match event {
-        Event::Reply {
-            ticket,
-            service,
-            reply,
-        } => {
-            let (m, s) = engine.inspect().service_name(*service);
-            let text = match reply {
-                Reply::Accepted => "accepted".to_string(),
-                Reply::Refused(Refusal::Conditions(r)) => format!(
-                    "REFUSED: {}",
-                    engine
-                        .inspect()
-                        .refusal_texts(*service, *r)
-                        .collect::<Vec<_>>()
-                        .join("; ")
-                ),
-                Reply::Refused(Refusal::NotEnabled) => "REFUSED: not enabled now".to_string(),
-                Reply::Done(Outcome::Ether) => "done: ether".to_string(),
-                Reply::Done(o) => format!("done: {o}"),
-            };
-            report
-                .replies
-                .push((format!("{m}.{s}"), *ticket, text.clone()));
-            format!("reply to #{} {m}.{s}: {text}", ticket.0)
-        }
-        Event::Held { codel, reasons, .. } => {
-            let (m, s, c) = engine.inspect().codel_name(*codel);
-            let why: Vec<String> = engine.inspect().hold_texts(*codel, *reasons).collect();
-            let line = format!("held: {m}.{s} codel `{c}` waits for {}", why.join("; "));
-            report.held.push((format!("{m}.{s}.{c}"), why));
-            line
-        }
-        Event::Fault(f) => {
-            report.faults += 1;
-            let (m, s, c) = engine.inspect().codel_name(f.codel);
-            format!("FAULT: {m}.{s}.{c} {}", f.kind)
-        }
-        Event::Overrun {
-            codel,
-            took_us,
-            period_us,
-        } => {
-            report.overruns += 1;
-            let (m, s, c) = engine.inspect().codel_name(*codel);
-            format!(
-                "overrun: {m}.{s}.{c} took {} ms, its period is {} ms",
-                took_us / 1000,
-                period_us / 1000
-            )
-        }
-        Event::WcetExceeded {
-            codel,
-            took_us,
-            wcet_us,
-        } => {
-            report.over_budget += 1;
-            let (m, s, c) = engine.inspect().codel_name(*codel);
-            format!("over budget: {m}.{s}.{c} took {took_us} µs, its WCET is {wcet_us} µs")
-        }
-        Event::DeadlineMissed {
-            codel,
-            elapsed_us,
-            deadline_us,
-        } => {
-            report.over_budget += 1;
-            let (m, s, _) = engine.inspect().codel_name(*codel);
-            format!(
-                "deadline missed: {m}.{s}'s task ended its period's work {elapsed_us} µs after its release, past {deadline_us} µs"
-            )
+impl Report {
+    /// Notes what the test looks at: replies, held codels, overruns, budgets, faults.
+    fn note(&mut self, event: &Event) {
+        match event {
+            Event::Reply {
+                ticket,
+                service,
+                reply,
+            } => {
+                let text = match reply {
+                    // the refused conditions are named by the event, from its service
+                    Reply::Refused(_) => event.to_string(),
+                    _ => reply.to_string(),
+                };
+                if let Reply::Done {
+                    output: Some(out), ..
+                } = reply
+                {
+                    self.stopped_at.extend(out.get::<f64>());
+                }
+                self.replies.push((service.to_string(), *ticket, text));
+            }
+            Event::Held { codel, reasons, .. } => {
+                let why = reasons.iter().map(|k| codel.holds[k].clone()).collect();
+                self.held.push((codel.to_string(), why));
+            }
+            Event::Fault(_) => self.faults += 1,
+            Event::Overrun { .. } => self.overruns += 1,
+            Event::WcetExceeded { .. } | Event::DeadlineMissed { .. } => self.over_budget += 1,
         }
     }
 }

@@ -7,12 +7,14 @@ use crate::prelude::*;
 
 use alloc::sync::Arc;
 
+use bip_model::genom::map::DataType;
 use bip_model::genom::{CodelMap, Condition};
 use bip_model::{Pick, Role, System};
 
 use crate::codel::{CodelInfo, Field};
 use crate::error::BuildError;
-use crate::event::{Reasons, Ticket};
+use crate::event::{Codel, CodelId, Output, Reasons, Service, ServiceId, Ticket};
+use crate::types::Args;
 
 /// What an interaction is to the engine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,6 +44,8 @@ pub(crate) enum PortKind {
 }
 
 pub(crate) struct CodelTable {
+    /// What events say of it.
+    pub name: Arc<Codel>,
     pub map: CodelMap,
     pub service: u32,
     /// The module's component (where the ids are).
@@ -94,6 +98,8 @@ impl CodelTable {
 }
 
 pub(crate) struct ServiceTable {
+    /// What events say of it.
+    pub name_ref: Arc<Service>,
     pub module: String,
     pub name: String,
     /// The activity's task.
@@ -102,6 +108,8 @@ pub(crate) struct ServiceTable {
     pub request: u32,
     pub owned: bool,
     pub refusals: Vec<Condition>,
+    /// What its requests' arguments may be.
+    pub args: Args,
     pub activity: Option<ActivityTable>,
 }
 
@@ -121,6 +129,8 @@ pub(crate) struct ActivityTable {
     pub pending: Option<Ticket>,
     pub current_args: Option<Box<dyn core::any::Any + Send>>,
     pub pending_args: Option<Box<dyn core::any::Any + Send>>,
+    /// What the current request's codels gave as its output so far.
+    pub output: Option<Output>,
 }
 
 /// An activity as a quiescent point looks at it ([`Rest`]), and the held codel last
@@ -163,6 +173,8 @@ pub(crate) struct Tables {
     pub activities: Vec<Watched>,
     /// (module, port) per port store entry.
     pub ports: Vec<(String, String)>,
+    /// The declared type of each port's data.
+    pub port_types: Vec<Option<DataType>>,
     /// The system has internal transitions: without any, the engine need not look for
     /// their steps (a GenoM layer has none).
     pub has_internal: bool,
@@ -196,6 +208,7 @@ impl Tables {
             activity_of: vec![None; system.components.len()],
             activities: Vec::new(),
             ports: Vec::new(),
+            port_types: Vec::new(),
             has_internal: system.summary().internal_transitions > 0,
             time: Vec::new(),
             progress_mask: Vec::new(),
@@ -227,6 +240,7 @@ impl Tables {
                 .extend(m.tasks.iter().map(|k| (u64::from(k.period), k.deadline_us)));
             for p in &m.ports {
                 t.ports.push((m.name.clone(), p.name.clone()));
+                t.port_types.push(p.ty.clone());
             }
             for s in &m.services {
                 let sid = t.services.len() as u32;
@@ -289,6 +303,13 @@ impl Tables {
                         })
                         .collect();
                     t.codels.push(CodelTable {
+                        name: Arc::new(Codel {
+                            id: CodelId(cid),
+                            module: m.name.clone(),
+                            service: s.name.clone(),
+                            state: c.state.clone(),
+                            holds: c.holds.iter().map(ToString::to_string).collect(),
+                        }),
                         map: c.clone(),
                         service: sid,
                         module_component: m.component,
@@ -300,6 +321,7 @@ impl Tables {
                             fields: fields.clone(),
                             writable,
                             ports,
+                            output: s.output.clone(),
                         },
                         ids_field,
                         period_ticks,
@@ -309,12 +331,23 @@ impl Tables {
                     });
                 }
                 t.services.push(ServiceTable {
+                    name_ref: Arc::new(Service {
+                        id: ServiceId(sid),
+                        module: m.name.clone(),
+                        name: s.name.clone(),
+                        refusals: s.refusals.iter().map(ToString::to_string).collect(),
+                    }),
                     module: m.name.clone(),
                     name: s.name.clone(),
                     task: s.task.and_then(|k| m.tasks.get(k)).map(|t| t.name.clone()),
                     request: s.request,
                     owned: s.owned_by_model,
                     refusals: s.refusals.clone(),
+                    args: Args {
+                        service: format!("{}.{}", m.name, s.name),
+                        ty: s.args.clone(),
+                        has_codels: !s.codels.is_empty(),
+                    },
                     activity,
                 });
             }
@@ -473,5 +506,6 @@ fn activity_table(
         pending: None,
         current_args: None,
         pending_args: None,
+        output: None,
     })
 }

@@ -8,6 +8,12 @@ pub trait Clock: Send {
     fn now_us(&self) -> u64;
     /// Waits until `t_us` (a real clock sleeps; a virtual clock jumps there at once).
     fn sleep_until(&self, t_us: u64);
+    /// Whether time passes only when told (a virtual clock). The engine then moves it to
+    /// the next tick whenever nothing else can happen, in `Engine::step` as in
+    /// `Engine::run_until`: time passes as a real clock's would by itself. Default false.
+    fn is_virtual(&self) -> bool {
+        false
+    }
 }
 
 /// Time that passes only when told: tests and simulations run as fast as the machine
@@ -41,6 +47,10 @@ impl Clock for VirtualClock {
     fn sleep_until(&self, t_us: u64) {
         self.now
             .fetch_max(t_us, core::sync::atomic::Ordering::SeqCst);
+    }
+
+    fn is_virtual(&self) -> bool {
+        true
     }
 }
 

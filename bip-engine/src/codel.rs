@@ -1,12 +1,16 @@
 //! Codels: what a codel returns ([`Next`]), what it sees ([`Ctx`]), and how the engine
 //! runs one (bound, by default, or on its task's thread).
 
-use core::any::Any;
+use core::any::{type_name, Any};
+use core::cell::Cell;
 
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use crate::ports::PortStore;
+use bip_model::genom::map::DataType;
+
+use crate::event::Output;
+use crate::ports::{PortStore, WrongType};
 
 /// What a codel returns: where its activity goes next, or an exception.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,6 +50,8 @@ pub(crate) struct CodelInfo {
     pub writable: u64,
     /// The ports the codel may write: (index in the port store, name).
     pub ports: Vec<(usize, String)>,
+    /// The declared type of its service's output.
+    pub output: Option<DataType>,
 }
 
 /// Something a codel did that the model does not allow; the engine makes it a fault.
@@ -53,6 +59,22 @@ pub(crate) struct CodelInfo {
 pub(crate) enum CtxFault {
     IdsWrite(String),
     PortWrite(String),
+    NoPort(String),
+    WrongType {
+        what: String,
+        expected: String,
+        given: &'static str,
+    },
+}
+
+impl CtxFault {
+    fn port(verb: &str, w: WrongType) -> CtxFault {
+        CtxFault::WrongType {
+            what: format!("{verb} port `{}`", w.port),
+            expected: w.expected,
+            given: w.given,
+        }
+    }
 }
 
 /// The codel's view: its module's ids (staged: the engine commits them with the codel's
@@ -61,9 +83,12 @@ pub struct Ctx<'a> {
     pub(crate) info: &'a CodelInfo,
     pub(crate) ids: &'a mut [i64],
     pub(crate) written: &'a mut u64,
-    pub(crate) fault: &'a mut Option<CtxFault>,
+    /// The first rule it broke (a cell: reading a port with the wrong type is one).
+    pub(crate) fault: &'a Cell<Option<CtxFault>>,
     pub(crate) ports: &'a mut PortStore,
     pub(crate) args: Option<&'a (dyn Any + Send)>,
+    /// The output of the request the activity serves.
+    pub(crate) output: Option<&'a mut Option<Output>>,
     pub(crate) now_us: u64,
     pub(crate) tick: u64,
 }
@@ -80,6 +105,13 @@ impl Ctx<'_> {
     /// The codel state being run (`"start"`, `"main"`, ...).
     pub fn state(&self) -> &str {
         &self.info.state
+    }
+
+    /// Notes what the codel did wrong, if it did nothing wrong before.
+    #[cold]
+    fn fault(&self, f: CtxFault) {
+        let first = self.fault.take();
+        self.fault.set(Some(first.unwrap_or(f)));
     }
 
     fn field(&self, name: &str) -> Option<usize> {
@@ -105,11 +137,7 @@ impl Ctx<'_> {
                 self.ids[k] = value;
                 *self.written |= 1 << k;
             }
-            _ => {
-                if self.fault.is_none() {
-                    *self.fault = Some(CtxFault::IdsWrite(field.to_string()));
-                }
-            }
+            _ => self.fault(CtxFault::IdsWrite(field.to_string())),
         }
     }
 
@@ -117,14 +145,27 @@ impl Ctx<'_> {
         self.set(field, i64::from(value));
     }
 
-    /// The data last written on port `port` of module `module`, if any and of type `T`.
+    /// The data last written on port `port` of module `module`, if any. Reading a port
+    /// the model does not have, or as another type than the port's (the model's type, or
+    /// the type of the data it holds), is a fault (and gives `None`).
     pub fn port<T: Any>(&self, module: &str, port: &str) -> Option<&T> {
-        self.ports.get(module, port)
+        let Some(k) = self.ports.index(module, port) else {
+            self.fault(CtxFault::NoPort(format!("{module}.{port}")));
+            return None;
+        };
+        match self.ports.read::<T>(k) {
+            Ok(v) => v,
+            Err(w) => {
+                self.fault(CtxFault::port("read", w));
+                None
+            }
+        }
     }
 
     /// The data of an out port of this codel's module that it lists in `writes`, created
     /// with `T::default()` on first use, for the codel to update in place. Any other port,
-    /// or data of another type than the port holds, is a fault (and gives `None`).
+    /// or data of another type than the port's (the model's type, or the type of the
+    /// data it holds), is a fault (and gives `None`).
     ///
     /// Port data is written in place: the model restarts the port's age only on a normal
     /// outcome, so a reader that checks `age` (a `Fresh` constraint) never relies on data
@@ -136,14 +177,19 @@ impl Ctx<'_> {
             .iter()
             .find(|(_, name)| name == port)
             .map(|&(k, _)| k);
-        let got = match slot {
-            Some(k) => self.ports.get_mut_or_default::<T>(k),
-            None => None,
+        let Some(k) = slot else {
+            self.fault(CtxFault::PortWrite(port.to_string()));
+            return None;
         };
-        if got.is_none() && self.fault.is_none() {
-            *self.fault = Some(CtxFault::PortWrite(port.to_string()));
+        match self.ports.get_mut_or_default::<T>(k) {
+            Ok(v) => Some(v),
+            Err(w) => {
+                let first = self.fault.take();
+                self.fault
+                    .set(Some(first.unwrap_or(CtxFault::port("wrote", w))));
+                None
+            }
         }
-        got
     }
 
     /// Replaces the data of an out port this codel writes (see [`Ctx::port_mut`]).
@@ -156,6 +202,25 @@ impl Ctx<'_> {
     /// The arguments of the request the activity serves, if they are a `T`.
     pub fn args<T: Any>(&self) -> Option<&T> {
         self.args.and_then(|a| a.downcast_ref())
+    }
+
+    /// Gives the output of the request the activity serves: its reply
+    /// ([`crate::Reply::Done`]) carries the last output its codels gave.
+    /// An output of another type than the model declares for the service is a fault.
+    pub fn set_output<T: Any + Send + Sync>(&mut self, value: T) {
+        if let Some(ty) = &self.info.output {
+            if !ty.accepts(type_name::<T>()) {
+                self.fault(CtxFault::WrongType {
+                    what: format!("gave {}.{} an output", self.info.module, self.info.service),
+                    expected: format!("{ty} (a Rust `{}`)", ty.rust_name()),
+                    given: type_name::<T>(),
+                });
+                return;
+            }
+        }
+        if let Some(o) = self.output.as_deref_mut() {
+            *o = Some(Output::new(value));
+        }
     }
 
     /// The engine's time, in microseconds since it started.

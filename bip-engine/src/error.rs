@@ -41,6 +41,24 @@ pub enum RequestError {
     UnknownService(String, String),
     #[error("requests for {0}.{1} come from a component of the model, not from outside")]
     OwnedByModel(String, String),
+    #[error("{service} is a function or attribute: no codel reads arguments, yet a `{given}` was given (send `()`)")]
+    NoArguments {
+        service: String,
+        given: &'static str,
+    },
+    #[error("{service} takes arguments of type {declared} (a Rust `{rust}`), not a `{given}`")]
+    WrongArguments {
+        service: String,
+        declared: String,
+        rust: String,
+        given: &'static str,
+    },
+    #[error("{service} takes arguments of type {declared}; {value} is outside it")]
+    ArgumentsOutOfRange {
+        service: String,
+        declared: String,
+        value: i64,
+    },
 }
 
 /// `Engine::step_as` (replay, simulation) could not take the step.

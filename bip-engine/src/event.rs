@@ -1,6 +1,9 @@
-//! What the engine reports: replies to requests, faults, overruns, held codels.
+//! What the engine reports: replies to requests, faults, overruns, held codels. Every
+//! event carries the names of the codel or service it is about, so that it reads (its
+//! `Display`) in the model's terms without asking the engine.
 
 use alloc::sync::Arc;
+use core::any::Any;
 use core::fmt;
 
 #[allow(unused_imports)]
@@ -44,23 +47,77 @@ impl Reasons {
     }
 }
 
+/// A codel of the model, as events name it: its id and its names.
+#[derive(Debug, PartialEq, Eq, Hash)]
+pub struct Codel {
+    pub id: CodelId,
+    pub module: String,
+    pub service: String,
+    /// Its codel state (`"start"`, `"track"`, ...).
+    pub state: String,
+    /// Its `holds` conditions as the model writes them, in order: [`Event::Held`]'s
+    /// reasons index them.
+    pub holds: Vec<String>,
+}
+
+/// A service of the model, as events name it: its id and its names.
+#[derive(Debug, PartialEq, Eq, Hash)]
+pub struct Service {
+    pub id: ServiceId,
+    pub module: String,
+    pub name: String,
+    /// Its `refusals` conditions as the model writes them, in order:
+    /// [`Refusal::Conditions`] indexes them.
+    pub refusals: Vec<String>,
+}
+
+impl fmt::Display for Codel {
+    /// `module.Service.codel`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}.{}.{}", self.module, self.service, self.state)
+    }
+}
+
+impl fmt::Display for Service {
+    /// `module.Service`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}.{}", self.module, self.name)
+    }
+}
+
+/// Writes the conditions of `list` that `reasons` names, separated by `; `.
+fn conditions(f: &mut fmt::Formatter<'_>, list: &[String], reasons: Reasons) -> fmt::Result {
+    for (n, k) in reasons.iter().enumerate() {
+        if n > 0 {
+            f.write_str("; ")?;
+        }
+        match list.get(k) {
+            Some(c) => f.write_str(c)?,
+            None => write!(f, "condition {k}")?,
+        }
+    }
+    Ok(())
+}
+
 /// A callback for every event.
 pub type EventFn = Box<dyn FnMut(&Event) + Send>;
 
 /// Something the engine reports. Drain them with [`crate::Engine::events`], or receive
-/// them as they happen with [`crate::EngineBuilder::on_event`].
+/// them as they happen with [`crate::EngineBuilder::on_event`]. An event names what it is
+/// about ([`Codel`], [`Service`]), and its `Display` is one line in the model's terms:
+/// `#2 rflex.TrackSpeed: refused: after rflex.Init`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Event {
-    /// About a request: accepted, refused, or its activity's outcome.
+    /// About a request: accepted, refused, its activity started, or its outcome.
     Reply {
         ticket: Ticket,
-        service: ServiceId,
+        service: Arc<Service>,
         reply: Reply,
     },
     /// A codel's start or run is held by conditions that fail (the activity waits for
     /// them; it runs as soon as they hold). Reported once per change.
     Held {
-        codel: CodelId,
+        codel: Arc<Codel>,
         /// The request the activity serves, if the engine accepted it.
         ticket: Option<Ticket>,
         /// Bits into the codel's `holds`; empty if no listed condition fails (an extending
@@ -71,14 +128,14 @@ pub enum Event {
     Fault(Fault),
     /// A codel ran longer than its task's period; its result was committed.
     Overrun {
-        codel: CodelId,
+        codel: Arc<Codel>,
         took_us: u64,
         period_us: u64,
     },
     /// A codel ran longer than its declared WCET (docs/model.md, "Time budgets"); its
     /// result was committed.
     WcetExceeded {
-        codel: CodelId,
+        codel: Arc<Codel>,
         took_us: u64,
         wcet_us: u64,
     },
@@ -86,7 +143,7 @@ pub enum Event {
     /// (the period, unless the model gives one): the task's work of this period is late.
     /// Reported once per period.
     DeadlineMissed {
-        codel: CodelId,
+        codel: Arc<Codel>,
         elapsed_us: u64,
         deadline_us: u64,
     },
@@ -99,15 +156,59 @@ pub enum Reply {
     Accepted,
     /// The model does not allow the request now.
     Refused(Refusal),
+    /// The activity left `ether`: its `start` codel ran.
+    Started,
     /// The activity ended (a function ends when it is accepted).
-    Done(Outcome),
+    Done {
+        outcome: Outcome,
+        /// What its codels gave with [`crate::Ctx::set_output`], the last they gave.
+        output: Option<Output>,
+    },
+}
+
+impl Reply {
+    /// The activity ended with `outcome` and no output.
+    pub fn done(outcome: Outcome) -> Reply {
+        Reply::Done {
+            outcome,
+            output: None,
+        }
+    }
+}
+
+/// A service's output: a value of any type, shared by the replies that carry it.
+#[derive(Clone)]
+pub struct Output(pub(crate) Arc<dyn Any + Send + Sync>);
+
+impl Output {
+    pub fn new<T: Any + Send + Sync>(value: T) -> Output {
+        Output(Arc::new(value))
+    }
+
+    /// The output, if it is a `T`.
+    pub fn get<T: Any>(&self) -> Option<&T> {
+        self.0.downcast_ref()
+    }
+}
+
+impl PartialEq for Output {
+    /// The same output: the one a codel gave.
+    fn eq(&self, other: &Output) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+impl fmt::Debug for Output {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("Output(..)")
+    }
 }
 
 /// Why a request was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Refusal {
     /// These conditions of the service's `refusals` fail (`already requested or active`,
-    /// `after ...`, a constraint on a function).
+    /// `after ...`, a constraint on a function): [`Service::refusals`] says them.
     Conditions(Reasons),
     /// Every listed condition holds, yet the request interaction is not enabled: the guard
     /// or a port of a connector of yours that extends it, or a priority, forbids it now.
@@ -121,8 +222,13 @@ pub enum Outcome {
     Ether,
     /// A codel threw one of its declared exceptions.
     Exception(Arc<str>),
-    /// A request interrupted or replaced it, or a connector aborted it.
-    Interrupted,
+    /// A request interrupted it: a request of a service that `interrupts` it, or a new
+    /// request of the same service, which replaces it. `by` is that service (`None` when
+    /// a connector of the model sent the request on its own).
+    Interrupted { by: Option<Arc<Service>> },
+    /// A connector of the model aborted it through its `abort` port: a rule of the model
+    /// (a safety rule, a supervisor in the model), not a client.
+    Aborted,
     /// A codel was faulty (the error path was taken).
     Fault(Fault),
 }
@@ -130,7 +236,7 @@ pub enum Outcome {
 /// A faulty codel run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Fault {
-    pub codel: CodelId,
+    pub codel: Arc<Codel>,
     pub kind: FaultKind,
 }
 
@@ -146,8 +252,18 @@ pub enum FaultKind {
     UndeclaredIdsWrite(String),
     /// It left an ids field out of its range.
     IdsOutOfRange { field: String, value: i64 },
-    /// It wrote a port its `writes` does not list, or gave a port data of another type.
+    /// It wrote a port its `writes` does not list.
     PortWrite(String),
+    /// It read a port (`module.port`) the model does not have.
+    NoSuchPort(String),
+    /// It wrote or read a port, or gave its service an output, with a value of another
+    /// type than the model declares (or than the port holds): `what` it did, the type
+    /// `expected` in words, the Rust type `given`.
+    WrongType {
+        what: String,
+        expected: String,
+        given: &'static str,
+    },
     /// The error path taken because a replayed trace takes it (the trace does not say
     /// whether an exception or a fault led there).
     Replayed,
@@ -171,11 +287,24 @@ impl fmt::Display for FaultKind {
                 write!(f, "left ids field `{field}` at {value}, outside its range")
             }
             FaultKind::PortWrite(p) => {
-                write!(f, "wrote port `{p}` it may not write, or with another type")
+                write!(f, "wrote port `{p}`, which its `writes` does not list")
             }
+            FaultKind::NoSuchPort(p) => write!(f, "read port `{p}`, which the model does not have"),
+            FaultKind::WrongType {
+                what,
+                expected,
+                given,
+            } => write!(f, "{what} with a `{given}`, where the model has {expected}"),
             FaultKind::Replayed => f.write_str("took its error path (replayed)"),
             FaultKind::NotAllowed => f.write_str("its outcome has no step in the model here"),
         }
+    }
+}
+
+impl fmt::Display for Fault {
+    /// `codel rflex.TrackSpeed.track panicked: ...`
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "codel {} {}", self.codel, self.kind)
     }
 }
 
@@ -184,8 +313,93 @@ impl fmt::Display for Outcome {
         match self {
             Outcome::Ether => f.write_str("ether"),
             Outcome::Exception(e) => write!(f, "exception {e}"),
-            Outcome::Interrupted => f.write_str("interrupted"),
-            Outcome::Fault(x) => write!(f, "fault: {}", x.kind),
+            Outcome::Interrupted { by: Some(s) } => write!(f, "interrupted by a request of {s}"),
+            Outcome::Interrupted { by: None } => f.write_str("interrupted by a request"),
+            Outcome::Aborted => f.write_str("aborted by a rule of the model"),
+            Outcome::Fault(x) => write!(f, "fault: {x}"),
+        }
+    }
+}
+
+impl fmt::Display for Refusal {
+    /// Without the service's names: how many conditions fail. [`Event`]'s `Display`
+    /// says them.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Refusal::Conditions(r) => {
+                write!(f, "refused: {} of its conditions fail", r.iter().count())
+            }
+            Refusal::NotEnabled => f.write_str(
+                "refused: its conditions hold, but a connector or a priority of the model forbids it now",
+            ),
+        }
+    }
+}
+
+impl fmt::Display for Reply {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Reply::Accepted => f.write_str("accepted"),
+            Reply::Refused(r) => r.fmt(f),
+            Reply::Started => f.write_str("started"),
+            Reply::Done {
+                outcome,
+                output: None,
+            } => write!(f, "done: {outcome}"),
+            Reply::Done {
+                outcome,
+                output: Some(_),
+            } => write!(f, "done: {outcome}, with an output"),
+        }
+    }
+}
+
+impl fmt::Display for Event {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Event::Reply {
+                ticket,
+                service,
+                reply: Reply::Refused(Refusal::Conditions(r)),
+            } => {
+                write!(f, "#{} {service}: refused: ", ticket.0)?;
+                conditions(f, &service.refusals, *r)
+            }
+            Event::Reply {
+                ticket,
+                service,
+                reply,
+            } => write!(f, "#{} {service}: {reply}", ticket.0),
+            Event::Held { codel, reasons, .. } if reasons.is_empty() => write!(
+                f,
+                "{codel} held: a connector or a priority of the model forbids it now"
+            ),
+            Event::Held { codel, reasons, .. } => {
+                write!(f, "{codel} held: ")?;
+                conditions(f, &codel.holds, *reasons)
+            }
+            Event::Fault(x) => write!(f, "fault: {x}; its error path is taken"),
+            Event::Overrun {
+                codel,
+                took_us,
+                period_us,
+            } => write!(
+                f,
+                "overrun: {codel} took {took_us} µs, its task's period is {period_us} µs"
+            ),
+            Event::WcetExceeded {
+                codel,
+                took_us,
+                wcet_us,
+            } => write!(f, "over budget: {codel} took {took_us} µs, its WCET is {wcet_us} µs"),
+            Event::DeadlineMissed {
+                codel,
+                elapsed_us,
+                deadline_us,
+            } => write!(
+                f,
+                "deadline missed: {codel} ended its task's work {elapsed_us} µs after the release, past {deadline_us} µs"
+            ),
         }
     }
 }

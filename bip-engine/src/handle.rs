@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use crate::error::RequestError;
 use crate::event::{Event, Reply, Ticket};
+use crate::types::Args;
 
 /// A request from a [`Handle`], with where its replies go.
 pub(crate) struct RemoteRequest {
@@ -34,8 +35,8 @@ impl Remote {
     }
 
     /// A handle sending to this engine; `services` are (module, service, owned by the
-    /// model) by service index.
-    pub(crate) fn handle(&self, services: Arc<Vec<(String, String, bool)>>) -> Handle {
+    /// model, what its arguments may be) by service index.
+    pub(crate) fn handle(&self, services: Arc<Vec<(String, String, bool, Args)>>) -> Handle {
         Handle {
             tx: self.tx.clone(),
             services,
@@ -65,7 +66,7 @@ impl Remote {
             return;
         };
         let _ = self.waiting[k].1.send((*ticket, reply.clone()));
-        if matches!(reply, Reply::Refused(_) | Reply::Done(_)) {
+        if matches!(reply, Reply::Refused(_) | Reply::Done { .. }) {
             self.waiting.swap_remove(k);
         }
     }
@@ -75,11 +76,13 @@ impl Remote {
 #[derive(Clone)]
 pub struct Handle {
     tx: Sender<RemoteRequest>,
-    /// (module, service, owned by the model), by service index.
-    services: Arc<Vec<(String, String, bool)>>,
+    /// (module, service, owned by the model, what its arguments may be), by service
+    /// index.
+    services: Arc<Vec<(String, String, bool, Args)>>,
 }
 
-/// The replies to one request: `Accepted` then `Done`, or `Refused`.
+/// The replies to one request: `Accepted`, then `Started` (an activity) and `Done`; or
+/// `Refused`.
 pub struct PendingReply {
     rx: Receiver<(Ticket, Reply)>,
 }
@@ -107,13 +110,14 @@ impl Handle {
         let Some(k) = self
             .services
             .iter()
-            .position(|(m, s, _)| m == module && s == service)
+            .position(|(m, s, _, _)| m == module && s == service)
         else {
             return Err(RequestError::UnknownService(module.into(), service.into()));
         };
         if self.services[k].2 {
             return Err(RequestError::OwnedByModel(module.into(), service.into()));
         }
+        self.services[k].3.check(&args)?;
         let (reply, rx) = channel();
         // a closed engine simply never replies
         let _ = self.tx.send(RemoteRequest {

@@ -4,7 +4,7 @@
 //! ```no_run
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! use bip_engine::{Engine, Next, RealClock, Until};
-//! let system = bip_lang::load_file("robots/rover.ron")?;
+//! let system = bip_engine::load_file("robots/rover.ron")?;
 //! let mut engine = Engine::builder(system)
 //!     .codel(("rflex", "TrackSpeed", "track"), |ctx| {
 //!         // drive the wheels...
@@ -17,7 +17,7 @@
 //! engine.request("rflex", "TrackSpeed", ())?;
 //! engine.run_until(Until::Ticks(50))?;
 //! for event in engine.events() {
-//!     println!("{event:?}");
+//!     println!("{event}"); // "#2 rflex.TrackSpeed: started", in the model's names
 //! }
 //! # Ok(()) }
 //! ```
@@ -35,7 +35,12 @@
 //! - [`Engine::inspect`] is the read-only view: state, names, counters, the state cache's
 //!   figures, held codels. [`replay`] and [`simulate`] are `bip replay` and `bip simulate`.
 //!
-//! docs/engine.md describes the scheduling, requests, faults, time, threads and recording.
+//! - bip-engine re-exports what an embedder needs: [`load_file`] and [`load_str`]
+//!   (bip-lang's loader, with the `std` feature), and [`bip_model`] with [`System`],
+//!   [`State`] and [`Trace`]: one dependency suffices.
+//!
+//! docs/engine.md is the user's guide (embedding, binding, time, threads, faults, replies,
+//! recording, replay).
 //!
 //! # Features
 //! `std` (default): task threads, [`RealClock`], catching codel panics, [`Handle`] for
@@ -75,8 +80,15 @@ pub mod replay;
 pub mod simulate;
 #[cfg(feature = "std")]
 mod threads;
+mod types;
 
-pub use bip_model::CacheStats;
+/// Loading a model file into a [`System`] (bip-lang), with errors in the file's terms.
+#[cfg(feature = "std")]
+pub use bip_lang::{load_file, load_str, LoadError};
+/// The compiled model and its step relation (bip-model), which the engine's API hands
+/// out: an embedder depends on bip-engine alone.
+pub use bip_model;
+pub use bip_model::{CacheStats, State, System, Trace};
 pub use budgets::{CodelTimes, BUCKETS as CODEL_TIME_BUCKETS};
 pub use clock::Clock;
 #[cfg(feature = "std")]
@@ -87,7 +99,8 @@ pub use codel::{Args, CodelFn, Ctx, DefaultCodels, Next};
 pub use engine::{Engine, EngineBuilder, Inspect, Stats, Stepped, Until, DEFAULT_STATE_CACHE};
 pub use error::{BuildError, EngineError, RequestError};
 pub use event::{
-    CodelId, Event, EventFn, Fault, FaultKind, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket,
+    Codel, CodelId, Event, EventFn, Fault, FaultKind, Outcome, Output, Reasons, Refusal, Reply,
+    Service, ServiceId, Ticket,
 };
 #[cfg(feature = "std")]
 pub use handle::{Handle, PendingReply};

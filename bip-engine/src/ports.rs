@@ -1,22 +1,42 @@
 //! Port data (GenoM posters): the model tracks only a port's age; the data lives here,
 //! one value of any type per out port, written by the module's codels and read by anyone.
+//! A port whose type the model declares takes only values of that type; any port keeps
+//! the type of its first value.
 
-use core::any::Any;
+use core::any::{type_name, Any};
 
 #[allow(unused_imports)]
 use crate::prelude::*;
+
+use bip_model::genom::map::DataType;
 
 #[derive(Default)]
 pub(crate) struct PortStore {
     /// (module, port) names, in the GenoM map's order.
     names: Vec<(String, String)>,
-    values: Vec<Option<Box<dyn Any + Send>>>,
+    /// The declared type of each.
+    types: Vec<Option<DataType>>,
+    /// The value of each, and its Rust type's name.
+    values: Vec<Option<(Box<dyn Any + Send>, &'static str)>>,
+}
+
+/// A value of another type than a port takes: the port (`module.port`), what it takes
+/// in words, and the type given.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct WrongType {
+    pub port: String,
+    pub expected: String,
+    pub given: &'static str,
 }
 
 impl PortStore {
-    pub fn new(names: Vec<(String, String)>) -> PortStore {
+    pub fn new(names: Vec<(String, String)>, types: Vec<Option<DataType>>) -> PortStore {
         let values = names.iter().map(|_| None).collect();
-        PortStore { names, values }
+        PortStore {
+            names,
+            types,
+            values,
+        }
     }
 
     pub fn index(&self, module: &str, port: &str) -> Option<usize> {
@@ -27,16 +47,67 @@ impl PortStore {
 
     pub fn get<T: Any>(&self, module: &str, port: &str) -> Option<&T> {
         let k = self.index(module, port)?;
-        self.values[k].as_ref()?.downcast_ref()
+        self.values[k].as_ref()?.0.downcast_ref()
     }
 
-    /// The value at `k` as a `T`, created on first use; `None` if it holds another type.
-    pub fn get_mut_or_default<T: Any + Send + Default>(&mut self, k: usize) -> Option<&mut T> {
-        let slot = self.values.get_mut(k)?;
-        if slot.is_none() {
-            *slot = Some(Box::new(T::default()));
+    /// The value at `k` as a `T`: `None` if it has none yet; an error if it holds another
+    /// type, or if a `T` is not of the port's declared type.
+    pub fn read<T: Any>(&self, k: usize) -> Result<Option<&T>, WrongType> {
+        match &self.values[k] {
+            Some((v, held)) => match v.downcast_ref() {
+                Some(v) => Ok(Some(v)),
+                None => Err(self.wrong::<T>(k, held)),
+            },
+            None => match &self.types[k] {
+                Some(ty) if !ty.accepts(type_name::<T>()) => Err(self.wrong::<T>(k, "")),
+                _ => Ok(None),
+            },
         }
-        slot.as_mut()?.downcast_mut()
+    }
+
+    /// The value at `k` as a `T`, created with `T::default()` on first use (if a `T` is of
+    /// the port's declared type); an error if it holds another type.
+    pub fn get_mut_or_default<T: Any + Send + Default>(
+        &mut self,
+        k: usize,
+    ) -> Result<&mut T, WrongType> {
+        if self.values[k].is_none() {
+            if let Some(ty) = &self.types[k] {
+                if !ty.accepts(type_name::<T>()) {
+                    return Err(self.wrong::<T>(k, ""));
+                }
+            }
+            self.values[k] = Some((Box::new(T::default()), type_name::<T>()));
+        }
+        if !self.values[k].as_ref().is_some_and(|v| v.0.is::<T>()) {
+            let held = self.values[k].as_ref().map_or("", |v| v.1);
+            return Err(self.wrong::<T>(k, held));
+        }
+        // (a `T`, as just asked)
+        self.values[k]
+            .as_mut()
+            .and_then(|v| v.0.downcast_mut())
+            .ok_or_else(|| WrongType {
+                port: String::new(),
+                expected: String::new(),
+                given: type_name::<T>(),
+            })
+    }
+
+    /// What port `k` takes, against a `T` given: its declared type, else the type it
+    /// holds (`held`).
+    #[cold]
+    fn wrong<T>(&self, k: usize, held: &str) -> WrongType {
+        let expected = match &self.types[k] {
+            Some(ty) => format!("{ty} (a Rust `{}`)", ty.rust_name()),
+            None => format!("a `{held}`, the type it holds"),
+        };
+        let (m, p) = &self.names[k];
+        WrongType {
+            port: format!("{m}.{p}"),
+            expected,
+            given: type_name::<T>(),
+        }
     }
 }
 
@@ -47,7 +118,7 @@ impl core::fmt::Debug for PortStore {
                 self.names
                     .iter()
                     .zip(&self.values)
-                    .map(|((m, p), v)| (m, p, v.is_some())),
+                    .map(|((m, p), v)| (m, p, v.as_ref().map(|v| v.1))),
             )
             .finish()
     }

@@ -7,6 +7,7 @@ use std::thread::JoinHandle;
 
 use crate::bind::Tables;
 use crate::codel::{call_guarded, Body, CodelFn, CodelInfo, Ctx, CtxFault, Next};
+use crate::event::Output;
 use crate::ports::PortStore;
 
 /// A codel run sent to a task thread, and sent back with its result. Everything moves
@@ -18,6 +19,7 @@ pub(crate) struct Job {
     pub fault: Option<CtxFault>,
     pub ports: PortStore,
     pub args: Option<Box<dyn Any + Send>>,
+    pub output: Option<Output>,
     pub now_us: u64,
     pub tick: u64,
     pub result: Option<Result<Next, String>>,
@@ -114,9 +116,10 @@ fn serve(mut codels: Vec<(CodelInfo, CodelFn)>, jobs: Receiver<Job>, done: SyncS
                     info,
                     ids: &mut job.ids,
                     written: &mut job.written,
-                    fault: &mut job.fault,
+                    fault: core::cell::Cell::from_mut(&mut job.fault),
                     ports: &mut job.ports,
                     args: job.args.as_deref(),
+                    output: Some(&mut job.output),
                     now_us: job.now_us,
                     tick: job.tick,
                 };

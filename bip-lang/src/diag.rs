@@ -76,8 +76,9 @@ impl Errors {
     }
 }
 
-/// A model file that could not be loaded.
-#[derive(Debug)]
+/// A model file that could not be loaded. Its `Debug` is [`LoadError::summary`] (one line
+/// per error, `file:line:col: message`), so that `main` returning it with `?` prints the
+/// errors, not the model's text.
 pub enum LoadError {
     /// The file could not be read.
     Io {
@@ -139,6 +140,12 @@ impl LoadError {
                 .collect::<Vec<_>>()
                 .join("\n"),
         }
+    }
+}
+
+impl fmt::Debug for LoadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.summary())
     }
 }
 

@@ -69,7 +69,10 @@ const CRATES: &[Layers] = &[
     Layers {
         src: "bip-engine/src",
         layers: &[
-            ("values", &["clock", "policy", "ports", "error", "budgets"]),
+            (
+                "values",
+                &["clock", "policy", "ports", "error", "budgets", "types"],
+            ),
             (
                 "codels",
                 &["codel", "event", "bind", "chosen", "per_state", "record"],
@@ -118,6 +121,10 @@ const CRATES: &[Layers] = &[
             ("layout", &["layout"]),
             ("pictures", &["dot", "render", "chart", "timeline"]),
         ],
+    },
+    Layers {
+        src: "codegen/src",
+        layers: &[("names", &["names"]), ("text", &["emit"])],
     },
     Layers {
         src: "bip-lang/src",

@@ -5,6 +5,7 @@
 //! (`wide_models`), in one binary.
 
 mod check;
+mod codegen;
 mod common;
 mod engine;
 mod export;

@@ -22,7 +22,7 @@ use crate::record::Recording;
 
 /// How many states [`EngineBuilder::state_cache`] remembers by default: about 1.5 MiB
 /// for a model the size of robots/rover.ron, at the 1.5 KiB per state measured there
-/// (docs/engine.md, "The state cache").
+/// (docs/engine-internals.md, "The state cache").
 pub const DEFAULT_STATE_CACHE: usize = 1024;
 
 /// Builds an [`Engine`]: bind codels, choose a clock, a policy, recording.
@@ -111,7 +111,7 @@ impl EngineBuilder {
     /// Remembers up to `states` states of the model, with their enabled steps and the
     /// steps between them, so that a step taken before from the same state is looked up
     /// rather than computed (default [`DEFAULT_STATE_CACHE`]; 0: none). See
-    /// docs/engine.md, "The state cache", and [`crate::Inspect::cache_stats`].
+    /// docs/engine-internals.md, "The state cache", and [`crate::Inspect::cache_stats`].
     pub fn state_cache(mut self, states: usize) -> Self {
         self.state_cache = states;
         self
@@ -166,7 +166,10 @@ impl EngineBuilder {
                 t.step_moves_request(i, &pool[at as usize..(at + width) as usize])
             })
             .collect();
-        let ports = PortStore::new(core::mem::take(&mut t.ports));
+        let ports = PortStore::new(
+            core::mem::take(&mut t.ports),
+            core::mem::take(&mut t.port_types),
+        );
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
         let activities = t.activities.len();
         #[cfg(feature = "std")]

@@ -16,7 +16,7 @@ use super::{Engine, Stepped};
 use crate::bind::RunStep;
 use crate::codel::{call_guarded, Body, Ctx, CtxFault, DefaultCodels, Next};
 use crate::error::{EngineError, StepAsError};
-use crate::event::{CodelId, Event, Fault, FaultKind, Outcome};
+use crate::event::{Codel, CodelId, Event, Fault, FaultKind, Outcome};
 
 /// How a codel run ended, before its step is chosen.
 pub(super) enum CodelEnd {
@@ -67,7 +67,7 @@ impl Engine {
                     return Err(StepAsError::Diverged);
                 } else {
                     let fault = Fault {
-                        codel: CodelId(c),
+                        codel: Arc::clone(&self.t.codels[ck].name),
                         kind: FaultKind::NotAllowed,
                     };
                     Some(Outcome::Fault(fault))
@@ -107,8 +107,9 @@ impl Engine {
             tracing::warn!(target: "bip_engine", module = i.module.as_str(),
                 service = i.service.as_str(), codel = i.state.as_str(), took_us = took,
                 period_us, "codel overran its task's period");
+            let codel = Arc::clone(&self.t.codels[ck].name);
             self.emit(Event::Overrun {
-                codel: CodelId(c),
+                codel,
                 took_us: took,
                 period_us,
             });
@@ -148,17 +149,23 @@ impl Engine {
         let activity = self.t.services[service].activity.as_mut();
         #[cfg(feature = "std")]
         if let Body::Thread { worker, local } = self.runner.bodies[ck] {
-            let mut args_slot = activity.map(|a| {
-                if starting {
-                    &mut a.pending_args
-                } else {
-                    &mut a.current_args
+            // the request's arguments and output move to the thread and back
+            let (mut args_slot, mut output_slot) = match activity {
+                Some(a) => {
+                    let slot = if starting {
+                        &mut a.pending_args
+                    } else {
+                        &mut a.current_args
+                    };
+                    (Some(slot), Some(&mut a.output))
                 }
-            });
+                None => (None, None),
+            };
             let Some(workers) = self.runner.workers.as_mut() else {
                 return Err("no task threads".into());
             };
             let taken = args_slot.as_mut().and_then(|s| s.take());
+            let output = output_slot.as_mut().and_then(|s| s.take());
             let job = crate::threads::Job {
                 local,
                 ids: core::mem::take(&mut self.runner.ids),
@@ -166,6 +173,7 @@ impl Engine {
                 fault: None,
                 ports: core::mem::take(&mut self.runner.ports),
                 args: taken,
+                output,
                 now_us,
                 tick,
                 result: None,
@@ -181,15 +189,22 @@ impl Engine {
             if let Some(s) = args_slot {
                 *s = job.args.take();
             }
+            if let Some(s) = output_slot {
+                *s = job.output.take();
+            }
             return job.result.unwrap_or_else(|| Err("no result".into()));
         }
-        let args: Option<&(dyn Any + Send)> = activity.and_then(|a| {
-            if starting {
-                a.pending_args.as_deref()
-            } else {
-                a.current_args.as_deref()
+        let (args, output): (Option<&(dyn Any + Send)>, _) = match activity {
+            Some(a) => {
+                let args = if starting {
+                    a.pending_args.as_deref()
+                } else {
+                    a.current_args.as_deref()
+                };
+                (args, Some(&mut a.output))
             }
-        });
+            None => (None, None),
+        };
         let Body::Bound(f) = &mut self.runner.bodies[ck] else {
             return Err("not a bound codel".into());
         };
@@ -197,9 +212,10 @@ impl Engine {
             info: &self.t.codels[ck].info,
             ids: &mut self.runner.ids,
             written: &mut self.runner.written,
-            fault: &mut self.runner.fault,
+            fault: core::cell::Cell::from_mut(&mut self.runner.fault),
             ports: &mut self.runner.ports,
             args,
+            output,
             now_us,
             tick,
         };
@@ -208,33 +224,36 @@ impl Engine {
 
     pub(super) fn classify(&mut self, ck: usize, result: Result<Next, String>) -> CodelEnd {
         let c = &mut self.t.codels[ck];
-        let fault = |kind| {
-            CodelEnd::Failed(Outcome::Fault(Fault {
-                codel: CodelId(ck as u32),
-                kind,
-            }))
-        };
         let next = match result {
-            Err(msg) => return fault(FaultKind::Panic(msg)),
+            Err(msg) => return fault(&c.name, FaultKind::Panic(msg)),
             Ok(n) => n,
         };
         if let Some(f) = self.runner.fault.take() {
-            return fault(match f {
+            let kind = match f {
                 CtxFault::IdsWrite(x) => FaultKind::UndeclaredIdsWrite(x),
                 CtxFault::PortWrite(p) => FaultKind::PortWrite(p),
-            });
+                CtxFault::NoPort(p) => FaultKind::NoSuchPort(p),
+                CtxFault::WrongType {
+                    what,
+                    expected,
+                    given,
+                } => FaultKind::WrongType {
+                    what,
+                    expected,
+                    given,
+                },
+            };
+            return fault(&c.name, kind);
         }
         match next {
             Next::Yield(y) => match c.yield_index(y) {
-                None => fault(FaultKind::BadTransition(y)),
+                None => fault(&c.name, FaultKind::BadTransition(y)),
                 Some(k) => {
                     for (j, f) in c.info.fields.iter().enumerate() {
                         let v = self.runner.ids[j];
                         if self.runner.written >> j & 1 == 1 && (v < f.lo || v > f.hi) {
-                            return fault(FaultKind::IdsOutOfRange {
-                                field: f.name.clone(),
-                                value: v,
-                            });
+                            let field = f.name.clone();
+                            return fault(&c.name, FaultKind::IdsOutOfRange { field, value: v });
                         }
                     }
                     CodelEnd::Yielded { yield_k: k }
@@ -242,7 +261,7 @@ impl Engine {
             },
             Next::Throw(e) => match c.throws.iter().find(|x| &***x == e) {
                 Some(x) => CodelEnd::Failed(Outcome::Exception(Arc::clone(x))),
-                None => fault(FaultKind::UndeclaredException(e)),
+                None => fault(&c.name, FaultKind::UndeclaredException(e)),
             },
         }
     }
@@ -254,7 +273,7 @@ impl Engine {
         if forced {
             if self.forced_is(c.map.fail) {
                 return CodelEnd::Failed(Outcome::Fault(Fault {
-                    codel: CodelId(ck as u32),
+                    codel: Arc::clone(&c.name),
                     kind: FaultKind::Replayed,
                 }));
             }
@@ -422,8 +441,9 @@ impl Engine {
         tracing::warn!(target: "bip_engine", module = i.module.as_str(),
             service = i.service.as_str(), codel = i.state.as_str(), took_us, wcet_us,
             "codel ran past its WCET");
+        let codel = Arc::clone(&self.t.codels[ck].name);
         self.emit(Event::WcetExceeded {
-            codel: CodelId(ck as u32),
+            codel,
             took_us,
             wcet_us,
         });
@@ -437,10 +457,19 @@ impl Engine {
         tracing::warn!(target: "bip_engine", module = i.module.as_str(),
             service = i.service.as_str(), codel = i.state.as_str(), elapsed_us, deadline_us,
             "task's period work ended past its deadline");
+        let codel = Arc::clone(&self.t.codels[ck].name);
         self.emit(Event::DeadlineMissed {
-            codel: CodelId(ck as u32),
+            codel,
             elapsed_us,
             deadline_us,
         });
     }
+}
+
+/// The end of a faulty run of `codel`.
+fn fault(codel: &Arc<Codel>, kind: FaultKind) -> CodelEnd {
+    CodelEnd::Failed(Outcome::Fault(Fault {
+        codel: Arc::clone(codel),
+        kind,
+    }))
 }

@@ -1,6 +1,8 @@
 //! Held codels: activities with work to do whose codel has no step, reported once per
 //! change at quiescent points, with the conditions that hold them.
 
+use alloc::sync::Arc;
+
 #[allow(unused_imports)]
 use crate::prelude::*;
 
@@ -64,8 +66,9 @@ impl Engine {
         tracing::info!(target: "bip_engine", module = i.module.as_str(),
             service = i.service.as_str(), codel = i.state.as_str(), reasons = reasons.0,
             "codel held");
+        let codel = Arc::clone(&self.t.codels[c as usize].name);
         self.emit(Event::Held {
-            codel: CodelId(c),
+            codel,
             ticket,
             reasons,
         });

@@ -75,7 +75,14 @@ pub struct Stats {
     pub events_dropped: u64,
 }
 
-/// The runtime engine (see the module documentation and docs/engine.md).
+/// The runtime engine: it runs your codels and takes only the steps the model allows.
+///
+/// Build it with [`Engine::builder`] (bind every codel, or ask for default codels), send
+/// requests with [`Engine::request`], and drive it with [`Engine::step`] (one step; on a
+/// virtual clock an idle step moves time to the next tick) or [`Engine::run_until`] (steps,
+/// and waits for the ticks). [`Engine::events`] gives the replies, held codels and faults,
+/// each naming its service or codel; [`Engine::inspect`] is the read-only view;
+/// [`Engine::record`] the run as a trace. docs/engine.md is the user's guide.
 pub struct Engine {
     /// The model's state and its enabled steps: every step is committed through it.
     gate: Gate,

@@ -17,7 +17,8 @@ impl Engine {
                 .map(|k| {
                     let (m, s) = self.inspect().service_name(ServiceId(k));
                     let owned = self.request_target(m, s).is_err();
-                    (m.to_string(), s.to_string(), owned)
+                    let args = self.t.services[k as usize].args.clone();
+                    (m.to_string(), s.to_string(), owned, args)
                 })
                 .collect(),
         );

@@ -1,6 +1,7 @@
 //! Replies to requests, by following the activities' life cycles through the committed
 //! step's picks (docs/genom.md, section 2, the activity atom).
 
+use alloc::sync::Arc;
 use core::any::Any;
 
 #[allow(unused_imports)]
@@ -8,7 +9,7 @@ use crate::prelude::*;
 
 use super::Engine;
 use crate::bind::PortKind;
-use crate::event::{CodelId, Event, Fault, FaultKind, Outcome, Reply, ServiceId, Ticket};
+use crate::event::{Event, Fault, FaultKind, Outcome, Output, Reply, Ticket};
 
 /// Why a step is committed, for replies.
 pub(super) enum Cause {
@@ -48,7 +49,7 @@ impl Engine {
             };
             let tr = &self.gate.system().atom_of(p.component).transitions[p.transition as usize];
             let Some(port) = tr.port else { continue };
-            let Some(a) = self.t.services[svc as usize].activity.as_mut() else {
+            let Some(a) = self.t.services[svc as usize].activity.as_ref() else {
                 continue;
             };
             let kind = match a.port_kind.get(port as usize).copied().flatten() {
@@ -61,72 +62,83 @@ impl Engine {
             let slots = self.gate.previous().slots();
             let req_before = slots[a.req_slot as usize] != 0;
             let stopping_before = a.stopping_slot.is_some_and(|sl| slots[sl as usize] != 0);
-            let mut replies: [Option<(Ticket, Outcome)>; 3] = [None, None, None];
+            let mut replies: [Option<(Ticket, Reply)>; 3] = [None, None, None];
             let mut n = 0;
-            let mut reply = |t: Option<Ticket>, o: Outcome| {
+            let mut reply = |t: Option<Ticket>, r: Reply| {
                 if let Some(t) = t {
-                    replies[n] = Some((t, o));
+                    replies[n] = Some((t, r));
                     n += 1;
                 }
             };
-            match kind {
-                PortKind::Request => {
-                    let (ticket, args) = if req_service == Some(svc) {
-                        (req_ticket.take(), req_args.take())
-                    } else {
-                        (None, None)
-                    };
+            let done = |outcome: Outcome, output: Option<Output>| Reply::Done { outcome, output };
+            // what ends the activity of another request: a request (the service's own,
+            // which replaces it, or one that interrupts it), or the model's abort rule
+            let cut = match kind {
+                PortKind::Abort => Some(Outcome::Aborted),
+                PortKind::Request | PortKind::Interrupt => Some(Outcome::Interrupted {
+                    by: req_service.map(|s| Arc::clone(&self.t.services[s as usize].name_ref)),
+                }),
+                _ => None,
+            };
+            let Some(a) = self.t.services[svc as usize].activity.as_mut() else {
+                continue;
+            };
+            match (kind, cut) {
+                (_, Some(cut)) => {
                     if !from_ether && !stopping_before {
-                        reply(a.current.take(), Outcome::Interrupted);
+                        reply(a.current.take(), done(cut.clone(), a.output.take()));
                         a.current_args = None;
                     }
                     if req_before {
-                        reply(a.pending.take(), Outcome::Interrupted);
-                    }
-                    a.pending = ticket;
-                    a.pending_args = args;
-                }
-                PortKind::Interrupt | PortKind::Abort => {
-                    if !from_ether && !stopping_before {
-                        reply(a.current.take(), Outcome::Interrupted);
-                        a.current_args = None;
-                    }
-                    if req_before {
-                        reply(a.pending.take(), Outcome::Interrupted);
+                        reply(a.pending.take(), done(cut, None));
                         a.pending_args = None;
                     }
+                    if kind == PortKind::Request {
+                        let (ticket, args) = if req_service == Some(svc) {
+                            (req_ticket.take(), req_args.take())
+                        } else {
+                            (None, None)
+                        };
+                        a.pending = ticket;
+                        a.pending_args = args;
+                    }
                 }
-                PortKind::Run(_) => {
+                (PortKind::Run(_), None) => {
                     if from_ether {
                         a.current = a.pending.take();
                         a.current_args = a.pending_args.take();
+                        reply(a.current, Reply::Started);
                     }
                     if to_ether {
-                        reply(a.current.take(), Outcome::Ether);
+                        reply(a.current.take(), done(Outcome::Ether, a.output.take()));
                         a.current_args = None;
                     }
                 }
-                PortKind::Fail(_) => {
+                (PortKind::Fail(c), None) => {
                     if from_ether {
                         a.current = a.pending.take();
                         a.current_args = a.pending_args.take();
+                        reply(a.current, Reply::Started);
                     }
-                    let o = error.take().unwrap_or(Outcome::Fault(Fault {
-                        codel: CodelId(u32::MAX),
-                        kind: FaultKind::Replayed,
-                    }));
-                    reply(a.current.take(), o);
+                    let o = error.take().unwrap_or_else(|| {
+                        Outcome::Fault(Fault {
+                            codel: Arc::clone(&self.t.codels[c as usize].name),
+                            kind: FaultKind::Replayed,
+                        })
+                    });
+                    reply(a.current.take(), done(o, a.output.take()));
                     a.current_args = None;
                 }
-                PortKind::Tick => {}
+                _ => {}
             }
-            // taken in place: moving the array out would copy all three outcomes
+            // taken in place: moving the array out would copy all three replies
             for r in &mut replies[..n] {
-                if let Some((ticket, o)) = r.take() {
+                if let Some((ticket, reply)) = r.take() {
+                    let service = Arc::clone(&self.t.services[svc as usize].name_ref);
                     self.emit(Event::Reply {
                         ticket,
-                        service: ServiceId(svc),
-                        reply: Reply::Done(o),
+                        service,
+                        reply,
                     });
                 }
             }

@@ -2,6 +2,7 @@
 //! model enables their request interaction and refused with the failing conditions when
 //! not (docs/engine.md, "Requests, replies and refusals").
 
+use alloc::sync::Arc;
 use core::any::Any;
 
 #[allow(unused_imports)]
@@ -10,13 +11,19 @@ use crate::prelude::*;
 use super::replies::Cause;
 use super::{Engine, Stepped};
 use crate::error::{EngineError, RequestError};
-use crate::event::{Event, Outcome, Reasons, Refusal, Reply, ServiceId, Ticket};
+use crate::event::{Event, Outcome, Reasons, Refusal, Reply, Ticket};
 
 impl Engine {
     /// Queues a request for `module.service` with arguments its codels can read
     /// ([`crate::Ctx::args`]). The engine serves it at its next quiescent point: the reply
     /// ([`Event::Reply`]) says whether the model accepted it, and later how the activity
     /// ended.
+    ///
+    /// `()` sends no arguments. Any other value must be of the type the service declares
+    /// (docs/model.md, "Data types": `Float` is an `f64`, `Int` an `i64` within its range,
+    /// a record or a Rust type a type of that name), or, if it declares none, go to an
+    /// activity: a function has no codel to read arguments. Otherwise the request is an
+    /// error that names the service and both types.
     pub fn request<A: Any + Send>(
         &mut self,
         module: &str,
@@ -24,6 +31,7 @@ impl Engine {
         args: A,
     ) -> Result<Ticket, RequestError> {
         let s = self.request_target(module, service)?;
+        self.t.services[s as usize].args.check(&args)?;
         let ticket = self.new_ticket();
         self.requests
             .inbox
@@ -90,7 +98,7 @@ impl Engine {
             service = s.name.as_str(), "request refused");
         self.emit(Event::Reply {
             ticket,
-            service: ServiceId(service),
+            service: Arc::clone(&self.t.services[service as usize].name_ref),
             reply: Reply::Refused(refusal),
         });
         Ok(Stepped::Request {
@@ -109,7 +117,7 @@ impl Engine {
         self.stats.requests_accepted += 1;
         self.emit(Event::Reply {
             ticket,
-            service: ServiceId(service),
+            service: Arc::clone(&self.t.services[service as usize].name_ref),
             reply: Reply::Accepted,
         });
         self.commit(Cause::Request {
@@ -121,8 +129,8 @@ impl Engine {
             // a function or attribute runs at once
             self.emit(Event::Reply {
                 ticket,
-                service: ServiceId(service),
-                reply: Reply::Done(Outcome::Ether),
+                service: Arc::clone(&self.t.services[service as usize].name_ref),
+                reply: Reply::done(Outcome::Ether),
             });
         }
         Ok(())

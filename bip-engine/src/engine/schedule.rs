@@ -44,8 +44,32 @@ pub enum Until {
 }
 
 impl Engine {
-    /// Takes one step (see the module documentation).
+    /// Takes one step: a due tick, else a codel or another step of the model, else a
+    /// waiting request; else nothing can happen before the next tick, and it returns
+    /// [`Stepped::Idle`].
+    ///
+    /// Time: `step` never blocks. On a virtual clock (the default, [`crate::Clock::is_virtual`])
+    /// an idle step also moves the clock to the next tick, so the next `step` fires it:
+    /// calling `step` in a loop runs the model with time passing. On a real clock the
+    /// time comes by itself: after `Idle { next_tick_us: Some(t) }` wait until `t`
+    /// ([`Engine::wait_until`]) or call `step` again later. [`Engine::run_until`] steps
+    /// and waits for you on either clock. `Idle { next_tick_us: None }`: nothing can
+    /// happen until a request arrives (no time step is enabled).
     pub fn step(&mut self) -> Result<Stepped, EngineError> {
+        let stepped = self.step_once()?;
+        if let Stepped::Idle {
+            next_tick_us: Some(t),
+        } = stepped
+        {
+            if self.time.clock.is_virtual() {
+                self.time.clock.sleep_until(t);
+            }
+        }
+        Ok(stepped)
+    }
+
+    /// One step, without moving a virtual clock when idle.
+    fn step_once(&mut self) -> Result<Stepped, EngineError> {
         if let Some(e) = &self.stopped {
             return Err(EngineError::Stopped(e.clone()));
         }
@@ -102,7 +126,7 @@ impl Engine {
                 Until::TimeUs(t) if self.time.clock.now_us() >= t => return Ok(()),
                 _ => {}
             }
-            if let Stepped::Idle { next_tick_us } = self.step()? {
+            if let Stepped::Idle { next_tick_us } = self.step_once()? {
                 if until == Until::Quiescent {
                     return Ok(());
                 }

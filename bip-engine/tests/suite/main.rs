@@ -3,6 +3,7 @@
 //! requests, faults, replay, simulation, golden traces, the example controller, and the
 //! differential property test.
 
+mod api;
 mod budgets;
 mod common;
 mod faults;

@@ -36,7 +36,7 @@ fn run(model: usize, seed: u64, cache: usize, half_tables: bool) -> Result<Run, 
         1 => load("rover-deadlock.ron"),
         2 => load("satellite.ron"),
         3 => load("tests/mini.ron"),
-        _ => load_str(IDS_MODEL),
+        _ => load_text(IDS_MODEL),
     };
     if half_tables {
         system.drop_step_tables(|i| i % 2 == 0);
@@ -69,7 +69,7 @@ fn run(model: usize, seed: u64, cache: usize, half_tables: bool) -> Result<Run, 
         for ev in engine.events() {
             if let Event::Reply {
                 ticket,
-                reply: Reply::Done(_) | Reply::Refused(_),
+                reply: Reply::Done { .. } | Reply::Refused(_),
                 ..
             } = ev
             {
@@ -152,7 +152,7 @@ fn random_runs_see_every_outcome() {
     silence_injected_panics();
     let mut kinds = std::collections::BTreeSet::new();
     for seed in 0..8 {
-        let system = load_str(IDS_MODEL);
+        let system = load_text(IDS_MODEL);
         let rng = Arc::new(Mutex::new(Rng(seed)));
         let mut e = random_codels(Engine::builder(system.clone()), &system, rng, None)
             .build()

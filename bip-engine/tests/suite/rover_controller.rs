@@ -26,7 +26,7 @@ fn the_rover_controller_plays_its_script_within_the_model() {
     assert!(
         reply_texts(&r, "rflex.TrackSpeed")
             .first()
-            .is_some_and(|t| t.starts_with("REFUSED: after rflex.Init")),
+            .is_some_and(|t| t.contains("rflex.TrackSpeed: refused: after rflex.Init")),
         "{log}"
     );
     // held by the rover's constraints, each named, with its line in the file
@@ -54,18 +54,26 @@ fn the_rover_controller_plays_its_script_within_the_model() {
         held_by("rflex.TrackSpeed.track", "battery_reserve", "Guard"),
         "{log}"
     );
-    // navigation: aborted without the laser, arrives, then blocked by the rock
+    // navigation: aborted by the rover's rule without the laser (not a client's
+    // interrupt), arrives, then blocked by the rock
     assert_eq!(
         reply_texts(&r, "ndd.GoTo")
             .into_iter()
             .filter(|t| t.starts_with("done"))
             .collect::<Vec<_>>(),
         [
-            "done: interrupted",
-            "done: ether",
-            "done: exception e_blocked"
+            "done: aborted by a rule of the model",
+            "done: ether, with an output",
+            "done: exception e_blocked, with an output"
         ],
         "{log}"
+    );
+    // GoTo's output (a `Float` in rover.ron): where the rover stopped, at the goal (1 m)
+    // then before the rock (2 m)
+    assert!(
+        matches!(r.stopped_at.as_slice(), [a, b] if (a - 1.0).abs() < 0.05 && *b < 2.0),
+        "{:?}",
+        r.stopped_at
     );
     assert!(reply_texts(&r, "antenna.Communicate").contains(&"done: ether"));
     assert_eq!((r.overruns, r.faults), (1, 0), "{log}");

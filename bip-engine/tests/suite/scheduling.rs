@@ -8,7 +8,7 @@ use common::*;
 
 #[test]
 fn internal_transitions_are_taken_as_progress_then_the_engine_is_idle() {
-    let system = load_str(
+    let system = load_text(
         r#"System(
             name: "internal",
             atoms: {
@@ -39,7 +39,7 @@ fn internal_transitions_are_taken_as_progress_then_the_engine_is_idle() {
 
 #[test]
 fn a_tick_fires_the_first_enabled_time_connector() {
-    let system = load_str(
+    let system = load_text(
         r#"System(
             name: "two_clocks",
             tick_ms: 1,
@@ -101,7 +101,7 @@ const TWO_STEPS_PER_YIELD: &str = r#"System(
 
 /// The values the dice takes at each run of `main`, under `policy`.
 fn rolls(policy: Policy) -> Vec<i64> {
-    let system = load_str(TWO_STEPS_PER_YIELD);
+    let system = load_text(TWO_STEPS_PER_YIELD);
     let dice = system.component_index("dice").expect("dice");
     let x = system.atom_of(dice).var_index("x").expect("x");
     let mut e = Engine::builder(system.clone())
@@ -140,7 +140,7 @@ fn the_policy_chooses_among_the_steps_of_a_codels_yield() {
 /// The values `x` takes at each of four ticks of a clock whose port has two transitions
 /// (`x = 0`, `x = 1`), under `policy`.
 fn ticks(policy: Policy) -> Vec<i64> {
-    let system = load_str(
+    let system = load_text(
         r#"System(
             name: "coin",
             tick_ms: 1,

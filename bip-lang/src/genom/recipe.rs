@@ -22,6 +22,8 @@ pub(crate) struct RecipeModule {
     pub tasks: Vec<(String, i64)>,
     /// Port names and their age caps, for ports whose age is tracked.
     pub ports: Vec<(String, Option<i64>)>,
+    /// The declared type of each port's data.
+    pub port_types: Vec<Option<DataType>>,
     /// Ids field names, in order.
     pub ids: Vec<String>,
     pub services: Vec<RecipeService>,
@@ -38,6 +40,8 @@ pub(crate) struct RecipeService {
     pub refusals: Vec<RecipeCondition>,
     pub interrupts: Vec<String>,
     pub codels: Vec<RecipeCodel>,
+    pub args: Option<DataType>,
+    pub output: Option<DataType>,
 }
 
 #[derive(Clone, Debug)]
@@ -104,7 +108,7 @@ impl Recipe {
             let mc = component(&m.name)?;
             let atom = system.atom_of(mc);
             let mut ports = Vec::new();
-            for (p, cap) in &m.ports {
+            for ((p, cap), ty) in m.ports.iter().zip(&m.port_types) {
                 let age = match cap {
                     None => None,
                     Some(cap) => {
@@ -119,6 +123,7 @@ impl Recipe {
                 };
                 ports.push(PortMap {
                     name: p.clone(),
+                    ty: ty.clone(),
                     age,
                 });
             }
@@ -251,6 +256,8 @@ impl Recipe {
                     refusals,
                     interrupts: s.interrupts.clone(),
                     codels,
+                    args: s.args.clone(),
+                    output: s.output.clone(),
                 });
             }
             modules.push(ModuleMap {

@@ -54,6 +54,35 @@ pub struct PortDef {
     pub name: Text,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub doc: Option<Text>,
+    /// The type of the port's data (docs/model.md, "Data types").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ty: Option<DataTypeDef>,
+}
+
+/// The type of a port's data, a service's arguments or its output, as written
+/// (docs/model.md, "Data types"); bip-model's `DataType` once checked.
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(rename = "DataType")]
+pub enum DataTypeDef {
+    Bool,
+    /// `Int(lo, hi)`, both bounds included; bounds may be constant expressions.
+    Int(ConstExpr, ConstExpr),
+    Float,
+    /// `Record(name: "Pose", fields: [(name: "x", ty: Float), ...])`.
+    Record {
+        name: Text,
+        fields: Vec<FieldDef>,
+    },
+    /// `Rust("my_crate::nav::Pose")`: a Rust type, opaque to the model.
+    Rust(Text),
+}
+
+/// A field of a record type.
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldDef {
+    pub name: Text,
+    pub ty: DataTypeDef,
 }
 
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
@@ -75,6 +104,12 @@ pub struct ServiceDef {
     pub after: Vec<Text>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub codels: Vec<CodelDef>,
+    /// The type of a request's arguments (docs/model.md, "Data types").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub args: Option<DataTypeDef>,
+    /// The type of the service's output.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output: Option<DataTypeDef>,
 }
 
 /// One codel state of an activity: the codel it runs and where it may go next.

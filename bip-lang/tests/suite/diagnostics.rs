@@ -260,6 +260,20 @@ fn empty_and_missing_files() {
     );
 }
 
+/// `main` returning a load error with `?` prints its `Debug`: the errors, one line each
+/// with their positions, never the model's text.
+#[test]
+fn a_load_errors_debug_is_its_summary() {
+    let text = ok_model().replace("uses = uses + 1", "uses = uses + * 1");
+    let err = load_str("model.ron", &text).expect_err("a syntax error");
+    let debug = format!("{err:?}");
+    assert_eq!(debug, err.summary());
+    assert!(debug.starts_with("model.ron:"), "{debug}");
+    assert!(!debug.contains("uses = uses"), "no model text: {debug}");
+    let err = load_file("/nonexistent/dir/model.ron").expect_err("missing");
+    assert_eq!(format!("{err:?}"), err.to_string());
+}
+
 #[test]
 fn expression_syntax_errors_point_inside_the_string() {
     let text = ok_model().replace("uses = uses + 1", "uses = uses + * 1");

@@ -3,6 +3,7 @@
 //! random layers (`genom_random`); reproducers of crashes and hangs (`robustness`) and
 //! mutated example models through the loader (`fuzz`).
 
+mod data_types;
 mod diagnostics;
 mod fuzz;
 mod genom;

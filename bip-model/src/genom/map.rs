@@ -81,6 +81,8 @@ pub struct TaskMap {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PortMap {
     pub name: String,
+    /// The type of its data, if the model declares one.
+    pub ty: Option<DataType>,
     /// Where the port's age lives, if any expression or constraint reads it.
     pub age: Option<AgeMap>,
 }
@@ -112,6 +114,77 @@ pub struct ServiceMap {
     /// Services (of the same module) a request interrupts.
     pub interrupts: Vec<String>,
     pub codels: Vec<CodelMap>,
+    /// The type of a request's arguments, if the model declares one.
+    pub args: Option<DataType>,
+    /// The type of the service's output, if the model declares one.
+    pub output: Option<DataType>,
+}
+
+/// The type of a port's data, a service's arguments or its output (docs/model.md,
+/// "Data types"). The verifier models ports by their age, not their values: types are
+/// for the engine, which checks the values codels and clients give, and for generated
+/// bindings.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum DataType {
+    Bool,
+    /// A bounded integer, both bounds included: an `i64` at run time.
+    Int {
+        lo: i64,
+        hi: i64,
+    },
+    /// An `f64` at run time.
+    Float,
+    /// A record of named fields: a Rust struct named `name` at run time.
+    Record {
+        name: String,
+        fields: Vec<(String, DataType)>,
+    },
+    /// A Rust type, opaque to the model, named by its path (`rover::Odometry`).
+    Rust(String),
+}
+
+impl DataType {
+    /// The Rust type a value of this type has: `bool`, `i64`, `f64`, the record's name,
+    /// or the path.
+    pub fn rust_name(&self) -> &str {
+        match self {
+            DataType::Bool => "bool",
+            DataType::Int { .. } => "i64",
+            DataType::Float => "f64",
+            DataType::Record { name, .. } => name,
+            DataType::Rust(path) => path,
+        }
+    }
+
+    /// Whether a Rust value whose type is named `type_name` (as `core::any::type_name`
+    /// gives it: `bool`, `f32`, `my_crate::nav::Pose`) is of this type: the same name, or
+    /// a path that ends with this type's name after a `::`.
+    pub fn accepts(&self, type_name: &str) -> bool {
+        let want = self.rust_name();
+        match self {
+            DataType::Bool | DataType::Int { .. } | DataType::Float => type_name == want,
+            DataType::Record { .. } | DataType::Rust(_) => {
+                type_name == want
+                    || type_name
+                        .strip_suffix(want)
+                        .is_some_and(|rest| rest.ends_with("::"))
+            }
+        }
+    }
+}
+
+impl core::fmt::Display for DataType {
+    /// As the model writes it: `Bool`, `Int(0, 3)`, `Float`, `Record Pose`,
+    /// `Rust("rover::Odometry")`.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            DataType::Bool => f.write_str("Bool"),
+            DataType::Int { lo, hi } => write!(f, "Int({lo}, {hi})"),
+            DataType::Float => f.write_str("Float"),
+            DataType::Record { name, .. } => write!(f, "Record {name}"),
+            DataType::Rust(path) => write!(f, "Rust(\"{path}\")"),
+        }
+    }
 }
 
 #[derive(Clone, Debug)]

@@ -12,7 +12,7 @@ pub fn load(name: &str) -> System {
     bip_lang::load_file(std::path::Path::new(&p)).unwrap_or_else(|e| panic!("{}", e.summary()))
 }
 
-pub fn load_str(text: &str) -> System {
+pub fn load_text(text: &str) -> System {
     bip_lang::load_str("test.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()))
 }
 
@@ -104,7 +104,11 @@ pub fn random_codels(
                 let throws: Vec<&'static str> = c.throws.iter().map(|t| leak(t)).collect();
                 let ids: Vec<(&'static str, i64, i64)> =
                     c.ids.iter().map(|f| (leak(&f.name), f.lo, f.hi)).collect();
-                let ports: Vec<&'static str> = c.writes.iter().map(|p| leak(p)).collect();
+                // a port of a declared type takes only that type: the random `u64` goes to
+                // the others (and is drawn for every port, so that the runs stay the same)
+                let typed = |p: &str| m.ports.iter().any(|x| x.name == p && x.ty.is_some());
+                let ports: Vec<(&'static str, bool)> =
+                    c.writes.iter().map(|p| (leak(p), typed(p))).collect();
                 let rng = rng.clone();
                 let overruns = overruns.clone();
                 b = b.codel((&m.name, &s.name, &c.state), move |ctx| {
@@ -121,8 +125,11 @@ pub fn random_codels(
                             ctx.set(name, v);
                         }
                     }
-                    for &p in &ports {
-                        ctx.write_port(p, r.next_u64());
+                    for &(p, typed) in &ports {
+                        let v = r.next_u64();
+                        if !typed {
+                            ctx.write_port(p, v);
+                        }
                     }
                     if let Some(clock) = &overruns {
                         if r.below(40) == 0 {
@@ -180,10 +187,14 @@ pub fn event_kind(e: &Event) -> &'static str {
             Reply::Accepted => "accepted",
             Reply::Refused(Refusal::NotEnabled) => "refused (not enabled)",
             Reply::Refused(_) => "refused",
-            Reply::Done(Outcome::Ether) => "ether",
-            Reply::Done(Outcome::Exception(_)) => "exception",
-            Reply::Done(Outcome::Interrupted) => "interrupted",
-            Reply::Done(Outcome::Fault(_)) => "fault reply",
+            Reply::Started => "started",
+            Reply::Done { outcome, .. } => match outcome {
+                Outcome::Ether => "ether",
+                Outcome::Exception(_) => "exception",
+                Outcome::Interrupted { .. } => "interrupted",
+                Outcome::Aborted => "aborted",
+                Outcome::Fault(_) => "fault reply",
+            },
         },
         Event::Fault(f) => match f.kind {
             FaultKind::Panic(_) => "panic",

@@ -287,6 +287,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         (p.to_string(), cap)
                     })
                     .collect(),
+                port_types: m.port_types.clone(),
                 ids: m.ids.iter().map(|(x, _)| x.to_string()).collect(),
                 services: Vec::new(),
             });

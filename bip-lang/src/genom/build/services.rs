@@ -153,6 +153,8 @@ impl<'a, 'd> Builder<'a, 'd> {
             owned_by_model: false,
             refusals,
             codels: Vec::new(),
+            args: s.args.clone(),
+            output: s.output.clone(),
             interrupts: s
                 .interrupts
                 .iter()

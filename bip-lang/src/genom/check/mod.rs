@@ -5,11 +5,13 @@
 //! This file holds the layer's types and the order of the checks; the checks are in:
 //! - `module.rs`: modules and their services;
 //! - `codels.rs`: an activity's codel automaton;
-//! - `constraints.rs`: the constraints between services.
+//! - `constraints.rs`: the constraints between services;
+//! - `types.rs`: the data types of ports, arguments and outputs.
 
 mod codels;
 mod constraints;
 mod module;
+mod types;
 
 use std::collections::HashSet;
 
@@ -17,7 +19,7 @@ use crate::compile::{check_name, unique, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::source::line_col;
 use crate::syntax::{CodelDef, ConstraintDef, ModuleDef, ServiceDef, ServiceKind, SystemDef, Text};
-use bip_model::genom::map::{ConstraintRef, Reason};
+use bip_model::genom::map::{ConstraintRef, DataType, Reason};
 
 use constraints::constraint;
 pub use constraints::too_old;
@@ -63,6 +65,8 @@ pub struct Module<'d> {
     /// Task names and periods (in ticks, at least 1).
     pub tasks: Vec<(&'d str, i64)>,
     pub ports: Vec<&'d str>,
+    /// The declared type of each port's data.
+    pub port_types: Vec<Option<DataType>>,
     /// The ids fields and their ranges (`None` if a bound is not a constant: the core
     /// reports it).
     pub ids: Vec<(&'d str, Option<(i64, i64)>)>,
@@ -84,6 +88,9 @@ pub struct Service<'d> {
     /// Codel states that are locations of the activity's atom: the targets of yields, and
     /// `stop` (where an interrupt leads). `start` is one only if a codel yields to it.
     pub locations: Vec<usize>,
+    /// The declared types of a request's arguments and of the output.
+    pub args: Option<DataType>,
+    pub output: Option<DataType>,
     /// Index of the `stop` codel, if declared.
     pub stop: Option<usize>,
 }

@@ -5,6 +5,7 @@
 use std::collections::HashMap;
 
 use super::codels::codels;
+use super::types::data_type;
 use super::{Module, Service, MODULE_PORTS};
 use crate::compile::{check_name, one_of, unique, Constants};
 use crate::diag::{Errors, ModelError};
@@ -57,11 +58,19 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
         .rev() // the first of duplicates wins
         .map(|(k, s)| (s.name.as_str(), k))
         .collect();
-    let services: Vec<Service> = m
+    let mut services: Vec<Service> = m
         .services
         .iter()
         .map(|s| service(errors, m, &tasks, &ports, &ids, &index, s))
         .collect();
+    let port_types = m
+        .ports
+        .iter()
+        .map(|p| p.ty.as_ref().and_then(|t| data_type(errors, consts, t)))
+        .collect();
+    for s in &mut services {
+        service_types(errors, consts, s);
+    }
     // the port of the module atom through which a codel writes ids must be free
     for s in services.iter().filter(|s| s.is_activity()) {
         for c in s.codels.iter().filter(|c| !c.ids.is_empty()) {
@@ -83,8 +92,45 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
         name: m.name.as_str(),
         tasks,
         ports,
+        port_types,
         ids,
         services,
+    }
+}
+
+/// The types of a service's arguments and output. A function or attribute has no codel
+/// to read arguments or give an output, so it may declare neither.
+fn service_types(errors: &mut Errors, consts: &Constants, s: &mut Service<'_>) {
+    let def = s.def;
+    for (what, ty) in [("arguments", &def.args), ("an output", &def.output)] {
+        let Some(ty) = ty else { continue };
+        if !s.is_activity() {
+            let field = if what == "arguments" {
+                "args"
+            } else {
+                "output"
+            };
+            errors.push(
+                ModelError::new(
+                    format!(
+                        "`{}` is not an activity; it has no codel for {what}",
+                        s.name
+                    ),
+                    def.name.span,
+                )
+                .with_label(format!("has `{field}`"))
+                .with_help(
+                    "only an activity's codels read a request's arguments and give an output",
+                ),
+            );
+            continue;
+        }
+        let t = data_type(errors, consts, ty);
+        if what == "arguments" {
+            s.args = t;
+        } else {
+            s.output = t;
+        }
     }
 }
 
@@ -163,6 +209,8 @@ fn service<'d>(
         codels: Vec::new(),
         locations: Vec::new(),
         stop: None,
+        args: None,
+        output: None,
     };
     if !activity {
         if let Some(t) = &s.task {

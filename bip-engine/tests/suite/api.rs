@@ -1,0 +1,400 @@
+//! The embedding API without its traps (issue 20): what a new user of the engine tries
+//! first works as it reads. Each test is one trap that a fresh controller met.
+
+use crate::common;
+
+use bip_engine::{
+    DefaultCodels, Engine, EngineBuilder, Event, FaultKind, Next, Outcome, RealClock, Reply,
+    RequestError, Stepped, Until,
+};
+use common::*;
+
+/// `step()` alone, on the default (virtual) clock, lets time pass: codels run and ticks
+/// come, where it used to answer `Idle` forever.
+#[test]
+fn step_in_a_loop_runs_the_model_on_a_virtual_clock() {
+    let mut e = Engine::builder(load("rover.ron"))
+        .default_codels(DefaultCodels::FirstYield)
+        .build()
+        .expect("builds");
+    e.request("rflex", "Init", ()).expect("queued");
+    e.request("rflex", "TrackSpeed", ()).expect("queued");
+    let mut idle = 0;
+    for _ in 0..300 {
+        if let Stepped::Idle { next_tick_us } = e.step().expect("steps") {
+            idle += 1;
+            // the clock is already at the next tick: the next step fires it
+            assert_eq!(next_tick_us, Some(e.inspect().now_us()));
+        }
+    }
+    let stats = e.inspect().stats();
+    assert!(stats.ticks >= 20 && stats.codels >= 20, "{stats:?}");
+    assert!(idle >= 20, "{idle} idle steps");
+    assert_eq!(e.inspect().now_us(), stats.ticks * e.inspect().tick_us());
+}
+
+/// On a real clock `step` never blocks: an idle step says when the next tick is due, and
+/// the time is the wall clock's.
+#[test]
+fn step_on_a_real_clock_does_not_move_time() {
+    let mut e = Engine::builder(load("rover.ron"))
+        .default_codels(DefaultCodels::FirstYield)
+        .clock(RealClock::new())
+        .tick_us(10_000_000)
+        .build()
+        .expect("builds");
+    let started = std::time::Instant::now();
+    let mut first_idle = None;
+    for _ in 0..50 {
+        if let Stepped::Idle { next_tick_us } = e.step().expect("steps") {
+            first_idle = first_idle.or(next_tick_us);
+        }
+    }
+    // a tick after the engine was built, by the wall clock
+    let next = first_idle.expect("idle");
+    assert!((10_000_000..11_000_000).contains(&next), "{next}");
+    assert!(started.elapsed() < std::time::Duration::from_secs(5));
+    assert!(e.inspect().now_us() < 10_000_000);
+    assert_eq!(e.inspect().stats().ticks, 0);
+}
+
+/// Events name what they are about, so a loop over them reads the names from the event
+/// while the engine is borrowed, and each prints as one line in the model's terms.
+#[test]
+fn events_carry_their_names_and_read_in_the_models_terms() {
+    let mut e = Engine::builder(load("rover.ron"))
+        .default_codels(DefaultCodels::FirstYield)
+        .codel(("ndd", "GoTo", "move"), |_| Next::Yield("pause::nowhere"))
+        .build()
+        .expect("builds");
+    e.request("rflex", "TrackSpeed", ()).expect("queued");
+    e.request("rflex", "Init", ()).expect("queued");
+    e.request("rflex", "TrackSpeed", ()).expect("queued");
+    e.run_until(Until::Ticks(3)).expect("runs");
+    e.request("antenna", "Communicate", ()).expect("queued");
+    e.request("sick", "Scan", ()).expect("queued");
+    e.request("pom", "Track", ()).expect("queued");
+    e.run_until(Until::Ticks(3)).expect("runs");
+    e.request("ndd", "GoTo", ()).expect("queued");
+    e.run_until(Until::Ticks(3)).expect("runs");
+    let mut lines = Vec::new();
+    let mut names = Vec::new();
+    for event in e.events() {
+        lines.push(event.to_string());
+        match &event {
+            Event::Reply { service, .. } => {
+                names.push(format!("{}.{}", service.module, service.name))
+            }
+            Event::Held { codel, .. } | Event::Overrun { codel, .. } => {
+                names.push(codel.to_string())
+            }
+            Event::Fault(f) => names.push(f.codel.to_string()),
+            _ => {}
+        }
+    }
+    let has = |want: &str| lines.iter().any(|l| l.contains(want));
+    assert!(
+        has("#1 rflex.TrackSpeed: refused: after rflex.Init"),
+        "{lines:#?}"
+    );
+    assert!(has("#2 rflex.Init: accepted"), "{lines:#?}");
+    assert!(has("#2 rflex.Init: done: ether"), "{lines:#?}");
+    assert!(has("#3 rflex.TrackSpeed: started"), "{lines:#?}");
+    assert!(
+        has("antenna.Communicate.start held: mast_still (line "),
+        "{lines:#?}"
+    );
+    assert!(
+        has("fault: codel ndd.GoTo.move returned `pause::nowhere`, which it does not yield"),
+        "{lines:#?}"
+    );
+    assert!(
+        names.contains(&"antenna.Communicate".to_string()),
+        "{names:?}"
+    );
+}
+
+/// A reply tells a client's interrupt (with the service that interrupted), the model's
+/// own abort rule, and a fault apart.
+#[test]
+fn interrupted_aborted_and_faulted_are_told_apart() {
+    let outcomes = |e: &mut Engine| -> Vec<(String, Outcome)> {
+        e.events()
+            .filter_map(|ev| match ev {
+                Event::Reply {
+                    service,
+                    reply: Reply::Done { outcome, .. },
+                    ..
+                } => Some((service.to_string(), outcome)),
+                _ => None,
+            })
+            .collect()
+    };
+    // ndd.GoTo without the laser: the rover's `abort_blind_navigation` aborts it
+    let mut e = Engine::builder(load("rover.ron"))
+        .default_codels(DefaultCodels::FirstYield)
+        .build()
+        .expect("builds");
+    e.request("ndd", "GoTo", ()).expect("queued");
+    e.run_until(Until::Ticks(3)).expect("runs");
+    let got = outcomes(&mut e);
+    assert!(
+        got.contains(&("ndd.GoTo".to_string(), Outcome::Aborted)),
+        "{got:?}"
+    );
+    // rflex.Stop interrupts TrackSpeed: the client's request, named
+    e.request("rflex", "Init", ()).expect("queued");
+    e.request("rflex", "TrackSpeed", ()).expect("queued");
+    e.run_until(Until::Ticks(3)).expect("runs");
+    e.request("rflex", "Stop", ()).expect("queued");
+    e.run_until(Until::Ticks(3)).expect("runs");
+    let got = outcomes(&mut e);
+    let by = got.iter().find_map(|(s, o)| match o {
+        Outcome::Interrupted { by } if s == "rflex.TrackSpeed" => Some(by.clone()),
+        _ => None,
+    });
+    assert_eq!(
+        by.flatten().map(|s| s.to_string()).as_deref(),
+        Some("rflex.Stop"),
+        "{got:?}"
+    );
+    // a codel that panics: a fault, naming the codel
+    let mut e = Engine::builder(load_text(IDS_MODEL))
+        .default_codels(DefaultCodels::FirstYield)
+        .codel(("m", "S", "main"), |_| panic!("injected"))
+        .build()
+        .expect("builds");
+    silence_injected_panics();
+    e.request("m", "Init", ()).expect("queued");
+    e.request("m", "S", ()).expect("queued");
+    e.run_until(Until::Ticks(6)).expect("runs");
+    let got = outcomes(&mut e);
+    let fault = got.iter().find_map(|(_, o)| match o {
+        Outcome::Fault(f) => Some(f.clone()),
+        _ => None,
+    });
+    let fault = fault.expect("a fault");
+    assert!(matches!(fault.kind, FaultKind::Panic(_)), "{fault:?}");
+    assert_eq!(fault.to_string(), "codel m.S.main panicked: injected");
+}
+
+/// A reply carries the service's output, on the engine's thread and on a task's; the
+/// activity's start is reported between its acceptance and its end.
+#[test]
+fn replies_carry_outputs_and_the_start_is_reported() {
+    for threads in [false, true] {
+        let mut e = Engine::builder(load_text(IDS_MODEL))
+            .codel(("m", "S", "start"), |ctx| {
+                ctx.set_output(String::from("half way"));
+                Next::Yield("pause::main")
+            })
+            .codel(("m", "S", "main"), |ctx| {
+                let speed = ctx.get("speed").unwrap_or(0);
+                ctx.set_output(speed * 10);
+                Next::ETHER
+            })
+            .threads(threads)
+            .build()
+            .expect("builds");
+        e.request("m", "Init", ()).expect("queued");
+        let t = e.request("m", "S", ()).expect("queued");
+        e.run_until(Until::Ticks(6)).expect("runs");
+        let replies: Vec<Reply> = e
+            .events()
+            .filter_map(|ev| match ev {
+                Event::Reply { ticket, reply, .. } if ticket == t => Some(reply),
+                _ => None,
+            })
+            .collect();
+        assert!(
+            matches!(
+                replies.as_slice(),
+                [
+                    Reply::Accepted,
+                    Reply::Started,
+                    Reply::Done {
+                        outcome: Outcome::Ether,
+                        ..
+                    }
+                ]
+            ),
+            "{replies:?}"
+        );
+        let Reply::Done {
+            output: Some(output),
+            ..
+        } = &replies[2]
+        else {
+            panic!("no output: {replies:?}")
+        };
+        assert_eq!(output.get::<i64>(), Some(&10), "threads: {threads}");
+        assert_eq!(output.get::<String>(), None);
+        assert_eq!(replies[2].to_string(), "done: ether, with an output");
+    }
+}
+
+/// One dependency suffices: the model is loaded and its types are named through
+/// bip-engine, and a load error's `Debug` (what `main` prints) is its summary.
+#[test]
+fn bip_engine_alone_loads_a_model_and_names_its_types() {
+    let path = format!("{}/../robots/rover.ron", env!("CARGO_MANIFEST_DIR"));
+    let system: bip_engine::System = bip_engine::load_file(&path).expect("loads");
+    let trace: bip_engine::Trace = Engine::builder(system.clone())
+        .default_codels(DefaultCodels::FirstYield)
+        .record(100)
+        .build()
+        .expect("builds")
+        .record();
+    assert!(trace.steps.is_empty());
+    let _: &[bip_engine::bip_model::Property] = &system.properties;
+    let err = bip_engine::load_str("bad.ron", "System(name: 3)").expect_err("bad");
+    let debug = format!("{err:?}");
+    assert!(debug.starts_with("bad.ron:1:"), "{debug}");
+}
+
+/// rover.ron declares `rflex.TrackSpeed`'s arguments a `Float`: an `f32` is refused when
+/// it is sent (it used to reach the codel as `None`, and the rover drove at speed 0), as
+/// are arguments to a function, and an `Int` outside its range.
+#[test]
+fn request_arguments_are_checked_against_the_declared_type() {
+    let mut e = Engine::builder(load("rover.ron"))
+        .default_codels(DefaultCodels::FirstYield)
+        .build()
+        .expect("builds");
+    let err = e
+        .request("rflex", "TrackSpeed", 0.5f32)
+        .expect_err("an f32 for a Float");
+    assert_eq!(
+        err.to_string(),
+        "rflex.TrackSpeed takes arguments of type Float (a Rust `f64`), not a `f32`"
+    );
+    e.request("rflex", "TrackSpeed", 0.5f64).expect("an f64");
+    e.request("rflex", "TrackSpeed", ()).expect("no arguments");
+    let err = e.request("rflex", "Init", 1.0).expect_err("a function");
+    assert!(
+        matches!(&err, RequestError::NoArguments { service, given: "f64" } if service == "rflex.Init"),
+        "{err}"
+    );
+    let err = e
+        .request("antenna", "Communicate", 20i64)
+        .expect_err("out of Int(1, 10)");
+    assert_eq!(
+        err.to_string(),
+        "antenna.Communicate takes arguments of type Int(1, 10); 20 is outside it"
+    );
+    e.request("antenna", "Communicate", 3i64).expect("in range");
+    // from another thread too
+    let h = e.handle();
+    let err = h
+        .request("ndd", "GoTo", "far away")
+        .err()
+        .expect("a &str for a Float");
+    assert!(
+        matches!(err, RequestError::WrongArguments { given: "&str", .. }),
+        "{err}"
+    );
+}
+
+/// The rover's `odo` is a record `Odometry`: a codel that writes it with another type, or
+/// reads it as another type, or gives GoTo (a `Float` output) an `f32`, is faulty, and
+/// the fault names the port or service and both types.
+#[test]
+fn port_data_and_outputs_of_another_type_are_faults() {
+    #[derive(Default)]
+    struct Odometry {
+        x: f64,
+    }
+    // the faults of a run with these requests, sent in phases six ticks apart
+    let fault_of = |b: EngineBuilder, phases: &[&[(&str, &str)]]| -> Vec<String> {
+        let mut e = b
+            .default_codels(DefaultCodels::FirstYield)
+            .build()
+            .expect("builds");
+        for requests in phases {
+            for (m, s) in *requests {
+                e.request(m, s, ()).expect("queued");
+            }
+            e.run_until(Until::Ticks(6)).expect("runs");
+        }
+        e.events()
+            .filter_map(|ev| match ev {
+                Event::Fault(f) => Some(f.to_string()),
+                _ => None,
+            })
+            .collect()
+    };
+    let drive: &[&[(&str, &str)]] = &[&[("rflex", "Init"), ("rflex", "TrackSpeed")]];
+    let wrong_write =
+        Engine::builder(load("rover.ron")).codel(("rflex", "TrackSpeed", "track"), |ctx| {
+            ctx.write_port("odo", 1.5f32);
+            Next::Yield("pause::track")
+        });
+    let got = fault_of(wrong_write, drive);
+    assert!(
+        got.first().is_some_and(|f| f
+            == "codel rflex.TrackSpeed.track wrote port `rflex.odo` with a `f32`, where the model has Record Odometry (a Rust `Odometry`)"),
+        "{got:?}"
+    );
+    let good_write =
+        Engine::builder(load("rover.ron")).codel(("rflex", "TrackSpeed", "track"), |ctx| {
+            if let Some(odo) = ctx.port_mut::<Odometry>("odo") {
+                odo.x += 1.0;
+            }
+            Next::Yield("pause::track")
+        });
+    assert_eq!(fault_of(good_write, drive), Vec::<String>::new());
+    // pom reads the odometry as an f64
+    let wrong_read = Engine::builder(load("rover.ron"))
+        .codel(("rflex", "TrackSpeed", "track"), |ctx| {
+            ctx.write_port("odo", Odometry { x: 1.0 });
+            Next::Yield("pause::track")
+        })
+        .codel(("pom", "Track", "fuse"), |ctx| {
+            let x = ctx.port::<f64>("rflex", "odo").copied().unwrap_or(0.0);
+            ctx.write_port("pose", x);
+            Next::Yield("pause::fuse")
+        });
+    let got = fault_of(
+        wrong_read,
+        &[&[("rflex", "Init"), ("rflex", "TrackSpeed"), ("pom", "Track")]],
+    );
+    assert!(
+        got.first().is_some_and(|f| f
+            == "codel pom.Track.fuse read port `rflex.odo` with a `f64`, where the model has Record Odometry (a Rust `Odometry`)"),
+        "{got:?}"
+    );
+    let misspelt = Engine::builder(load("rover.ron")).codel(("pom", "Track", "fuse"), |ctx| {
+        let _ = ctx.port::<Odometry>("rflex", "odometry");
+        Next::Yield("pause::fuse")
+    });
+    let got = fault_of(misspelt, &[&[("pom", "Track")]]);
+    assert!(
+        got.first().is_some_and(
+            |f| f.ends_with("read port `rflex.odometry`, which the model does not have")
+        ),
+        "{got:?}"
+    );
+    // an output of another type
+    let wrong_output = Engine::builder(load("rover.ron")).codel(("ndd", "GoTo", "start"), |ctx| {
+        ctx.set_output(1.0f32);
+        Next::Yield("pause::move")
+    });
+    let got = fault_of(
+        wrong_output,
+        &[&[("sick", "Scan"), ("pom", "Track")], &[("ndd", "GoTo")]],
+    );
+    assert!(
+        got.iter().any(|f| f
+            == "codel ndd.GoTo.start gave ndd.GoTo an output with a `f32`, where the model has Float (a Rust `f64`)"),
+        "{got:?}"
+    );
+}
+
+#[path = "../../examples/minimal.rs"]
+mod minimal;
+
+/// The minimal example, a newcomer's first copy, runs and its run is a path of the model.
+#[test]
+fn the_minimal_example_runs() {
+    minimal::main().unwrap_or_else(|e| panic!("the minimal example fails: {e}"));
+}
