@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use bip_model::{Label, State, Steps, System};
 
-use super::tasks::TaskTable;
+use super::tasks::{TaskKind, TaskTable};
 
 /// What the exploration may use.
 #[derive(Clone, Copy, Debug)]
@@ -30,7 +30,8 @@ pub struct Limits<'a> {
 /// The exact demands, and the size of what was explored.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Exact {
-    /// Per task of the table: its demand in microseconds, `None` if unbounded.
+    /// Per task of the table: its demand in microseconds, `None` if unbounded (a
+    /// component's is its declared WCET).
     pub demands: Vec<Option<u64>>,
     pub states: u64,
     pub transitions: u64,
@@ -56,12 +57,16 @@ pub fn exact_demands(
     table: &TaskTable,
     limits: Limits<'_>,
 ) -> Result<Exact, String> {
-    let graph = explore(system, table.tick, limits)?;
+    let tick = table.tick.ok_or("no task runs codels")?;
+    let graph = explore(system, tick, limits)?;
     let states = graph.offsets.len() as u64 - 1;
     let transitions = graph.targets.len() as u64;
-    let (scc_of, members) = condense(&graph, table.tick);
+    let (scc_of, members) = condense(&graph, tick);
     let demands = (0..table.tasks.len())
-        .map(|t| longest_period(&graph, table, t, &scc_of, &members))
+        .map(|t| match table.tasks[t].kind {
+            TaskKind::Component { wcet_us, .. } => Some(wcet_us),
+            TaskKind::Genom { .. } => longest_period(&graph, table, tick, t, &scc_of, &members),
+        })
         .collect();
     Ok(Exact {
         demands,
@@ -218,6 +223,7 @@ fn condense(graph: &Graph, tick: u32) -> (Vec<u32>, Vec<Vec<u32>>) {
 fn longest_period(
     graph: &Graph,
     table: &TaskTable,
+    tick: u32,
     task: usize,
     scc_of: &[u32],
     members: &[Vec<u32>],
@@ -235,7 +241,7 @@ fn longest_period(
         'states: for &v in &members[c as usize] {
             let v = v as usize;
             for edge in graph.offsets[v] as usize..graph.offsets[v + 1] as usize {
-                if graph.labels[edge] == table.tick {
+                if graph.labels[edge] == tick {
                     continue;
                 }
                 let w = cost(edge);
