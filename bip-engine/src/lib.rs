@@ -77,7 +77,7 @@ pub mod simulate;
 mod threads;
 
 pub use bip_model::CacheStats;
-pub use budgets::{CodelTimes, BUCKETS as CODEL_TIME_BUCKETS};
+pub use budgets::{CodelTime, CodelTimes, BUCKETS as CODEL_TIME_BUCKETS};
 pub use clock::Clock;
 #[cfg(feature = "std")]
 pub use clock::RealClock;

@@ -1,4 +1,5 @@
-//! An atom that stands for a periodic task (docs/model.md, "Periodic atoms"): a
+//! An atom that stands for a periodic task (docs/model.md, "Atoms that stand for
+//! periodic tasks"): a
 //! PECOS-style design of plain periodic tasks, without GenoM modules.
 
 use crate::source::{ConstExpr, Text};
