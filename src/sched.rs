@@ -1,6 +1,6 @@
-//! `bip sched FILE`: whether the GenoM layer's tasks meet their deadlines, from the
-//! codels' WCETs: each task's demand per period, its worst response by exact
-//! response-time analysis, per CPU; the schedule as a picture.
+//! `bip sched FILE`: whether the model's tasks meet their deadlines, from the codels'
+//! WCETs and the atoms that stand for tasks: each task's demand per period, its worst
+//! response by exact response-time analysis, per CPU; the schedule as a picture.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -87,7 +87,7 @@ pub fn run(args: &Args) -> u8 {
         Ok(Some(s)) => s,
         Ok(None) => {
             eprintln!(
-                "error: {}: no time budgets to analyse: give codels a `wcet` and the model a `tick_ms` (docs/model.md, \"Time budgets\")",
+                "error: {}: no time budgets to analyse: give codels a `wcet` and the model a `tick_ms`, or an atom a `task` (docs/model.md, \"Time budgets\")",
                 args.file.display()
             );
             return exit::ERROR;
@@ -129,6 +129,7 @@ fn demand_line(sched: &Schedulability) -> String {
         DemandMethod::Bound { why } => {
             format!("bounded from the codel automata ({why})")
         }
+        DemandMethod::Declared => "declared: each task's WCET per period".into(),
     }
 }
 
@@ -278,6 +279,7 @@ fn json(
             transitions,
         } => json!({"method": "exact", "states": states, "transitions": transitions}),
         DemandMethod::Bound { why } => json!({"method": "bound", "why": why}),
+        DemandMethod::Declared => json!({"method": "declared"}),
     };
     let response = |r: ResponseTime| -> Value {
         match r {

@@ -10,9 +10,13 @@ use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 
-use bip_engine::simulate::{simulate_with, Hooks, SimulationEnd, SimulationOptions};
+use bip_engine::simulate::{
+    simulate_with, BudgetEventKind, Hooks, Simulation, SimulationEnd, SimulationOptions,
+};
+use bip_engine::{CodelTime, CODEL_TIME_BUCKETS};
 use bip_lang::trace_file::TraceWriter;
 use bip_model::Trace;
+use bip_sched::show_micros as show;
 
 use crate::{exit, interrupt, load};
 
@@ -36,6 +40,20 @@ pub struct Args {
     /// Draw the run saved with --trace as a timeline in FILE (SVG): one lane per activity.
     #[arg(long, value_name = "FILE", requires = "trace")]
     pub svg: Option<PathBuf>,
+    /// How long codels take on the virtual clock, on CPUs scheduled as `bip sched`
+    /// assumes.
+    #[arg(long, value_enum, default_value = "zero")]
+    pub codel_time: CodelTimeArg,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CodelTimeArg {
+    /// No time, as in the model.
+    Zero,
+    /// Each its WCET: the analysis' worst case.
+    Wcet,
+    /// Uniformly from 0 to its WCET (from the seed).
+    Random,
 }
 
 pub fn run(args: &Args) -> u8 {
@@ -73,6 +91,11 @@ pub fn run(args: &Args) -> u8 {
     let options = SimulationOptions {
         steps: args.steps,
         seed: args.seed,
+        codel_time: match args.codel_time {
+            CodelTimeArg::Zero => CodelTime::Zero,
+            CodelTimeArg::Wcet => CodelTime::Wcet,
+            CodelTimeArg::Random => CodelTime::Random(args.seed),
+        },
     };
     let sim = match simulate_with(system.clone(), options, hooks) {
         Ok(s) => s,
@@ -129,6 +152,7 @@ pub fn run(args: &Args) -> u8 {
             println!("  RANGE ERROR after step {}: {m}", stats.steps)
         }
     }
+    print!("{}", budgets(&sim, args.codel_time));
     if code == exit::FAILED {
         let last = &sim.last_steps;
         print!(
@@ -164,6 +188,100 @@ pub fn run(args: &Args) -> u8 {
         }
     }
     code
+}
+
+/// The codels' run times, and the overruns and misses the run saw.
+fn budgets(sim: &Simulation, codel_time: CodelTimeArg) -> String {
+    use std::fmt::Write as _;
+    let mut out = String::new();
+    let ran: Vec<_> = sim.codels.iter().filter(|c| c.times.runs > 0).collect();
+    if ran.is_empty() {
+        return out;
+    }
+    let how = match codel_time {
+        CodelTimeArg::Zero => "none simulated: codels are instants",
+        CodelTimeArg::Wcet => "simulated: each its WCET",
+        CodelTimeArg::Random => "simulated: random up to its WCET",
+    };
+    let _ = writeln!(out, "  codel times ({how}):");
+    let rows: Vec<[String; 6]> = ran
+        .iter()
+        .map(|c| {
+            let (m, s, k) = &c.codel;
+            [
+                format!("{m}.{s}.{k}"),
+                c.times.runs.to_string(),
+                show(c.times.max_us),
+                show(c.times.mean_us().round() as u64),
+                c.wcet_us.map_or("-".into(), show),
+                histogram(&c.times.histogram),
+            ]
+        })
+        .collect();
+    let header = ["codel", "runs", "max", "mean", "wcet", "runs by time"].map(String::from);
+    let widths: Vec<usize> = (0..6)
+        .map(|i| {
+            rows.iter()
+                .chain([&header])
+                .map(|r| r[i].chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    for row in [&header].into_iter().chain(&rows) {
+        let mut line = format!("    {:<w$}", row[0], w = widths[0]);
+        for i in 1..5 {
+            let _ = write!(line, "  {:>w$}", row[i], w = widths[i]);
+        }
+        let _ = writeln!(out, "{line}  {}", row[5]);
+    }
+    let stats = &sim.stats;
+    let _ = writeln!(
+        out,
+        "  {} past a WCET, {} past a deadline",
+        count(stats.wcet_exceeded, "codel run"),
+        count(stats.deadlines_missed, "period's work")
+    );
+    for e in &sim.budget_events {
+        let (m, s, k) = &e.codel;
+        let what = match e.kind {
+            BudgetEventKind::WcetExceeded { took_us, wcet_us } => {
+                format!("{m}.{s}.{k} took {}, its WCET is {}", show(took_us), show(wcet_us))
+            }
+            BudgetEventKind::DeadlineMissed {
+                elapsed_us,
+                deadline_us,
+            } => format!(
+                "a period's work of the task of {m}.{s}.{k} was late: {} after its release, deadline {}",
+                show(elapsed_us),
+                show(deadline_us)
+            ),
+        };
+        let _ = writeln!(out, "    at {}: {what}", show(e.at_us));
+    }
+    let shown = sim.budget_events.len() as u64;
+    let all = stats.wcet_exceeded + stats.deadlines_missed;
+    if all > shown {
+        let _ = writeln!(out, "    ... and {} more", all - shown);
+    }
+    out
+}
+
+/// Runs by duration: `≤ 2 ms: 5, ≤ 4 ms: 1` (bucket `k` holds runs under 2^k µs).
+fn histogram(buckets: &[u64; CODEL_TIME_BUCKETS]) -> String {
+    let parts: Vec<String> = buckets
+        .iter()
+        .enumerate()
+        .filter(|(_, &n)| n > 0)
+        .map(|(k, n)| {
+            if k + 1 == CODEL_TIME_BUCKETS {
+                format!("longer: {n}")
+            } else {
+                format!("< {} µs: {n}", 1u64 << k)
+            }
+        })
+        .collect();
+    parts.join(", ")
 }
 
 /// "1 step", "2 steps".

@@ -359,14 +359,27 @@ pub fn run(
     timed.sort_by_key(|(_, t)| std::cmp::Reverse(t.max_us));
     for (c, t) in timed.iter().take(5) {
         let (m, s, k) = inspect.codel_name(*c);
+        // runs by duration: bucket `b` holds the runs under 2^b µs
+        let histogram: Vec<String> = t
+            .histogram
+            .iter()
+            .enumerate()
+            .filter(|(_, &n)| n > 0)
+            .map(|(b, n)| format!("{n} under {} µs", 1u64 << b))
+            .collect();
         say(format!(
-            "codel {m}.{s}.{k}: {} runs, mean {:.0} µs, max {} µs, {} over its WCET",
+            "codel {m}.{s}.{k}: {} runs, mean {:.0} µs, max {} µs, {} over its WCET ({})",
             t.runs,
             t.mean_us(),
             t.max_us,
-            t.over_wcet
+            t.over_wcet,
+            histogram.join(", ")
         ));
     }
+    say(format!(
+        "budgets: {} codel runs past their WCET, {} periods' work past their task's deadline",
+        stats.wcet_exceeded, stats.deadlines_missed
+    ));
 
     // the recording is a path of the model, and every invariant holds along it
     report.trace = engine.record();

@@ -1,9 +1,12 @@
 //! Time budgets at run time (docs/model.md, "Time budgets"): how long each codel takes,
 //! against its WCET, and how long each task's work of a period takes from its release,
-//! against its deadline.
+//! against its deadline. In a simulation, codels without a body may take a simulated time
+//! ([`CodelTime`]) on CPUs scheduled as the analysis assumes ([`SimulatedCpus`]).
 
 #[allow(unused_imports)]
 use crate::prelude::*;
+
+use alloc::collections::VecDeque;
 
 /// Buckets of [`CodelTimes::histogram`]: bucket `k` counts runs of `[2^(k-1), 2^k)` µs
 /// (bucket 0: under 1 µs), the last one everything longer.
@@ -101,6 +104,184 @@ impl TaskClock {
         } else {
             None
         }
+    }
+}
+
+/// How long a codel without a body (a default codel of a simulation) takes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CodelTime {
+    /// No time, as in the model: the engine's measures and checks see instants.
+    #[default]
+    Zero,
+    /// Its WCET (no time without one): the work the scheduling analysis assumes.
+    Wcet,
+    /// Uniformly from 0 to its WCET, drawn from this seed.
+    Random(u64),
+}
+
+/// A task as the simulated CPUs schedule it.
+#[derive(Clone, Debug)]
+pub(crate) struct SimulatedTask {
+    pub cpu: u32,
+    pub priority: Option<i64>,
+    pub period_ticks: u64,
+    pub deadline_us: u64,
+}
+
+/// One period's work of a task, as far as it has run.
+#[derive(Clone, Copy, Debug)]
+struct Job {
+    release_us: u64,
+    remaining_us: u64,
+    /// The codel that last added work, which a miss names.
+    codel: u32,
+    missed: bool,
+}
+
+/// A period's work that ended (or is still running) past the task's deadline.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Miss {
+    pub codel: u32,
+    /// From the release to the end of the work, or to now if it has not ended.
+    pub elapsed_us: u64,
+    pub deadline_us: u64,
+}
+
+/// The most jobs a task keeps waiting: past it (a CPU that never catches up, already
+/// reported), new work joins the last job, so that a long run takes bounded memory.
+const MAX_BACKLOG: usize = 1024;
+
+/// The CPUs as the scheduling analysis sees them (docs/sched.md): each runs its tasks'
+/// work by fixed priorities, preemptively, a task's periods one after the other. The
+/// codels' simulated times are the work; the model's releases stay on the tick, so a
+/// period's work may end after the next tick, as on a real CPU, and a miss shows when it
+/// ends past the deadline, or when the deadline passes before it ends.
+#[derive(Clone, Debug)]
+pub(crate) struct SimulatedCpus {
+    tasks: Vec<SimulatedTask>,
+    jobs: Vec<VecDeque<Job>>,
+    /// Per CPU, its tasks most urgent first (priorities, else rate-monotonic; ties in
+    /// declaration order, as `bip sched`).
+    order: Vec<Vec<usize>>,
+    /// Per CPU, how far its schedule has run.
+    time_us: Vec<u64>,
+}
+
+impl SimulatedCpus {
+    pub fn new(tasks: Vec<SimulatedTask>) -> SimulatedCpus {
+        let cpus = tasks.iter().map(|t| t.cpu as usize + 1).max().unwrap_or(0);
+        let order = (0..cpus)
+            .map(|cpu| {
+                let mut on: Vec<usize> = (0..tasks.len())
+                    .filter(|&i| tasks[i].cpu as usize == cpu)
+                    .collect();
+                let given = on.iter().all(|&i| tasks[i].priority.is_some());
+                on.sort_by_key(|&i| {
+                    let t = &tasks[i];
+                    let rank = if given {
+                        -i128::from(t.priority.unwrap_or(0))
+                    } else {
+                        i128::from(t.period_ticks)
+                    };
+                    (rank, i)
+                });
+                on
+            })
+            .collect();
+        SimulatedCpus {
+            jobs: vec![VecDeque::new(); tasks.len()],
+            tasks,
+            order,
+            time_us: vec![0; cpus],
+        }
+    }
+
+    /// Codel `codel` of `task` ran `us` of work in the period released at `release_us`.
+    pub fn work(&mut self, task: usize, codel: u32, release_us: u64, us: u64) {
+        let jobs = &mut self.jobs[task];
+        let full = jobs.len() >= MAX_BACKLOG;
+        match jobs.back_mut() {
+            Some(j) if j.release_us == release_us || full => {
+                j.remaining_us = j.remaining_us.saturating_add(us);
+                j.codel = codel;
+            }
+            _ => jobs.push_back(Job {
+                release_us,
+                remaining_us: us,
+                codel,
+                missed: false,
+            }),
+        }
+    }
+
+    /// Runs every CPU up to `to_us`, giving each miss to `missed`.
+    pub fn run_until(&mut self, to_us: u64, mut missed: impl FnMut(Miss)) {
+        for cpu in 0..self.order.len() {
+            let mut t = self.time_us[cpu].max(self.earliest_release(cpu));
+            while t < to_us {
+                let Some(&task) = self.order[cpu].iter().find(|&&k| {
+                    self.jobs[k]
+                        .front()
+                        .is_some_and(|j| j.release_us <= t && j.remaining_us > 0)
+                }) else {
+                    // idle until the next release, or the end
+                    t = self.next_release(cpu, t).unwrap_or(to_us).min(to_us);
+                    continue;
+                };
+                // it runs until it ends, a more urgent task is released, or the end
+                let deadline_us = self.tasks[task].deadline_us;
+                let until = self.next_release(cpu, t).unwrap_or(to_us).min(to_us);
+                let job = self.jobs[task].front_mut().expect("found above");
+                let ran = job.remaining_us.min(until - t);
+                t += ran;
+                job.remaining_us -= ran;
+                if job.remaining_us == 0 {
+                    let elapsed_us = t - job.release_us;
+                    if elapsed_us > deadline_us && !job.missed {
+                        missed(Miss {
+                            codel: job.codel,
+                            elapsed_us,
+                            deadline_us,
+                        });
+                    }
+                    self.jobs[task].pop_front();
+                } else if ran == 0 {
+                    t = until;
+                }
+            }
+            self.time_us[cpu] = to_us;
+            for &k in &self.order[cpu] {
+                let deadline_us = self.tasks[k].deadline_us;
+                for j in self.jobs[k].iter_mut() {
+                    let elapsed_us = to_us.saturating_sub(j.release_us);
+                    if elapsed_us > deadline_us && !j.missed {
+                        j.missed = true;
+                        missed(Miss {
+                            codel: j.codel,
+                            elapsed_us,
+                            deadline_us,
+                        });
+                    }
+                }
+            }
+        }
+    }
+
+    fn earliest_release(&self, cpu: usize) -> u64 {
+        self.order[cpu]
+            .iter()
+            .filter_map(|&k| self.jobs[k].front().map(|j| j.release_us))
+            .min()
+            .unwrap_or(0)
+    }
+
+    /// The first release after `t` of a job waiting on `cpu`.
+    fn next_release(&self, cpu: usize, t: u64) -> Option<u64> {
+        self.order[cpu]
+            .iter()
+            .flat_map(|&k| self.jobs[k].iter().map(|j| j.release_us))
+            .filter(|&r| r > t)
+            .min()
     }
 }
 

@@ -89,7 +89,7 @@ pub use bip_lang::{load_file, load_str, LoadError};
 /// out: an embedder depends on bip-engine alone.
 pub use bip_model;
 pub use bip_model::{CacheStats, State, System, Trace};
-pub use budgets::{CodelTimes, BUCKETS as CODEL_TIME_BUCKETS};
+pub use budgets::{CodelTime, CodelTimes, BUCKETS as CODEL_TIME_BUCKETS};
 pub use clock::Clock;
 #[cfg(feature = "std")]
 pub use clock::RealClock;

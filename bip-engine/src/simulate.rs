@@ -3,6 +3,11 @@
 //! every invariant (and deadlock freedom, if the model asks for it) after every step
 //! (docs/engine.md, "`bip simulate` and `bip replay`"). A run is the same for a seed.
 //!
+//! Codels may take a simulated time on the virtual clock ([`CodelTime`]: their WCETs, or
+//! random times up to them), run on CPUs scheduled as `bip sched` assumes: a run then
+//! shows the deadline misses the analysis predicts when its worst case happens. A run
+//! reports each codel's times and the first overruns and misses it saw.
+//!
 //! A run of any length takes constant memory: the engine records only the last steps (a
 //! window, for the report of a failure), and [`Hooks::on_steps`] receives the run in
 //! segments as it goes, to stream the whole trace to a file.
@@ -16,9 +21,11 @@ use bip_model::{
     Verdict,
 };
 
+use crate::budgets::{CodelTime, CodelTimes};
 use crate::codel::DefaultCodels;
 use crate::engine::{Engine, Stats, Stepped};
 use crate::error::BuildError;
+use crate::event::{CodelId, Event};
 use crate::policy::Policy;
 use crate::record::Window;
 
@@ -33,6 +40,37 @@ pub struct SimulationOptions {
     pub steps: u64,
     /// Seed of the random requests, codel outcomes and choices.
     pub seed: u64,
+    /// How long codels take on the virtual clock (default: no time).
+    pub codel_time: CodelTime,
+}
+
+/// The first overruns and misses a run keeps (the engine counts them all in its stats).
+pub const KEPT_BUDGET_EVENTS: usize = 20;
+
+/// One codel's run times in a simulation.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CodelReport {
+    /// `(module, service, codel state)`.
+    pub codel: (String, String, String),
+    pub wcet_us: Option<u64>,
+    pub times: CodelTimes,
+}
+
+/// A codel run past its WCET, or a task's period work past its deadline.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BudgetEvent {
+    /// The engine's time when it was seen.
+    pub at_us: u64,
+    /// `(module, service, codel state)` of the codel that ran (for a miss: the last one
+    /// of the late period's work).
+    pub codel: (String, String, String),
+    pub kind: BudgetEventKind,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BudgetEventKind {
+    WcetExceeded { took_us: u64, wcet_us: u64 },
+    DeadlineMissed { elapsed_us: u64, deadline_us: u64 },
 }
 
 /// What a simulation reports to its caller while it runs.
@@ -87,6 +125,11 @@ pub struct Simulation {
     /// The run's last steps (all of them for a run of at most [`SEGMENT`] steps), from the
     /// state they start in, as a trace whose verdict is the failure (if any).
     pub last_steps: Window,
+    /// Every codel's run times, in the GenoM map's order (empty without a GenoM layer).
+    pub codels: Vec<CodelReport>,
+    /// The first [`KEPT_BUDGET_EVENTS`] overruns of a WCET and misses of a deadline
+    /// (`stats` counts them all).
+    pub budget_events: Vec<BudgetEvent>,
 }
 
 /// Simulates `system` (see the module documentation).
@@ -117,8 +160,10 @@ pub fn simulate_with(
         .default_codels(DefaultCodels::Random(options.seed))
         .policy(Policy::Seeded(options.seed))
         .record_window(SEGMENT)
-        .event_capacity(0)
+        .event_capacity(EVENT_QUEUE)
+        .codel_time(options.codel_time)
         .build()?;
+    let mut budget_events = Vec::new();
     let mut checks = Checks {
         deadlock_free,
         steps: Steps::new(),
@@ -171,6 +216,7 @@ pub fn simulate_with(
         if end.is_none() && engine.inspect().stats().steps != before {
             end = checks.check(&engine);
         }
+        keep_budget_events(&mut engine, &mut budget_events);
     }
     let end = end.unwrap_or(SimulationEnd::Completed);
     let verdict = match &end {
@@ -204,7 +250,72 @@ pub fn simulate_with(
         invariants,
         deadlock_checked: checks.deadlock_free.is_some(),
         last_steps,
+        codels: codel_reports(&engine),
+        budget_events,
     })
+}
+
+/// Events the engine queues between two drains: a step emits a few.
+const EVENT_QUEUE: usize = 64;
+
+/// Takes the engine's events, keeping the first overruns and misses.
+fn keep_budget_events(engine: &mut Engine, kept: &mut Vec<BudgetEvent>) {
+    let at_us = engine.inspect().now_us();
+    let events: Vec<(CodelId, BudgetEventKind)> = engine
+        .events()
+        .filter_map(|e| match e {
+            Event::WcetExceeded {
+                codel,
+                took_us,
+                wcet_us,
+            } => Some((codel, BudgetEventKind::WcetExceeded { took_us, wcet_us })),
+            Event::DeadlineMissed {
+                codel,
+                elapsed_us,
+                deadline_us,
+            } => Some((
+                codel,
+                BudgetEventKind::DeadlineMissed {
+                    elapsed_us,
+                    deadline_us,
+                },
+            )),
+            _ => None,
+        })
+        .collect();
+    for (codel, kind) in events {
+        if kept.len() < KEPT_BUDGET_EVENTS {
+            let (m, s, c) = engine.inspect().codel_name(codel);
+            kept.push(BudgetEvent {
+                at_us,
+                codel: (m.into(), s.into(), c.into()),
+                kind,
+            });
+        }
+    }
+}
+
+/// Every codel's run times, in the GenoM map's order.
+fn codel_reports(engine: &Engine) -> Vec<CodelReport> {
+    let view = engine.inspect();
+    let Some(map) = view.system().genom.as_ref() else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for m in &map.modules {
+        for s in &m.services {
+            for c in &s.codels {
+                if let Some(id) = view.codel_id(&m.name, &s.name, &c.state) {
+                    out.push(CodelReport {
+                        codel: (m.name.clone(), s.name.clone(), c.state.clone()),
+                        wcet_us: c.wcet_us,
+                        times: view.codel_times(id),
+                    });
+                }
+            }
+        }
+    }
+    out
 }
 
 /// A random enabled environment step of a model without a GenoM layer.

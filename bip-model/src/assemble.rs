@@ -4,6 +4,7 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
+use crate::budgets::Budgets;
 use crate::enable_index::EnableIndex;
 use crate::genom::GenomMap;
 use crate::model::{
@@ -36,6 +37,7 @@ pub struct SystemParts {
     /// For each slot, the range of values it may hold.
     pub slot_ranges: Vec<(i64, i64)>,
     pub genom: Option<GenomMap>,
+    pub budgets: Budgets,
 }
 
 impl System {
@@ -73,6 +75,7 @@ impl System {
             initial: State::from_slots(parts.initial),
             slot_ranges: parts.slot_ranges,
             genom: parts.genom,
+            budgets: parts.budgets,
             enable_index,
             priority_graph,
             priority_masks,

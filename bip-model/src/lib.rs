@@ -26,6 +26,7 @@ mod prelude {
 }
 
 mod assemble;
+mod budgets;
 pub mod choices;
 mod deadlock;
 mod enable_index;
@@ -55,6 +56,7 @@ pub mod trace;
 mod watches;
 
 pub use assemble::SystemParts;
+pub use budgets::{Budgets, ComponentTask};
 pub use deadlock::{Liveness, LivenessChecker};
 pub use fire_plan::{FirePlans, PlanId};
 pub use gate::{CommitError, Committed, Gate, GateStep};

@@ -37,6 +37,9 @@ pub struct System {
     /// The GenoM layer the system was expanded from, if any: what the engine binds codels
     /// and sends requests with (docs/genom.md, "The engine's map").
     pub genom: Option<crate::genom::GenomMap>,
+    /// The CPUs, and the components that stand for periodic tasks (docs/model.md, "Time
+    /// budgets").
+    pub budgets: crate::budgets::Budgets,
     /// Flat tables for the step relation's inner loop.
     pub(crate) enable_index: crate::enable_index::EnableIndex,
     /// The priorities as a graph, whose reachability is their closure.

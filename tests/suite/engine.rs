@@ -395,3 +395,65 @@ fn replay_names_a_misspelt_step_and_a_tampered_value() {
         "{text}"
     );
 }
+
+/// `--codel-time wcet` runs each codel for its WCET on CPUs scheduled as `bip sched`
+/// assumes: the rover, schedulable, misses nothing; with the map's `fuse` raised from 70
+/// to 120 ms the payload CPU is overloaded (`bip sched`: antenna.comm never catches up)
+/// and the run sees the antenna's periods end late. Without simulated times the codels
+/// are instants, and their runs are still counted.
+#[test]
+fn simulated_codel_times_show_the_misses_of_an_overloaded_cpu() {
+    let run = |file: &str, codel_time: &str| {
+        let out = bip(&[
+            "simulate",
+            file,
+            "--steps",
+            "20000",
+            "--seed",
+            "1",
+            "--codel-time",
+            codel_time,
+        ]);
+        let text = stdout(&out);
+        assert_eq!(out.status.code(), Some(0), "{text}");
+        text
+    };
+    let text = run("robots/rover.ron", "zero");
+    assert!(text.contains("codel times (none simulated"), "{text}");
+    assert!(
+        text.contains("0 codel runs past a WCET, 0 period's works past a deadline"),
+        "{text}"
+    );
+    let text = run("robots/rover.ron", "wcet");
+    let fuse = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("aspect.Build.fuse"))
+        .expect("a row for fuse");
+    assert!(fuse.contains("70 ms"), "{fuse}");
+    assert!(
+        text.contains("0 codel runs past a WCET, 0 period's works past a deadline"),
+        "{text}"
+    );
+    let rover = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/robots/rover.ron"))
+        .expect("the rover");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let heavy = dir.path().join("rover.ron");
+    std::fs::write(
+        &heavy,
+        rover.replacen(r#"wcet: "70ms""#, r#"wcet: "120ms""#, 1),
+    )
+    .expect("write");
+    let heavy = heavy.to_str().expect("utf-8");
+    let sched = stdout(&bip(&["sched", heavy, "--demand", "bound"]));
+    assert!(sched.contains("antenna.comm never catches up"), "{sched}");
+    let text = run(heavy, "wcet");
+    assert!(
+        text.contains("a period's work of the task of antenna.Communicate.send was late"),
+        "{text}"
+    );
+    assert!(text.contains("0 codel runs past a WCET"), "{text}");
+    assert!(
+        !text.contains(" 0 period's works past a deadline"),
+        "{text}"
+    );
+}

@@ -28,7 +28,7 @@ const CRATES: &[Layers] = &[
                 "values",
                 &["ops", "rng", "radix", "ordered_map", "state", "eval"],
             ),
-            ("parts", &["model", "steps", "genom::map"]),
+            ("parts", &["model", "steps", "budgets", "genom::map"]),
             (
                 "tables",
                 &[

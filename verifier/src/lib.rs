@@ -41,11 +41,11 @@ pub use report::{
 };
 pub use schedulability::{
     has_time_budgets, schedulability, DemandChoice, DemandMethod, LayerTask, Schedulability,
-    SCHEDULABLE,
+    TaskKind, SCHEDULABLE,
 };
 
 /// Verifies every property of `system` (deadlock freedom if it declares none, range
-/// errors always, and schedulability when its GenoM layer has time budgets) with
+/// errors always, and schedulability when it has time budgets) with
 /// `method`, within the limits of `options`.
 ///
 /// `progress` is called from time to time during long runs, from any thread.

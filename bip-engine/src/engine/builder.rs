@@ -9,7 +9,7 @@ use bip_model::{Gate, System};
 
 use super::{Budgets, Engine, EventQueue, HeldReports, Inbox, Runner, Schedule, Stats, Time};
 use crate::bind::Tables;
-use crate::budgets::{CodelTimes, TaskClock};
+use crate::budgets::{CodelTime, CodelTimes, SimulatedCpus, SimulatedTask, TaskClock};
 use crate::chosen::Chosen;
 use crate::clock::Clock;
 use crate::codel::{Body, CodelFn, Ctx, DefaultCodels, Next};
@@ -38,6 +38,7 @@ pub struct EngineBuilder {
     on_event: Option<EventFn>,
     threads: bool,
     state_cache: usize,
+    codel_time: CodelTime,
 }
 
 impl EngineBuilder {
@@ -49,6 +50,15 @@ impl EngineBuilder {
     ) -> Self {
         self.bindings
             .push(((module.into(), service.into(), state.into()), Box::new(f)));
+        self
+    }
+
+    /// How long unbound codels take on the engine's clock (default: no time). With a
+    /// simulated time, the tasks' work runs on CPUs scheduled as `bip sched` assumes, and
+    /// a deadline is judged when the work ends there (docs/engine.md, "Simulated codel
+    /// times").
+    pub fn codel_time(mut self, t: CodelTime) -> Self {
+        self.codel_time = t;
         self
     }
 
@@ -157,6 +167,22 @@ impl EngineBuilder {
             .or(system.tick_ms.map(|ms| ms.saturating_mul(1000)))
             .unwrap_or(1000)
             .max(1);
+        let cpus = (self.codel_time != CodelTime::Zero).then(|| {
+            let tasks = system.genom.iter().flat_map(|g| &g.modules);
+            SimulatedCpus::new(
+                tasks
+                    .flat_map(|m| &m.tasks)
+                    .map(|k| SimulatedTask {
+                        cpu: k.cpu,
+                        priority: k.priority,
+                        period_ticks: u64::from(k.period),
+                        deadline_us: k
+                            .deadline_us
+                            .unwrap_or_else(|| u64::from(k.period).saturating_mul(tick_us)),
+                    })
+                    .collect(),
+            )
+        });
         let gate = Gate::new(system, self.state_cache).map_err(BuildError::Range)?;
         let pool = gate.enabled().pool();
         let plan_moves = gate
@@ -194,6 +220,12 @@ impl EngineBuilder {
                     TaskClock::new(period_ticks, deadline_us, now)
                 })
                 .collect(),
+            codel_time: self.codel_time,
+            cpus,
+            rng: Rng::new(match self.codel_time {
+                CodelTime::Random(seed) => seed,
+                _ => 0,
+            }),
         };
         Ok(Engine {
             gate,
@@ -275,6 +307,7 @@ impl Engine {
             on_event: None,
             threads: false,
             state_cache: DEFAULT_STATE_CACHE,
+            codel_time: CodelTime::Zero,
         }
     }
 }

@@ -14,6 +14,7 @@ use super::replies::Cause;
 use super::schedule::count_first;
 use super::{Engine, Stepped};
 use crate::bind::RunStep;
+use crate::budgets::CodelTime;
 use crate::codel::{call_guarded, Body, Ctx, CtxFault, DefaultCodels, Next};
 use crate::error::{EngineError, StepAsError};
 use crate::event::{Codel, CodelId, Event, Fault, FaultKind, Outcome};
@@ -46,6 +47,7 @@ impl Engine {
             .as_ref()
             .is_some_and(|a| self.gate.state().slots()[a.loc_slot as usize] == i64::from(a.ether));
         let t0 = self.time.clock.now_us();
+        let default = matches!(self.runner.bodies[ck], Body::Default);
         let end = match &self.runner.bodies[ck] {
             Body::Default => self.default_end(ck, forced),
             _ => {
@@ -53,7 +55,12 @@ impl Engine {
                 self.classify(ck, result)
             }
         };
-        let took = self.time.clock.now_us().saturating_sub(t0);
+        let simulated = if default {
+            self.simulated_time(ck)
+        } else {
+            None
+        };
+        let took = simulated.unwrap_or_else(|| self.time.clock.now_us().saturating_sub(t0));
         let period_us = self.t.codels[ck]
             .period_ticks
             .saturating_mul(self.time.tick_us);
@@ -425,12 +432,42 @@ impl Engine {
             times.over_wcet += 1;
             self.report_over_wcet(ck, took, wcet_us);
         }
-        let task = task.and_then(|k| self.budgets.tasks.get_mut(k as usize));
+        let Some(k) = task.map(|k| k as usize) else {
+            return;
+        };
+        if let Some(cpus) = &mut self.budgets.cpus {
+            // the simulated CPUs judge the deadline when the work ends there
+            let released_us = self.budgets.tasks[k].released_us;
+            cpus.work(k, ck as u32, released_us, took);
+            return;
+        }
+        let task = self.budgets.tasks.get_mut(k);
         if let Some((elapsed_us, deadline_us)) =
             task.and_then(|t| Some((t.ended(t0.saturating_add(took))?, t.deadline_us)))
         {
             self.report_deadline_missed(ck, elapsed_us, deadline_us);
         }
+    }
+
+    /// The simulated time of a default run of codel `ck`, if codels have one.
+    fn simulated_time(&mut self, ck: usize) -> Option<u64> {
+        let wcet = self.t.codels[ck].map.wcet_us.unwrap_or(0);
+        match self.budgets.codel_time {
+            CodelTime::Zero => None,
+            CodelTime::Wcet => Some(wcet),
+            CodelTime::Random(_) => Some(self.budgets.rng.next_u64() % wcet.saturating_add(1)),
+        }
+    }
+
+    /// Runs the simulated CPUs until `now_us`, reporting the deadlines missed there.
+    pub(super) fn run_simulated_cpus(&mut self, now_us: u64) {
+        let Some(mut cpus) = self.budgets.cpus.take() else {
+            return;
+        };
+        cpus.run_until(now_us, |m| {
+            self.report_deadline_missed(m.codel as usize, m.elapsed_us, m.deadline_us)
+        });
+        self.budgets.cpus = Some(cpus);
     }
 
     #[cold]

@@ -29,7 +29,7 @@ use crate::prelude::*;
 use bip_model::{Gate, Label, Pick, RangeError, Trace, Verdict};
 
 use crate::bind::Tables;
-use crate::budgets::{CodelTimes, TaskClock};
+use crate::budgets::{CodelTime, CodelTimes, SimulatedCpus, TaskClock};
 use crate::chosen::Chosen;
 use crate::clock::Clock;
 use crate::codel::{Args, Body, CtxFault, DefaultCodels};
@@ -140,6 +140,11 @@ struct Budgets {
     times: Vec<CodelTimes>,
     /// Per task of [`Tables::tasks`].
     tasks: Vec<TaskClock>,
+    /// How long default codels take; with a simulated time, the CPUs that run it (and
+    /// judge the deadlines instead of the task clocks) and the draws of random times.
+    codel_time: CodelTime,
+    cpus: Option<SimulatedCpus>,
+    rng: Rng,
 }
 
 /// The choice among the progress steps.

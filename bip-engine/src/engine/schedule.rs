@@ -183,6 +183,7 @@ impl Engine {
         self.stats.ticks += 1;
         // a period begins when its tick was due
         let due = self.time.next_tick_us;
+        self.run_simulated_cpus(due);
         for task in &mut self.budgets.tasks {
             task.tick(due);
         }

@@ -7,6 +7,7 @@
 use crate::common;
 
 use bip_engine::replay::{replay, End};
+use bip_engine::CodelTime;
 use std::cell::Cell;
 
 use bip_engine::simulate::{
@@ -36,6 +37,7 @@ fn the_rover_keeps_its_invariants_and_a_run_is_the_same_for_a_seed() {
     let options = SimulationOptions {
         steps: 3000,
         seed: 1,
+        codel_time: CodelTime::Zero,
     };
     let (sim, trace) = streamed(load("rover.ron"), options);
     assert_eq!(sim.end, SimulationEnd::Completed);
@@ -79,6 +81,7 @@ fn the_deadlock_of_rover_deadlock_is_found_and_replays() {
     let options = SimulationOptions {
         steps: 5000,
         seed: 1,
+        codel_time: CodelTime::Zero,
     };
     let (sim, trace) = streamed(load("rover-deadlock.ron"), options);
     assert_eq!(sim.end, SimulationEnd::Deadlock);
@@ -93,6 +96,7 @@ fn a_model_without_a_genom_layer_moves_by_its_environment() {
     let options = SimulationOptions {
         steps: 5000,
         seed: 2,
+        codel_time: CodelTime::Zero,
     };
     let sim = simulate(load("philosophers.ron"), options).expect("builds");
     assert_eq!(sim.end, SimulationEnd::Deadlock);
@@ -117,6 +121,7 @@ fn a_stopped_run_ends_as_interrupted_with_its_steps_so_far() {
     let options = SimulationOptions {
         steps: 1_000_000,
         seed: 3,
+        codel_time: CodelTime::Zero,
     };
     let sim = simulate_with(load("rover.ron"), options, hooks).expect("builds");
     assert_eq!(sim.end, SimulationEnd::Interrupted);

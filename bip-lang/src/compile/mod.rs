@@ -7,6 +7,8 @@
 //! order of `compile_core`:
 //! - `constants.rs`: the constants (and `Constants`, for the GenoM expansion);
 //! - `atoms.rs`, `components.rs`: atoms, then the component families built from them;
+//! - `budgets.rs`: the CPUs, durations, the atoms that stand for periodic tasks, and the
+//!   priority rules per CPU (the GenoM layer's time budgets use them too);
 //! - `connectors.rs`: connectors and their `forall` instances, as interactions;
 //! - `choices.rs`: the limit on an interaction's steps in one state;
 //! - `priority.rs`: priorities resolved to interactions, and their acyclicity;
@@ -14,6 +16,7 @@
 //! - `resolve.rs`: name resolution and type checking of expressions.
 
 mod atoms;
+pub(crate) mod budgets;
 mod choices;
 mod components;
 mod connectors;
@@ -64,6 +67,7 @@ pub(crate) fn compile_core(
     for e in choices::check(def, &c.atoms, &c.components, &c.connectors, &c.interactions) {
         c.errors.push(e);
     }
+    let budgets = budgets::check(def, &mut c.errors);
     let priorities = c.priorities(def);
     let properties = c.properties(def);
     let extra: Vec<eval::Expr> = extra.iter().filter_map(|e| c.global_bool_tree(e)).collect();
@@ -96,6 +100,7 @@ pub(crate) fn compile_core(
         initial: c.initial,
         slot_ranges: c.slot_ranges,
         genom: None,
+        budgets,
     });
     Ok((system, extra))
 }

@@ -296,7 +296,6 @@ impl Recipe {
             tick_ms: system.tick_ms,
             modules,
             idle,
-            cpus: self.timing.cpus.clone(),
         })
     }
 }

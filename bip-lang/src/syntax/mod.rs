@@ -6,6 +6,7 @@
 //! serialize back to RON, which is how `bip expand` prints an expanded model.
 
 mod code;
+mod task;
 mod var;
 
 use std::fmt;
@@ -24,6 +25,7 @@ pub use bip_model::Role;
 pub use code::{
     parse_action_in_file, parse_in_file, parse_range_in_file, syntax_error, ActionDef, ExprDef,
 };
+pub use task::AtomTaskDef;
 pub use var::{TypeDef, VarDef};
 
 /// The `ron` options every model file is read and printed with (docs/model.md:
@@ -41,8 +43,8 @@ pub struct SystemDef {
     /// Real-time length of one model tick in milliseconds (used by the engine's clock).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tick_ms: Option<ConstExpr>,
-    /// The CPUs the GenoM layer's tasks run on, for the scheduling analysis
-    /// (docs/model.md, "Time budgets"); none declared: one.
+    /// The CPUs the tasks (of the GenoM layer, and atoms') run on, for the scheduling
+    /// analysis (docs/model.md, "Time budgets"); none declared: one.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub cpus: Vec<Text>,
     #[serde(default, skip_serializing_if = "OrderedMap::is_empty")]
@@ -156,6 +158,10 @@ pub struct AtomDef {
     pub vars: Vec<VarDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub transitions: Vec<TransitionDef>,
+    /// Each component of the atom stands for a periodic task (docs/model.md, "Time
+    /// budgets").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<AtomTaskDef>,
 }
 
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]

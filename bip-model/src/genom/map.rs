@@ -35,9 +35,6 @@ pub struct GenomMap {
     /// which `DeadlockFree` excuses when requests come from the environment; `None` if
     /// the model has no activity or its requests all come from components of the model.
     pub idle: Option<eval::Expr>,
-    /// The CPUs the tasks run on (docs/model.md, "Time budgets"); empty if the model
-    /// declares none, and then every task is on one CPU.
-    pub cpus: Vec<String>,
 }
 
 #[derive(Clone, Debug)]
@@ -70,7 +67,8 @@ pub struct TaskMap {
     pub name: String,
     /// In ticks.
     pub period: u32,
-    /// Index into [`GenomMap::cpus`] (0 if the model declares none).
+    /// Index into the system's [`Budgets::cpus`](crate::Budgets::cpus) (0 if the model
+    /// declares none).
     pub cpu: u32,
     /// Larger is more urgent; `None` on every task of its CPU: rate-monotonic.
     pub priority: Option<i64>,

@@ -8,16 +8,13 @@
 use bip_model::genom::map::{CodelMap, ServiceMap};
 use bip_model::GenomMap;
 
-use super::tasks::LayerTask;
-
-/// The bound for `task`, in microseconds; `None` if a chain can loop without pausing
-/// (the activity could run forever in one period).
-pub fn demand_bound(map: &GenomMap, task: &LayerTask) -> Option<u64> {
-    let module = &map.modules[task.module];
-    module
+/// The bound for task `task` of module `module`, in microseconds; `None` if a chain can
+/// loop without pausing (the activity could run forever in one period).
+pub fn demand_bound(map: &GenomMap, module: usize, task: usize) -> Option<u64> {
+    map.modules[module]
         .services
         .iter()
-        .filter(|s| s.task == Some(task.task))
+        .filter(|s| s.task == Some(task))
         .try_fold(0u64, |sum, s| Some(sum.saturating_add(longest_chain(s)?)))
 }
 

@@ -1,10 +1,11 @@
-//! Whether the tasks of a GenoM layer meet their deadlines (docs/sched.md).
+//! Whether the tasks of a model meet their deadlines (docs/sched.md).
 //!
-//! The verifier's tick semantics assumes that every task's work of one period ends
+//! The verifier's tick semantics assumes that every GenoM task's work of one period ends
 //! within its period. With WCETs declared this checks it: each task's demand per
 //! period, exact from the model's states (`exact`) or, when they are too many, bounded
 //! from its codel automata (`bound`), then `bip-sched`'s response-time analysis per
-//! CPU. `tasks` says which interaction is whose codel run.
+//! CPU, together with the components that stand for periodic tasks (their demand is
+//! declared). `tasks` says which interaction is whose codel run.
 
 mod bound;
 mod exact;
@@ -17,7 +18,7 @@ use bip_sched::{
     analyse, show_micros as show, Analysis, Assignment, ResponseTime, SchedError, Task, TaskSet,
 };
 
-pub use tasks::LayerTask;
+pub use tasks::{LayerTask, TaskKind};
 
 use crate::memory;
 use crate::options::Options;
@@ -34,6 +35,9 @@ pub enum DemandMethod {
     /// From the codel automata: never below what a run can ask; `why` the states were not
     /// explored.
     Bound { why: String },
+    /// Every task's demand is declared (components standing for tasks, no codels to
+    /// look at).
+    Declared,
 }
 
 /// Which demand to compute.
@@ -153,6 +157,20 @@ pub(crate) fn as_property(
         Ok(s) => s?,
         Err(e) => return Some(failed(e)),
     };
+    let settled = |s: &Schedulability| {
+        if s.schedulable() {
+            PropertyVerdict::Holds { witness: None }
+        } else {
+            PropertyVerdict::Fails {
+                reason: s.verdict(),
+                trace: None,
+            }
+        }
+    };
+    let declared = || "response-time analysis of the declared WCETs".to_string();
+    if bound.method == DemandMethod::Declared {
+        return Some(result(settled(&bound), method, declared()));
+    }
     if bound.schedulable() {
         return Some(result(
             PropertyVerdict::Holds { witness: None },
@@ -167,16 +185,9 @@ pub(crate) fn as_property(
     Some(match &exact.method {
         DemandMethod::Exact { states, .. } => {
             let note = format!("response-time analysis, exact demands ({states} states)");
-            let verdict = if exact.schedulable() {
-                PropertyVerdict::Holds { witness: None }
-            } else {
-                PropertyVerdict::Fails {
-                    reason: exact.verdict(),
-                    trace: None,
-                }
-            };
-            result(verdict, Method::Explicit, note)
+            result(settled(&exact), Method::Explicit, note)
         }
+        DemandMethod::Declared => result(settled(&exact), method, declared()),
         DemandMethod::Bound { why } => result(
             PropertyVerdict::Inconclusive {
                 reason: format!(
@@ -190,21 +201,23 @@ pub(crate) fn as_property(
     })
 }
 
-/// The schedulability of `system`'s GenoM layer; `Ok(None)` if it declares no WCET (or
-/// has no `tick_ms` to measure periods with). An error is a task set the analysis cannot
-/// take, which the model's checks should have refused.
+/// The schedulability of `system`'s tasks; `Ok(None)` if it has none to analyse (no WCET
+/// in its GenoM layer, or no `tick_ms` to measure periods with, and no component standing
+/// for a task). An error is a task set the analysis cannot take, which the model's checks
+/// should have refused.
 pub fn schedulability(
     system: &System,
     options: &Options,
     assignment: Assignment,
     choice: DemandChoice,
 ) -> Result<Option<Schedulability>, SchedError> {
-    let (Some(table), Some(map)) = (tasks::TaskTable::new(system), system.genom.as_ref()) else {
+    let Some(table) = tasks::TaskTable::new(system) else {
         return Ok(None);
     };
     let (demands, method) = match choice {
+        _ if !table.has_codel_tasks() => (bounds(system, &table), DemandMethod::Declared),
         DemandChoice::Bound => (
-            bounds(map, &table),
+            bounds(system, &table),
             DemandMethod::Bound {
                 why: "asked for".into(),
             },
@@ -228,7 +241,7 @@ pub fn schedulability(
                     },
                 ),
                 Err(why) => (
-                    bounds(map, &table),
+                    bounds(system, &table),
                     DemandMethod::Bound {
                         why: format!("the states were not all explored: {why}"),
                     },
@@ -236,10 +249,10 @@ pub fn schedulability(
             }
         }
     };
-    let cpus = if map.cpus.is_empty() {
+    let cpus = if system.budgets.cpus.is_empty() {
         vec!["cpu".to_string()]
     } else {
-        map.cpus.clone()
+        system.budgets.cpus.clone()
     };
     let set = TaskSet {
         cpus: cpus.clone(),
@@ -273,10 +286,15 @@ pub fn schedulability(
     }))
 }
 
-fn bounds(map: &bip_model::GenomMap, table: &tasks::TaskTable) -> Vec<Option<u64>> {
+/// Each task's demand bounded without exploring: from the codel automata, or declared.
+fn bounds(system: &System, table: &tasks::TaskTable) -> Vec<Option<u64>> {
     table
         .tasks
         .iter()
-        .map(|t| bound::demand_bound(map, t))
+        .map(|t| match (t.kind, system.genom.as_ref()) {
+            (TaskKind::Component { wcet_us, .. }, _) => Some(wcet_us),
+            (TaskKind::Genom { module, task }, Some(map)) => bound::demand_bound(map, module, task),
+            (TaskKind::Genom { .. }, None) => None,
+        })
         .collect()
 }

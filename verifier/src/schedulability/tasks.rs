@@ -1,16 +1,15 @@
-//! The GenoM layer's tasks as the scheduling analysis sees them: which interactions are
-//! whose codel runs, and what each run costs.
+//! The model's tasks as the scheduling analysis sees them: the GenoM layer's execution
+//! tasks (which interactions are whose codel runs, and what each run costs) and the
+//! components that stand for periodic tasks (their work per period declared).
 
 use bip_model::{GenomMap, System};
 
-/// One execution task of a module.
+/// One task of the model.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LayerTask {
-    /// `module.task`.
+    /// `module.task`, or the component's name.
     pub name: String,
-    pub module: usize,
-    /// Index into the module's tasks.
-    pub task: usize,
+    pub kind: TaskKind,
     pub period_us: u64,
     pub cpu: u32,
     pub priority: Option<i64>,
@@ -20,22 +19,71 @@ pub struct LayerTask {
     pub unbudgeted: Vec<String>,
 }
 
-/// The tasks, and the cost of each interaction to each task.
+/// Where a task's demand per period comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TaskKind {
+    /// An execution task of a GenoM module: its demand is found from the codels its
+    /// activities run in a period.
+    Genom {
+        module: usize,
+        /// Index into the module's tasks.
+        task: usize,
+    },
+    /// A component whose atom stands for a periodic task: its demand is its declared
+    /// WCET per period.
+    Component { component: u32, wcet_us: u64 },
+}
+
+/// The tasks, and the cost of each interaction to each GenoM task.
 #[derive(Clone, Debug)]
 pub struct TaskTable {
+    /// The GenoM layer's tasks first, in declaration order, then the components'.
     pub tasks: Vec<LayerTask>,
     /// Per interaction: `(task, WCET)` if it runs (or fails) a codel of a task's activity.
     pub cost: Vec<Option<(usize, u64)>>,
-    /// The tick interaction: it ends every task's period.
-    pub tick: u32,
+    /// The tick interaction, which ends every GenoM task's period; `None` without
+    /// GenoM tasks to analyse.
+    pub tick: Option<u32>,
 }
 
 impl TaskTable {
-    /// The tasks of `system`'s GenoM layer, if it has one with a known tick length and at
-    /// least one WCET.
+    /// The tasks of `system`, if it has some to analyse: the GenoM layer's when it has a
+    /// known tick length and at least one WCET, and the components that stand for tasks.
     pub fn new(system: &System) -> Option<TaskTable> {
-        let map: &GenomMap = system.genom.as_ref()?;
-        let tick_us = map.tick_ms?.checked_mul(1000)?;
+        let mut table = TaskTable {
+            tasks: Vec::new(),
+            cost: vec![None; system.interactions.len()],
+            tick: None,
+        };
+        if let Some(map) = system.genom.as_ref() {
+            table.add_layer(map);
+        }
+        for t in &system.budgets.tasks {
+            table.tasks.push(LayerTask {
+                name: system.components[t.component as usize].name.clone(),
+                kind: TaskKind::Component {
+                    component: t.component,
+                    wcet_us: t.wcet_us,
+                },
+                period_us: t.period_us,
+                cpu: t.cpu,
+                priority: t.priority,
+                deadline_us: t.deadline_us,
+                unbudgeted: Vec::new(),
+            });
+        }
+        (!table.tasks.is_empty()).then_some(table)
+    }
+
+    /// True if some task's demand is found from the model's codels.
+    pub fn has_codel_tasks(&self) -> bool {
+        self.tick.is_some()
+    }
+
+    fn add_layer(&mut self, map: &GenomMap) {
+        let Some(tick_us) = map.tick_ms.and_then(|ms| ms.checked_mul(1000)) else {
+            return;
+        };
         let any_wcet = map
             .modules
             .iter()
@@ -43,13 +91,12 @@ impl TaskTable {
             .flat_map(|s| &s.codels)
             .any(|c| c.wcet_us.is_some());
         if !any_wcet {
-            return None;
+            return;
         }
-        let mut tasks = Vec::new();
-        let mut cost = vec![None; system.interactions.len()];
+        self.tick = Some(map.tick);
         for (mi, module) in map.modules.iter().enumerate() {
             for (ti, task) in module.tasks.iter().enumerate() {
-                let index = tasks.len();
+                let index = self.tasks.len();
                 let mut unbudgeted = Vec::new();
                 for service in module.services.iter().filter(|s| s.task == Some(ti)) {
                     for codel in &service.codels {
@@ -64,16 +111,18 @@ impl TaskTable {
                             }
                         };
                         for i in [codel.run, codel.fail] {
-                            if let Some(slot) = cost.get_mut(i as usize) {
+                            if let Some(slot) = self.cost.get_mut(i as usize) {
                                 *slot = Some((index, wcet));
                             }
                         }
                     }
                 }
-                tasks.push(LayerTask {
+                self.tasks.push(LayerTask {
                     name: format!("{}.{}", module.name, task.name),
-                    module: mi,
-                    task: ti,
+                    kind: TaskKind::Genom {
+                        module: mi,
+                        task: ti,
+                    },
                     period_us: u64::from(task.period).saturating_mul(tick_us),
                     cpu: task.cpu,
                     priority: task.priority,
@@ -82,10 +131,5 @@ impl TaskTable {
                 });
             }
         }
-        Some(TaskTable {
-            tasks,
-            cost,
-            tick: map.tick,
-        })
     }
 }

@@ -240,3 +240,88 @@ fn the_analysis_on_the_demands() {
     let a = s.analysis.as_ref().unwrap();
     assert_eq!(a.misses(&s.set).collect::<Vec<_>>(), [1]);
 }
+
+/// The responses of robots/controllers.ron by hand (Joseph and Pandya's fixed point):
+/// control CPU, priorities 40..10: odometry 2; speed 6 + ⌈8/10⌉·2 = 8; motors
+/// 3 + ⌈13/10⌉·2 + ⌈13/20⌉·6 = 13; safety 10 + ⌈36/10⌉·2 + ⌈36/20⌉·(6 + 3) = 36 (from
+/// 21, then 34, then 36). comm CPU, rate-monotonic: telemetry 30; logger 40 + ⌈70/100⌉·30
+/// = 70. The demands are the declared WCETs: no state is explored.
+#[test]
+fn periodic_atoms_are_analysed_with_their_declared_work() {
+    let text = include_str!("../../../robots/controllers.ron");
+    let analysed = |text: &str| {
+        let system = load_str("controllers.ron", text).unwrap();
+        schedulability(
+            &system,
+            &Options::default(),
+            Assignment::Given,
+            DemandChoice::Exact,
+        )
+        .unwrap()
+        .expect("the atoms stand for tasks")
+    };
+    let s = analysed(text);
+    assert_eq!(s.method, DemandMethod::Declared);
+    let names: Vec<&str> = s.set.tasks.iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "odometry",
+            "speed",
+            "motors",
+            "safety",
+            "telemetry",
+            "logger"
+        ]
+    );
+    let a = s.analysis.as_ref().unwrap();
+    let responses: Vec<ResponseTime> = a.tasks.iter().map(|t| t.response).collect();
+    assert_eq!(
+        responses,
+        [2000, 8000, 13_000, 36_000, 30_000, 70_000].map(ResponseTime::Exact)
+    );
+    assert!(a.tasks[3].iterations >= 3, "{:?}", a.tasks[3]);
+    assert!(s.schedulable());
+    // safety at 15 ms: 15 + ⌈54/10⌉·2 + ⌈54/20⌉·9 = 54 > 50
+    let heavy = text.replace(
+        r#"wcet: "10ms", priority: 10"#,
+        r#"wcet: "15ms", priority: 10"#,
+    );
+    let s = analysed(&heavy);
+    assert!(!s.schedulable());
+    assert_eq!(
+        s.verdict(),
+        "not schedulable: safety misses its deadline by 4 ms (responds in 54 ms, deadline 50 ms)"
+    );
+}
+
+/// A module's task and an atom's task on one CPU: the atom's declared work interferes
+/// with the module's exact demand. Rate-monotonic: `watch` (5 ms, 1 ms), `m.t` (10 ms,
+/// 2.5 ms: 2.5 + ⌈3.5/5⌉·1 = 3.5), `m.u` (20 ms, 0.3 ms: 0.3 + 1 + 2.5 = 3.8).
+#[test]
+fn module_tasks_and_atoms_share_a_cpu() {
+    let text = layer(false, "u").replace(
+        "    modules: [",
+        "    atoms: { \"Watch\": Atom(locations: [\"on\"], initial: \"on\", task: (period: \"5ms\", wcet: \"1ms\")) },\n    components: [(name: \"watch\", atom: \"Watch\")],\n    modules: [",
+    );
+    let system = load_str("mixed.ron", &text).unwrap();
+    let (exact, method) = demands(&system, DemandChoice::Exact);
+    assert!(matches!(method, DemandMethod::Exact { .. }), "{method:?}");
+    assert_eq!(exact, [Some(2500), Some(300), Some(1000)]);
+    let (bound, _) = demands(&system, DemandChoice::Bound);
+    assert_eq!(bound[2], Some(1000));
+    let s = schedulability(
+        &system,
+        &Options::default(),
+        Assignment::Given,
+        DemandChoice::Exact,
+    )
+    .unwrap()
+    .unwrap();
+    let names: Vec<&str> = s.set.tasks.iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(names, ["m.t", "m.u", "watch"]);
+    let a = s.analysis.as_ref().unwrap();
+    let responses: Vec<ResponseTime> = a.tasks.iter().map(|t| t.response).collect();
+    assert_eq!(responses, [3500, 3800, 1000].map(ResponseTime::Exact));
+    assert_eq!(a.tasks[2].rank, 0);
+}

@@ -206,6 +206,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             ports,
             vars,
             transitions: t,
+            task: None,
         };
         let what = format!("activity `{m}.{}`", s.name);
         let comp = self.comp(r);

@@ -68,6 +68,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             ports: vec![text("tick")],
             vars,
             transitions: vec![tr("on", "tick", "on", None, Vec::new())],
+            task: None,
         };
         let span = self
             .layer

@@ -99,8 +99,8 @@ impl<'a, 'd> Builder<'a, 'd> {
             def: SystemDef {
                 name: def.name.clone(),
                 tick_ms: def.tick_ms.clone(),
-                // the core has no tasks to place
-                cpus: Vec::new(),
+                // the atoms' tasks are placed on them
+                cpus: def.cpus.clone(),
                 constants: def.constants.clone(),
                 atoms,
                 components,

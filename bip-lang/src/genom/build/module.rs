@@ -122,6 +122,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             ports,
             vars,
             transitions,
+            task: None,
         };
         let what = format!("module `{}`", m.name);
         self.add_atom(module_atom(m.name), atom, m.def.name.span, what.clone());
