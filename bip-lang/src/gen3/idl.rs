@@ -93,6 +93,9 @@ impl Idl {
 
     /// An IDL declaration, from its first word; `;` included.
     pub fn declaration(&mut self, c: &mut Cursor) -> Result<(), ModelError> {
+        if self.scope.len() > MAX_DEPTH {
+            return Err(ModelError::new("modules nested too deeply", c.here()));
+        }
         let Some(word) = c.peek().and_then(|t| t.ident().map(str::to_string)) else {
             return Err(c.expected("an IDL declaration"));
         };

@@ -20,7 +20,7 @@ const MAX_INCLUDE_DEPTH: usize = 32;
 /// Macro expansion nesting bound.
 const MAX_MACRO_DEPTH: usize = 64;
 /// Tokens after expansion: a bound on what macros may multiply.
-const MAX_TOKENS: usize = 4_000_000;
+const MAX_TOKENS: usize = 1_000_000;
 
 /// Where the files come from and go to.
 pub struct Input<'a> {

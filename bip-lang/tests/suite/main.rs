@@ -5,6 +5,8 @@
 
 mod diagnostics;
 mod fuzz;
+mod gen3;
+mod gen3_fuzz;
 mod genom;
 mod genom_random;
 mod genom_terms;
