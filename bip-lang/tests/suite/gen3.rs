@@ -552,7 +552,9 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         }
         let (m, l, c) = error(text);
         if !m.contains(message) || (l, c) != (*line, *col) {
-            wrong.push(format!("`{text}`: {l}:{c}: `{m}`, expected {line}:{col}: `{message}`"));
+            wrong.push(format!(
+                "`{text}`: {l}:{c}: `{m}`, expected {line}:{col}: `{message}`"
+            ));
         }
     }
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
