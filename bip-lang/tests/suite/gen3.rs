@@ -653,26 +653,11 @@ fn the_examples_import_to_their_ron_equivalent() {
     }
 }
 
-/// A generated component of about `lines` lines, for the parser's speed (by hand) and
-/// for a test that such a file imports.
-pub(crate) fn large_component(lines: usize) -> String {
-    let mut s = String::from("#define PERIOD 10\ncomponent big {\n  exception e_fail;\n  task t { period PERIOD ms; };\n  port out double p;\n");
-    let mut k = 0;
-    while s.lines().count() < lines {
-        s.push_str(&format!(
-            "  activity A{k}(in double x = 1 : \"input\") {{\n    doc \"activity {k}\";\n    task t;\n    interrupts A{k};\n    codel<start> a{k}_start(in x) yield pause::run;\n    codel<run> a{k}_run(in x, out p) yield pause::run, ether;\n    codel<stop> a{k}_stop() yield ether;\n    throw e_fail;\n  }};\n"
-        ));
-        k += 1;
-    }
-    s.push_str("};\n");
-    s
-}
-
 #[test]
 fn a_two_thousand_line_component_imports() {
-    let text = large_component(2_000);
-    let dir = TempDir::new();
-    let path = dir.write("big.gen", &text);
+    let path = robots().join("bench/genom3-component.gen");
+    let text = std::fs::read_to_string(&path).expect("reads");
+    assert!(text.lines().count() >= 2_000);
     let s = bip_lang::gen3::read(
         &path,
         "big.gen",
@@ -682,7 +667,7 @@ fn a_two_thousand_line_component_imports() {
         Default::default(),
     )
     .unwrap_or_else(|e| panic!("{}", e.message));
-    assert!(s.components[0].services.len() > 200);
+    assert_eq!(s.components[0].services.len(), 222);
     let modules = bip_lang::gen3::modules(&s, 10_000).unwrap_or_else(|e| panic!("{e:?}"));
     assert_eq!(modules[0].services.len(), s.components[0].services.len());
 }
