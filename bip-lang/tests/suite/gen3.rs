@@ -69,7 +69,7 @@ fn spec(text: &str) -> Spec {
 /// The one error of importing `text`: its message and its line and column in `c.gen`,
 /// after checking that it renders with a caret in that file.
 fn error(text: &str) -> (String, usize, usize) {
-    let e = import(text).err().expect("an error");
+    let e = import(text).expect_err("an error");
     let summary = e.summary();
     let first = summary.lines().next().unwrap_or_default().to_string();
     let rendered = render(&e);
@@ -253,6 +253,9 @@ fn a_component_with_every_construct_reads_with_its_information() {
             || t.name.value == "handle_s"));
 }
 
+/// A codel's state, yields, throws and writes.
+type CodelRow<'a> = (&'a str, Vec<&'a str>, Vec<&'a str>, Vec<&'a str>);
+
 #[test]
 fn a_component_becomes_a_module_of_the_genom_layer() {
     let def = imported(FULL);
@@ -294,7 +297,7 @@ fn a_component_becomes_a_module_of_the_genom_layer() {
     let run = &m.services[2];
     assert_eq!(run.task.as_ref().map(|t| t.value.as_str()), Some("main"));
     assert_eq!(run.after[0].value, "Reset");
-    let codels: Vec<(&str, Vec<&str>, Vec<&str>, Vec<&str>)> = run
+    let codels: Vec<CodelRow> = run
         .codels
         .iter()
         .map(|c| {
@@ -480,7 +483,7 @@ fn malformed_preprocessor_input_is_an_error_at_its_place() {
     // an include cycle without guards
     let dir = TempDir::new();
     let path = dir.write("c.gen", "#include \"c.gen\"\n");
-    let e = import_gen_file(&path, &[]).err().expect("an error");
+    let e = import_gen_file(&path, &[]).expect_err("an error");
     assert!(
         e.summary().contains("nested more than 32 deep"),
         "{}",
@@ -546,7 +549,7 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
     let mut wrong = Vec::new();
     for (text, message, line, col) in cases {
         if *line == 0 {
-            let e = import(text).err().expect("an error");
+            let e = import(text).expect_err("an error");
             assert!(e.summary().contains(message), "{}", e.summary());
             continue;
         }
@@ -568,10 +571,10 @@ fn the_period_of_a_gen_task_is_a_whole_number_of_model_ticks() {
         "m.ron",
         r#"System(name: "m", tick_ms: 10, modules: [Gen("a.gen")])"#,
     );
-    let e = load_file(&model).err().expect("an error");
+    let e = load_file(&model).expect_err("an error");
     assert!(e.summary().contains("a.gen:1:31: the period of task `t` (25000 µs) is not a whole number of ticks of 10000 µs"), "{}", e.summary());
     let model = dir.write("n.ron", r#"System(name: "m", modules: [Gen("a.gen")])"#);
-    let e = load_file(&model).err().expect("an error");
+    let e = load_file(&model).expect_err("an error");
     assert!(
         e.summary()
             .contains("n.ron:1:34: a model with `.gen` modules needs `tick_ms`"),
@@ -582,7 +585,7 @@ fn the_period_of_a_gen_task_is_a_whole_number_of_model_ticks() {
         "o.ron",
         r#"System(name: "m", tick_ms: 5, modules: [Gen("missing.gen")])"#,
     );
-    let e = load_file(&model).err().expect("an error");
+    let e = load_file(&model).expect_err("an error");
     assert!(
         e.summary().contains("o.ron:1:46: cannot read"),
         "{}",
