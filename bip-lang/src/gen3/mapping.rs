@@ -2,7 +2,7 @@
 //! files"): what is modelled (tasks and their periods, out ports, services, their
 //! interrupts, `after`, codel state machines with their yields, exceptions, the ports each
 //! codel writes) and what is refused because it would change the behaviour without being
-//! modelled (tasks without a period, `delay`, `before`). The rest is kept in the
+//! modelled (a task without a period that an activity runs in, `delay`, `before`). The rest is kept in the
 //! component as information.
 
 use std::collections::HashSet;
@@ -63,10 +63,19 @@ fn module(
                 }
             }
             let Some((period, span)) = t.period else {
-                errors.push(
-                    ModelError::new(format!("task `{}` has no period", t.name), t.name.span)
-                        .with_help("bip models periodic tasks only: give it a `period`"),
-                );
+                // a task no activity runs in only runs its own state machine, which is
+                // not modelled; one an activity runs in needs a period
+                let user = c
+                    .services
+                    .iter()
+                    .find(|s| s.task.as_ref().is_some_and(|n| n.value == t.name.value));
+                if let Some(s) = user {
+                    errors.push(
+                        ModelError::new(format!("task `{}` has no period", t.name), t.name.span)
+                            .with_help("bip models periodic tasks only: give it a `period`")
+                            .with_note(s.name.span, format!("activity `{}` runs in it", s.name)),
+                    );
+                }
                 return None;
             };
             if period % tick_us != 0 {

@@ -129,6 +129,7 @@ component full {
     throw e_sys;
   };
   task slow { period 0.5 s; };
+  task events { codel<start> events_start() yield ether; };
 
   attribute SetSpeed(in speed = { [0] = 1, [1] = 2.5 : "y", [2] = : "z" }) {
     doc "Set the speed.";
@@ -519,7 +520,7 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         ("component c { task t { period -5 ms; }; };", "a duration is positive", 1, 31),
         ("component c { task t { speed 3; }; };", "expected a task property", 1, 24),
         ("component c { task t { scheduling fast; }; };", "expected `real-time`, found `fast`", 1, 35),
-        ("component c { task t; };", "task `t` has no period", 1, 20),
+        ("component c { task t; activity a() { task t; codel<start> s() yield ether; }; };", "task `t` has no period", 1, 20),
         ("component c { task t { period 10 ms; delay 5 ms; }; };", "task `t`: `delay` is not supported", 1, 44),
         // port
         ("component c { port sideways double p; };", "expected `in` or `out`, found `sideways`", 1, 20),
