@@ -69,7 +69,7 @@ fn parse_shared(name: &str, text: &Arc<String>) -> Result<SystemDef, LoadError> 
         LoadError::model(name, text, vec![err])
     })?;
     if !entries.is_empty() {
-        gen3::resolve(&mut def, entries, name, text.len())
+        gen3::resolve(&mut def, entries, name, text)
             .map_err(|errors| LoadError::model(name, text, errors).with_files(&def.sources))?;
     }
     Ok(def)

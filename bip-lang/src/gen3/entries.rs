@@ -12,8 +12,9 @@ use std::fmt;
 use serde::de::value::{MapAccessDeserializer, SeqAccessDeserializer};
 use serde::de::{self, Deserialize, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
 
+use crate::diag::ModelError;
 use crate::genom::syntax::ModuleDef;
-use crate::source::Text;
+use crate::source::{Span, Text};
 
 /// A `Gen(...)` entry of a model's `modules`.
 #[derive(Clone, Debug)]
@@ -185,4 +186,33 @@ impl<'de, A: MapAccess<'de>> MapAccess<'de> for FirstKey<A> {
     fn next_value_seed<V: DeserializeSeed<'de>>(&mut self, seed: V) -> Result<V::Value, A::Error> {
         self.map.next_value_seed(seed)
     }
+}
+
+/// The error for an entry written `Other("x.gen")` rather than `Gen("x.gen")`: `ron` drops
+/// the name before the entry's shape is seen, so it is read back from the model's text,
+/// before the file's path.
+pub(crate) fn misnamed(text: &str, entry: &GenEntry) -> Option<ModelError> {
+    let before = text.get(..entry.file.span.start)?;
+    // the opening quote, then `file:` if written, then `(`
+    let mut rest = before.strip_suffix('"').unwrap_or(before).trim_end();
+    if let Some(r) = rest.strip_suffix(':') {
+        rest = r.trim_end().strip_suffix("file")?.trim_end();
+    }
+    rest = rest.strip_suffix('(')?.trim_end();
+    let start = rest
+        .rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .map_or(0, |i| i + 1);
+    let word = &rest[start..];
+    (word != "Gen").then(|| {
+        let span = if word.is_empty() {
+            entry.file.span
+        } else {
+            Span::new(start, rest.len())
+        };
+        ModelError::new(
+            "a module from a GenoM3 file is written `Gen(\"file.gen\")`",
+            span,
+        )
+        .with_help("or `Gen(file: \"file.gen\", include: [\"dir/\"])`")
+    })
 }

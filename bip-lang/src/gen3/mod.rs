@@ -64,15 +64,23 @@ pub fn modules(spec: &Spec, tick_us: u64) -> Result<Vec<ModuleDef>, Vec<ModelErr
     mapping::modules(spec, tick_us)
 }
 
-/// Reads the `.gen` entries of a parsed model (`model` is its file's name; `main_len` its
-/// length) and puts their modules in their places in `def.modules`. The files read stay in
+/// Reads the `.gen` entries of a parsed model (`model` is its file's name, `text` its
+/// text) and puts their modules in their places in `def.modules`. The files read stay in
 /// `def.sources` whether or not they load, for the errors to point into them.
 pub(crate) fn resolve(
     def: &mut SystemDef,
     entries: Vec<GenEntry>,
     model: &str,
-    main_len: usize,
+    text: &str,
 ) -> Result<(), Vec<ModelError>> {
+    let main_len = text.len();
+    let misnamed: Vec<ModelError> = entries
+        .iter()
+        .filter_map(|e| entries::misnamed(text, e))
+        .collect();
+    if !misnamed.is_empty() {
+        return Err(misnamed);
+    }
     let dir = Path::new(model).parent().unwrap_or(Path::new(""));
     let tick_us = model_tick_us(def, entries.first().map_or(Span::NONE, |e| e.file.span))
         .map_err(|e| vec![e])?;

@@ -624,6 +624,19 @@ fn gen_entries_take_their_places_among_ron_modules() {
         [("a", "1".into()), ("r", "3".into()), ("b", "2".into())]
     );
     load_file(&model).unwrap_or_else(|e| panic!("{}", e.summary()));
+    // an entry of that shape with another name is an error at the name
+    let model = dir.write(
+        "p.ron",
+        r#"System(name: "m", tick_ms: 10, modules: [Gem("a.gen"), Gen ( file : "a.gen")])"#,
+    );
+    let e = load_file(&model).expect_err("an error");
+    assert_eq!(e.errors().len(), 1, "{}", e.summary());
+    assert!(
+        e.summary()
+            .contains("p.ron:1:42: a module from a GenoM3 file is written `Gen(\"file.gen\")`"),
+        "{}",
+        e.summary()
+    );
     // an unknown field of a Gen entry is an error in the model file
     let model = dir.write(
         "n.ron",
