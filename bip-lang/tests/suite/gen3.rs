@@ -340,6 +340,9 @@ fn a_component_becomes_a_module_of_the_genom_layer() {
 fn idl_declarations_and_constants_read() {
     let s = spec(
         r#"
+#define SIZE (2 + 2)
+typedef double sized[SIZE];
+typedef sequence<string<SIZE>, SIZE> names;
 module geo {
   const long scale = 2 * (3 + 1) - 10 / 5 % 3 << 1 | 1 ^ 0 & 7;
   enum mode { idle, busy, done };
@@ -375,18 +378,19 @@ component c {
     ] {
         assert!(kinds.contains(&want), "{want:?} in {kinds:?}");
     }
-    let grid = s
-        .types
-        .iter()
-        .find(|t| t.name.value == "geo::grid")
-        .expect("grid");
-    assert_eq!(grid.members[0].ty, "sequence<sequence<long>>");
-    let matrix = s
-        .types
-        .iter()
-        .find(|t| t.name.value == "geo::matrix")
-        .expect("matrix");
-    assert_eq!(matrix.members[0].ty, "double[3][3]");
+    let ty = |name: &str| {
+        let t = s
+            .types
+            .iter()
+            .find(|t| t.name.value == name)
+            .expect("declared");
+        t.members[0].ty.clone()
+    };
+    assert_eq!(ty("geo::grid"), "sequence<sequence<long>>");
+    assert_eq!(ty("geo::matrix"), "double[3][3]");
+    // sizes from a `#define`
+    assert_eq!(ty("sized"), "double[4]");
+    assert_eq!(ty("names"), "sequence<string<4>, 4>");
 }
 
 #[test]
