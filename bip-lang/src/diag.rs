@@ -144,16 +144,15 @@ impl LoadError {
 
     /// `(line, column)` of each error, 1-based, in the order reported.
     pub fn positions(&self) -> Vec<(usize, usize)> {
+        self.places().into_iter().map(|(_, l, c)| (l, c)).collect()
+    }
+
+    /// `(file, line, column)` of each error, in the order reported: the file is the model
+    /// file's name, or that of the `.gen` file the error lies in.
+    pub fn places(&self) -> Vec<(&str, usize, usize)> {
         match self {
             LoadError::Io { .. } => Vec::new(),
-            LoadError::Model(m) => m
-                .errors
-                .iter()
-                .map(|e| {
-                    let (_, l, c) = m.position(e.span);
-                    (l, c)
-                })
-                .collect(),
+            LoadError::Model(m) => m.errors.iter().map(|e| m.position(e.span)).collect(),
         }
     }
 

@@ -77,6 +77,29 @@ fn bip_import_shows_an_error_in_the_gen_file() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("expected `;`, found `}`"), "{stderr}");
     assert!(stderr.contains("bad.gen:2:25]"), "{stderr}");
+    // in a model, and in JSON, the error names the .gen file
+    let model = dir.path().join("m.ron");
+    std::fs::write(
+        &model,
+        r#"System(name: "m", tick_ms: 10, modules: [Gen("bad.gen")])"#,
+    )
+    .expect("writes");
+    let out = bip(&["verify", model.to_str().expect("utf-8"), "--format", "json"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(2), "{stdout}");
+    let json: serde_json::Value = serde_json::from_str(&stdout).expect("a JSON document");
+    let first = &json["errors"][0];
+    assert!(
+        first["file"]
+            .as_str()
+            .is_some_and(|f| f.ends_with("bad.gen")),
+        "{json}"
+    );
+    assert_eq!(
+        (first["line"].as_u64(), first["column"].as_u64()),
+        (Some(2), Some(25)),
+        "{json}"
+    );
     // without the search path, an include is not found
     let out = bip(&["import", "robots/genom3/nav.gen"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
