@@ -99,9 +99,13 @@ fn unary(c: &mut Cursor, lookup: Lookup, c_ops: bool, depth: usize) -> Result<Va
             continue;
         }
         if c.eat_punct(op).is_some() {
+            let at = c.last_span();
             let v = unary(c, lookup, c_ops, depth + 1)?;
             return Ok(match (op, v) {
-                ("-", Value::Int(i)) => Value::Int(-i),
+                ("-", Value::Int(i)) => Value::Int(
+                    i.checked_neg()
+                        .ok_or_else(|| ModelError::new("`-` overflows here", at))?,
+                ),
                 ("-", Value::Float(f)) => Value::Float(-f),
                 ("~", Value::Int(i)) => Value::Int(!i),
                 ("!", v) => Value::Int(i128::from(!v.truth())),

@@ -144,8 +144,8 @@ fn model_tick_us(def: &SystemDef, at: Span) -> Result<u64, ModelError> {
             }),
         ConstValue::Bool(_) => None,
     };
-    match ms {
-        Some(ms) if ms >= 1 => Ok(ms as u64 * 1000),
+    match ms.and_then(|ms| u64::try_from(ms).ok()?.checked_mul(1000)) {
+        Some(us) if us >= 1000 => Ok(us),
         _ => Err(ModelError::new(
             "with `.gen` modules, `tick_ms` must be a positive number (or a constant's name)",
             tick.span,

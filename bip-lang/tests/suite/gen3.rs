@@ -519,6 +519,7 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         ("enum e { };", "expected an enumerator, found `}`", 1, 10),
         ("const long k = unknown;", "unknown constant `unknown`", 1, 16),
         ("const long k = 1 / 0;", "division by zero", 1, 18),
+        ("const long k = -(-170141183460469231731687303715884105727 - 1);", "`-` overflows here", 1, 16),
         // task
         ("component c { task t { period; }; };", "expected a constant, found `;`", 1, 30),
         ("component c { task t { period -5 ms; }; };", "a duration is positive", 1, 31),
@@ -583,6 +584,17 @@ fn the_period_of_a_gen_task_is_a_whole_number_of_model_ticks() {
     assert!(
         e.summary()
             .contains("n.ron:1:34: a model with `.gen` modules needs `tick_ms`"),
+        "{}",
+        e.summary()
+    );
+    let model = dir.write(
+        "huge.ron",
+        r#"System(name: "m", tick_ms: 9223372036854775807, modules: [Gen("a.gen")])"#,
+    );
+    let e = load_file(&model).expect_err("an error");
+    assert!(
+        e.summary()
+            .contains("huge.ron:1:28: with `.gen` modules, `tick_ms` must be a positive number"),
         "{}",
         e.summary()
     );
