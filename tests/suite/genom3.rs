@@ -1,6 +1,6 @@
 //! GenoM3 `.gen` files end to end: a model that takes its modules from `.gen` files
-//! verifies with the same verdicts and state counts as its RON equivalent, and `bip
-//! import` prints a model that loads (docs/genom.md, "GenoM3 files").
+//! verifies with the same verdicts and state counts as its RON equivalent and runs in the
+//! engine, and `bip import` prints a model that loads (docs/genom.md, "GenoM3 files").
 
 use crate::common::bip;
 
@@ -36,6 +36,18 @@ fn the_gen_rover_verifies_as_its_ron_equivalent() {
         "four properties and the counts: {from_gen:?}"
     );
     assert_eq!(from_gen, written);
+    // the engine runs it as read from the .gen files
+    let out = bip(&[
+        "simulate",
+        "robots/genom3-rover.ron",
+        "--steps",
+        "500",
+        "--seed",
+        "1",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("held at every step"), "{stdout}");
 }
 
 #[test]
