@@ -11,6 +11,7 @@ mod exit;
 mod expand;
 mod export;
 mod graph;
+mod import;
 mod interrupt;
 mod load;
 mod names;
@@ -55,6 +56,15 @@ enum Command {
         /// Model file (RON).
         file: PathBuf,
     },
+    /// Print the components of a GenoM3 `.gen` file as the equivalent model (RON), checked
+    /// as `bip check` would.
+    Import {
+        /// The `.gen` file.
+        file: PathBuf,
+        /// A directory `#include` searches (after the including file's own).
+        #[arg(short = 'I', value_name = "DIR")]
+        include: Vec<PathBuf>,
+    },
     /// Verify a model's properties (deadlock freedom, invariants, reachability, range
     /// errors) by exploring its states or by symbolic proofs. Exit code 0: all hold,
     /// 1: some property fails, 2: model or usage error, 3: inconclusive.
@@ -91,6 +101,7 @@ fn main() -> ExitCode {
     let code = match cli.command {
         Command::Check { files } => check::run(&files),
         Command::Expand { file } => expand::run(&file),
+        Command::Import { file, include } => import::run(&file, &include),
         Command::Verify(args) => verify::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Simulate(args) => simulate::run(&args),

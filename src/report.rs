@@ -46,9 +46,14 @@ pub fn load_error_json(file: &Path, e: &LoadError) -> String {
         LoadError::Model(_) => e
             .errors()
             .iter()
-            .zip(e.positions())
-            .map(|(err, (line, column))| Entry {
-                file: shown.clone(),
+            .zip(e.places())
+            .map(|(err, (place, line, column))| Entry {
+                // an error in a `.gen` module names its file
+                file: if err.span.is_none() {
+                    shown.clone()
+                } else {
+                    place.to_string()
+                },
                 line: (!err.span.is_none()).then_some(line),
                 column: (!err.span.is_none()).then_some(column),
                 message: &err.message,

@@ -12,6 +12,7 @@ use miette::{Diagnostic, LabeledSpan, SourceCode};
 
 use crate::excerpt::Excerpt;
 use crate::source::{line_col, Span};
+use crate::source_map::SourceMap;
 
 /// One problem in a model file.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -95,6 +96,25 @@ pub struct ModelErrors {
     pub name: String,
     pub text: Arc<String>,
     pub errors: Vec<ModelError>,
+    /// The other files the errors may lie in (`.gen` modules).
+    pub files: SourceMap,
+}
+
+impl ModelErrors {
+    /// The file a span lies in (its name and text) and the span in that file.
+    fn place(&self, span: Span) -> (&str, &Arc<String>, Span) {
+        match self.files.locate(span) {
+            Some((f, local)) => (&f.name, &f.text, local),
+            None => (&self.name, &self.text, span),
+        }
+    }
+
+    /// `(file, line, column)` of a span's start.
+    fn position(&self, span: Span) -> (&str, usize, usize) {
+        let (name, text, local) = self.place(span);
+        let (l, c) = line_col(text, local.start);
+        (name, l, c)
+    }
 }
 
 impl LoadError {
@@ -103,7 +123,16 @@ impl LoadError {
             name: name.to_string(),
             text: Arc::clone(text),
             errors,
+            files: SourceMap::default(),
         })
+    }
+
+    /// The same errors, some of which lie in `files` (spans past the model file's end).
+    pub(crate) fn with_files(mut self, files: &SourceMap) -> LoadError {
+        if let LoadError::Model(m) = &mut self {
+            m.files = files.clone();
+        }
+        self
     }
 
     /// The model errors, if the file was read.
@@ -116,13 +145,15 @@ impl LoadError {
 
     /// `(line, column)` of each error, 1-based, in the order reported.
     pub fn positions(&self) -> Vec<(usize, usize)> {
+        self.places().into_iter().map(|(_, l, c)| (l, c)).collect()
+    }
+
+    /// `(file, line, column)` of each error, in the order reported: the file is the model
+    /// file's name, or that of the `.gen` file the error lies in.
+    pub fn places(&self) -> Vec<(&str, usize, usize)> {
         match self {
             LoadError::Io { .. } => Vec::new(),
-            LoadError::Model(m) => m
-                .errors
-                .iter()
-                .map(|e| line_col(&m.text, e.span.start))
-                .collect(),
+            LoadError::Model(m) => m.errors.iter().map(|e| m.position(e.span)).collect(),
         }
     }
 
@@ -134,8 +165,8 @@ impl LoadError {
                 .errors
                 .iter()
                 .map(|e| {
-                    let (l, c) = line_col(&m.text, e.span.start);
-                    format!("{}:{l}:{c}: {}", m.name, e.message)
+                    let (name, l, c) = m.position(e.span);
+                    format!("{name}:{l}:{c}: {}", e.message)
                 })
                 .collect::<Vec<_>>()
                 .join("\n"),
@@ -155,8 +186,8 @@ impl fmt::Display for LoadError {
             LoadError::Io { path, source } => write!(f, "cannot read {}: {source}", path.display()),
             LoadError::Model(m) => match m.errors.as_slice() {
                 [one] => {
-                    let (l, c) = line_col(&m.text, one.span.start);
-                    write!(f, "{}:{l}:{c}: {}", m.name, one.message)
+                    let (name, l, c) = m.position(one.span);
+                    write!(f, "{name}:{l}:{c}: {}", one.message)
                 }
                 many => write!(f, "{}: {} errors in the model", m.name, many.len()),
             },
@@ -180,13 +211,29 @@ struct Rendered {
 }
 
 impl Rendered {
-    fn new(name: &str, text: &Arc<String>, error: &ModelError) -> Rendered {
+    /// The error against the file its span lies in; notes in other files are left out.
+    fn new(errors: &ModelErrors, error: &ModelError) -> Rendered {
+        let (name, text, span) = errors.place(error.span);
+        let notes = error
+            .notes
+            .iter()
+            .filter(|(s, _)| !s.is_none())
+            .filter_map(|(s, n)| {
+                let (note_name, _, local) = errors.place(*s);
+                (note_name == name).then(|| (local, n.clone()))
+            })
+            .collect();
+        let error = ModelError {
+            span,
+            notes,
+            ..error.clone()
+        };
         let spans: Vec<Span> = std::iter::once(error.span)
-            .chain(error.notes.iter().map(|(s, _)| *s).filter(|s| !s.is_none()))
+            .chain(error.notes.iter().map(|(s, _)| *s))
             .collect();
         Rendered {
             src: Excerpt::new(name, text, error.span, &spans),
-            error: error.clone(),
+            error,
         }
     }
 }
@@ -249,7 +296,7 @@ impl LoadError {
                 text: self.to_string(),
             },
             LoadError::Model(m) => {
-                let mut rendered = m.errors.iter().map(|e| Rendered::new(&m.name, &m.text, e));
+                let mut rendered = m.errors.iter().map(|e| Rendered::new(m, e));
                 let first = rendered.next();
                 LoadDiagnostic {
                     first,

@@ -20,9 +20,11 @@ mod compile;
 pub mod diag;
 mod excerpt;
 pub mod expr;
+pub mod gen3;
 pub mod genom;
 mod load;
 pub mod source;
+pub mod source_map;
 pub mod syntax;
 pub mod trace_file;
 
@@ -30,6 +32,7 @@ pub use compile::Ty;
 pub use diag::{LoadError, ModelError};
 pub use genom::expand;
 pub use load::{
-    compile, compile_def, expand_file, expand_str, load_file, load_str, parse_str, read_model_file,
+    compile, compile_def, expand_file, expand_str, import_gen_file, load_file, load_str, parse_str,
+    read_model_file,
 };
 pub use syntax::ron_options;

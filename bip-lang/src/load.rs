@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use crate::compile::compile_core;
 use crate::diag::{LoadError, ModelError};
+use crate::gen3;
 use crate::genom;
 use crate::source::{normalized, offset_of, with_positions, Span};
 use crate::syntax::{ron_options, SystemDef};
@@ -49,7 +50,10 @@ fn parse_shared(name: &str, text: &Arc<String>) -> Result<SystemDef, LoadError> 
                 .with_help("a model file holds one `System(name: \"…\", …)`")],
         ));
     }
-    with_positions(text, || ron_options().from_str::<SystemDef>(text)).map_err(|e| {
+    let (parsed, entries) = gen3::entries::collecting(|| {
+        with_positions(text, || ron_options().from_str::<SystemDef>(text))
+    });
+    let mut def = parsed.map_err(|e| {
         let start = offset_of(text, e.span.start.line, e.span.start.col);
         let end = offset_of(text, e.span.end.line, e.span.end.col).max(start);
         let mut err = ModelError::new(e.code.to_string(), Span::new(start, end));
@@ -63,7 +67,12 @@ fn parse_shared(name: &str, text: &Arc<String>) -> Result<SystemDef, LoadError> 
             err = err.with_help(format!("see {page} for the fields of each part of a model"));
         }
         LoadError::model(name, text, vec![err])
-    })
+    })?;
+    if !entries.is_empty() {
+        gen3::resolve(&mut def, entries, name, text)
+            .map_err(|errors| LoadError::model(name, text, errors).with_files(&def.sources))?;
+    }
+    Ok(def)
 }
 
 /// Parses and compiles a model's text; `name` is how diagnostics call the file.
@@ -83,7 +92,7 @@ pub fn expand_str(name: &str, text: &str) -> Result<SystemDef, LoadError> {
         return Ok(def);
     }
     let expansion = genom::expand_in(&def, Some(&shared))
-        .map_err(|errors| LoadError::model(name, &shared, errors))?;
+        .map_err(|errors| LoadError::model(name, &shared, errors).with_files(&def.sources))?;
     compile_def(name, &shared, &def)?;
     Ok(expansion.def)
 }
@@ -106,7 +115,8 @@ pub fn compile(def: &SystemDef) -> Result<System, Vec<ModelError>> {
 
 /// Compiles parsed file-format types; `text` is the file they came from (for positions).
 pub fn compile_def(name: &str, text: &Arc<String>, def: &SystemDef) -> Result<System, LoadError> {
-    compile_in(def, Some(text)).map_err(|errors| LoadError::model(name, text, errors))
+    compile_in(def, Some(text))
+        .map_err(|errors| LoadError::model(name, text, errors).with_files(&def.sources))
 }
 
 fn compile_in(def: &SystemDef, text: Option<&str>) -> Result<System, Vec<ModelError>> {
@@ -141,4 +151,24 @@ fn is_blank(text: &str) -> bool {
             return rest.is_empty();
         }
     }
+}
+
+/// `bip import`: a `.gen` file as the model that holds its components as modules,
+/// checked as [`load_file`] checks a model; `include` is the search path of `#include`.
+pub fn import_gen_file(
+    path: &Path,
+    include: &[std::path::PathBuf],
+) -> Result<SystemDef, LoadError> {
+    let shown = path.display().to_string();
+    let empty = Arc::new(String::new());
+    let mut files = crate::source_map::SourceMap::default();
+    let fail = |errors: Vec<ModelError>, files: &crate::source_map::SourceMap| {
+        LoadError::model(&shown, &empty, errors).with_files(files)
+    };
+    let spec = gen3::read(path, &shown, include, &mut files, 0, Span::NONE)
+        .map_err(|e| fail(vec![e], &files))?;
+    let mut def = gen3::import(&spec, &shown).map_err(|e| fail(e, &files))?;
+    def.sources = files;
+    compile(&def).map_err(|e| fail(e, &def.sources))?;
+    Ok(def)
 }

@@ -129,10 +129,13 @@ const CRATES: &[Layers] = &[
     Layers {
         src: "bip-lang/src",
         layers: &[
-            ("positions", &["source", "excerpt", "diag"]),
-            ("syntax", &["syntax", "expr", "genom::syntax"]),
+            ("positions", &["source", "source_map", "excerpt", "diag"]),
+            (
+                "syntax",
+                &["syntax", "expr", "genom::syntax", "gen3::entries"],
+            ),
             ("compile", &["compile"]),
-            ("expansion", &["genom"]),
+            ("expansion", &["genom", "gen3"]),
             ("files", &["load", "trace_file"]),
         ],
     },

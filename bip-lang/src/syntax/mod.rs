@@ -21,6 +21,7 @@ pub use crate::genom::syntax::{
 };
 pub use crate::source::Text;
 use crate::source::{ident_has_parens, ConstExpr, OrderedMap};
+use crate::source_map::SourceMap;
 pub use bip_model::Role;
 pub use code::{
     parse_action_in_file, parse_in_file, parse_range_in_file, syntax_error, ActionDef, ExprDef,
@@ -58,21 +59,34 @@ pub struct SystemDef {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub priorities: Vec<PriorityDef>,
     /// The GenoM layer (docs/model.md, "The GenoM layer"), expanded into the core before compilation.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    /// `Gen("file.gen")` entries are read into modules by the loader (docs/genom.md, "GenoM3 files").
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "crate::gen3::entries::deserialize_modules"
+    )]
     pub modules: Vec<ModuleDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub constraints: Vec<ConstraintDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub properties: Vec<PropertyDef>,
+    /// The files besides this one that its spans may point into (`.gen` modules).
+    #[serde(skip)]
+    pub sources: SourceMap,
 }
 
 impl SystemDef {
     /// The model as RON text that [`crate::load_str`] reads back (how `bip expand` prints
     /// an expanded model).
     pub fn to_ron(&self) -> Result<String, ron::Error> {
+        self.to_ron_nested(4)
+    }
+
+    /// The model as RON, structures nested deeper than `depth` on one line.
+    pub fn to_ron_nested(&self, depth: usize) -> Result<String, ron::Error> {
         let config = ron::ser::PrettyConfig::new()
             .struct_names(true)
-            .depth_limit(4)
+            .depth_limit(depth)
             .extensions(ron::extensions::Extensions::IMPLICIT_SOME);
         let text = ron_options().to_string_pretty(self, config)?;
         Ok(tidy_ron(&text))
@@ -87,12 +101,17 @@ impl SystemDef {
 /// Writes printed RON the way docs/model.md does: the inner structs without their type names
 /// (`(from: …)`, not `TransitionDef(from: …)`), and lists of plain values on one line.
 fn tidy_ron(text: &str) -> String {
-    const INNER: [&str; 5] = [
+    const INNER: [&str; 10] = [
         "VarDef(",
         "TransitionDef(",
         "ComponentDef(",
         "ConnectorDef(",
         "PriorityDef(",
+        "ModuleDef(",
+        "TaskDef(",
+        "PortDef(",
+        "ServiceDef(",
+        "CodelDef(",
     ];
     let lines: Vec<&str> = text.lines().collect();
     let mut out = String::with_capacity(text.len());

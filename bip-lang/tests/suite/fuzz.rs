@@ -51,7 +51,7 @@ fn seeds() -> Vec<(String, String)> {
 
 /// One mutation, with positions as fractions of the text so that they apply to any seed.
 #[derive(Clone, Debug)]
-enum Mutation {
+pub(crate) enum Mutation {
     DeleteBytes(f64, usize),
     DuplicateBytes(f64, usize),
     SwapBytes(f64, f64, usize),
@@ -66,7 +66,7 @@ enum Mutation {
 }
 
 #[derive(Clone, Debug)]
-enum Insertion {
+pub(crate) enum Insertion {
     LongLine(usize),
     Parens(usize),
     Nots(usize),
@@ -90,7 +90,7 @@ const SNIPPETS: &[&str] = &[
     "r#\"", "?", "@", "=>", "&&", "\\", "'",
 ];
 
-fn mutation() -> impl Strategy<Value = Mutation> {
+pub(crate) fn mutation() -> impl Strategy<Value = Mutation> {
     let at = 0.0..1.0f64;
     prop_oneof![
         (at.clone(), 1..32usize).prop_map(|(a, n)| Mutation::DeleteBytes(a, n)),
@@ -174,7 +174,7 @@ fn range(text: &str, at: f64, n: usize) -> (usize, usize) {
     (a, floor(text, a + n))
 }
 
-fn apply(text: &mut String, m: &Mutation) {
+pub(crate) fn apply(text: &mut String, m: &Mutation) {
     let toks = tokens(text);
     let tok = |at: f64| toks.get(((at * toks.len() as f64) as usize).min(toks.len().max(1) - 1));
     match *m {

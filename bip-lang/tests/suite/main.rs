@@ -6,6 +6,8 @@
 mod data_types;
 mod diagnostics;
 mod fuzz;
+mod gen3;
+mod gen3_fuzz;
 mod genom;
 mod genom_random;
 mod genom_terms;

@@ -108,6 +108,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 priorities,
                 modules: Vec::new(),
                 constraints: Vec::new(),
+                sources: def.sources.clone(),
                 properties,
             },
             recipe: std::mem::take(&mut self.recipe),

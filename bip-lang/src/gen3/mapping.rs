@@ -1,0 +1,230 @@
+//! From a GenoM3 component to a module of bip's GenoM layer (docs/genom.md, "GenoM3
+//! files"): what is modelled (tasks and their periods, out ports, services, their
+//! interrupts, `after`, codel state machines with their yields, exceptions, the ports each
+//! codel writes) and what is refused because it would change the behaviour without being
+//! modelled (a task without a period that an activity runs in, `delay`, `before`). The rest is kept in the
+//! component as information.
+
+use std::collections::HashSet;
+
+use super::ast::{Codel, Component, Kind, Port, PortDir, Service, Source, Spec};
+use crate::diag::{Errors, ModelError};
+use crate::genom::syntax::{CodelDef, ModuleDef, PortDef, ServiceDef, ServiceKind, TaskDef};
+use crate::source::{ConstValue, Spanned, Text};
+
+/// The modules of a file's components; `tick_us` is the model's tick in microseconds.
+pub fn modules(spec: &Spec, tick_us: u64) -> Result<Vec<ModuleDef>, Vec<ModelError>> {
+    let mut errors = Errors::default();
+    let declared: HashSet<String> = spec
+        .types
+        .iter()
+        .chain(spec.components.iter().flat_map(|c| c.exceptions.iter()))
+        .filter(|d| d.kind == "exception")
+        .flat_map(|d| {
+            let full = d.name.value.clone();
+            let last = full.rsplit("::").next().unwrap_or(&full).to_string();
+            [full, last]
+        })
+        .collect();
+    let out: Vec<ModuleDef> = spec
+        .components
+        .iter()
+        .map(|c| module(c, tick_us, &declared, &mut errors))
+        .collect();
+    if errors.is_empty() {
+        Ok(out)
+    } else {
+        Err(errors.list)
+    }
+}
+
+fn doc(lines: &[Text]) -> Option<Text> {
+    let first = lines.first()?;
+    let text: Vec<&str> = lines.iter().map(|t| t.value.as_str()).collect();
+    Some(Text::new(text.join("\n"), first.span))
+}
+
+fn module(
+    c: &Component,
+    tick_us: u64,
+    exceptions: &HashSet<String>,
+    errors: &mut Errors,
+) -> ModuleDef {
+    let tasks = c
+        .tasks
+        .iter()
+        .filter_map(|t| {
+            if let Some((d, span)) = t.delay {
+                if d > 0 {
+                    errors.push(
+                        ModelError::new(format!("task `{}`: `delay` is not supported", t.name), span)
+                            .with_help("bip releases every task at each multiple of its period from tick 0"),
+                    );
+                }
+            }
+            let Some((period, span)) = t.period else {
+                // a task no activity runs in only runs its own state machine, which is
+                // not modelled; one an activity runs in needs a period
+                let user = c
+                    .services
+                    .iter()
+                    .find(|s| s.task.as_ref().is_some_and(|n| n.value == t.name.value));
+                if let Some(s) = user {
+                    errors.push(
+                        ModelError::new(format!("task `{}` has no period", t.name), t.name.span)
+                            .with_help("bip models periodic tasks only: give it a `period`")
+                            .with_note(s.name.span, format!("activity `{}` runs in it", s.name)),
+                    );
+                }
+                return None;
+            };
+            if period % tick_us != 0 {
+                errors.push(
+                    ModelError::new(
+                        format!(
+                            "the period of task `{}` ({period} µs) is not a whole number of ticks of {tick_us} µs",
+                            t.name
+                        ),
+                        span,
+                    )
+                    .with_help("choose the model's `tick_ms` to divide every period"),
+                );
+                return None;
+            }
+            let ticks = i64::try_from(period / tick_us).unwrap_or(i64::MAX);
+            Some(TaskDef {
+                name: t.name.clone(),
+                period: Spanned {
+                    value: ConstValue::Int(ticks),
+                    span,
+                    verbatim: false,
+                },
+                priority: None,
+                cpu: None,
+                deadline: None,
+                doc: doc(&t.doc),
+            })
+        })
+        .collect();
+    let ports = c
+        .ports
+        .iter()
+        .filter(|p| p.dir == PortDir::Out)
+        .map(|p| PortDef {
+            name: p.name.clone(),
+            doc: doc(&p.doc),
+        })
+        .collect();
+    let services = c
+        .services
+        .iter()
+        .map(|s| service(c, s, exceptions, errors))
+        .collect();
+    ModuleDef {
+        name: c.name.clone(),
+        doc: doc(&c.doc),
+        ids: Vec::new(),
+        tasks,
+        ports,
+        services,
+    }
+}
+
+fn service(
+    c: &Component,
+    s: &Service,
+    exceptions: &HashSet<String>,
+    errors: &mut Errors,
+) -> ServiceDef {
+    if let Some(b) = s.before.first() {
+        errors.push(
+            ModelError::new(
+                format!("{} `{}`: `before` is not supported", s.kind.word(), s.name),
+                b.span,
+            )
+            .with_help("write the order with `after` on the other service"),
+        );
+    }
+    for t in &s.throws {
+        let last = t.value.rsplit("::").next().unwrap_or(&t.value);
+        if !exceptions.contains(&t.value) && !exceptions.contains(last) {
+            errors.push(
+                ModelError::new(format!("exception `{}` is not declared", t.value), t.span)
+                    .with_help("declare it in the component: `exception name;`"),
+            );
+        }
+    }
+    let kind = match s.kind {
+        Kind::Attribute => ServiceKind::Attribute,
+        Kind::Function => ServiceKind::Function,
+        Kind::Activity => ServiceKind::Activity,
+    };
+    let throws: Vec<Text> = s
+        .throws
+        .iter()
+        .map(|t| Text {
+            value: t.value.rsplit("::").next().unwrap_or(&t.value).to_string(),
+            ..t.clone()
+        })
+        .collect();
+    let codels = s
+        .codels
+        .iter()
+        .flat_map(|codel| {
+            let writes = writes(c, s, codel);
+            let throws = throws.clone();
+            codel.states.iter().map(move |state| CodelDef {
+                state: state.clone(),
+                yields: codel.yields.clone(),
+                throws: throws.clone(),
+                writes: writes.clone(),
+                wcet: None,
+            })
+        })
+        .collect();
+    ServiceDef {
+        name: s.name.clone(),
+        kind,
+        doc: doc(&s.doc),
+        task: s.task.clone(),
+        interrupts: s.interrupts.clone(),
+        after: s.after.clone(),
+        codels,
+    }
+}
+
+/// The out ports a codel writes: its `out` and `inout` parameters that name one (`port out
+/// p`, or a plain `out p` that is not a service parameter, a local or an ids member).
+fn writes(c: &Component, s: &Service, codel: &Codel) -> Vec<Text> {
+    let out_port = |name: &str| -> Option<&Port> {
+        c.ports
+            .iter()
+            .find(|p| p.dir == PortDir::Out && p.name.value == name)
+    };
+    let shadowed = |name: &str| {
+        s.params.iter().any(|p| p.name.value == name)
+            || s.locals.iter().any(|l| l.name.value == name)
+            || c.ids.iter().any(|m| m.name.value == name)
+    };
+    let mut out: Vec<Text> = Vec::new();
+    for p in &codel.params {
+        if !p.dir.writes() {
+            continue;
+        }
+        let Some(first) = p.path.first() else {
+            continue;
+        };
+        let is_port = match p.source {
+            Some(Source::Port) => true,
+            None => !shadowed(first),
+            Some(_) => false,
+        };
+        if is_port && out_port(first).is_some() && !out.iter().any(|w| w.value == *first) {
+            out.push(Text {
+                value: first.clone(),
+                ..p.name.clone()
+            });
+        }
+    }
+    out
+}

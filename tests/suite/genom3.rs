@@ -1,0 +1,123 @@
+//! GenoM3 `.gen` files end to end: a model that takes its modules from `.gen` files
+//! verifies with the same verdicts and state counts as its RON equivalent and runs in the
+//! engine, and `bip import` prints a model that loads (docs/genom.md, "GenoM3 files").
+
+use crate::common::bip;
+
+/// The verdict lines and the explored states and transitions of `bip verify`.
+fn verdicts(model: &str) -> (Option<i32>, Vec<String>) {
+    let out = bip(&["verify", model, "--method", "explicit", "--jobs", "1"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let lines = stdout
+        .lines()
+        .filter(|l| l.contains("holds") || l.contains("FAILS") || l.contains(" states, "))
+        .map(|l| match l.split_once(", depth") {
+            // the counts, not the time
+            Some((counts, _)) => counts.to_string(),
+            None => l.to_string(),
+        })
+        .collect();
+    (out.status.code(), lines)
+}
+
+#[test]
+fn the_gen_rover_verifies_as_its_ron_equivalent() {
+    let (code, from_gen) = verdicts("robots/genom3-rover.ron");
+    let (written_code, written) = verdicts("robots/genom3-rover-written.ron");
+    assert_eq!(code, Some(0), "{from_gen:?}");
+    assert_eq!(written_code, Some(0));
+    assert!(
+        from_gen.iter().any(|l| l.contains(" states, ")),
+        "{from_gen:?}"
+    );
+    assert_eq!(
+        from_gen.len(),
+        5,
+        "four properties and the counts: {from_gen:?}"
+    );
+    assert_eq!(from_gen, written);
+    // the engine runs it as read from the .gen files
+    let out = bip(&[
+        "simulate",
+        "robots/genom3-rover.ron",
+        "--steps",
+        "500",
+        "--seed",
+        "1",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("held at every step"), "{stdout}");
+}
+
+#[test]
+fn bip_import_prints_a_model_that_loads() {
+    let out = bip(&["import", "robots/genom3/nav.gen", "-I", "robots/genom3/idl"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let printed = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(printed.contains("tick_ms: 200"), "{printed}");
+    assert!(
+        printed.contains(
+            r#"(state: "move", yields: ["pause::move", "ether"], throws: ["e_blocked"])"#
+        ),
+        "{printed}"
+    );
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let path = dir.path().join("nav.ron");
+    std::fs::write(&path, printed).expect("writes");
+    let check = bip(&["check", path.to_str().expect("utf-8")]);
+    assert_eq!(
+        check.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+}
+
+#[test]
+fn bip_import_shows_an_error_in_the_gen_file() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let path = dir.path().join("bad.gen");
+    std::fs::write(&path, "component bad {\n  task t { period 10 ms };\n};\n").expect("writes");
+    let out = bip(&["import", path.to_str().expect("utf-8")]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("expected `;`, found `}`"), "{stderr}");
+    assert!(stderr.contains("bad.gen:2:25]"), "{stderr}");
+    // in a model, and in JSON, the error names the .gen file
+    let model = dir.path().join("m.ron");
+    std::fs::write(
+        &model,
+        r#"System(name: "m", tick_ms: 10, modules: [Gen("bad.gen")])"#,
+    )
+    .expect("writes");
+    let out = bip(&["verify", model.to_str().expect("utf-8"), "--format", "json"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(2), "{stdout}");
+    let json: serde_json::Value = serde_json::from_str(&stdout).expect("a JSON document");
+    let first = &json["errors"][0];
+    assert!(
+        first["file"]
+            .as_str()
+            .is_some_and(|f| f.ends_with("bad.gen")),
+        "{json}"
+    );
+    assert_eq!(
+        (first["line"].as_u64(), first["column"].as_u64()),
+        (Some(2), Some(25)),
+        "{json}"
+    );
+    // without the search path, an include is not found
+    let out = bip(&["import", "robots/genom3/nav.gen"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("cannot find the included file `rover.idl`"),
+        "{stderr}"
+    );
+}
