@@ -25,7 +25,7 @@ use crate::budgets::{CodelTime, CodelTimes};
 use crate::codel::DefaultCodels;
 use crate::engine::{Engine, Stats, Stepped};
 use crate::error::BuildError;
-use crate::event::{CodelId, Event};
+use crate::event::Event;
 use crate::policy::Policy;
 use crate::record::Window;
 
@@ -261,34 +261,34 @@ const EVENT_QUEUE: usize = 64;
 /// Takes the engine's events, keeping the first overruns and misses.
 fn keep_budget_events(engine: &mut Engine, kept: &mut Vec<BudgetEvent>) {
     let at_us = engine.inspect().now_us();
-    let events: Vec<(CodelId, BudgetEventKind)> = engine
-        .events()
-        .filter_map(|e| match e {
+    for event in engine.events() {
+        let (codel, kind) = match event {
             Event::WcetExceeded {
                 codel,
                 took_us,
                 wcet_us,
-            } => Some((codel, BudgetEventKind::WcetExceeded { took_us, wcet_us })),
+            } => (codel, BudgetEventKind::WcetExceeded { took_us, wcet_us }),
             Event::DeadlineMissed {
                 codel,
                 elapsed_us,
                 deadline_us,
-            } => Some((
+            } => (
                 codel,
                 BudgetEventKind::DeadlineMissed {
                     elapsed_us,
                     deadline_us,
                 },
-            )),
-            _ => None,
-        })
-        .collect();
-    for (codel, kind) in events {
+            ),
+            _ => continue,
+        };
         if kept.len() < KEPT_BUDGET_EVENTS {
-            let (m, s, c) = engine.inspect().codel_name(codel);
             kept.push(BudgetEvent {
                 at_us,
-                codel: (m.into(), s.into(), c.into()),
+                codel: (
+                    codel.module.clone(),
+                    codel.service.clone(),
+                    codel.state.clone(),
+                ),
                 kind,
             });
         }

@@ -4,6 +4,8 @@
 
 use std::fmt::Write;
 
+use bip_picture::xml::escape;
+
 use crate::simulate::Schedule;
 use crate::task::{Assignment, Micros, TaskSet};
 
@@ -147,18 +149,4 @@ fn millis(us: Micros) -> String {
     } else {
         format!("{}", us as f64 / 1000.0)
     }
-}
-
-fn escape(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            _ => out.push(c),
-        }
-    }
-    out
 }

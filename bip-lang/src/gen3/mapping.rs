@@ -113,6 +113,7 @@ fn module(
         .map(|p| PortDef {
             name: p.name.clone(),
             doc: doc(&p.doc),
+            ty: None,
         })
         .collect();
     let services = c
@@ -190,6 +191,8 @@ fn service(
         interrupts: s.interrupts.clone(),
         after: s.after.clone(),
         codels,
+        args: None,
+        output: None,
     }
 }
 
