@@ -234,6 +234,10 @@ impl<'a> Exporter<'a> {
                     ));
                 }
                 PropertyKind::DeadlockFree { .. } => {}
+                PropertyKind::Response { .. } => defines.push(format!(
+                    "/* response property {}: not exported (`bip verify` checks it) */",
+                    p.name
+                )),
             }
         }
         if invariants.is_empty() && reachables.is_empty() {

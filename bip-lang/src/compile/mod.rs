@@ -21,6 +21,7 @@ mod constants;
 mod priority;
 mod properties;
 mod resolve;
+mod response;
 
 use std::collections::{HashMap, HashSet};
 
@@ -32,6 +33,7 @@ use bip_model::eval;
 use bip_model::{Atom, Component, Connector, Family, Interaction, System, SystemParts};
 
 pub(crate) use constants::Constants;
+pub(crate) use properties::written_text;
 pub(crate) use resolve::one_of;
 pub use resolve::Ty;
 use resolve::{ConstInfo, Names, ResolveError};
