@@ -8,6 +8,7 @@ mod fuzz;
 mod genom;
 mod genom_random;
 mod genom_terms;
+mod response;
 mod robustness;
 mod support;
 mod timing;
