@@ -15,6 +15,7 @@ use crate::properties::{
 use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 use crate::visited::{StateId, Visited};
 
+use super::response::{decide, Decided, Question};
 use super::{Explorer, Finding, Found};
 
 /// What one property checks, with its compiled expression.
@@ -119,11 +120,34 @@ impl Explorer<'_> {
         };
         // the response properties need every state, and the run stops early only when
         // none is left open (`all_decided`), so `complete` is enough
-        let mut responses = if complete {
-            super::response::decide(self.system, &self.visited, &self.targets, self.watch)?
-        } else {
-            Vec::new()
-        };
+        let mut responses: Vec<Option<Decided>> = self.targets.iter().map(|_| None).collect();
+        if complete {
+            let (which, questions): (Vec<usize>, Vec<Question<'_>>) = self
+                .targets
+                .iter()
+                .enumerate()
+                .filter_map(|(k, t)| match &t.check {
+                    Check::Response {
+                        trigger,
+                        response,
+                        within,
+                    } => Some((
+                        k,
+                        Question {
+                            name: &t.name,
+                            trigger,
+                            response,
+                            within: *within,
+                        },
+                    )),
+                    _ => None,
+                })
+                .unzip();
+            let decided = decide(self.system, &self.visited, &questions, self.watch)?;
+            for (k, d) in which.into_iter().zip(decided) {
+                responses[k] = Some(d);
+            }
+        }
         let mut properties = Vec::with_capacity(self.targets.len());
         for (k, (t, f)) in self.targets.iter().zip(&self.findings).enumerate() {
             let decided = responses.get_mut(k).and_then(Option::take);

@@ -9,14 +9,13 @@ mod cycles;
 mod graph;
 mod run;
 
-use bip_model::{OwnedStep, State, Steps, System, Trace, Verdict};
+use bip_model::{Happens, OwnedStep, State, Steps, System, Trace, Verdict};
 
 use crate::error::VerifyError;
 use crate::report::PropertyVerdict;
 use crate::visited::Visited;
 use crate::watch::Watch;
 
-use super::targets::{Check, Target};
 use graph::{Graph, Watched, MAX_WATCHED};
 use run::Run;
 
@@ -26,24 +25,30 @@ pub(super) struct Decided {
     pub(super) note: Option<String>,
 }
 
-/// The verdicts of the response targets (`None` for the others), from a complete
+/// A response property to decide.
+pub(super) struct Question<'a> {
+    pub(super) name: &'a str,
+    pub(super) trigger: &'a Happens,
+    pub(super) response: &'a Happens,
+    pub(super) within: Option<u64>,
+}
+
+/// The verdicts of the response properties `questions`, in order, from a complete
 /// exploration stored in `visited`.
 pub(super) fn decide(
     system: &System,
     visited: &Visited,
-    targets: &[Target<'_>],
+    questions: &[Question<'_>],
     watch: &Watch,
-) -> Result<Vec<Option<Decided>>, VerifyError> {
-    let mut out: Vec<Option<Decided>> = targets.iter().map(|_| None).collect();
+) -> Result<Vec<Decided>, VerifyError> {
+    if questions.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut out: Vec<Option<Decided>> = questions.iter().map(|_| None).collect();
     let mut watched = Vec::new();
     let mut which = Vec::new();
-    for (k, t) in targets.iter().enumerate() {
-        let Check::Response {
-            trigger, response, ..
-        } = &t.check
-        else {
-            continue;
-        };
+    for (k, t) in questions.iter().enumerate() {
+        let (trigger, response) = (t.trigger, t.response);
         if watched.len() == MAX_WATCHED {
             out[k] = Some(inconclusive(format!(
                 "one run checks at most {MAX_WATCHED} response properties; check this one in a run of its own"
@@ -57,9 +62,11 @@ pub(super) fn decide(
         });
         which.push(k);
     }
-    if watched.is_empty() {
-        return Ok(out);
-    }
+    let done = |out: Vec<Option<Decided>>| {
+        out.into_iter()
+            .map(|d| d.expect("every question is answered"))
+            .collect()
+    };
     let stopped = |watch: &Watch| {
         inconclusive(match watch.stopped() {
             Some(stop) => format!("{stop} while the state graph was searched"),
@@ -70,13 +77,11 @@ pub(super) fn decide(
         for &k in &which {
             out[k] = Some(stopped(watch));
         }
-        return Ok(out);
+        return Ok(done(out));
     };
     for (p, &k) in which.iter().enumerate() {
-        let t = &targets[k];
-        let Check::Response { within, .. } = t.check else {
-            unreachable!("watched targets are response checks")
-        };
+        let t = &questions[k];
+        let within = t.within;
         if let Some(f) = &g.failures[p] {
             let run = Run {
                 states: vec![f.state],
@@ -126,7 +131,7 @@ pub(super) fn decide(
             },
             Err(run) => {
                 let mut trace = run_trace(system, visited, &g, &run)?;
-                trace.verdict = Verdict::Violation(t.name.clone());
+                trace.verdict = Verdict::Violation(t.name.to_string());
                 let reason = reason(&g, &run, within);
                 Decided {
                     verdict: PropertyVerdict::Fails {
@@ -138,7 +143,7 @@ pub(super) fn decide(
             }
         });
     }
-    Ok(out)
+    Ok(done(out))
 }
 
 fn inconclusive(reason: String) -> Decided {
