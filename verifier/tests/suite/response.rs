@@ -34,10 +34,9 @@ fn explore(sys: &System) -> Naive {
     while k < g.states.len() {
         let s = g.states[k].clone();
         let mut out = Vec::new();
-        let mut error = false;
         let mut steps = Steps::new();
-        if sys.enabled_steps(&s, &mut steps).is_err() {
-            error = true;
+        let error = if sys.enabled_steps(&s, &mut steps).is_err() {
+            true
         } else {
             // a step in range error has no successor
             for step in steps.iter() {
@@ -52,8 +51,8 @@ fn explore(sys: &System) -> Naive {
                 }
                 out.push((step.to_owned(), t));
             }
-            error = out.is_empty() && !steps.is_empty();
-        }
+            out.is_empty() && !steps.is_empty()
+        };
         g.edges.push(out);
         g.error.push(error);
         k += 1;

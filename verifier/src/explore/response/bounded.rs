@@ -89,7 +89,7 @@ pub(crate) fn search(g: &Graph, p: usize, within: u64, watch: &Watch) -> Found {
     while !level.is_empty() {
         for &x in &level {
             work += 1;
-            if work % 4096 == 0 && watch.stopped().is_some() {
+            if work.is_multiple_of(4096) && watch.stopped().is_some() {
                 return Found::Stopped;
             }
             let (s, o) = (x / width, x % width);

@@ -158,7 +158,7 @@ fn components(w: &Waiting<'_>, watch: &Watch) -> Option<Components> {
         calls.push((root, g.edges(root).start));
         while let Some(&mut (v, ref mut pos)) = calls.last_mut() {
             work += 1;
-            if work % 4096 == 0 && watch.stopped().is_some() {
+            if work.is_multiple_of(4096) && watch.stopped().is_some() {
                 return None;
             }
             let end = g.edges(v).end;

@@ -121,10 +121,15 @@ impl Graph {
                 },
             )
             .collect();
+        let rows = rows.into_iter().collect::<Option<Vec<Rows>>>()?;
+        let edges: usize = rows.iter().map(|r| r.targets.len()).sum();
+        if !watch.expect(edges as u64 * 8) {
+            return None;
+        }
         let mut g = Graph {
             offsets: Vec::with_capacity(n + 1),
-            targets: Vec::new(),
-            edge_flags: Vec::new(),
+            targets: Vec::with_capacity(edges),
+            edge_flags: Vec::with_capacity(edges),
             state_flags: Vec::with_capacity(n),
             ids,
             failures: (0..watched.len()).map(|_| None).collect(),
@@ -132,7 +137,6 @@ impl Graph {
         };
         g.offsets.push(0);
         for r in rows {
-            let r = r?;
             for d in &r.degrees {
                 let last = *g.offsets.last().unwrap_or(&0);
                 g.offsets.push(last + u64::from(*d));
@@ -170,7 +174,7 @@ fn rows_of(
     };
     let mut packed = vec![0u8; layout.bytes()];
     for (k, local) in (chunk.start..chunk.end).enumerate() {
-        if k % 64 == 0 && watch.stopped().is_some() {
+        if k.is_multiple_of(64) && watch.stopped().is_some() {
             return None;
         }
         let me = first + k as u32;
