@@ -121,6 +121,7 @@ impl Explorer<'_> {
         // the response properties need every state, and the run stops early only when
         // none is left open (`all_decided`), so `complete` is enough
         let mut responses: Vec<Option<Decided>> = self.targets.iter().map(|_| None).collect();
+        let mut run_stopped = stopped.clone();
         if complete {
             let (which, questions): (Vec<usize>, Vec<Question<'_>>) = self
                 .targets
@@ -144,6 +145,11 @@ impl Explorer<'_> {
                 })
                 .unzip();
             let decided = decide(self.system, &self.visited, &questions, self.watch)?;
+            // a limit reached while the response properties were searched stopped the run
+            // too (every state was explored: `complete` stays true)
+            if !which.is_empty() {
+                run_stopped = self.watch.stopped().cloned();
+            }
             for (k, d) in which.into_iter().zip(decided) {
                 responses[k] = Some(d);
             }
@@ -182,7 +188,7 @@ impl Explorer<'_> {
             method: Method::Explicit,
             properties,
             stats,
-            stopped,
+            stopped: run_stopped,
             symbolic: None,
             seconds,
             peak_memory_bytes: None,

@@ -75,7 +75,11 @@ pub(crate) fn search(g: &Graph, p: usize, within: u64, watch: &Watch) -> Found {
     let Some(size) = size.filter(|&s| s < u64::from(u32::MAX)) else {
         return Found::TooLarge;
     };
+    if watch.stopped().is_some() {
+        return Found::Stopped;
+    }
     if !watch.expect(size * 4) {
+        // the memory limit is raised: the run stops here
         return Found::TooLarge;
     }
     let width = width as u32;

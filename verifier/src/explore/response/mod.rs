@@ -73,6 +73,7 @@ pub(super) fn decide(
             None => "the state graph could not be stored".into(),
         })
     };
+    watch.rebase();
     let Some(g) = Graph::build(system, visited, &watched, watch) else {
         for &k in &which {
             out[k] = Some(stopped(watch));
@@ -80,6 +81,8 @@ pub(super) fn decide(
         return Ok(done(out));
     };
     for (p, &k) in which.iter().enumerate() {
+        // what the last search announced is freed or resident now
+        watch.rebase();
         let t = &questions[k];
         let within = t.within;
         if let Some(f) = &g.failures[p] {
