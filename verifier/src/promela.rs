@@ -234,10 +234,13 @@ impl<'a> Exporter<'a> {
                     ));
                 }
                 PropertyKind::DeadlockFree { .. } => {}
-                PropertyKind::Response { .. } => defines.push(format!(
-                    "/* response property {}: not exported (`bip verify` checks it) */",
-                    p.name
-                )),
+                PropertyKind::Response { .. } => {
+                    let _ = writeln!(
+                        out,
+                        "/* response property {}: not exported (`bip verify` checks it) */",
+                        p.name
+                    );
+                }
             }
         }
         if invariants.is_empty() && reachables.is_empty() {
