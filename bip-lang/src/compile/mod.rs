@@ -37,6 +37,7 @@ pub(crate) use properties::written_text;
 pub(crate) use resolve::one_of;
 pub use resolve::Ty;
 use resolve::{ConstInfo, Names, ResolveError};
+pub(crate) use response::disjuncts;
 
 /// The largest family a model may declare; far beyond what any exploration handles, small
 /// enough that a typo (`count: "10000000000"`) is an error rather than an out-of-memory.

@@ -136,7 +136,7 @@ impl Compiler {
 }
 
 /// The operands of a top-level `||` (the expression itself if it is none).
-fn disjuncts(e: &Expr) -> Vec<&Expr> {
+pub(crate) fn disjuncts(e: &Expr) -> Vec<&Expr> {
     match &e.kind {
         ExprKind::Binary(BinOp::Or, a, b) => {
             let mut out = disjuncts(a);

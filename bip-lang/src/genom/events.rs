@@ -8,9 +8,9 @@
 use super::check::{Layer, Service, ServiceRef, Yield, ETHER};
 use super::names::{activity_component, codel_connector, request_connector, PAUSED, REQ};
 use super::tree::{and, at, boolean, member, not, or};
-use crate::compile::one_of;
+use crate::compile::{disjuncts, one_of};
 use crate::diag::ModelError;
-use crate::expr::{BinOp, Expr, ExprKind, Ident};
+use crate::expr::{Expr, ExprKind, Ident};
 use crate::source::Span;
 
 const EVENTS: [&str; 3] = ["request", "reply", "yield"];
@@ -218,25 +218,6 @@ fn service<'l, 'd>(
 fn not_activity(m: &str, s: &Service<'_>, span: Span) -> ModelError {
     ModelError::new(format!("`{m}.{}` is not an activity", s.name), span)
         .with_help("functions and attributes have no codels")
-}
-
-/// The operands of a top-level `||` (the expression itself if it is none).
-fn disjuncts(e: &Expr) -> Vec<&Expr> {
-    match &e.kind {
-        ExprKind::Binary(BinOp::Or, a, b) => {
-            let mut out = disjuncts(a);
-            out.extend(disjuncts(b));
-            out
-        }
-        ExprKind::Chain(first, rest) if rest.iter().all(|(op, _)| *op == BinOp::Or) => {
-            let mut out = disjuncts(first);
-            for (_, x) in rest {
-                out.extend(disjuncts(x));
-            }
-            out
-        }
-        _ => vec![e],
-    }
 }
 
 fn is_event(e: &Expr) -> bool {
