@@ -270,39 +270,26 @@ fn verified(text: &str) -> (System, Report) {
     (sys, one)
 }
 
-/// A client requests, a server takes two ticks to serve it; with `urgent`, the reply is
-/// above the tick (it happens as soon as it can), else time may pass forever instead.
+/// robots/served.ron: a client requests, a server takes two ticks to serve it; with
+/// `urgent`, the reply is above the tick (it happens as soon as it can), else time may
+/// pass forever instead. Its properties replaced by `properties`.
 fn served(urgent: bool, properties: &str) -> String {
-    let priorities = if urgent {
-        r#"priorities: [(low: "tick", high: "reply")],"#
+    let text = std::fs::read_to_string(format!(
+        "{}/../robots/served.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let priority = r#"(low: "tick", high: "reply"),"#;
+    assert!(text.contains(priority));
+    let text = if urgent {
+        text
     } else {
-        ""
+        text.replace(priority, "")
     };
-    format!(
-        r#"System(name: "served",
-    atoms: {{
-        "Client": Atom(locations: ["idle", "waiting"], initial: "idle", ports: ["req", "done"],
-            transitions: [(from: "idle", port: "req", to: "waiting"), (from: "waiting", port: "done", to: "idle")]),
-        "Server": Atom(locations: ["free", "busy"], initial: "free", ports: ["accept", "reply", "tick"],
-            vars: [(name: "t", ty: Int(0, 2))],
-            transitions: [
-                (from: "free", port: "accept", to: "busy", action: "t = 0"),
-                (from: "busy", port: "reply", to: "free", guard: "t == 2"),
-                (from: "busy", port: "tick", to: "busy", action: "t = t < 2 ? t + 1 : 2"),
-                (from: "free", port: "tick", to: "free"),
-            ]),
-        "Clock": Atom(locations: ["on"], initial: "on", ports: ["tick"], transitions: [(from: "on", port: "tick", to: "on")]),
-    }},
-    components: [(name: "client", atom: "Client"), (name: "server", atom: "Server"), (name: "clock", atom: "Clock")],
-    connectors: [
-        (name: "request", ports: ["client.req", "server.accept"]),
-        (name: "reply", ports: ["server.reply", "client.done"]),
-        (name: "tick", ports: ["clock.tick", "server.tick"], kind: Broadcast(trigger: "clock.tick"), role: Time),
-    ],
-    {priorities}
-    properties: [{properties}],
-)"#
-    )
+    let at = text
+        .rfind("properties: [")
+        .expect("the model has properties");
+    format!("{}properties: [{properties}],\n)\n", &text[..at])
 }
 
 const SERVED: &str = r#"LeadsTo(name: "served", from: "fires(request)", to: "client@idle"),
