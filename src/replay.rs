@@ -136,6 +136,21 @@ pub fn run(args: &Args) -> u8 {
             println!("result: witness for {property}");
             exit::FAILED
         }
+        Some(End::Unanswered {
+            property,
+            loop_start,
+        }) => {
+            match loop_start {
+                Some(k) => println!(
+                    "the run repeats steps {}-{} forever (the last step returns to the state after step {k}), and `{property}`'s response never comes on it",
+                    k + 1,
+                    trace.steps.len()
+                ),
+                None => println!("`{property}`'s trigger goes unanswered at the end of the trace"),
+            }
+            println!("result: {property} fails");
+            exit::FAILED
+        }
         Some(End::RangeError { message }) => {
             println!("range error from the last state: {message}");
             println!("result: RangeErrors fails");

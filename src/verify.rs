@@ -360,6 +360,8 @@ fn kind_name(kind: CheckKind) -> &'static str {
         CheckKind::DeadlockFree => "deadlock freedom",
         CheckKind::Invariant => "invariant",
         CheckKind::Reachable => "reachability",
+        CheckKind::Response => "bounded response",
+        CheckKind::LeadsTo => "response",
         CheckKind::RangeErrors => "range errors",
         CheckKind::Schedulable => "schedulability",
     }
@@ -419,6 +421,15 @@ fn text_report(
         }
         let line = format!("  {:<width$}  {:<12}  {detail}", p.name, word);
         let _ = writeln!(s, "{}", line.trim_end());
+    }
+    for p in &report.properties {
+        if p.verdict.holds() && p.note.as_deref().is_some_and(|n| n.starts_with("vacuous")) {
+            let _ = writeln!(
+                s,
+                "warning: {} holds vacuously: its trigger never happens in a reachable state or step",
+                p.name
+            );
+        }
     }
     for p in &report.properties {
         let Some(trace) = p.verdict.trace() else {

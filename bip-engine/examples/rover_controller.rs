@@ -291,6 +291,7 @@ pub fn run(
             system: system.name.clone(),
             verdict: bip_engine::bip_model::Verdict::None,
             steps: Vec::new(),
+            loop_start: None,
         },
         replies: Vec::new(),
         held: Vec::new(),

@@ -6,7 +6,9 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use bip_model::{Liveness, LivenessChecker, PropertyKind, Steps, System, Trace, Verdict};
+use bip_model::{
+    Liveness, LivenessChecker, OwnedStep, PropertyKind, State, Steps, System, Trace, Verdict,
+};
 
 use crate::codel::DefaultCodels;
 use crate::engine::{Engine, Stepped};
@@ -46,6 +48,13 @@ pub enum End {
     Violation { property: String },
     /// The reachability property holds in the last state.
     Witness { property: String },
+    /// The response property's trigger goes unanswered: on the cycle of a lasso (which
+    /// starts after `loop_start` steps and returns to its first state), past the bound on
+    /// the last step, or in a last state with no step.
+    Unanswered {
+        property: String,
+        loop_start: Option<usize>,
+    },
     /// A step from the last state has a range error.
     RangeError { message: String },
     /// The verdict does not show at the end of the trace.
@@ -107,7 +116,7 @@ pub fn replay(system: System, trace: &Trace) -> Result<Replay, BuildError> {
         }
         return Ok(r);
     }
-    let end = check_end(&engine, &trace.verdict);
+    let end = check_end(&engine, trace, &path);
     Ok(Replay {
         steps,
         refused: None,
@@ -167,7 +176,28 @@ fn reasons_for(engine: &Engine, name: &str) -> Vec<String> {
     out
 }
 
-fn check_end(engine: &Engine, verdict: &Verdict) -> End {
+/// The end of a response property's counterexample: the engine went where the step
+/// relation goes, so the path the relation replays is the engine's.
+fn unanswered(
+    system: &System,
+    p: &bip_model::Property,
+    trace: &Trace,
+    path: &[(OwnedStep, State)],
+) -> Result<End, String> {
+    trace.check_loop(system, path).map_err(|e| e.message)?;
+    let spec = p.kind.response_spec().ok_or("not a response property")?;
+    match system.shows_unanswered(spec, path, trace.loop_start, &p.name) {
+        Ok(true) => Ok(End::Unanswered {
+            property: p.name.clone(),
+            loop_start: trace.loop_start,
+        }),
+        Ok(false) => Err("the trace does not show a trigger left unanswered".into()),
+        Err(e) => Err(format!("range error: {e}")),
+    }
+}
+
+fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End {
+    let verdict = &trace.verdict;
     let system = engine.inspect().system();
     let state = engine.inspect().state();
     let not = |why: &str| End::NotConfirmed {
@@ -220,6 +250,9 @@ fn check_end(engine: &Engine, verdict: &Verdict) -> End {
             let expr = match &p.kind {
                 PropertyKind::Invariant(e) | PropertyKind::Reachable(e) => e,
                 PropertyKind::DeadlockFree { .. } => return not("not an invariant"),
+                PropertyKind::Response { .. } => {
+                    return unanswered(system, p, trace, path).unwrap_or_else(|why| not(&why))
+                }
             };
             match (system.holds(expr, state, name), verdict) {
                 (Ok(false), Verdict::Violation(_)) => End::Violation {

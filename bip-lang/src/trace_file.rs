@@ -11,7 +11,9 @@
 //! )
 //! ```
 //!
-//! The verdict comes last, so that a run is written as it goes ([`TraceWriter`]).
+//! The verdict comes last, so that a run is written as it goes ([`TraceWriter`]); a
+//! lasso (a run that repeats a cycle forever) adds `loop_start: k` after it: the steps
+//! after the first `k` repeat.
 
 use std::io::{self, Write};
 
@@ -23,7 +25,9 @@ use crate::syntax::ron_options;
 pub fn to_ron(trace: &Trace) -> String {
     let mut w = TraceWriter::new(Vec::new(), &trace.system).expect("writes to memory");
     w.steps(&trace.steps).expect("writes to memory");
-    let bytes = w.finish(&trace.verdict).expect("writes to memory");
+    let bytes = w
+        .finish_lasso(&trace.verdict, trace.loop_start)
+        .expect("writes to memory");
     String::from_utf8(bytes).expect("RON is UTF-8")
 }
 
@@ -52,8 +56,18 @@ impl<W: Write> TraceWriter<W> {
     }
 
     /// Writes the verdict and the end of the trace, and returns the writer.
-    pub fn finish(mut self, verdict: &Verdict) -> io::Result<W> {
-        writeln!(self.out, "    ],\n    verdict: {},\n)", value(verdict)?)?;
+    pub fn finish(self, verdict: &Verdict) -> io::Result<W> {
+        self.finish_lasso(verdict, None)
+    }
+
+    /// Like [`TraceWriter::finish`], for a lasso whose loop starts after `loop_start`
+    /// steps (written after the verdict, and only for a lasso).
+    pub fn finish_lasso(mut self, verdict: &Verdict, loop_start: Option<usize>) -> io::Result<W> {
+        write!(self.out, "    ],\n    verdict: {},\n", value(verdict)?)?;
+        if let Some(k) = loop_start {
+            writeln!(self.out, "    loop_start: {k},")?;
+        }
+        writeln!(self.out, ")")?;
         self.out.flush()?;
         Ok(self.out)
     }

@@ -44,6 +44,7 @@ mod plan_effects;
 mod priority_graph;
 mod priority_masks;
 mod radix;
+mod response;
 mod rng;
 mod state;
 mod state_cache;
@@ -63,12 +64,14 @@ pub use gate::{CommitError, Committed, Gate, GateStep};
 pub use genom::GenomMap;
 pub use incremental::{Enabled, EnabledSet};
 pub use model::{
-    family_indices, Assign, Atom, Component, Connector, Family, Interaction, PortRef, Priority,
-    Property, PropertyKind, RangeError, RangeErrorKind, Role, Target, Transition, Var, VarType,
+    family_indices, Assign, Atom, Component, Connector, Family, Happens, Interaction, PortRef,
+    Priority, Property, PropertyKind, RangeError, RangeErrorKind, Role, StepPattern, Target,
+    Transition, Var, VarType,
 };
 pub use ordered_map::OrderedMap;
 pub use plan_effects::PlanEffects;
 pub use priority_graph::{PriorityGraph, MAX_INCIDENCES};
+pub use response::ResponseSpec;
 pub use rng::Rng;
 pub use state::{State, StateLayout};
 pub use state_cache::{CacheStats, StateCache};

@@ -177,9 +177,37 @@ pub struct Property {
 
 #[derive(Clone, Debug)]
 pub enum PropertyKind {
-    DeadlockFree { terminal: Option<Expr> },
+    DeadlockFree {
+        terminal: Option<Expr>,
+    },
     Invariant(Expr),
     Reachable(Expr),
+    /// Whenever `trigger` happens, `response` happens later: within `within` ticks
+    /// (`Response`, `Replies(within)`), or eventually (`LeadsTo`, `Replies`, `Terminates`)
+    /// on every run in which time diverges (docs/model.md, "Response and liveness").
+    Response {
+        trigger: Happens,
+        response: Happens,
+        within: Option<u64>,
+    },
+}
+
+/// What a response property watches for: a state condition, or a step.
+#[derive(Clone, Debug)]
+pub enum Happens {
+    /// A state in which the expression holds.
+    State(Expr),
+    /// A step that matches one of the patterns.
+    Step(Vec<StepPattern>),
+}
+
+/// Steps of some connectors (any, if `connectors` is empty) from a state where `before`
+/// holds to one where `after` holds (each true if absent).
+#[derive(Clone, Debug, Default)]
+pub struct StepPattern {
+    pub connectors: Vec<u32>,
+    pub before: Option<Expr>,
+    pub after: Option<Expr>,
 }
 
 /// A range error: the model computed a value it cannot hold or an operation that has no

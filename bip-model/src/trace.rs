@@ -24,6 +24,11 @@ pub struct Trace {
     pub system: String,
     pub steps: Vec<TraceStep>,
     pub verdict: Verdict,
+    /// A lasso (a run that goes on forever): the run repeats the steps after the first
+    /// `loop_start` steps, and the last step returns to the state reached after them.
+    /// Absent for a finite trace; earlier files have none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loop_start: Option<usize>,
 }
 
 /// Why a trace was recorded.
@@ -155,16 +160,61 @@ impl Trace {
             system: system.name.clone(),
             verdict,
             steps,
+            loop_start: None,
         }
     }
 
     /// Re-executes the trace with the step relation: each step must be enabled and lead to
     /// the recorded changes. Returns the steps and states it passes through.
+    /// A lasso's last step must return to the state where its loop starts.
     pub fn replay(&self, system: &System) -> Result<Vec<(OwnedStep, State)>, ReplayError> {
         match self.replay_prefix(system) {
-            (path, None) => Ok(path),
+            (path, None) => {
+                self.check_loop(system, &path)?;
+                Ok(path)
+            }
             (_, Some(e)) => Err(e),
         }
+    }
+
+    /// For a lasso replayed along `path` from the initial state: an error unless the loop
+    /// start is a step of the trace and its last state is the state where the loop starts.
+    pub fn check_loop(
+        &self,
+        system: &System,
+        path: &[(OwnedStep, State)],
+    ) -> Result<(), ReplayError> {
+        let Some(k) = self.loop_start else {
+            return Ok(());
+        };
+        let malformed = |message: String| ReplayError { step: 0, message };
+        if k >= path.len() {
+            return Err(malformed(format!(
+                "the loop starts after step {k}, but the trace has {} step{}",
+                path.len(),
+                if path.len() == 1 { "" } else { "s" }
+            )));
+        }
+        let init = system.initial_state();
+        let start = if k == 0 { &init } else { &path[k - 1].1 };
+        let Some((_, last)) = path.last() else {
+            return Ok(());
+        };
+        if last != start {
+            let differences: Vec<String> = system
+                .diff(start, last)
+                .iter()
+                .map(|(name, v)| format!("`{name}` is {v}"))
+                .collect();
+            return Err(ReplayError {
+                step: path.len(),
+                message: format!(
+                    "the last step does not return to the state where the loop starts (after step {k}): {}",
+                    differences.join(", ")
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// Like [`Trace::replay`], but keeps the steps that replay before the first that does
@@ -446,7 +496,18 @@ impl fmt::Display for TraceDisplay<'_> {
         let skipped = self.start.map_or(0, |(_, k)| k);
         let total = skipped + n as u64;
         if self.header {
-            write!(f, "{what} after {total} step{}", plural(total))?;
+            match t.loop_start {
+                Some(k) => {
+                    let cycle = n.saturating_sub(k);
+                    write!(
+                        f,
+                        "{what}: a run that repeats steps {}-{n} forever ({k} step{} to the cycle, a cycle of {cycle})",
+                        k + 1,
+                        plural(k as u64)
+                    )?;
+                }
+                None => write!(f, "{what} after {total} step{}", plural(total))?,
+            }
             if skipped > 0 {
                 write!(f, " (the last {n} shown)")?;
             }
@@ -480,6 +541,13 @@ impl fmt::Display for TraceDisplay<'_> {
             .min(40);
         let shown = self.notes.map_or(n, |notes| notes.len().min(n));
         for (k, s) in t.steps.iter().enumerate().take(shown) {
+            if t.loop_start == Some(k) {
+                writeln!(
+                    f,
+                    "  {:>num_width$}  ┌ the cycle: the steps below repeat forever",
+                    ""
+                )?;
+            }
             write!(
                 f,
                 "  {:>num_width$}  {:<width$}",
@@ -503,6 +571,15 @@ impl fmt::Display for TraceDisplay<'_> {
                 }
             }
             writeln!(f)?;
+        }
+        if let Some(k) = t.loop_start {
+            if shown == n && k < n {
+                writeln!(
+                    f,
+                    "  {:>num_width$}  └ back to the state after step {k}, where the cycle starts",
+                    ""
+                )?;
+            }
         }
         Ok(())
     }

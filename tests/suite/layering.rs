@@ -48,6 +48,7 @@ const CRATES: &[Layers] = &[
                     "suppression",
                     "assemble",
                     "deadlock",
+                    "response",
                     "trace",
                     "genom",
                 ],

@@ -234,6 +234,13 @@ impl<'a> Exporter<'a> {
                     ));
                 }
                 PropertyKind::DeadlockFree { .. } => {}
+                PropertyKind::Response { .. } => {
+                    let _ = writeln!(
+                        out,
+                        "/* response property {}: not exported (`bip verify` checks it) */",
+                        p.name
+                    );
+                }
             }
         }
         if invariants.is_empty() && reachables.is_empty() {

@@ -6,6 +6,8 @@ use std::borrow::Cow;
 use bip_model::eval::Expr;
 use bip_model::{Property, PropertyKind as ModelKind, Steps, System, Trace, Verdict};
 
+use crate::report::CheckKind;
+
 /// The name of the result that reports range errors.
 pub const RANGE_ERRORS: &str = "RangeErrors";
 
@@ -24,6 +26,19 @@ pub(crate) fn checked_properties(system: &System) -> Vec<Cow<'_, Property>> {
         })]
     } else {
         system.properties.iter().map(Cow::Borrowed).collect()
+    }
+}
+
+/// What a result of property `kind` checks.
+pub(crate) fn check_kind(kind: &ModelKind) -> CheckKind {
+    match kind {
+        ModelKind::DeadlockFree { .. } => CheckKind::DeadlockFree,
+        ModelKind::Invariant(_) => CheckKind::Invariant,
+        ModelKind::Reachable(_) => CheckKind::Reachable,
+        ModelKind::Response {
+            within: Some(_), ..
+        } => CheckKind::Response,
+        ModelKind::Response { within: None, .. } => CheckKind::LeadsTo,
     }
 }
 

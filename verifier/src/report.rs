@@ -35,6 +35,10 @@ pub enum CheckKind {
     DeadlockFree,
     Invariant,
     Reachable,
+    /// Bounded response: `Response`, `Replies(within)`.
+    Response,
+    /// Unbounded response: `LeadsTo`, `Replies`, `Terminates`.
+    LeadsTo,
     /// Range errors are always checked (docs/model.md, "Range errors"); reported as a property of their own.
     RangeErrors,
     /// With time budgets: every task's work of a period ends by its deadline

@@ -22,6 +22,7 @@ fn streamed(system: System, options: SimulationOptions) -> (Simulation, Trace) {
         system: system.name.clone(),
         steps: Vec::new(),
         verdict: Verdict::None,
+        loop_start: None,
     };
     let mut on_steps = |segment: &Trace| whole.steps.extend(segment.steps.iter().cloned());
     let hooks = Hooks {

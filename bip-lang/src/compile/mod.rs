@@ -24,6 +24,7 @@ mod constants;
 mod priority;
 mod properties;
 mod resolve;
+mod response;
 
 use std::collections::{HashMap, HashSet};
 
@@ -35,9 +36,11 @@ use bip_model::eval;
 use bip_model::{Atom, Component, Connector, Family, Interaction, System, SystemParts};
 
 pub(crate) use constants::Constants;
+pub(crate) use properties::written_text;
 pub(crate) use resolve::one_of;
 pub use resolve::Ty;
 use resolve::{ConstInfo, Names, ResolveError};
+pub(crate) use response::disjuncts;
 
 /// The largest family a model may declare; far beyond what any exploration handles, small
 /// enough that a typo (`count: "10000000000"`) is an error rather than an out-of-memory.

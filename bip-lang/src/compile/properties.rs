@@ -17,16 +17,8 @@ impl Compiler {
         let mut out = Vec::new();
         let mut seen: HashMap<String, Span> = HashMap::new();
         for p in &def.properties {
-            let (name_span, text) = match p {
-                PropertyDef::DeadlockFree { terminal } => (
-                    terminal.as_ref().map_or(Span::NONE, ExprDef::span),
-                    terminal.as_ref(),
-                ),
-                PropertyDef::Invariant { name, expr } | PropertyDef::Reachable { name, expr } => {
-                    (name.span, Some(expr))
-                }
-            };
-            let name = p.name().to_string();
+            let name_span = p.name_span();
+            let name = p.name().into_owned();
             if let Some(&first) = seen.get(&name) {
                 self.errors.push(
                     ModelError::new(format!("duplicate property `{name}`"), name_span)
@@ -35,25 +27,68 @@ impl Compiler {
                 continue;
             }
             seen.insert(name.clone(), name_span);
-            let compiled = match text {
-                None => None,
-                Some(t) => match self.global_bool(t) {
-                    Some(e) => Some(e),
+            let kind = match p {
+                PropertyDef::DeadlockFree { terminal } => match terminal {
+                    None => PropertyKind::DeadlockFree { terminal: None },
+                    Some(t) => match self.global_bool(t) {
+                        Some(e) => PropertyKind::DeadlockFree { terminal: Some(e) },
+                        None => continue,
+                    },
+                },
+                PropertyDef::Invariant { expr, .. } => match self.global_bool(expr) {
+                    Some(e) => PropertyKind::Invariant(e),
                     None => continue,
                 },
-            };
-            let kind = match (p, compiled) {
-                (PropertyDef::DeadlockFree { .. }, terminal) => {
-                    PropertyKind::DeadlockFree { terminal }
+                PropertyDef::Reachable { expr, .. } => match self.global_bool(expr) {
+                    Some(e) => PropertyKind::Reachable(e),
+                    None => continue,
+                },
+                PropertyDef::Response {
+                    trigger,
+                    response,
+                    within,
+                    ..
+                } => {
+                    let (t, r, k) = (
+                        self.happens(trigger),
+                        self.happens(response),
+                        self.within(within),
+                    );
+                    let (Some(trigger), Some(response), Some(k)) = (t, r, k) else {
+                        continue;
+                    };
+                    PropertyKind::Response {
+                        trigger,
+                        response,
+                        within: Some(k),
+                    }
                 }
-                (PropertyDef::Invariant { .. }, Some(e)) => PropertyKind::Invariant(e),
-                (PropertyDef::Reachable { .. }, Some(e)) => PropertyKind::Reachable(e),
-                _ => continue,
+                PropertyDef::LeadsTo { from, to, .. } => {
+                    let (Some(trigger), Some(response)) = (self.happens(from), self.happens(to))
+                    else {
+                        continue;
+                    };
+                    PropertyKind::Response {
+                        trigger,
+                        response,
+                        within: None,
+                    }
+                }
+                PropertyDef::Replies { service, .. } | PropertyDef::Terminates { service, .. } => {
+                    self.errors.push(
+                        ModelError::new(
+                            format!("`{service}` names a GenoM service, but the model has no modules"),
+                            service.span,
+                        )
+                        .with_help("`Replies` and `Terminates` are about the services of a GenoM layer; in BIP core, write `Response` or `LeadsTo`"),
+                    );
+                    continue;
+                }
             };
             out.push(Property {
                 name,
                 kind,
-                text: text.map(ExprDef::to_string).unwrap_or_default(),
+                text: written_text(p),
             });
         }
         out
@@ -79,6 +114,38 @@ impl Compiler {
                 self.errors.push(expr_error(e));
                 None
             }
+        }
+    }
+}
+
+/// A property's expressions as written, for reports.
+pub(crate) fn written_text(p: &PropertyDef) -> String {
+    match p {
+        PropertyDef::DeadlockFree { terminal } => terminal
+            .as_ref()
+            .map(ExprDef::to_string)
+            .unwrap_or_default(),
+        PropertyDef::Invariant { expr, .. } | PropertyDef::Reachable { expr, .. } => {
+            expr.to_string()
+        }
+        PropertyDef::Response {
+            trigger,
+            response,
+            within,
+            ..
+        } => format!("{trigger} → {response} within {} ticks", within.value),
+        PropertyDef::LeadsTo { from, to, .. } => format!("{from} → {to} eventually"),
+        PropertyDef::Replies {
+            service, within, ..
+        } => match within {
+            Some(k) => format!(
+                "every accepted request of {service} is replied to within {} ticks",
+                k.value
+            ),
+            None => format!("every accepted request of {service} is replied to"),
+        },
+        PropertyDef::Terminates { service, .. } => {
+            format!("every started {service} ends")
         }
     }
 }

@@ -5,8 +5,8 @@ use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 use super::build::{Expansion, UserExpr, UserTexts};
-use super::{build, check, rewrite, timing};
-use crate::compile::{compile_core, Constants};
+use super::{build, check, events, rewrite, timing};
+use crate::compile::{compile_core, written_text, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::expr::{Assign, Expr};
 use crate::syntax::{ActionDef, ExprDef, PropertyDef, SystemDef};
@@ -65,6 +65,43 @@ pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion
         let text = match p {
             PropertyDef::DeadlockFree { terminal } => terminal.as_ref(),
             PropertyDef::Invariant { expr, .. } | PropertyDef::Reachable { expr, .. } => Some(expr),
+            PropertyDef::Response {
+                trigger, response, ..
+            } => {
+                let t = happens(&layer, &mut errors, &mut expr, trigger);
+                let r = happens(&layer, &mut errors, &mut expr, response);
+                if let (Some(t), Some(r)) = (t, r) {
+                    user.responses.insert(k, (t, r));
+                }
+                None
+            }
+            PropertyDef::LeadsTo { from, to, .. } => {
+                let t = happens(&layer, &mut errors, &mut expr, from);
+                let r = happens(&layer, &mut errors, &mut expr, to);
+                if let (Some(t), Some(r)) = (t, r) {
+                    user.responses.insert(k, (t, r));
+                }
+                None
+            }
+            PropertyDef::Replies { service, .. } | PropertyDef::Terminates { service, .. } => {
+                let replies = matches!(p, PropertyDef::Replies { .. });
+                if let Some(r) = check::service_ref(&mut errors, &layer, service) {
+                    let s = &layer.modules[r.module].services[r.service];
+                    if replies {
+                        let (t, r) = events::replies(&layer, r, service.span);
+                        user.responses.insert(k, (built(t), built(r)));
+                    } else if s.is_activity() {
+                        let (t, r) = events::terminates(&layer, r, service.span);
+                        user.responses.insert(k, (built(t), built(r)));
+                    } else {
+                        errors.push(
+                            ModelError::new(format!("`{service}` is not an activity"), service.span)
+                                .with_help("`Terminates` is about activities; a function or attribute ends in the step that runs it"),
+                        );
+                    }
+                }
+                None
+            }
         };
         if let Some(t) = text {
             if let Some(u) = expr(&mut errors, t) {
@@ -96,6 +133,39 @@ pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion
     let mut expansion = build::build(&layer, def, caps, user)?;
     expansion.recipe.timing = timing;
     Ok(expansion)
+}
+
+/// A trigger or a response: GenoM events as the core's step forms, or an expression
+/// rewritten if it names GenoM things.
+fn happens(
+    layer: &check::Layer<'_>,
+    errors: &mut Errors,
+    expr: &mut impl FnMut(&mut Errors, &ExprDef) -> Option<UserExpr<Expr>>,
+    t: &ExprDef,
+) -> Option<UserExpr<Expr>> {
+    let tree = match t.tree() {
+        Ok(tree) => tree,
+        Err(e) => {
+            errors.push(e);
+            return None;
+        }
+    };
+    match events::event(layer, &tree) {
+        Ok(Some(steps)) => Some(built(steps)),
+        Ok(None) => expr(errors, t),
+        Err(e) => {
+            errors.push(e);
+            None
+        }
+    }
+}
+
+/// A tree the expansion built, which the core holds as it is.
+fn built(tree: Expr) -> UserExpr<Expr> {
+    UserExpr {
+        tree,
+        rewritten: true,
+    }
 }
 
 /// A user's action as a tree, rewritten if it names GenoM things.
@@ -152,15 +222,7 @@ impl Expansion {
         })?;
         // reports show the properties as written, not as rewritten for the core
         for (p, written) in system.properties.iter_mut().zip(&def.properties) {
-            p.text = match written {
-                PropertyDef::DeadlockFree { terminal } => terminal
-                    .as_ref()
-                    .map(ExprDef::to_string)
-                    .unwrap_or_default(),
-                PropertyDef::Invariant { expr, .. } | PropertyDef::Reachable { expr, .. } => {
-                    expr.to_string()
-                }
-            };
+            p.text = written_text(written);
         }
         system.genom = Some(map);
         Ok(system)

@@ -19,6 +19,7 @@
 
 mod build;
 mod check;
+mod events;
 mod expansion;
 mod names;
 mod recipe;

@@ -20,7 +20,7 @@ pub use crate::genom::syntax::{
     TaskDef,
 };
 pub use crate::source::Text;
-use crate::source::{ident_has_parens, ConstExpr, OrderedMap};
+use crate::source::{ident_has_parens, ConstExpr, OrderedMap, Span};
 use crate::source_map::SourceMap;
 pub use bip_model::Role;
 pub use code::{
@@ -263,21 +263,129 @@ pub struct PriorityDef {
 }
 
 /// A property to verify. `DeadlockFree` may be written bare or with a `terminal` condition.
+///
+/// A response property's `trigger`/`response` (`from`/`to`) is a state condition or steps
+/// (docs/model.md, "Response and liveness"): `fires(c)`, `changes(before, after)`, in the
+/// GenoM layer `request(m.S)`, `reply(m.S)`, `yield(m.S.codel)`; the expansion turns
+/// `Replies` and `Terminates` into `Response` and `LeadsTo` of the core.
 #[derive(Clone, Debug)]
 pub enum PropertyDef {
-    DeadlockFree { terminal: Option<ExprDef> },
-    Invariant { name: Text, expr: ExprDef },
-    Reachable { name: Text, expr: ExprDef },
+    DeadlockFree {
+        terminal: Option<ExprDef>,
+    },
+    Invariant {
+        name: Text,
+        expr: ExprDef,
+    },
+    Reachable {
+        name: Text,
+        expr: ExprDef,
+    },
+    Response {
+        name: Text,
+        trigger: ExprDef,
+        response: ExprDef,
+        within: ConstExpr,
+    },
+    LeadsTo {
+        name: Text,
+        from: ExprDef,
+        to: ExprDef,
+    },
+    Replies {
+        name: Option<Text>,
+        service: Text,
+        within: Option<ConstExpr>,
+    },
+    Terminates {
+        name: Option<Text>,
+        service: Text,
+    },
 }
 
 impl PropertyDef {
-    /// The property's name as reports show it.
-    pub fn name(&self) -> &str {
+    /// The property's name as reports show it: `Replies` and `Terminates` without a
+    /// `name` are named after their service (`Replies(ndd.GoTo)`).
+    pub fn name(&self) -> std::borrow::Cow<'_, str> {
         match self {
-            PropertyDef::DeadlockFree { .. } => "DeadlockFree",
-            PropertyDef::Invariant { name, .. } | PropertyDef::Reachable { name, .. } => name,
+            PropertyDef::DeadlockFree { .. } => "DeadlockFree".into(),
+            PropertyDef::Invariant { name, .. }
+            | PropertyDef::Reachable { name, .. }
+            | PropertyDef::Response { name, .. }
+            | PropertyDef::LeadsTo { name, .. } => name.as_str().into(),
+            PropertyDef::Replies {
+                name: Some(name), ..
+            }
+            | PropertyDef::Terminates {
+                name: Some(name), ..
+            } => name.as_str().into(),
+            PropertyDef::Replies {
+                name: None,
+                service,
+                within,
+            } => match within {
+                Some(k) => format!("Replies({service}, within: {})", k.value).into(),
+                None => format!("Replies({service})").into(),
+            },
+            PropertyDef::Terminates {
+                name: None,
+                service,
+            } => format!("Terminates({service})").into(),
         }
     }
+
+    /// Where the property's name is, or where it would be (its service, its keyword's
+    /// first expression), for messages about it.
+    pub fn name_span(&self) -> Span {
+        match self {
+            PropertyDef::DeadlockFree { terminal } => {
+                terminal.as_ref().map_or(Span::NONE, ExprDef::span)
+            }
+            PropertyDef::Invariant { name, .. }
+            | PropertyDef::Reachable { name, .. }
+            | PropertyDef::Response { name, .. }
+            | PropertyDef::LeadsTo { name, .. } => name.span,
+            PropertyDef::Replies { name, service, .. }
+            | PropertyDef::Terminates { name, service } => {
+                name.as_ref().map_or(service.span, |n| n.span)
+            }
+        }
+    }
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ResponseFields {
+    name: Text,
+    trigger: ExprDef,
+    response: ExprDef,
+    within: ConstExpr,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LeadsToFields {
+    name: Text,
+    from: ExprDef,
+    to: ExprDef,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RepliesFields {
+    #[serde(default)]
+    name: Option<Text>,
+    service: Text,
+    #[serde(default)]
+    within: Option<ConstExpr>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TerminatesFields {
+    #[serde(default)]
+    name: Option<Text>,
+    service: Text,
 }
 
 #[derive(serde::Deserialize)]
@@ -300,9 +408,21 @@ enum PropertyTag {
     DeadlockFree,
     Invariant,
     Reachable,
+    Response,
+    LeadsTo,
+    Replies,
+    Terminates,
 }
 
-const PROPERTY_VARIANTS: &[&str] = &["DeadlockFree", "Invariant", "Reachable"];
+const PROPERTY_VARIANTS: &[&str] = &[
+    "DeadlockFree",
+    "Invariant",
+    "Reachable",
+    "Response",
+    "LeadsTo",
+    "Replies",
+    "Terminates",
+];
 
 impl<'de> Deserialize<'de> for PropertyDef {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
@@ -310,7 +430,7 @@ impl<'de> Deserialize<'de> for PropertyDef {
         impl<'de> Visitor<'de> for PropertyVisitor {
             type Value = PropertyDef;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("DeadlockFree, Invariant(name, expr) or Reachable(name, expr)")
+                f.write_str("DeadlockFree, Invariant(name, expr), Reachable(name, expr), Response(name, trigger, response, within), LeadsTo(name, from, to), Replies(service) or Terminates(service)")
             }
             fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<PropertyDef, A::Error> {
                 let (tag, variant) = data.variant::<PropertyTag>()?;
@@ -340,6 +460,42 @@ impl<'de> Deserialize<'de> for PropertyDef {
                         Ok(PropertyDef::Reachable {
                             name: n.name,
                             expr: n.expr,
+                        })
+                    }
+                    PropertyTag::Response => {
+                        let r: ResponseFields = variant
+                            .struct_variant(&["name", "trigger", "response", "within"], fields())?;
+                        Ok(PropertyDef::Response {
+                            name: r.name,
+                            trigger: r.trigger,
+                            response: r.response,
+                            within: r.within,
+                        })
+                    }
+                    PropertyTag::LeadsTo => {
+                        let r: LeadsToFields =
+                            variant.struct_variant(&["name", "from", "to"], fields())?;
+                        Ok(PropertyDef::LeadsTo {
+                            name: r.name,
+                            from: r.from,
+                            to: r.to,
+                        })
+                    }
+                    PropertyTag::Replies => {
+                        let r: RepliesFields =
+                            variant.struct_variant(&["name", "service", "within"], fields())?;
+                        Ok(PropertyDef::Replies {
+                            name: r.name,
+                            service: r.service,
+                            within: r.within,
+                        })
+                    }
+                    PropertyTag::Terminates => {
+                        let r: TerminatesFields =
+                            variant.struct_variant(&["name", "service"], fields())?;
+                        Ok(PropertyDef::Terminates {
+                            name: r.name,
+                            service: r.service,
                         })
                     }
                 }
@@ -389,6 +545,49 @@ impl Serialize for PropertyDef {
                 let mut v = s.serialize_struct_variant("Property", 2, "Reachable", 2)?;
                 v.serialize_field("name", name)?;
                 v.serialize_field("expr", expr)?;
+                v.end()
+            }
+            PropertyDef::Response {
+                name,
+                trigger,
+                response,
+                within,
+            } => {
+                let mut v = s.serialize_struct_variant("Property", 3, "Response", 4)?;
+                v.serialize_field("name", name)?;
+                v.serialize_field("trigger", trigger)?;
+                v.serialize_field("response", response)?;
+                v.serialize_field("within", within)?;
+                v.end()
+            }
+            PropertyDef::LeadsTo { name, from, to } => {
+                let mut v = s.serialize_struct_variant("Property", 4, "LeadsTo", 3)?;
+                v.serialize_field("name", name)?;
+                v.serialize_field("from", from)?;
+                v.serialize_field("to", to)?;
+                v.end()
+            }
+            PropertyDef::Replies {
+                name,
+                service,
+                within,
+            } => {
+                let mut v = s.serialize_struct_variant("Property", 5, "Replies", 3)?;
+                if let Some(n) = name {
+                    v.serialize_field("name", n)?;
+                }
+                v.serialize_field("service", service)?;
+                if let Some(k) = within {
+                    v.serialize_field("within", k)?;
+                }
+                v.end()
+            }
+            PropertyDef::Terminates { name, service } => {
+                let mut v = s.serialize_struct_variant("Property", 6, "Terminates", 2)?;
+                if let Some(n) = name {
+                    v.serialize_field("name", n)?;
+                }
+                v.serialize_field("service", service)?;
                 v.end()
             }
         }

@@ -11,6 +11,7 @@ mod gen3_fuzz;
 mod genom;
 mod genom_random;
 mod genom_terms;
+mod response;
 mod robustness;
 mod support;
 mod timing;

@@ -26,6 +26,9 @@ pub struct Options {
     /// A deadlock-freedom (sometimes with a terminal condition), an invariant and a
     /// reachability property over the components' values; their expressions may divide.
     pub properties: bool,
+    /// With `properties`: a `LeadsTo` and, if a connector has the Time role, a bounded
+    /// `Response`, between two conditions over the components' values.
+    pub responses: bool,
 }
 
 impl Options {
@@ -36,6 +39,7 @@ impl Options {
             roles,
             failing_guards: true,
             properties: true,
+            responses: false,
         }
     }
 }
@@ -144,6 +148,9 @@ pub struct Props {
     pub terminal: Option<Ex>,
     pub invariant: Ex,
     pub reachable: Ex,
+    /// With [`Options::responses`]: trigger, response, and the bound of the `Response`
+    /// (written only if a connector has the Time role).
+    pub response: Option<(Ex, Ex, u64)>,
 }
 
 pub fn gen_int(
@@ -517,10 +524,16 @@ pub fn generate_with(seed: u64, opts: &Options) -> Gen {
         let invariant = gen_bool(&mut r, 2, &mut leaf, ops);
         let reachable = gen_bool(&mut r, 2, &mut leaf, ops);
         let terminal = r.chance(30).then(|| gen_bool(&mut r, 1, &mut leaf, ops));
+        let response = opts.responses.then(|| {
+            let trigger = gen_bool(&mut r, 1, &mut leaf, ops);
+            let response = gen_bool(&mut r, 1, &mut leaf, ops);
+            (trigger, response, r.below(4) as u64)
+        });
         gen.props = Some(Props {
             terminal,
             invariant,
             reachable,
+            response,
         });
     }
     gen

@@ -117,9 +117,19 @@ impl Gen {
                 Some(t) => format!("DeadlockFree(terminal: \"{}\")", global(t)),
                 None => "DeadlockFree".into(),
             };
+            let mut responses = String::new();
+            if let Some((trigger, response, within)) = &p.response {
+                let (t, r) = (global(trigger), global(response));
+                responses += &format!(", LeadsTo(name: \"leads\", from: \"{t}\", to: \"{r}\")");
+                if self.conns.iter().any(|c| c.role == Some(Role::Time)) {
+                    responses += &format!(
+                        ", Response(name: \"bounded\", trigger: \"{t}\", response: \"{r}\", within: {within})"
+                    );
+                }
+            }
             s += &format!(
                 "  properties: [{deadlock}, Invariant(name: \"inv\", expr: \"{}\"), \
-                 Reachable(name: \"reach\", expr: \"{}\")],\n",
+                 Reachable(name: \"reach\", expr: \"{}\"){responses}],\n",
                 global(&p.invariant),
                 global(&p.reachable)
             );

@@ -18,9 +18,11 @@
 //!
 //! This module holds the driver (levels, batches, the two phases, the limits) and the
 //! data it hands each batch; `expand` is phase 1 on one chunk, `targets` the properties a
-//! run checks and how its findings become verdicts and traces.
+//! run checks and how its findings become verdicts and traces, `response` the response
+//! properties, decided on the stored graph once the exploration is complete.
 
 mod expand;
+mod response;
 mod targets;
 
 use std::sync::atomic::{AtomicBool, AtomicU64};

@@ -4,20 +4,33 @@
 use std::borrow::Cow;
 
 use bip_model::eval::Expr;
-use bip_model::{OwnedStep, Property, PropertyKind as ModelKind, State, Steps, System, Trace};
+use bip_model::{
+    Happens, OwnedStep, Property, PropertyKind as ModelKind, State, Steps, System, Trace,
+};
 
 use crate::error::VerifyError;
-use crate::properties::{checked_properties, default_terminal, error_step, RANGE_ERRORS};
+use crate::properties::{
+    check_kind, checked_properties, default_terminal, error_step, RANGE_ERRORS,
+};
 use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 use crate::visited::{StateId, Visited};
 
+use super::response::{decide, Decided, Question};
 use super::{Explorer, Finding, Found};
 
 /// What one property checks, with its compiled expression.
 pub(super) enum Check<'a> {
-    Deadlock { terminal: Option<&'a Expr> },
+    Deadlock {
+        terminal: Option<&'a Expr>,
+    },
     Invariant(&'a Expr),
     Reachable(&'a Expr),
+    /// Decided on the state graph once the exploration is complete (`response`).
+    Response {
+        trigger: &'a Happens,
+        response: &'a Happens,
+        within: Option<u64>,
+    },
     RangeErrors,
 }
 
@@ -35,16 +48,25 @@ pub(super) fn targets(system: &System) -> Vec<Target<'_>> {
         .into_iter()
         .map(|p| {
             let (kind, check) = match &p {
-                Cow::Borrowed(Property { kind, .. }) => match kind {
-                    ModelKind::DeadlockFree { terminal } => (
-                        CheckKind::DeadlockFree,
-                        Check::Deadlock {
+                Cow::Borrowed(Property { kind, .. }) => (
+                    check_kind(kind),
+                    match kind {
+                        ModelKind::DeadlockFree { terminal } => Check::Deadlock {
                             terminal: terminal.as_ref(),
                         },
-                    ),
-                    ModelKind::Invariant(e) => (CheckKind::Invariant, Check::Invariant(e)),
-                    ModelKind::Reachable(e) => (CheckKind::Reachable, Check::Reachable(e)),
-                },
+                        ModelKind::Invariant(e) => Check::Invariant(e),
+                        ModelKind::Reachable(e) => Check::Reachable(e),
+                        ModelKind::Response {
+                            trigger,
+                            response,
+                            within,
+                        } => Check::Response {
+                            trigger,
+                            response,
+                            within: *within,
+                        },
+                    },
+                ),
                 // the default property, which borrows nothing from the system's list
                 Cow::Owned(_) => (
                     CheckKind::DeadlockFree,
@@ -96,11 +118,50 @@ impl Explorer<'_> {
             store_bytes: self.store_bytes(),
             jobs: self.jobs,
         };
+        // the response properties need every state, and the run stops early only when
+        // none is left open (`all_decided`), so `complete` is enough
+        let mut responses: Vec<Option<Decided>> = self.targets.iter().map(|_| None).collect();
+        let mut run_stopped = stopped.clone();
+        if complete {
+            let (which, questions): (Vec<usize>, Vec<Question<'_>>) = self
+                .targets
+                .iter()
+                .enumerate()
+                .filter_map(|(k, t)| match &t.check {
+                    Check::Response {
+                        trigger,
+                        response,
+                        within,
+                    } => Some((
+                        k,
+                        Question {
+                            name: &t.name,
+                            trigger,
+                            response,
+                            within: *within,
+                        },
+                    )),
+                    _ => None,
+                })
+                .unzip();
+            let decided = decide(self.system, &self.visited, &questions, self.watch)?;
+            // a limit reached while the response properties were searched stopped the run
+            // too (every state was explored: `complete` stays true)
+            if !which.is_empty() {
+                run_stopped = self.watch.stopped().cloned();
+            }
+            for (k, d) in which.into_iter().zip(decided) {
+                responses[k] = Some(d);
+            }
+        }
         let mut properties = Vec::with_capacity(self.targets.len());
-        for (t, f) in self.targets.iter().zip(&self.findings) {
-            let verdict = match f {
-                Some(f) => self.verdict_of(t, f)?,
-                None => self.open_verdict(t, stopped.as_ref(), states),
+        for (k, (t, f)) in self.targets.iter().zip(&self.findings).enumerate() {
+            let decided = responses.get_mut(k).and_then(Option::take);
+            let note = decided.as_ref().and_then(|d| d.note.clone());
+            let verdict = match (f, decided) {
+                (_, Some(d)) => d.verdict,
+                (Some(f), None) => self.verdict_of(t, f)?,
+                (None, None) => self.open_verdict(t, stopped.as_ref(), states),
             };
             let error_step = verdict.trace().and_then(|tr| error_step(self.system, tr));
             properties.push(PropertyResult {
@@ -109,7 +170,7 @@ impl Explorer<'_> {
                 expr: t.expr.clone(),
                 verdict,
                 method: Method::Explicit,
-                note: None,
+                note,
                 error_step,
             });
         }
@@ -127,7 +188,7 @@ impl Explorer<'_> {
             method: Method::Explicit,
             properties,
             stats,
-            stopped,
+            stopped: run_stopped,
             symbolic: None,
             seconds,
             peak_memory_bytes: None,

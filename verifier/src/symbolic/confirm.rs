@@ -128,6 +128,7 @@ pub fn greedy_deadlock(
                     system: sys.name.clone(),
                     verdict: TraceVerdict::Deadlock,
                     steps: trace_steps,
+                    loop_start: None,
                 });
             }
         }

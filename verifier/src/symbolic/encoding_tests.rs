@@ -84,7 +84,9 @@ fn check_state(sys: &System, enc: &Encoding<'_>, s: &State) -> Result<(), String
         let e = match &p.kind {
             PropertyKind::Invariant(e) | PropertyKind::Reachable(e) => e,
             PropertyKind::DeadlockFree { terminal: Some(e) } => e,
-            PropertyKind::DeadlockFree { terminal: None } => continue,
+            PropertyKind::DeadlockFree { terminal: None } | PropertyKind::Response { .. } => {
+                continue
+            }
         };
         let v = enc.eval(e, &f);
         let failed = decide(&err_formula(&v.err));

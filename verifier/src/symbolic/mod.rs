@@ -43,7 +43,7 @@ use crate::error::VerifyError;
 use crate::memory;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::properties::{checked_properties, error_step, RANGE_ERRORS};
+use crate::properties::{check_kind, checked_properties, error_step, RANGE_ERRORS};
 use crate::report::{
     CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, SymbolicStats,
 };
@@ -236,6 +236,14 @@ fn run(
                     safety(p, Goal::Reach(e, &prop.name))
                 }),
             ),
+            // no proof method for them yet: never a verdict without one
+            ModelKind::Response { .. } => (
+                check_kind(&prop.kind),
+                Outcome::unknown(
+                    "the symbolic method does not decide response properties; `--method explicit` does"
+                        .into(),
+                ),
+            ),
         };
         properties.push(PropertyResult {
             name: prop.name.clone(),
@@ -317,11 +325,7 @@ fn undecided(system: &System, why: &str, watch: &Watch) -> Report {
         .iter()
         .map(|prop| PropertyResult {
             name: prop.name.clone(),
-            kind: match prop.kind {
-                ModelKind::DeadlockFree { .. } => CheckKind::DeadlockFree,
-                ModelKind::Invariant(_) => CheckKind::Invariant,
-                ModelKind::Reachable(_) => CheckKind::Reachable,
-            },
+            kind: check_kind(&prop.kind),
             expr: prop.text.clone(),
             verdict: PropertyVerdict::Inconclusive { reason: why.into() },
             method: Method::Symbolic,

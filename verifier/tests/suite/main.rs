@@ -2,6 +2,8 @@
 //!
 //! - `known_answers`: verdicts, state counts and trace lengths known independently of bip;
 //! - `random_systems`: every worker count gives the same report, equal to a naive search;
+//! - `response`: response properties against a naive search for unanswered triggers, on
+//!   known models and random systems, with the truncation guardrail and vacuity;
 //! - `schedulability`: each task's demand per period against an oracle walking every path
 //!   between two ticks, and the analysis on top;
 //! - `symbolic_known_answers`: the symbolic method on models whose answers are known;
@@ -9,6 +11,7 @@
 
 mod known_answers;
 mod random_systems;
+mod response;
 mod schedulability;
 mod symbolic_known_answers;
 mod symbolic_verdicts;

@@ -72,6 +72,9 @@ pub(super) struct UserTexts {
     pub connector_actions: HashMap<usize, UserExpr<Vec<Assign>>>,
     pub priority_whens: HashMap<usize, UserExpr<Expr>>,
     pub properties: HashMap<usize, UserExpr<Expr>>,
+    /// Response properties' triggers and responses (`Replies` and `Terminates` too),
+    /// GenoM events as the core's step forms.
+    pub responses: HashMap<usize, (UserExpr<Expr>, UserExpr<Expr>)>,
 }
 
 /// A condition of a request or a codel, while the expansion builds it.

@@ -7,7 +7,7 @@ use super::{Builder, UserTexts};
 use crate::genom::check::ETHER;
 use crate::genom::names::*;
 use crate::genom::tree::{all, and, at, boolean, member, not, or};
-use crate::syntax::{ConnectorDef, ExprDef, PropertyDef, Role};
+use crate::syntax::{ConnectorDef, ExprDef, PropertyDef, Role, Text};
 
 impl<'a, 'd> Builder<'a, 'd> {
     /// The user's properties with GenoM names rewritten; `DeadlockFree` excuses the states
@@ -67,6 +67,48 @@ impl<'a, 'd> Builder<'a, 'd> {
                     name: name.clone(),
                     expr: rewritten(expr),
                 },
+                PropertyDef::Response {
+                    name,
+                    trigger,
+                    response,
+                    within,
+                } => {
+                    let (t, r) = &user.responses[&k];
+                    PropertyDef::Response {
+                        name: name.clone(),
+                        trigger: t.def(trigger),
+                        response: r.def(response),
+                        within: within.clone(),
+                    }
+                }
+                PropertyDef::LeadsTo { name, from, to } => {
+                    let (t, r) = &user.responses[&k];
+                    PropertyDef::LeadsTo {
+                        name: name.clone(),
+                        from: t.def(from),
+                        to: r.def(to),
+                    }
+                }
+                PropertyDef::Replies { .. } | PropertyDef::Terminates { .. } => {
+                    // named as written, so that the report keeps the user's name
+                    let name = Text::new(p.name().into_owned(), p.name_span());
+                    let (t, r) = &user.responses[&k];
+                    let (from, to) = (
+                        ExprDef::Built(t.tree.clone()),
+                        ExprDef::Built(r.tree.clone()),
+                    );
+                    match p {
+                        PropertyDef::Replies {
+                            within: Some(k), ..
+                        } => PropertyDef::Response {
+                            name,
+                            trigger: from,
+                            response: to,
+                            within: k.clone(),
+                        },
+                        _ => PropertyDef::LeadsTo { name, from, to },
+                    }
+                }
             });
         }
         out

@@ -22,7 +22,7 @@ use crate::syntax::{CodelDef, ConstraintDef, ModuleDef, ServiceDef, ServiceKind,
 use bip_model::genom::map::{ConstraintRef, DataType, Reason};
 
 use constraints::constraint;
-pub use constraints::too_old;
+pub use constraints::{service_ref, too_old};
 use module::module;
 
 /// The name of the final state of every activity (GenoM's `ether`).

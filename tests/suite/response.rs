@@ -1,0 +1,109 @@
+//! End-to-end tests of response properties: a lasso counterexample printed with its cycle
+//! marked, saved with its loop start and replayed through the engine; a trace whose cycle
+//! does not close refused; a truncated run inconclusive (exit 3); a vacuous property
+//! warned about.
+
+use crate::common::bip;
+
+use std::path::Path;
+
+/// Three philosophers, the last taking its right fork first: nobody deadlocks, but
+/// philosopher 0 may starve.
+fn philosophers(dir: &Path) -> String {
+    let text = std::fs::read_to_string(format!(
+        "{}/robots/philosophers-asymmetric.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+    .replace("\"N\": 5", "\"N\": 3");
+    let at = text.rfind("properties: [").unwrap();
+    let text = format!(
+        r#"{}properties: [
+        LeadsTo(name: "phil0_eats", from: "phil[0]@hungry", to: "phil[0]@eating"),
+        LeadsTo(name: "someone_eats", from: "exists i in 0..N: phil[i]@hungry", to: "exists i in 0..N: phil[i]@eating"),
+        LeadsTo(name: "nobody_eats_twice", from: "phil[0]@eating && phil[1]@eating", to: "true"),
+    ],
+)
+"#,
+        &text[..at]
+    );
+    let path = dir.join("starving.ron");
+    std::fs::write(&path, text).unwrap();
+    path.display().to_string()
+}
+
+fn out(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn a_lasso_is_printed_saved_and_replayed_with_its_cycle() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = philosophers(dir.path());
+    let traces = dir.path().join("traces");
+    let o = bip(&["verify", &model, "--trace-dir", traces.to_str().unwrap()]);
+    let text = out(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("phil0_eats") && text.contains("FAILS"),
+        "{text}"
+    );
+    assert!(
+        text.contains("┌ the cycle: the steps below repeat forever"),
+        "{text}"
+    );
+    assert!(text.contains("└ back to the state after step"), "{text}");
+    let file = traces.join("phil0_eats.trace.ron");
+    let saved = std::fs::read_to_string(&file).unwrap();
+    assert!(saved.contains("loop_start: "), "{saved}");
+    let o = bip(&["replay", &model, file.to_str().unwrap()]);
+    let text = out(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(text.contains("forever"), "{text}");
+    assert!(text.contains("result: phil0_eats fails"), "{text}");
+    // a cycle that does not close is not a lasso of the model
+    let k: usize = saved
+        .split("loop_start: ")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .and_then(|n| n.trim().parse().ok())
+        .unwrap();
+    let moved = saved.replace(
+        &format!("loop_start: {k},"),
+        &format!("loop_start: {},", k + 1),
+    );
+    assert_ne!(moved, saved);
+    let bad = dir.path().join("moved.trace.ron");
+    std::fs::write(&bad, moved).unwrap();
+    let o = bip(&["replay", &model, bad.to_str().unwrap()]);
+    let text = out(&o);
+    assert_eq!(o.status.code(), Some(2), "{text}");
+    assert!(
+        text.contains("does not return to the state where the loop starts"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_truncated_run_is_inconclusive_and_a_vacuous_property_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = philosophers(dir.path());
+    let o = bip(&[
+        "verify",
+        &model,
+        "--method",
+        "explicit",
+        "--max-states",
+        "4",
+    ]);
+    let text = out(&o);
+    assert_eq!(o.status.code(), Some(3), "{text}");
+    assert!(text.contains("inconclusive"), "{text}");
+    assert!(!text.contains("FAILS"), "{text}");
+    let o = bip(&["verify", &model]);
+    let text = out(&o);
+    assert!(
+        text.contains("warning: nobody_eats_twice holds vacuously: its trigger never happens"),
+        "{text}"
+    );
+}

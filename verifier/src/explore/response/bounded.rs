@@ -1,0 +1,155 @@
+//! Bounded response (`Response`, `Replies(within)`): a breadth-first search of the
+//! product of the stored graph with an observer that counts the ticks since the oldest
+//! trigger not yet answered (docs/verify.md, "Response and liveness"). The first product
+//! state found that takes a tick past the bound, or stops with a trigger unanswered, ends
+//! a shortest counterexample.
+
+use super::graph::{response_bit, trigger_bit, Graph, IN_ERROR, TICK};
+use super::run::Run;
+use crate::watch::Watch;
+
+/// What the search found.
+pub(crate) enum Found {
+    Holds {
+        vacuous: bool,
+    },
+    Fails(Run),
+    /// The product would not fit (more states than can be numbered, or the memory limit).
+    TooLarge,
+    Stopped,
+}
+
+/// The observer: 0 when no trigger waits, `c + 1` when the oldest waiting trigger came
+/// `c` ticks ago (`c <= within`).
+struct Observer {
+    within: u64,
+    trigger: u32,
+    response: u32,
+}
+
+/// What a step does to the observer.
+enum Next {
+    To(u32),
+    /// The step is a tick past the bound.
+    Late,
+}
+
+impl Observer {
+    fn initial(&self, flags: u32) -> u32 {
+        u32::from(flags & self.trigger != 0 && flags & self.response == 0)
+    }
+
+    /// From observer value `o`, along an edge flagged `edge`, into a state flagged `to`.
+    fn next(&self, o: u32, edge: u32, to: u32) -> Next {
+        let mut o = o;
+        if o > 0 && edge & TICK != 0 {
+            if u64::from(o - 1) == self.within {
+                return Next::Late;
+            }
+            o += 1;
+        }
+        if (edge | to) & self.response != 0 {
+            return Next::To(0);
+        }
+        if o == 0 && (edge | to) & self.trigger != 0 {
+            o = 1;
+        }
+        Next::To(o)
+    }
+}
+
+/// Searches property `p`, which must answer within `within` ticks.
+pub(crate) fn search(g: &Graph, p: usize, within: u64, watch: &Watch) -> Found {
+    let obs = Observer {
+        within,
+        trigger: trigger_bit(p),
+        response: response_bit(p),
+    };
+    let vacuous = !g.state_flags.iter().any(|f| f & obs.trigger != 0)
+        && !g.edge_flags.iter().any(|f| f & obs.trigger != 0);
+    if vacuous {
+        return Found::Holds { vacuous };
+    }
+    let width = within.saturating_add(2);
+    let size = (g.len() as u64).checked_mul(width);
+    let Some(size) = size.filter(|&s| s < u64::from(u32::MAX)) else {
+        return Found::TooLarge;
+    };
+    if watch.stopped().is_some() {
+        return Found::Stopped;
+    }
+    if !watch.expect(size * 4) {
+        // the memory limit is raised: the run stops here
+        return Found::TooLarge;
+    }
+    let width = width as u32;
+    // each reached product state's parent (itself for the initial one)
+    let mut parent = vec![u32::MAX; size as usize];
+    let start = obs.initial(g.state_flags[0]);
+    parent[start as usize] = start;
+    let mut level = vec![start];
+    let mut next_level = Vec::new();
+    let mut work = 0u64;
+    while !level.is_empty() {
+        for &x in &level {
+            work += 1;
+            if work.is_multiple_of(4096) && watch.stopped().is_some() {
+                return Found::Stopped;
+            }
+            let (s, o) = (x / width, x % width);
+            let edges = g.edges(s);
+            if o > 0 && edges.is_empty() && g.state_flags[s as usize] & IN_ERROR == 0 {
+                return Found::Fails(run_to(g, &parent, width, x, &obs));
+            }
+            for e in edges {
+                let t = g.targets[e];
+                match obs.next(o, g.edge_flags[e], g.state_flags[t as usize]) {
+                    Next::Late => {
+                        let mut run = run_to(g, &parent, width, x, &obs);
+                        run.push(g, e);
+                        return Found::Fails(run);
+                    }
+                    Next::To(o2) => {
+                        let y = t * width + o2;
+                        if parent[y as usize] == u32::MAX {
+                            parent[y as usize] = x;
+                            next_level.push(y);
+                        }
+                    }
+                }
+            }
+        }
+        std::mem::swap(&mut level, &mut next_level);
+        next_level.clear();
+    }
+    Found::Holds { vacuous: false }
+}
+
+/// The run to product state `x`, following parents, each step by the first edge that
+/// leads the observer from the parent's value to the child's.
+fn run_to(g: &Graph, parent: &[u32], width: u32, x: u32, obs: &Observer) -> Run {
+    let mut chain = vec![x];
+    let mut cur = x;
+    while parent[cur as usize] != cur {
+        cur = parent[cur as usize];
+        chain.push(cur);
+    }
+    chain.reverse();
+    let mut run = Run {
+        states: vec![chain[0] / width],
+        ..Run::default()
+    };
+    for pair in chain.windows(2) {
+        let (s, o) = (pair[0] / width, pair[0] % width);
+        let (t, o2) = (pair[1] / width, pair[1] % width);
+        let e = g
+            .edges(s)
+            .find(|&e| {
+                g.targets[e] == t
+                    && matches!(obs.next(o, g.edge_flags[e], g.state_flags[t as usize]), Next::To(v) if v == o2)
+            })
+            .expect("a parent reaches its child by some edge");
+        run.push(g, e);
+    }
+    run
+}

@@ -1,0 +1,233 @@
+//! The response properties (`Response`, `LeadsTo`, `Replies`, `Terminates`), decided on
+//! the state graph once the exploration is complete (docs/verify.md, "Response and
+//! liveness"): `graph` stores it, `bounded` searches the product with a tick-counting
+//! observer, `cycles` searches for runs on which the response never comes, `run` holds
+//! the paths both return. A truncated exploration decides none of them.
+
+mod bounded;
+mod cycles;
+mod graph;
+mod run;
+
+use bip_model::{Happens, OwnedStep, State, Steps, System, Trace, Verdict};
+
+use crate::error::VerifyError;
+use crate::report::PropertyVerdict;
+use crate::visited::Visited;
+use crate::watch::Watch;
+
+use graph::{Graph, Watched, MAX_WATCHED};
+use run::Run;
+
+/// A response property's verdict, with a note when its trigger never happens.
+pub(super) struct Decided {
+    pub(super) verdict: PropertyVerdict,
+    pub(super) note: Option<String>,
+}
+
+/// A response property to decide.
+pub(super) struct Question<'a> {
+    pub(super) name: &'a str,
+    pub(super) trigger: &'a Happens,
+    pub(super) response: &'a Happens,
+    pub(super) within: Option<u64>,
+}
+
+/// The verdicts of the response properties `questions`, in order, from a complete
+/// exploration stored in `visited`.
+pub(super) fn decide(
+    system: &System,
+    visited: &Visited,
+    questions: &[Question<'_>],
+    watch: &Watch,
+) -> Result<Vec<Decided>, VerifyError> {
+    if questions.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut out: Vec<Option<Decided>> = questions.iter().map(|_| None).collect();
+    let mut watched = Vec::new();
+    let mut which = Vec::new();
+    for (k, t) in questions.iter().enumerate() {
+        let (trigger, response) = (t.trigger, t.response);
+        if watched.len() == MAX_WATCHED {
+            out[k] = Some(inconclusive(format!(
+                "one run checks at most {MAX_WATCHED} response properties; check this one in a run of its own"
+            )));
+            continue;
+        }
+        watched.push(Watched {
+            context: format!("property {}", t.name),
+            trigger,
+            response,
+        });
+        which.push(k);
+    }
+    let done = |out: Vec<Option<Decided>>| {
+        out.into_iter()
+            .map(|d| d.expect("every question is answered"))
+            .collect()
+    };
+    let stopped = |watch: &Watch| {
+        inconclusive(match watch.stopped() {
+            Some(stop) => format!("{stop} while the state graph was searched"),
+            None => "the state graph could not be stored".into(),
+        })
+    };
+    watch.rebase();
+    let Some(g) = Graph::build(system, visited, &watched, watch) else {
+        for &k in &which {
+            out[k] = Some(stopped(watch));
+        }
+        return Ok(done(out));
+    };
+    for (p, &k) in which.iter().enumerate() {
+        // what the last search announced is freed or resident now
+        watch.rebase();
+        let t = &questions[k];
+        let within = t.within;
+        if let Some(f) = &g.failures[p] {
+            let run = Run {
+                states: vec![f.state],
+                ..Run::default()
+            };
+            let mut trace = run_trace(system, visited, &g, &stem_to(&g, run))?;
+            trace.verdict = Verdict::RangeError(f.message.clone());
+            out[k] = Some(Decided {
+                verdict: PropertyVerdict::Fails {
+                    reason: format!("range error: {}", f.message),
+                    trace: Some(trace),
+                },
+                note: None,
+            });
+            continue;
+        }
+        let found = match within {
+            Some(bound) => match bounded::search(&g, p, bound, watch) {
+                bounded::Found::Holds { vacuous } => Ok(vacuous),
+                bounded::Found::Fails(run) => Err(run),
+                bounded::Found::TooLarge => {
+                    out[k] = Some(inconclusive(format!(
+                        "the observer's product ({} states times {} tick counts) does not fit",
+                        g.len(),
+                        bound.saturating_add(2)
+                    )));
+                    continue;
+                }
+                bounded::Found::Stopped => {
+                    out[k] = Some(stopped(watch));
+                    continue;
+                }
+            },
+            None => match cycles::search(&g, p, watch) {
+                cycles::Found::Holds { vacuous } => Ok(vacuous),
+                cycles::Found::Fails(run) => Err(run),
+                cycles::Found::Stopped => {
+                    out[k] = Some(stopped(watch));
+                    continue;
+                }
+            },
+        };
+        out[k] = Some(match found {
+            Ok(vacuous) => Decided {
+                verdict: PropertyVerdict::Holds { witness: None },
+                note: vacuous.then(|| "vacuous: its trigger never happens".to_string()),
+            },
+            Err(run) => {
+                let mut trace = run_trace(system, visited, &g, &run)?;
+                trace.verdict = Verdict::Violation(t.name.to_string());
+                let reason = reason(&g, &run, within);
+                Decided {
+                    verdict: PropertyVerdict::Fails {
+                        reason,
+                        trace: Some(trace),
+                    },
+                    note: None,
+                }
+            }
+        });
+    }
+    Ok(done(out))
+}
+
+fn inconclusive(reason: String) -> Decided {
+    Decided {
+        verdict: PropertyVerdict::Inconclusive { reason },
+        note: None,
+    }
+}
+
+/// How the counterexample `run` fails.
+fn reason(g: &Graph, run: &Run, within: Option<u64>) -> String {
+    let n = run.edges.len();
+    let steps = |n: usize| format!("{n} step{}", if n == 1 { "" } else { "s" });
+    match (run.loop_start, within) {
+        (Some(k), _) => format!(
+            "the response never comes: after {}, a cycle of {} repeats forever without it",
+            steps(k),
+            steps(n - k)
+        ),
+        (None, Some(bound)) if g.edges(run.last()).is_empty() => format!(
+            "the response never comes: the run stops after {} with the trigger unanswered (bound {bound} ticks)",
+            steps(n)
+        ),
+        (None, Some(bound)) => format!(
+            "the response does not come within {bound} tick{}: the tick of step {n} passes the bound",
+            if bound == 1 { "" } else { "s" }
+        ),
+        (None, None) => format!(
+            "the response never comes: the run stops after {} with the trigger unanswered",
+            steps(n)
+        ),
+    }
+}
+
+/// The run from the initial state to the first state of `run`, joined with it.
+fn stem_to(g: &Graph, run: Run) -> Run {
+    let mut out = Run {
+        states: vec![0],
+        ..Run::default()
+    };
+    let first = run.states[0];
+    let path =
+        run::shortest_path(g, 0, |_| true, |t| t == first).expect("every stored state is reached");
+    out.extend(g, &path);
+    out.extend(g, &run.edges);
+    out.loop_start = run.loop_start;
+    out
+}
+
+/// The trace of `run` (which starts at the initial state): each edge is the step of its
+/// state that the graph stored at that place, found again by firing the state's steps in
+/// the same order.
+fn run_trace(
+    system: &System,
+    visited: &Visited,
+    g: &Graph,
+    run: &Run,
+) -> Result<Trace, VerifyError> {
+    let layout = &system.layout;
+    let mut steps = Steps::new();
+    let mut path: Vec<(OwnedStep, State)> = Vec::with_capacity(run.edges.len());
+    let mut state = system.initial_state();
+    let mut next = system.initial_state();
+    for (k, &e) in run.edges.iter().enumerate() {
+        let from = run.states[k];
+        layout.decode(visited.state(g.ids[from as usize]), &mut state);
+        let nth = e - g.edges(from).start;
+        system.enabled_steps(&state, &mut steps).map_err(|e| {
+            VerifyError::Internal(format!("a state on a trace has a range error: {e}"))
+        })?;
+        let step = steps
+            .iter()
+            .filter(|s| system.fire(&state, *s, &mut next).is_ok())
+            .nth(nth)
+            .ok_or_else(|| VerifyError::Internal("an edge of the graph has no step".into()))?;
+        system
+            .fire(&state, step, &mut next)
+            .map_err(|e| VerifyError::Internal(format!("a step of a trace fails: {e}")))?;
+        path.push((step.to_owned(), next.clone()));
+    }
+    let mut trace = Trace::from_path(system, Verdict::None, &path);
+    trace.loop_start = run.loop_start;
+    Ok(trace)
+}

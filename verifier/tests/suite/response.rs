@@ -1,0 +1,470 @@
+//! Response properties (`Response`, `LeadsTo`): known answers on small models, random
+//! systems, the truncation guardrail and the vacuity note, each verdict checked against an
+//! oracle written here: a naive search of the explored graph that looks, from every
+//! trigger, for a run that avoids the response forever (a dead end, or a cycle through a
+//! tick reachable from it and back, found edge by edge) or past the bound (per trigger,
+//! counting ticks). Every counterexample must replay with the step relation, a lasso must
+//! return to the state where its cycle starts, and the run must show the trigger
+//! unanswered.
+
+use std::collections::{HashMap, HashSet, VecDeque};
+
+use bip_lang::load_str;
+use bip_model::{OwnedStep, ResponseSpec, Role, State, Steps, System, Verdict};
+use bip_verifier::{verify, Method, Options, PropertyResult, PropertyVerdict, Report};
+use proptest::prelude::*;
+
+/// The explored graph, built with the step relation alone.
+struct Naive {
+    states: Vec<State>,
+    edges: Vec<Vec<(OwnedStep, usize)>>,
+    /// The state's steps cannot be computed, or every one of them fails.
+    error: Vec<bool>,
+}
+
+fn explore(sys: &System) -> Naive {
+    let mut index: HashMap<State, usize> = HashMap::new();
+    let mut g = Naive {
+        states: vec![sys.initial_state()],
+        edges: Vec::new(),
+        error: Vec::new(),
+    };
+    index.insert(sys.initial_state(), 0);
+    let mut k = 0;
+    while k < g.states.len() {
+        let s = g.states[k].clone();
+        let mut out = Vec::new();
+        let mut steps = Steps::new();
+        let error = if sys.enabled_steps(&s, &mut steps).is_err() {
+            true
+        } else {
+            // a step in range error has no successor
+            for step in steps.iter() {
+                let mut next = s.clone();
+                if sys.fire(&s, step, &mut next).is_err() {
+                    continue;
+                }
+                let n = index.len();
+                let t = *index.entry(next.clone()).or_insert(n);
+                if t == g.states.len() {
+                    g.states.push(next);
+                }
+                out.push((step.to_owned(), t));
+            }
+            out.is_empty() && !steps.is_empty()
+        };
+        g.edges.push(out);
+        g.error.push(error);
+        k += 1;
+    }
+    g
+}
+
+/// The oracle's answer.
+#[derive(Debug, PartialEq, Eq)]
+enum Answer {
+    Holds { vacuous: bool },
+    Fails,
+    RangeError,
+}
+
+fn oracle(sys: &System, g: &Naive, spec: ResponseSpec<'_>) -> Answer {
+    let n = g.states.len();
+    let mut trig = vec![false; n];
+    let mut resp = vec![false; n];
+    let mut edge_trig: Vec<Vec<bool>> = Vec::new();
+    let mut edge_resp: Vec<Vec<bool>> = Vec::new();
+    for s in 0..n {
+        let (Ok(t), Ok(r)) = (
+            sys.happens_in(spec.trigger, &g.states[s], "p"),
+            sys.happens_in(spec.response, &g.states[s], "p"),
+        ) else {
+            return Answer::RangeError;
+        };
+        trig[s] = t;
+        resp[s] = r;
+        let (mut et, mut er) = (Vec::new(), Vec::new());
+        for (step, t) in &g.edges[s] {
+            let (a, b) = (&g.states[s], &g.states[*t]);
+            let (Ok(x), Ok(y)) = (
+                sys.happens_on(spec.trigger, a, step.as_step(), b, "p"),
+                sys.happens_on(spec.response, a, step.as_step(), b, "p"),
+            ) else {
+                return Answer::RangeError;
+            };
+            et.push(x);
+            er.push(y);
+        }
+        edge_trig.push(et);
+        edge_resp.push(er);
+    }
+    let tick = |s: usize, k: usize| sys.role(g.edges[s][k].0.label) == Role::Time;
+    let dead = |s: usize| g.edges[s].is_empty() && !g.error[s];
+    let waiting = |s: usize| !resp[s] && !g.error[s];
+    let follow = |s: usize, k: usize| !edge_resp[s][k] && waiting(g.edges[s][k].1);
+    // every trigger, as the state where the wait starts
+    let mut starts = Vec::new();
+    let mut vacuous = true;
+    for s in 0..n {
+        if trig[s] {
+            vacuous = false;
+            if waiting(s) {
+                starts.push(s);
+            }
+        }
+        for (k, (_, t)) in g.edges[s].iter().enumerate() {
+            if edge_trig[s][k] {
+                vacuous = false;
+                if !edge_resp[s][k] && waiting(*t) {
+                    starts.push(*t);
+                }
+            }
+        }
+    }
+    let reach = |from: usize| -> HashSet<usize> {
+        let mut seen = HashSet::from([from]);
+        let mut queue = VecDeque::from([from]);
+        while let Some(s) = queue.pop_front() {
+            for (k, (_, t)) in g.edges[s].iter().enumerate() {
+                if follow(s, k) && seen.insert(*t) {
+                    queue.push_back(*t);
+                }
+            }
+        }
+        seen
+    };
+    let fails = match spec.within {
+        None => starts.iter().any(|&x| {
+            let from_x = reach(x);
+            from_x.iter().any(|&u| {
+                dead(u)
+                    || g.edges[u].iter().enumerate().any(|(k, (_, v))| {
+                        follow(u, k) && (!sys.has_time() || tick(u, k)) && reach(*v).contains(&u)
+                    })
+            })
+        }),
+        Some(bound) => starts.iter().any(|&x| {
+            // (state, ticks since this trigger), waiting for the response
+            let mut seen = HashSet::from([(x, 0u64)]);
+            let mut queue = VecDeque::from([(x, 0u64)]);
+            while let Some((s, c)) = queue.pop_front() {
+                if dead(s) {
+                    return true;
+                }
+                for (k, (_, t)) in g.edges[s].iter().enumerate() {
+                    if tick(s, k) && c == bound {
+                        return true;
+                    }
+                    if edge_resp[s][k] || resp[*t] {
+                        continue;
+                    }
+                    let next = (*t, c + u64::from(tick(s, k)));
+                    if seen.insert(next) {
+                        queue.push_back(next);
+                    }
+                }
+            }
+            false
+        }),
+    };
+    if fails {
+        Answer::Fails
+    } else {
+        Answer::Holds { vacuous }
+    }
+}
+
+/// Checks every response property of `report` against the oracle, and its
+/// counterexample against the step relation.
+fn check_against_oracle(sys: &System, report: &Report) -> Result<(), String> {
+    let g = explore(sys);
+    for p in &sys.properties {
+        let Some(spec) = p.kind.response_spec() else {
+            continue;
+        };
+        let result = result(report, &p.name);
+        let answer = oracle(sys, &g, spec);
+        match (&result.verdict, &answer) {
+            (PropertyVerdict::Holds { .. }, Answer::Holds { vacuous }) => {
+                let noted = result
+                    .note
+                    .as_deref()
+                    .is_some_and(|n| n.starts_with("vacuous"));
+                if noted != *vacuous {
+                    return Err(format!(
+                        "{}: vacuity {noted}, the oracle says {vacuous}",
+                        p.name
+                    ));
+                }
+            }
+            (PropertyVerdict::Fails { trace: Some(t), .. }, Answer::RangeError) => {
+                if !matches!(t.verdict, Verdict::RangeError(_)) {
+                    return Err(format!("{}: fails without a range error", p.name));
+                }
+                t.replay(sys).map_err(|e| format!("{}: {e}", p.name))?;
+            }
+            (PropertyVerdict::Fails { trace: Some(t), .. }, Answer::Fails) => {
+                let path = t.replay(sys).map_err(|e| format!("{}: {e}", p.name))?;
+                if let Some(k) = t.loop_start {
+                    let start = if k == 0 {
+                        sys.initial_state()
+                    } else {
+                        path[k - 1].1.clone()
+                    };
+                    if path.last().map(|(_, s)| s) != Some(&start) {
+                        return Err(format!("{}: the cycle does not return", p.name));
+                    }
+                }
+                if sys.shows_unanswered(spec, &path, t.loop_start, "p") != Ok(true) {
+                    return Err(format!(
+                        "{}: the trace does not show the trigger unanswered",
+                        p.name
+                    ));
+                }
+            }
+            (v, a) => {
+                return Err(format!(
+                    "{}: the verifier says {v:?}, the oracle {a:?}",
+                    p.name
+                ))
+            }
+        }
+    }
+    Ok(())
+}
+
+fn result<'r>(report: &'r Report, name: &str) -> &'r PropertyResult {
+    report
+        .properties
+        .iter()
+        .find(|p| p.name == name)
+        .unwrap_or_else(|| panic!("no result for {name}"))
+}
+
+fn run(sys: &System, jobs: usize) -> Report {
+    let mut r = verify(
+        sys,
+        Method::Explicit,
+        &Options {
+            jobs,
+            ..Options::default()
+        },
+        &|_| {},
+    )
+    .unwrap();
+    r.stats.seconds = 0.0;
+    r.stats.states_per_second = 0.0;
+    r.stats.store_bytes = 0;
+    r.stats.jobs = 0;
+    r.seconds = 0.0;
+    r.peak_memory_bytes = None;
+    r
+}
+
+/// Runs with one worker and with three, which must agree, and checks against the oracle.
+fn verified(text: &str) -> (System, Report) {
+    let sys = load_str("model.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()));
+    let one = run(&sys, 1);
+    assert_eq!(run(&sys, 3), one, "one worker and three disagree");
+    check_against_oracle(&sys, &one).unwrap();
+    (sys, one)
+}
+
+/// robots/served.ron: a client requests, a server takes two ticks to serve it; with
+/// `urgent`, the reply is above the tick (it happens as soon as it can), else time may
+/// pass forever instead. Its properties replaced by `properties`.
+fn served(urgent: bool, properties: &str) -> String {
+    let text = std::fs::read_to_string(format!(
+        "{}/../robots/served.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let priority = r#"(low: "tick", high: "reply"),"#;
+    assert!(text.contains(priority));
+    let text = if urgent {
+        text
+    } else {
+        text.replace(priority, "")
+    };
+    let at = text
+        .rfind("properties: [")
+        .expect("the model has properties");
+    format!("{}properties: [{properties}],\n)\n", &text[..at])
+}
+
+const SERVED: &str = r#"LeadsTo(name: "served", from: "fires(request)", to: "client@idle"),
+    Response(name: "in_two", trigger: "client@waiting", response: "fires(reply)", within: 2),
+    Response(name: "in_one", trigger: "client@waiting", response: "fires(reply)", within: 1),
+    LeadsTo(name: "never_asked", from: "client@waiting && server@free", to: "client@idle")"#;
+
+#[test]
+fn a_request_is_served_within_two_ticks_and_not_one() {
+    let (_, r) = verified(&served(true, SERVED));
+    assert!(result(&r, "served").verdict.holds());
+    assert!(result(&r, "in_two").verdict.holds());
+    // request, tick, and the second tick passes the bound
+    let PropertyVerdict::Fails { trace: Some(t), .. } = &result(&r, "in_one").verdict else {
+        panic!("in_one should fail: {:?}", result(&r, "in_one"));
+    };
+    let names: Vec<&str> = t.steps.iter().map(|s| s.step.as_str()).collect();
+    assert_eq!(names, ["request", "tick", "tick"]);
+    assert_eq!(t.loop_start, None);
+    let never = result(&r, "never_asked");
+    assert!(never.verdict.holds());
+    assert_eq!(
+        never.note.as_deref(),
+        Some("vacuous: its trigger never happens")
+    );
+}
+
+#[test]
+fn a_reply_that_time_may_overtake_forever_is_a_lasso() {
+    let (_, r) = verified(&served(false, SERVED));
+    let PropertyVerdict::Fails { trace: Some(t), .. } = &result(&r, "served").verdict else {
+        panic!("served should fail");
+    };
+    // the shortest stem reaches t == 2; then the tick repeats forever
+    let names: Vec<&str> = t.steps.iter().map(|s| s.step.as_str()).collect();
+    assert_eq!(names, ["request", "tick", "tick", "tick"]);
+    assert_eq!(t.loop_start, Some(3));
+}
+
+/// N philosophers, the last one taking its right fork first (no deadlock).
+fn philosophers(properties: &str) -> String {
+    let text = std::fs::read_to_string(format!(
+        "{}/../robots/philosophers-asymmetric.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let text = text.replace("\"N\": 5", "\"N\": 3");
+    let at = text
+        .rfind("properties: [")
+        .expect("the model has properties");
+    format!("{}properties: [{properties}],\n)\n", &text[..at])
+}
+
+#[test]
+fn a_philosopher_may_starve_while_someone_always_eats() {
+    let (sys, r) = verified(&philosophers(
+        r#"LeadsTo(name: "phil0_eats", from: "phil[0]@hungry", to: "phil[0]@eating"),
+           LeadsTo(name: "someone_eats", from: "exists i in 0..N: phil[i]@hungry", to: "exists i in 0..N: phil[i]@eating")"#,
+    ));
+    assert!(!sys.has_time());
+    assert!(result(&r, "someone_eats").verdict.holds());
+    let PropertyVerdict::Fails { trace: Some(t), .. } = &result(&r, "phil0_eats").verdict else {
+        panic!("phil0_eats should fail");
+    };
+    assert!(t.loop_start.is_some());
+}
+
+/// N processes share a resource: through a mutex that any waiting process may take
+/// (`fair: false`), or through a token passed round the ring (`fair: true`).
+fn ring(fair: bool) -> String {
+    let (scheduler, connectors) = if fair {
+        (
+            r#""Token": Atom(locations: ["on"], initial: "on", ports: ["grant", "pass"],
+                vars: [(name: "k", ty: Int(0, 2))],
+                transitions: [(from: "on", port: "grant", to: "on"), (from: "on", port: "pass", to: "on")]),"#,
+            r#"(name: "enter", forall: "i in 0..3", ports: ["p[i].enter", "s.grant"], guard: "s.k == i"),
+               (name: "leave", forall: "i in 0..3", ports: ["p[i].leave", "s.pass"], action: "s.k = (i + 1) % 3"),
+               (name: "skip", forall: "i in 0..3", ports: ["p[i].skip", "s.pass"], guard: "s.k == i", action: "s.k = (i + 1) % 3"),"#,
+        )
+    } else {
+        (
+            r#""Token": Atom(locations: ["free", "taken"], initial: "free", ports: ["grant", "pass"],
+                transitions: [(from: "free", port: "grant", to: "taken"), (from: "taken", port: "pass", to: "free")]),"#,
+            r#"(name: "enter", forall: "i in 0..3", ports: ["p[i].enter", "s.grant"]),
+               (name: "leave", forall: "i in 0..3", ports: ["p[i].leave", "s.pass"]),"#,
+        )
+    };
+    format!(
+        r#"System(name: "ring",
+    atoms: {{
+        "Process": Atom(locations: ["idle", "waiting", "critical"], initial: "idle", ports: ["enter", "leave", "skip"],
+            transitions: [
+                (from: "idle", to: "waiting"),
+                (from: "waiting", port: "enter", to: "critical"),
+                (from: "critical", port: "leave", to: "idle"),
+                (from: "idle", port: "skip", to: "idle"),
+            ]),
+        {scheduler}
+    }},
+    components: [(name: "p", atom: "Process", count: 3), (name: "s", atom: "Token")],
+    connectors: [{connectors}],
+    properties: [
+        DeadlockFree,
+        LeadsTo(name: "p0_enters", from: "p[0]@waiting", to: "p[0]@critical"),
+        LeadsTo(name: "p0_enters_by_step", from: "p[0]@waiting", to: "fires(enter)"),
+    ],
+)"#
+    )
+}
+
+#[test]
+fn a_token_ring_serves_everyone_and_a_bare_mutex_does_not() {
+    let (_, fair) = verified(&ring(true));
+    assert!(result(&fair, "p0_enters").verdict.holds());
+    let (_, unfair) = verified(&ring(false));
+    assert!(result(&unfair, "p0_enters").verdict.fails());
+    // any process entering answers `fires(enter)`, so the bare mutex serves that one
+    assert!(result(&unfair, "p0_enters_by_step").verdict.holds());
+}
+
+#[test]
+fn a_truncated_exploration_decides_no_response_property() {
+    let sys = load_str("served.ron", &served(true, SERVED)).unwrap();
+    let r = verify(
+        &sys,
+        Method::Explicit,
+        &Options {
+            max_states: Some(3),
+            ..Options::default()
+        },
+        &|_| {},
+    )
+    .unwrap();
+    for name in ["served", "in_two", "in_one", "never_asked"] {
+        let PropertyVerdict::Inconclusive { reason } = &result(&r, name).verdict else {
+            panic!("{name} decided by a truncated run: {:?}", result(&r, name));
+        };
+        assert!(reason.contains("state limit"), "{reason}");
+    }
+}
+
+#[test]
+fn the_symbolic_method_never_decides_a_response_property() {
+    let sys = load_str("served.ron", &served(true, SERVED)).unwrap();
+    let r = verify(&sys, Method::Symbolic, &Options::default(), &|_| {}).unwrap();
+    for name in ["served", "in_two", "in_one", "never_asked"] {
+        assert!(
+            matches!(
+                result(&r, name).verdict,
+                PropertyVerdict::Inconclusive { .. }
+            ),
+            "{name}"
+        );
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// Random systems with a `LeadsTo` and (with a tick) a bounded `Response` between two
+    /// random conditions: one worker and three agree, the oracle agrees, and every
+    /// counterexample replays and shows the trigger unanswered.
+    #[test]
+    fn random_systems_match_the_oracle(seed in any::<u64>(), roles in any::<bool>()) {
+        let opts = bip_random_systems::Options {
+            responses: true,
+            ..bip_random_systems::Options::verifier(roles)
+        };
+        let text = bip_random_systems::generate_with(seed, &opts).to_ron();
+        let sys = load_str("random.ron", &text)
+            .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e.summary())))?;
+        let one = run(&sys, 1);
+        prop_assert_eq!(&run(&sys, 3), &one, "{}", text);
+        if one.stats.complete {
+            check_against_oracle(&sys, &one).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
+        }
+    }
+}
