@@ -155,6 +155,13 @@ fn text(system: &System, trace: &Trace, user: &view::UserTrace) -> String {
         .min(48);
     let digits = n.to_string().len();
     for step in &user.steps {
+        if trace.loop_start.map(|stem| stem + 1) == Some(step.number) {
+            let _ = writeln!(
+                s,
+                "  {:>digits$}  ┌ the cycle: the steps below repeat forever",
+                ""
+            );
+        }
         let mut line = format!("  {:>digits$}  {:<width$}", step.number, step.label);
         let who: Vec<&str> = step
             .lifelines
@@ -243,7 +250,14 @@ fn chart(system: &System, trace: &Trace, user: &view::UserTrace) -> Chart {
                 },
             }),
         })
-        .collect();
+        .collect::<Vec<_>>();
+    // the loop runs from the step after the stem's `loop_start` steps
+    let loop_from = trace.loop_start.and_then(|stem| {
+        rows.iter().position(|row| match row {
+            Row::Tick { number, .. } => *number == stem + 1,
+            Row::Step(step) => step.number == stem + 1,
+        })
+    });
     Chart {
         title: format!(
             "{}: {} after {n} step{}",
@@ -253,8 +267,7 @@ fn chart(system: &System, trace: &Trace, user: &view::UserTrace) -> Chart {
         ),
         lifelines,
         rows,
-        // the trace format has no loop start yet: a lasso's, once it has one, goes here
-        loop_from: None,
+        loop_from,
         end,
         idle,
     }

@@ -56,6 +56,30 @@ fn a_lasso_is_printed_saved_and_replayed_with_its_cycle() {
     let file = traces.join("phil0_eats.trace.ron");
     let saved = std::fs::read_to_string(&file).unwrap();
     assert!(saved.contains("loop_start: "), "{saved}");
+    // the chart beside it and `bip trace show` mark the same cycle
+    let chart = std::fs::read_to_string(traces.join("phil0_eats.svg")).unwrap();
+    assert!(
+        chart.contains(r#"<g class="loop"><title>the run repeats from here</title>"#),
+        "{chart}"
+    );
+    let shown = out(&bip(&["trace", "show", &model, file.to_str().unwrap()]));
+    let stem: usize = saved
+        .split("loop_start: ")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .and_then(|n| n.trim().parse().ok())
+        .unwrap();
+    let lines: Vec<&str> = shown.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| l.contains("┌ the cycle: the steps below repeat forever"))
+        .unwrap_or_else(|| panic!("{shown}"));
+    assert!(
+        lines[at + 1]
+            .trim_start()
+            .starts_with(&format!("{} ", stem + 1)),
+        "{shown}"
+    );
     let o = bip(&["replay", &model, file.to_str().unwrap()]);
     let text = out(&o);
     assert_eq!(o.status.code(), Some(1), "{text}");
