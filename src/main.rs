@@ -8,6 +8,7 @@
 mod check;
 mod exit;
 mod expand;
+mod explore;
 mod export;
 mod graph;
 mod interrupt;
@@ -78,6 +79,9 @@ enum Command {
     Graph(graph::Args),
     /// Show a trace in the model's terms, as text and as a sequence chart (SVG).
     Trace(trace::Args),
+    /// Explore the model's states in a web browser: fire steps, go back and forward,
+    /// step through a counterexample (a local server on 127.0.0.1; Ctrl-C stops it).
+    Explore(explore::Args),
 }
 
 fn main() -> ExitCode {
@@ -94,6 +98,7 @@ fn main() -> ExitCode {
         Command::Sched(args) => sched::run(&args),
         Command::Graph(args) => graph::run(&args),
         Command::Trace(args) => trace::run(&args),
+        Command::Explore(args) => explore::run(&args),
     };
     ExitCode::from(code)
 }

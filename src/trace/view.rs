@@ -305,3 +305,55 @@ pub fn verdict(trace: &Trace) -> String {
         Verdict::None => "recording".to_string(),
     }
 }
+
+/// A part of a state shown together: a module (its activities' codel states, its ids
+/// fields, its ports' ages) or a component of the model's own.
+pub struct StateGroup {
+    pub name: String,
+    /// `(name, value)`; a location's name is the component's (or the activity's).
+    pub entries: Vec<(String, String)>,
+}
+
+/// A state in the user's terms, grouped as a trace's lifelines are; `all` shows the
+/// bookkeeping variables too.
+pub fn user_state(system: &System, state: &State, all: bool) -> Vec<StateGroup> {
+    let (names, of) = lifelines(system);
+    let slots = slots(system);
+    let mut groups: Vec<StateGroup> = names
+        .into_iter()
+        .map(|name| StateGroup {
+            name,
+            entries: Vec::new(),
+        })
+        .collect();
+    for (slot, what) in slots.iter().enumerate() {
+        let slot = slot as u32;
+        let Some(group) = of[system.component_of_slot(slot) as usize] else {
+            continue;
+        };
+        let name = match what {
+            Slot::Shown { name, .. } => name.clone(),
+            Slot::Bookkeeping if all => system.slot_name(slot),
+            Slot::Bookkeeping => continue,
+        };
+        let value = system.trace_value(state, slot).to_string();
+        groups[group].entries.push((name, value));
+    }
+    groups
+}
+
+/// Each step's label as a trace shows it (`request nav.GoTo`, `nav.GoTo: start → drive`,
+/// `tick`, a connector of the user's).
+pub fn step_labels(system: &System, steps: &[OwnedStep]) -> Vec<String> {
+    let roles = system.genom.as_ref().map(roles).unwrap_or_default();
+    steps
+        .iter()
+        .map(|step| {
+            let role = match step.label {
+                Label::Interaction(i) => roles.get(&i),
+                Label::Internal { .. } => None,
+            };
+            describe(system, step, role).0
+        })
+        .collect()
+}
