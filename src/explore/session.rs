@@ -186,6 +186,8 @@ impl Session {
             })
             .collect();
         let properties = self.properties(&state, liveness);
+        // no progress, where deadlock freedom allows it: an end, not a deadlock
+        let terminal = properties.iter().any(|p| p["status"] == "terminal");
         let history_steps: Vec<OwnedStep> = self.path.iter().map(|(s, _)| s.clone()).collect();
         let history_labels = view::step_labels(system, &history_steps);
         let groups: Vec<Value> = view::user_state(system, &state, false)
@@ -207,7 +209,7 @@ impl Session {
             "state": groups,
             "enabled": enabled_json,
             "range_error": range_error,
-            "liveness": liveness_name(liveness),
+            "liveness": if terminal { "terminal" } else { liveness_name(liveness) },
             "held": self.held(&state),
             "properties": properties,
             "chart": self.chart(liveness, &properties),

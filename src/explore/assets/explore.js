@@ -62,6 +62,13 @@ function render(v) {
   $("deadlock").hidden = v.liveness !== "deadlock";
   $("deadlock").textContent = "deadlock: the system can make no progress, now or after time passes";
 
+  $("liveness").textContent = {
+    progress: "a step of the system can be taken",
+    "progress after time passes": "a step of the system can be taken once time passes",
+    terminal: "no step of the system, and deadlock freedom allows it to end here",
+    deadlock: "deadlock",
+  }[v.liveness] || v.liveness;
+
   const next = v.position < v.history.length ? v.history[v.position] : null;
   const enabled = $("enabled");
   enabled.replaceChildren();
