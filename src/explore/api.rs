@@ -5,7 +5,7 @@
 //! | request | body | does |
 //! |---|---|---|
 //! | `GET /api/state` | | nothing |
-//! | `POST /api/fire` | `{"index": N}` | fires the current state's enabled step N |
+//! | `POST /api/fire` | `{"index": N}` or `{"step": NAME}` | fires an enabled step |
 //! | `POST /api/back`, `POST /api/forward` | | one step along the history |
 //! | `POST /api/go` | `{"position": N}` | to the state after N steps of the history |
 //! | `POST /api/replay` | `{"history": [N, ...], "position": N}` | a deep link's history |
@@ -79,7 +79,12 @@ fn change(session: &mut Session, path: &str, body: &[u8]) -> Result<(), (u16, St
         "/api/back" => session.back().map_err(conflict),
         "/api/forward" => session.forward().map_err(conflict),
         "/api/fire" => {
-            let index = index(&parse(body)?, "index")?;
+            let doc = parse(body)?;
+            let index = match doc.get("step") {
+                Some(Value::String(name)) => session.index_of(name)?,
+                Some(_) => return Err(bad("`step` must be a step's name")),
+                None => index(&doc, "index")?,
+            };
             session.fire(index).map_err(conflict)
         }
         "/api/go" => {
@@ -180,6 +185,8 @@ mod tests {
             ("POST", "/api/fire", b"[0]", 400),
             ("POST", "/api/fire", br#"{"index": -1}"#, 400),
             ("POST", "/api/fire", br#"{"index": 9999}"#, 409),
+            ("POST", "/api/fire", br#"{"step": "no_such_thing"}"#, 404),
+            ("POST", "/api/fire", br#"{"step": 3}"#, 400),
             ("POST", "/api/go", br#"{"position": 3}"#, 409),
             ("POST", "/api/back", b"", 409),
             ("POST", "/api/forward", b"", 409),

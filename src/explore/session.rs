@@ -92,6 +92,45 @@ impl Session {
         Ok(())
     }
 
+    /// The index of the enabled step named `name`: its label as the page shows it
+    /// (`request ndd.GoTo`) or its interaction (`ndd_GoTo_request`, `comp.internal`).
+    pub fn index_of(&self, name: &str) -> Result<usize, (u16, String)> {
+        let enabled = self.enabled(&self.state()).map_err(|e| (409, e))?;
+        let labels = view::step_labels(&self.system, &enabled);
+        let named: Vec<usize> = (0..enabled.len())
+            .filter(|&k| labels[k] == name || self.system.label_name(enabled[k].label) == name)
+            .collect();
+        match named[..] {
+            [k] => Ok(k),
+            [] => {
+                let known = self.system.interaction_index(name).is_some()
+                    || name
+                        .strip_suffix(".internal")
+                        .is_some_and(|c| self.system.component_index(c).is_some());
+                if known {
+                    Err((409, format!("`{name}` is not enabled here")))
+                } else {
+                    Err((
+                        404,
+                        format!("no enabled step is `{name}`, and no interaction is so named"),
+                    ))
+                }
+            }
+            _ => Err((
+                409,
+                format!(
+                    "{} enabled steps are `{name}`: give its index ({})",
+                    named.len(),
+                    named
+                        .iter()
+                        .map(|k| k.to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )),
+        }
+    }
+
     pub fn back(&mut self) -> Result<(), String> {
         self.go(self.position.checked_sub(1).ok_or("at the initial state")?)
     }
