@@ -78,6 +78,6 @@ pub fn run(args: &Args) -> u8 {
     // the first line says where, for a reader that asked for port 0
     println!("bip explore: http://{address}/ (Ctrl-C to stop)");
     let _ = std::io::stdout().flush();
-    http::serve(listener, session);
+    http::serve(listener, session, args.listen.is_loopback());
     exit::OK
 }

@@ -19,8 +19,10 @@ const MAX_BODY: usize = 32 * 1024 * 1024;
 const TIMEOUT: Duration = Duration::from_secs(10);
 const MAX_CONNECTIONS: usize = 64;
 
-/// Serves `listener` until the process ends.
-pub fn serve(listener: TcpListener, session: Session) {
+/// Serves `listener` until the process ends. With `loopback_only`, a request must name a
+/// loopback host (so that a page of another site, whose name was made to resolve to
+/// 127.0.0.1, cannot read the explorer).
+pub fn serve(listener: TcpListener, session: Session, loopback_only: bool) {
     let session = Arc::new(Mutex::new(session));
     let open = Arc::new(AtomicUsize::new(0));
     for stream in listener.incoming() {
@@ -36,7 +38,7 @@ pub fn serve(listener: TcpListener, session: Session) {
         open.fetch_add(1, Ordering::SeqCst);
         let (session, open) = (Arc::clone(&session), Arc::clone(&open));
         std::thread::spawn(move || {
-            let _ = connection(stream, &session);
+            let _ = connection(stream, &session, loopback_only);
             open.fetch_sub(1, Ordering::SeqCst);
         });
     }
@@ -45,15 +47,32 @@ pub fn serve(listener: TcpListener, session: Session) {
 struct Request {
     method: String,
     path: String,
+    /// The Host header without its port.
+    host: String,
     body: Vec<u8>,
 }
 
-fn connection(stream: TcpStream, session: &Mutex<Session>) -> std::io::Result<()> {
+fn is_loopback(host: &str) -> bool {
+    matches!(host, "127.0.0.1" | "localhost" | "[::1]")
+}
+
+fn connection(
+    stream: TcpStream,
+    session: &Mutex<Session>,
+    loopback_only: bool,
+) -> std::io::Result<()> {
     stream.set_read_timeout(Some(TIMEOUT))?;
     stream.set_write_timeout(Some(TIMEOUT))?;
     let mut reader = BufReader::new(stream.try_clone()?);
     let mut stream = stream;
     let (response, head) = match read_request(&mut reader) {
+        Ok(Some(req)) if loopback_only && !is_loopback(&req.host) => (
+            Response::error(
+                403,
+                &format!("host `{}` is not this machine's loopback", req.host),
+            ),
+            false,
+        ),
         Ok(Some(req)) => {
             let head = req.method == "HEAD";
             // a panic in one request must not stop the others: the lock is taken back
@@ -84,6 +103,7 @@ fn read_request(reader: &mut impl BufRead) -> Result<Option<Request>, (u16, Stri
         return Err((505, format!("{version} is not HTTP/1.x")));
     }
     let mut length = 0usize;
+    let mut host = String::new();
     for _ in 0..=MAX_HEADERS {
         let header = read_line(reader)?.ok_or((400, "the headers end early".to_string()))?;
         if header.is_empty() {
@@ -98,6 +118,7 @@ fn read_request(reader: &mut impl BufRead) -> Result<Option<Request>, (u16, Stri
             return Ok(Some(Request {
                 method: method.to_string(),
                 path,
+                host,
                 body,
             }));
         }
@@ -112,6 +133,14 @@ fn read_request(reader: &mut impl BufRead) -> Result<Option<Request>, (u16, Stri
             if length > MAX_BODY {
                 return Err((413, format!("a body has at most {MAX_BODY} bytes")));
             }
+        } else if name.eq_ignore_ascii_case("host") {
+            let value = value.trim();
+            // `[::1]:7390`, `localhost:7390`: the port is what follows the last colon after
+            // any bracketed address
+            let port_at = value
+                .rfind(':')
+                .filter(|&i| i > value.rfind(']').unwrap_or(0));
+            host = value[..port_at.unwrap_or(value.len())].to_ascii_lowercase();
         } else if name.eq_ignore_ascii_case("transfer-encoding") {
             return Err((411, "send the body with a Content-Length".to_string()));
         }
@@ -149,6 +178,7 @@ fn write(stream: &mut TcpStream, response: &Response, head: bool) -> std::io::Re
         408 => "Request Timeout",
         409 => "Conflict",
         411 => "Length Required",
+        403 => "Forbidden",
         413 => "Content Too Large",
         422 => "Unprocessable Content",
         431 => "Request Header Fields Too Large",

@@ -296,6 +296,20 @@ fn explore_answers_bad_requests_with_a_4xx_and_a_message() {
             "{method} {path}: {text}"
         );
     }
+    // a page of another site whose name resolves to 127.0.0.1 cannot read the explorer
+    let (status, _) = raw(
+        a,
+        b"GET /api/state HTTP/1.1\r\nHost: evil.example:7390\r\n\r\n",
+    );
+    assert_eq!(status, 403);
+    assert_eq!(
+        raw(
+            a,
+            b"GET /api/state HTTP/1.1\r\nHost: localhost:7390\r\n\r\n"
+        )
+        .0,
+        200
+    );
     // malformed HTTP
     assert_eq!(raw(a, b"NONSENSE\r\n\r\n").0, 400);
     assert_eq!(
