@@ -326,9 +326,11 @@ pub fn user_state(system: &System, state: &State, all: bool) -> Vec<StateGroup> 
             entries: Vec::new(),
         })
         .collect();
+    let pending = pending_requests(system, state);
     for (slot, what) in slots.iter().enumerate() {
         let slot = slot as u32;
-        let Some(group) = of[system.component_of_slot(slot) as usize] else {
+        let c = system.component_of_slot(slot);
+        let Some(group) = of[c as usize] else {
             continue;
         };
         let name = match what {
@@ -336,10 +338,32 @@ pub fn user_state(system: &System, state: &State, all: bool) -> Vec<StateGroup> 
             Slot::Bookkeeping if all => system.slot_name(slot),
             Slot::Bookkeeping => continue,
         };
-        let value = system.trace_value(state, slot).to_string();
+        let mut value = system.trace_value(state, slot).to_string();
+        if slot == system.components[c as usize].slot && pending.contains(&c) {
+            value.push_str(", requested");
+        }
         groups[group].entries.push((name, value));
     }
     groups
+}
+
+/// The GenoM activities with a request waiting to be taken (the expansion's `req`).
+fn pending_requests(system: &System, state: &State) -> Vec<u32> {
+    let Some(map) = &system.genom else {
+        return Vec::new();
+    };
+    map.modules
+        .iter()
+        .flat_map(|m| &m.services)
+        .filter_map(|s| s.component)
+        .filter(|&c| {
+            let atom = system.atom_of(c);
+            atom.vars
+                .iter()
+                .position(|v| v.name == "req")
+                .is_some_and(|k| system.value(state, c, k as u32) != 0)
+        })
+        .collect()
 }
 
 /// Each step's label as a trace shows it (`request nav.GoTo`, `nav.GoTo: start → drive`,
