@@ -9,6 +9,7 @@ mod check;
 mod codegen;
 mod exit;
 mod expand;
+mod explore;
 mod export;
 mod graph;
 mod import;
@@ -92,6 +93,9 @@ enum Command {
     /// Write the Rust bindings of the model's GenoM layer (per codel an enum of its
     /// outcomes, per module a trait of its codels; docs/codegen.md) to a file.
     Codegen(codegen::Args),
+    /// Explore the model's states in a web browser: fire steps, go back and forward,
+    /// step through a counterexample (a local server on 127.0.0.1; Ctrl-C stops it).
+    Explore(explore::Args),
 }
 
 fn main() -> ExitCode {
@@ -110,6 +114,7 @@ fn main() -> ExitCode {
         Command::Graph(args) => graph::run(&args),
         Command::Trace(args) => trace::run(&args),
         Command::Codegen(args) => codegen::run(&args),
+        Command::Explore(args) => explore::run(&args),
     };
     ExitCode::from(code)
 }

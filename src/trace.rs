@@ -4,7 +4,7 @@
 //! --svg`) draws a run along its steps, one lane per activity.
 
 mod timeline;
-mod view;
+pub(crate) mod view;
 
 use std::path::{Path, PathBuf};
 
@@ -100,11 +100,17 @@ fn write_timeline(system: &System, trace: &Trace, svg: &Path) -> Result<(), Stri
     std::fs::write(svg, picture).map_err(|e| format!("cannot write {}: {e}", svg.display()))
 }
 
-fn read(path: &Path) -> Result<Trace, String> {
+pub(crate) fn read(path: &Path) -> Result<Trace, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     bip_lang::trace_file::from_ron(&text)
         .map_err(|e| format!("{}: not a trace: {e}", path.display()))
+}
+
+/// The trace as a sequence chart (SVG), as `bip trace show --svg` draws it.
+pub(crate) fn chart_svg(system: &System, trace: &Trace) -> Result<String, String> {
+    let user = view::user_trace(system, trace, false)?;
+    Ok(bip_picture::chart::to_svg(&chart(system, trace, &user)))
 }
 
 /// Beside each trace `bip verify` saved (`NAME.trace.ron`), its sequence chart

@@ -115,24 +115,15 @@ impl System {
             self.happens_on(spec.response, state_at(k), s.as_step(), after, context)
         };
         let tick = |k: usize| self.role(path[k].0.label) == Role::Time;
-        // the ticks since the oldest unanswered trigger, as the verifier's observer counts
-        let mut waiting: Option<u64> = (trig(0)? && !resp(0)?).then_some(0);
+        let mut watch = ResponseWatch::start(self, spec, &init, context)?;
         let end = loop_start.unwrap_or(path.len());
         for k in 0..end {
-            if let Some(c) = waiting {
-                if tick(k) {
-                    if spec.within == Some(c) {
-                        return Ok(loop_start.is_none() && k + 1 == path.len());
-                    }
-                    waiting = Some(c + 1);
-                }
-            }
-            if step_resp(k)? || resp(k + 1)? {
-                waiting = None;
-            } else if waiting.is_none() && (step_trig(k)? || trig(k + 1)?) {
-                waiting = Some(0);
+            let (s, after) = &path[k];
+            if watch.observe(self, spec, state_at(k), s.as_step(), after, context)? {
+                return Ok(loop_start.is_none() && k + 1 == path.len());
             }
         }
+        let waiting = watch.waiting;
         let Some(start) = loop_start else {
             let mut steps = crate::steps::Steps::new();
             let last = state_at(path.len());
@@ -152,6 +143,61 @@ impl System {
             ticked |= tick(k);
         }
         Ok(triggered && ticked && !resp(start)?)
+    }
+}
+
+/// A response property watched along a run, step by step, as the verifier's bounded
+/// observer counts: the ticks since the oldest trigger not yet answered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ResponseWatch {
+    /// The ticks since the oldest unanswered trigger, if one waits.
+    pub waiting: Option<u64>,
+}
+
+impl ResponseWatch {
+    /// The watch in the run's first state.
+    pub fn start(
+        system: &System,
+        spec: ResponseSpec<'_>,
+        init: &State,
+        context: &str,
+    ) -> Result<Self, RangeError> {
+        let waiting = (system.happens_in(spec.trigger, init, context)?
+            && !system.happens_in(spec.response, init, context)?)
+        .then_some(0);
+        Ok(ResponseWatch { waiting })
+    }
+
+    /// Watches one step; true if it is a tick that passes the bound of a trigger still
+    /// waiting (the watch then stays as it was).
+    pub fn observe(
+        &mut self,
+        system: &System,
+        spec: ResponseSpec<'_>,
+        before: &State,
+        step: Step<'_>,
+        after: &State,
+        context: &str,
+    ) -> Result<bool, RangeError> {
+        if let Some(c) = self.waiting {
+            if system.role(step.label) == Role::Time {
+                if spec.within == Some(c) {
+                    return Ok(true);
+                }
+                self.waiting = Some(c + 1);
+            }
+        }
+        if system.happens_on(spec.response, before, step, after, context)?
+            || system.happens_in(spec.response, after, context)?
+        {
+            self.waiting = None;
+        } else if self.waiting.is_none()
+            && (system.happens_on(spec.trigger, before, step, after, context)?
+                || system.happens_in(spec.trigger, after, context)?)
+        {
+            self.waiting = Some(0);
+        }
+        Ok(false)
     }
 }
 

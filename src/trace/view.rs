@@ -305,3 +305,79 @@ pub fn verdict(trace: &Trace) -> String {
         Verdict::None => "recording".to_string(),
     }
 }
+
+/// A part of a state shown together: a module (its activities' codel states, its ids
+/// fields, its ports' ages) or a component of the model's own.
+pub struct StateGroup {
+    pub name: String,
+    /// `(name, value)`; a location's name is the component's (or the activity's).
+    pub entries: Vec<(String, String)>,
+}
+
+/// A state in the user's terms, grouped as a trace's lifelines are; `all` shows the
+/// bookkeeping variables too.
+pub fn user_state(system: &System, state: &State, all: bool) -> Vec<StateGroup> {
+    let (names, of) = lifelines(system);
+    let slots = slots(system);
+    let mut groups: Vec<StateGroup> = names
+        .into_iter()
+        .map(|name| StateGroup {
+            name,
+            entries: Vec::new(),
+        })
+        .collect();
+    let pending = pending_requests(system, state);
+    for (slot, what) in slots.iter().enumerate() {
+        let slot = slot as u32;
+        let c = system.component_of_slot(slot);
+        let Some(group) = of[c as usize] else {
+            continue;
+        };
+        let name = match what {
+            Slot::Shown { name, .. } => name.clone(),
+            Slot::Bookkeeping if all => system.slot_name(slot),
+            Slot::Bookkeeping => continue,
+        };
+        let mut value = system.trace_value(state, slot).to_string();
+        if slot == system.components[c as usize].slot && pending.contains(&c) {
+            value.push_str(", requested");
+        }
+        groups[group].entries.push((name, value));
+    }
+    groups
+}
+
+/// The GenoM activities with a request waiting to be taken (the expansion's `req`).
+fn pending_requests(system: &System, state: &State) -> Vec<u32> {
+    let Some(map) = &system.genom else {
+        return Vec::new();
+    };
+    map.modules
+        .iter()
+        .flat_map(|m| &m.services)
+        .filter_map(|s| s.component)
+        .filter(|&c| {
+            let atom = system.atom_of(c);
+            atom.vars
+                .iter()
+                .position(|v| v.name == "req")
+                .is_some_and(|k| system.value(state, c, k as u32) != 0)
+        })
+        .collect()
+}
+
+/// Each step's label as a trace shows it (`request nav.GoTo`, `nav.GoTo: start → drive`,
+/// `tick`, a connector of the user's).
+pub fn step_labels(system: &System, steps: &[OwnedStep]) -> Vec<String> {
+    let roles = system.genom.as_ref().map(roles).unwrap_or_default();
+    steps
+        .iter()
+        .map(|step| {
+            let role = match step.label {
+                Label::Interaction(i) => roles.get(&i),
+                Label::Internal { .. } => None,
+            };
+            describe(system, step, role).0
+        })
+        .collect()
+}

@@ -1,4 +1,4 @@
-//! The `bip` command end to end (`check`, `codegen`, `engine`, `genom`, `genom3`, `graph`, `response`, `sched`, `trace`, `verify`: the binary
+//! The `bip` command end to end (`check`, `codegen`, `engine`, `explore`, `genom`, `genom3`, `graph`, `response`, `sched`, `trace`, `verify`: the binary
 //! run as a user runs it, with SPIN as a cross-check where it is installed; `limits`: every
 //! limit and Ctrl-C on wide models, in capped child processes), the architecture's layering
 //! read from the sources (`layering`), and wide models within memory and time bounds
@@ -8,6 +8,7 @@ mod check;
 mod codegen;
 mod common;
 mod engine;
+mod explore;
 mod export;
 mod genom;
 mod genom3;
