@@ -13,8 +13,11 @@
 //! `EngineBuilder` (a missing codel does not compile). The code depends on bip-engine
 //! alone.
 
+mod context;
 mod emit;
 mod names;
+mod requests;
+mod types;
 
 use std::path::{Path, PathBuf};
 
@@ -58,6 +61,7 @@ pub fn write_rust_bindings(
     println!("cargo:rerun-if-changed={}", model.display());
     let system = bip_lang::load_file(model).map_err(CodegenError::Load)?;
     let text = rust_bindings(&system)?;
+    let text = rustfmt(&text).unwrap_or(text);
     let out = out.as_ref();
     if std::fs::read_to_string(out).is_ok_and(|old| old == text) {
         return Ok(());
@@ -66,4 +70,23 @@ pub fn write_rust_bindings(
         path: out.to_path_buf(),
         source,
     })
+}
+
+/// `text` as rustfmt formats it, if rustfmt is installed (`$RUSTFMT`, else `rustfmt` on the
+/// path) and formats it; the bindings compile as well unformatted.
+fn rustfmt(text: &str) -> Option<String> {
+    use std::io::Write as _;
+    use std::process::{Command, Stdio};
+    let tool = std::env::var_os("RUSTFMT").unwrap_or_else(|| "rustfmt".into());
+    let mut child = Command::new(tool)
+        .args(["--edition", "2021", "--emit", "stdout", "--quiet"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .ok()?;
+    child.stdin.take()?.write_all(text.as_bytes()).ok()?;
+    let done = child.wait_with_output().ok()?;
+    let formatted = String::from_utf8(done.stdout).ok()?;
+    (done.status.success() && !formatted.is_empty()).then_some(formatted)
 }
