@@ -187,6 +187,17 @@ fn outcome_enum(out: &mut String, m: &ModuleMap, n: &Named<'_>) -> Result<(), Co
         let _ = writeln!(out, "        /// The {doc}.\n        {v},");
     }
     out.push_str("    }\n\n");
+    let _ = writeln!(
+        out,
+        "    impl {ty} {{\n        /// Every outcome, in declaration order (yields, then exceptions).\n        pub const ALL: [{ty}; {len}] = [{all}];\n    }}\n",
+        ty = n.ty,
+        len = arms.len(),
+        all = arms
+            .iter()
+            .map(|(v, _, _)| format!("{}::{v}", n.ty))
+            .collect::<Vec<_>>()
+            .join(", "),
+    );
     let _ = writeln!(out, "    impl From<{}> for bip_engine::Next {{", n.ty);
     let _ = writeln!(
         out,

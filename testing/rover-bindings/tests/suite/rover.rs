@@ -138,7 +138,7 @@ impl camera::Codels for Brief {
     }
 }
 
-fn system() -> bip_engine::System {
+pub(crate) fn system() -> bip_engine::System {
     let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../../robots/rover.ron");
     bip_engine::load_file(model).unwrap_or_else(|e| panic!("{e:?}"))
 }
