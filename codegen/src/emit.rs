@@ -28,7 +28,6 @@ pub(crate) fn bindings(system: &str, layer: &GenomMap) -> Result<String, Codegen
     }
     let modules: Vec<&ModuleMap> = layer.modules.iter().filter(|m| has_codels(m)).collect();
     top_bind(&mut out, &modules);
-    out.push_str(LOCK);
     Ok(out)
 }
 
@@ -143,17 +142,26 @@ fn module(out: &mut String, layer: &GenomMap, m: &ModuleMap) -> Result<(), Codeg
         m.name
     );
     out.push_str(
-        "    pub fn bind(\n        builder: bip_engine::EngineBuilder,\n        codels: impl Codels,\n    ) -> bip_engine::EngineBuilder {\n",
+        "    pub fn bind(\n        builder: bip_engine::EngineBuilder,\n        mut codels: impl Codels,\n    ) -> bip_engine::EngineBuilder {\n",
     );
-    out.push_str("        let codels = std::sync::Arc::new(std::sync::Mutex::new(codels));\n");
-    out.push_str("        builder");
-    for n in &codels {
+    let _ = write!(
+        out,
+        "        builder.module(\"{}\", move |codel, ctx| match codel {{",
+        m.name
+    );
+    for (k, n) in codels.iter().enumerate() {
         let _ = write!(
             out,
-            "\n            .codel((\"{}\", \"{}\", \"{}\"), {{\n                let codels = std::sync::Arc::clone(&codels);\n                move |ctx| super::lock(&codels).{}({} {{ ctx }}).into()\n            }})",
-            m.name, n.service.name, n.codel.state, n.method, n.context
+            "\n            {k} => codels.{}({} {{ ctx }}).into(),",
+            n.method, n.context
         );
     }
+    let _ = write!(
+        out,
+        "\n            // the engine calls the module's codels only, by their index\n            _ => unreachable!(\"module `{}` has {} codels\"),\n        }})",
+        m.name,
+        codels.len()
+    );
     out.push_str("\n    }\n}\n\n");
     Ok(())
 }
@@ -248,13 +256,3 @@ fn top_bind(out: &mut String, modules: &[&ModuleMap]) {
     }
     out.push_str("}\n");
 }
-
-/// A codel's module, locked for its call: the engine calls one codel at a time, so the
-/// lock is never contended; a codel that panicked (a fault) left it usable.
-const LOCK: &str = "
-fn lock<T>(codels: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    codels
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner)
-}
-";

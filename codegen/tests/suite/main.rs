@@ -35,7 +35,8 @@ fn the_bindings_hold_an_enum_per_codel_a_trait_and_binds() {
         "RunMain::ELost => bip_engine::Next::Throw(\"e_lost\"),",
         "RunMain::PauseMain => bip_engine::Next::Yield(\"pause::main\"),",
         "fn run_start(&mut self, ctx: RunStartCtx<'_, '_>) -> RunStart;",
-        ".codel((\"type\", \"Run\", \"main\"), {",
+        "builder.module(\"type\", move |codel, ctx| match codel {",
+        "1 => codels.run_main(RunMainCtx { ctx }).into(),",
         "pub fn bind(\n    builder: bip_engine::EngineBuilder,\n    r#type: impl r#type::Codels,\n",
     ] {
         assert!(text.contains(want), "no `{want}` in\n{text}");
