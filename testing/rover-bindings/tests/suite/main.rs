@@ -2,6 +2,7 @@
 //! random codels and requests through them under the step relation, and what must not
 //! compile.
 
+mod alloc;
 mod compile_fail;
 mod property;
 mod rover;

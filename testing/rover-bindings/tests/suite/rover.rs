@@ -143,9 +143,15 @@ pub(crate) fn system() -> bip_engine::System {
     bip_engine::load_file(model).unwrap_or_else(|e| panic!("{e:?}"))
 }
 
-/// The rover bound to its codels, the laser seeing `obstacle`, driving at 0.5 m/s.
+/// The rover bound to its codels, the laser seeing `obstacle`, driving at 0.5 m/s; its
+/// steps recorded.
 fn rover(system: &bip_engine::System, obstacle: Option<f64>) -> Engine {
-    let builder = Engine::builder(system.clone()).record(10_000);
+    driving(Engine::builder(system.clone()).record(10_000), obstacle)
+}
+
+/// The rover built from `builder` with its codels bound, the laser seeing `obstacle`,
+/// driving at 0.5 m/s.
+pub(crate) fn driving(builder: bip_engine::EngineBuilder, obstacle: Option<f64>) -> Engine {
     let laser = Laser { obstacle };
     let wheels = Wheels::default();
     let mut engine = bind(
