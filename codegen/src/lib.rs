@@ -7,11 +7,13 @@
 //! ```
 //!
 //! and in the crate, `include!(concat!(env!("OUT_DIR"), "/rover.rs"));`. The generated
-//! module has, per module of the model, an enum per codel of exactly its declared yields
-//! and exceptions (returning another does not compile), a trait with one method per
-//! codel, and a `bind` that registers an implementation of the trait with an
-//! `EngineBuilder` (a missing codel does not compile). The code depends on bip-engine
-//! alone.
+//! module has the model's records as structs and, per module of the model, a typed
+//! request per service (its arguments' type in, a ticket that reads its typed end out),
+//! per codel an enum of exactly its declared yields and exceptions (returning another
+//! does not compile) and a typed context (what the model lets it read and write, of the
+//! model's types), a trait with one method per codel, and a `bind` that gives an
+//! implementation of the trait to an `EngineBuilder` as one module object (a missing
+//! codel does not compile). The code depends on bip-engine alone.
 
 mod context;
 mod emit;
