@@ -12,6 +12,8 @@ pub enum BuildError {
     Unbound(String, String, String),
     #[error("the model has no codel ({0}, {1}, {2})")]
     UnknownCodel(String, String, String),
+    #[error("the model has no module `{0}` with codels")]
+    UnknownModule(String),
     #[error("codel ({0}, {1}, {2}) is bound twice")]
     BoundTwice(String, String, String),
     #[error("the model has no GenoM layer, so it has no codel to bind")]

@@ -95,7 +95,7 @@ pub use clock::Clock;
 pub use clock::RealClock;
 #[cfg(target_has_atomic = "64")]
 pub use clock::VirtualClock;
-pub use codel::{Args, CodelFn, Ctx, DefaultCodels, Next};
+pub use codel::{Args, CodelFn, Ctx, DefaultCodels, ModuleFn, Next};
 pub use engine::{Engine, EngineBuilder, Inspect, Stats, Stepped, Until, DEFAULT_STATE_CACHE};
 pub use error::{BuildError, EngineError, RequestError};
 pub use event::{

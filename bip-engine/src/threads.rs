@@ -3,10 +3,11 @@
 
 use std::any::Any;
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
 
 use crate::bind::Tables;
-use crate::codel::{call_guarded, Body, CodelFn, CodelInfo, Ctx, CtxFault, Next};
+use crate::codel::{call_guarded, Body, CodelFn, CodelInfo, Ctx, CtxFault, ModuleFn, Next};
 use crate::event::Output;
 use crate::ports::PortStore;
 
@@ -103,6 +104,28 @@ impl Drop for Workers {
     }
 }
 
+/// Task threads call codels bound one by one: each module object becomes one closure per
+/// codel, sharing it behind a lock (its codels may run on several tasks' threads; the
+/// lock is uncontended when they run on one, and costs little beside the threads'
+/// hand-over).
+pub(crate) fn share_modules(bodies: &mut [Body], modules: Vec<ModuleFn>) {
+    let modules: Vec<Arc<Mutex<ModuleFn>>> = modules
+        .into_iter()
+        .map(|m| Arc::new(Mutex::new(m)))
+        .collect();
+    for body in bodies.iter_mut() {
+        if let Body::Module { module, local } = *body {
+            let Some(m) = modules.get(module).cloned() else {
+                continue;
+            };
+            *body = Body::Bound(Box::new(move |ctx| {
+                let mut f = m.lock().unwrap_or_else(PoisonError::into_inner);
+                f(local, ctx)
+            }));
+        }
+    }
+}
+
 fn task_of(t: &Tables, codel: usize) -> String {
     let s = &t.services[t.codels[codel].service as usize];
     s.task.clone().unwrap_or_else(|| s.name.clone())
@@ -123,7 +146,7 @@ fn serve(mut codels: Vec<(CodelInfo, CodelFn)>, jobs: Receiver<Job>, done: SyncS
                     now_us: job.now_us,
                     tick: job.tick,
                 };
-                call_guarded(f, &mut ctx)
+                call_guarded(&mut ctx, &mut **f)
             }
             None => Err("no such codel on this thread".into()),
         };

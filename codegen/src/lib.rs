@@ -7,14 +7,19 @@
 //! ```
 //!
 //! and in the crate, `include!(concat!(env!("OUT_DIR"), "/rover.rs"));`. The generated
-//! module has, per module of the model, an enum per codel of exactly its declared yields
-//! and exceptions (returning another does not compile), a trait with one method per
-//! codel, and a `bind` that registers an implementation of the trait with an
-//! `EngineBuilder` (a missing codel does not compile). The code depends on bip-engine
-//! alone.
+//! module has the model's records as structs and, per module of the model, a typed
+//! request per service (its arguments' type in, a ticket that reads its typed end out),
+//! per codel an enum of exactly its declared yields and exceptions (returning another
+//! does not compile) and a typed context (what the model lets it read and write, of the
+//! model's types), a trait with one method per codel, and a `bind` that gives an
+//! implementation of the trait to an `EngineBuilder` as one module object (a missing
+//! codel does not compile). The code depends on bip-engine alone.
 
+mod context;
 mod emit;
 mod names;
+mod requests;
+mod types;
 
 use std::path::{Path, PathBuf};
 
@@ -58,6 +63,7 @@ pub fn write_rust_bindings(
     println!("cargo:rerun-if-changed={}", model.display());
     let system = bip_lang::load_file(model).map_err(CodegenError::Load)?;
     let text = rust_bindings(&system)?;
+    let text = rustfmt(&text).unwrap_or(text);
     let out = out.as_ref();
     if std::fs::read_to_string(out).is_ok_and(|old| old == text) {
         return Ok(());
@@ -66,4 +72,23 @@ pub fn write_rust_bindings(
         path: out.to_path_buf(),
         source,
     })
+}
+
+/// `text` as rustfmt formats it, if rustfmt is installed (`$RUSTFMT`, else `rustfmt` on the
+/// path) and formats it; the bindings compile as well unformatted.
+fn rustfmt(text: &str) -> Option<String> {
+    use std::io::Write as _;
+    use std::process::{Command, Stdio};
+    let tool = std::env::var_os("RUSTFMT").unwrap_or_else(|| "rustfmt".into());
+    let mut child = Command::new(tool)
+        .args(["--edition", "2021", "--emit", "stdout", "--quiet"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .ok()?;
+    child.stdin.take()?.write_all(text.as_bytes()).ok()?;
+    let done = child.wait_with_output().ok()?;
+    let formatted = String::from_utf8(done.stdout).ok()?;
+    (done.status.success() && !formatted.is_empty()).then_some(formatted)
 }

@@ -125,7 +125,12 @@ const CRATES: &[Layers] = &[
     },
     Layers {
         src: "codegen/src",
-        layers: &[("names", &["names"]), ("text", &["emit"])],
+        layers: &[
+            ("names", &["names"]),
+            ("types", &["types"]),
+            ("parts", &["context", "requests"]),
+            ("text", &["emit"]),
+        ],
     },
     Layers {
         src: "bip-lang/src",

@@ -12,7 +12,7 @@ use crate::bind::Tables;
 use crate::budgets::{CodelTime, CodelTimes, SimulatedCpus, SimulatedTask, TaskClock};
 use crate::chosen::Chosen;
 use crate::clock::Clock;
-use crate::codel::{Body, CodelFn, Ctx, DefaultCodels, Next};
+use crate::codel::{Body, CodelFn, Ctx, DefaultCodels, ModuleFn, Next};
 use crate::error::BuildError;
 use crate::event::{Event, EventFn};
 use crate::per_state::PerState;
@@ -29,6 +29,7 @@ pub const DEFAULT_STATE_CACHE: usize = 1024;
 pub struct EngineBuilder {
     system: System,
     bindings: Vec<((String, String, String), CodelFn)>,
+    modules: Vec<(String, ModuleFn)>,
     defaults: Option<DefaultCodels>,
     clock: Option<Box<dyn Clock>>,
     policy: Policy,
@@ -59,6 +60,21 @@ impl EngineBuilder {
     /// times").
     pub fn codel_time(mut self, t: CodelTime) -> Self {
         self.codel_time = t;
+        self
+    }
+
+    /// Binds every codel of module `module` to one object: `f(k, ctx)` runs the module's
+    /// `k`-th codel, in the GenoM map's order (its services, then their codels, as
+    /// declared). This is how generated bindings bind a module (docs/codegen.md): one
+    /// object serves all its codels, with no lock, since the engine calls one codel at a
+    /// time. With [`EngineBuilder::threads`], a module whose codels run on several tasks
+    /// is called from their threads one at a time, behind a lock.
+    pub fn module(
+        mut self,
+        module: &str,
+        f: impl FnMut(usize, &mut Ctx<'_>) -> Next + Send + 'static,
+    ) -> Self {
+        self.modules.push((module.into(), Box::new(f)));
         self
     }
 
@@ -143,6 +159,30 @@ impl EngineBuilder {
             }
             bodies[k] = Some(Body::Bound(f));
         }
+        let mut modules = Vec::with_capacity(self.modules.len());
+        for (m, f) in self.modules {
+            let codels: Vec<usize> = (0..t.codels.len())
+                .filter(|&k| t.codels[k].info.module == m)
+                .collect();
+            if codels.is_empty() {
+                return Err(BuildError::UnknownModule(m));
+            }
+            for (local, &k) in codels.iter().enumerate() {
+                if bodies[k].is_some() {
+                    let i = &t.codels[k].info;
+                    return Err(BuildError::BoundTwice(
+                        i.module.clone(),
+                        i.service.clone(),
+                        i.state.clone(),
+                    ));
+                }
+                bodies[k] = Some(Body::Module {
+                    module: modules.len(),
+                    local,
+                });
+            }
+            modules.push(f);
+        }
         let mut out = Vec::with_capacity(bodies.len());
         for (k, b) in bodies.into_iter().enumerate() {
             match (b, self.defaults) {
@@ -200,6 +240,7 @@ impl EngineBuilder {
         let activities = t.activities.len();
         #[cfg(feature = "std")]
         let workers = if self.threads {
+            crate::threads::share_modules(&mut out, core::mem::take(&mut modules));
             Some(crate::threads::Workers::spawn(&t, &mut out))
         } else {
             None
@@ -235,6 +276,7 @@ impl EngineBuilder {
             forced: Vec::with_capacity(16),
             runner: Runner {
                 bodies: out,
+                modules,
                 ports,
                 ids: Vec::with_capacity(max_fields.unwrap_or(0)),
                 written: 0,
@@ -298,6 +340,7 @@ impl Engine {
         EngineBuilder {
             system,
             bindings: Vec::new(),
+            modules: Vec::new(),
             defaults: None,
             clock: None,
             policy: Policy::default(),

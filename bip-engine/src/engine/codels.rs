@@ -212,8 +212,19 @@ impl Engine {
             }
             None => (None, None),
         };
-        let Body::Bound(f) = &mut self.runner.bodies[ck] else {
-            return Err("not a bound codel".into());
+        // a module object's codel is called through a closure on the stack, so that both
+        // kinds take the one call below
+        let mut dispatch;
+        let f: &mut dyn FnMut(&mut Ctx<'_>) -> Next = match &mut self.runner.bodies[ck] {
+            Body::Bound(f) => f,
+            &mut Body::Module { module, local } => {
+                let Some(m) = self.runner.modules.get_mut(module) else {
+                    return Err("no such module object".into());
+                };
+                dispatch = move |ctx: &mut Ctx<'_>| m(local, ctx);
+                &mut dispatch
+            }
+            _ => return Err("not a bound codel".into()),
         };
         let mut ctx = Ctx {
             info: &self.t.codels[ck].info,
@@ -226,7 +237,7 @@ impl Engine {
             now_us,
             tick,
         };
-        call_guarded(f, &mut ctx)
+        call_guarded(&mut ctx, f)
     }
 
     pub(super) fn classify(&mut self, ck: usize, result: Result<Next, String>) -> CodelEnd {

@@ -114,6 +114,8 @@ pub struct Engine {
 /// How the codels run, and what a run leaves behind for its step.
 struct Runner {
     bodies: Vec<Body>,
+    /// The module objects that `Body::Module` codels call.
+    modules: Vec<crate::codel::ModuleFn>,
     /// The ports' data, which codels read and write.
     ports: PortStore,
     /// The module's ids fields a codel sees, staged: written into the state only by its

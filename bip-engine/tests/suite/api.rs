@@ -398,3 +398,82 @@ mod minimal;
 fn the_minimal_example_runs() {
     minimal::main().unwrap_or_else(|e| panic!("the minimal example fails: {e}"));
 }
+
+/// One object serves all the codels of a module, called with each codel's index in the
+/// GenoM map's order, its state kept between them, on the engine's thread and on a
+/// task's; a panic is a fault like a closure's, and the object goes on serving.
+#[test]
+fn a_module_object_serves_all_its_codels_by_index() {
+    for threads in [false, true] {
+        let calls = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        let seen = calls.clone();
+        let mut runs = 0;
+        let mut e = Engine::builder(load_text(IDS_MODEL))
+            .module("m", move |codel, ctx| {
+                seen.lock()
+                    .expect("lock")
+                    .push((codel, ctx.state().to_string()));
+                runs += 1;
+                match codel {
+                    0 => Next::Yield("pause::main"),
+                    _ if runs == 2 => panic!("the second run panics"),
+                    _ => Next::ETHER,
+                }
+            })
+            .threads(threads)
+            .build()
+            .expect("builds");
+        e.request("m", "Init", ()).expect("queued");
+        let first = e.request("m", "S", ()).expect("queued");
+        e.run_until(Until::Ticks(6)).expect("runs");
+        let second = e.request("m", "S", ()).expect("queued");
+        e.run_until(Until::Ticks(6)).expect("runs");
+        let ends: Vec<(bip_engine::Ticket, Outcome)> = e
+            .events()
+            .filter_map(|ev| match ev {
+                Event::Reply {
+                    ticket,
+                    reply: Reply::Done { outcome, .. },
+                    ..
+                } => Some((ticket, outcome)),
+                _ => None,
+            })
+            .collect();
+        assert!(
+            matches!(ends.as_slice(), [_, (a, Outcome::Fault(_)), (b, Outcome::Ether)] if *a == first && *b == second),
+            "threads: {threads}: {ends:?}"
+        );
+        let calls = calls.lock().expect("lock").clone();
+        assert_eq!(
+            calls,
+            [
+                (0, "start".to_string()),
+                (1, "main".to_string()),
+                (0, "start".to_string()),
+                (1, "main".to_string())
+            ],
+            "threads: {threads}"
+        );
+    }
+}
+
+#[test]
+fn a_module_object_is_bound_to_a_module_with_codels_and_only_once() {
+    let err = Engine::builder(load_text(IDS_MODEL))
+        .module("n", |_, _| Next::ETHER)
+        .build()
+        .err();
+    assert!(
+        matches!(&err, Some(bip_engine::BuildError::UnknownModule(m)) if m == "n"),
+        "{err:?}"
+    );
+    let err = Engine::builder(load_text(IDS_MODEL))
+        .codel(("m", "S", "main"), |_| Next::ETHER)
+        .module("m", |_, _| Next::ETHER)
+        .build()
+        .err();
+    assert!(
+        matches!(err, Some(bip_engine::BuildError::BoundTwice(..))),
+        "{err:?}"
+    );
+}

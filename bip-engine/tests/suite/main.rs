@@ -11,7 +11,6 @@ mod golden;
 mod property;
 mod replay;
 mod requests;
-mod rover_controller;
 mod scheduling;
 mod simulate;
 mod soak;

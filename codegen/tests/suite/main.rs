@@ -34,14 +34,89 @@ fn the_bindings_hold_an_enum_per_codel_a_trait_and_binds() {
         "        ELost,\n",
         "RunMain::ELost => bip_engine::Next::Throw(\"e_lost\"),",
         "RunMain::PauseMain => bip_engine::Next::Yield(\"pause::main\"),",
-        "fn run_start(&mut self, ctx: &mut bip_engine::Ctx<'_>) -> RunStart;",
-        ".codel((\"type\", \"Run\", \"main\"), {",
+        "fn run_start(&mut self, ctx: RunStartCtx<'_, '_>) -> RunStart;",
+        "builder.module(\"type\", move |codel, ctx| match codel {",
+        "1 => codels.run_main(RunMainCtx { ctx }).into(),",
         "pub fn bind(\n    builder: bip_engine::EngineBuilder,\n    r#type: impl r#type::Codels,\n",
     ] {
         assert!(text.contains(want), "no `{want}` in\n{text}");
     }
     // the same model, the same text
     assert_eq!(rust_bindings(&load(ONE)).expect("generates"), text);
+}
+
+const TYPED: &str = r#"System(
+    name: "typed",
+    modules: [(
+        name: "nav",
+        tasks: [(name: "t", period: 1)],
+        ids: [(name: "gear", ty: Int(0, 3), init: 0)],
+        ports: [(name: "pose", ty: Record(name: "Pose", fields: [(name: "x", ty: Float), (name: "ok", ty: Bool)])),
+                (name: "map", ty: Rust("crate::world::Map")), (name: "raw")],
+        services: [
+            (name: "GoTo", kind: Activity, task: "t", args: Int(0, 9), output: Record(name: "Pose", fields: [(name: "x", ty: Float), (name: "ok", ty: Bool)]),
+             codels: [
+                (state: "start", yields: ["main"], writes: ["gear"]),
+                (state: "main", yields: ["pause::main", "ether"], throws: ["e_lost"], writes: ["pose"]),
+            ]),
+        ],
+    )],
+)"#;
+
+#[test]
+fn the_bindings_type_what_each_codel_may_touch() {
+    let text = rust_bindings(&load(TYPED)).expect("generates");
+    for want in [
+        // a record is a struct, once, though two places declare it
+        "pub struct Pose {\n    /// Field `x`: Float.\n    pub x: f64,\n    /// Field `ok`: Bool.\n    pub ok: bool,\n}",
+        // every codel reads every typed port; a Rust path is used as written
+        "pub fn read_nav_pose(&self) -> Option<&super::Pose> {",
+        "pub fn read_nav_map(&self) -> Option<&crate::world::Map> {",
+        // only the codel that writes a port or an ids field has its writer
+        "pub fn write_pose(&mut self, value: super::Pose) {",
+        "pub fn port_pose_mut(&mut self) -> Option<&mut super::Pose> {",
+        "pub fn set_ids_gear(&mut self, value: i64) {",
+        "pub fn ids_gear(&self) -> i64 {",
+        // the service's arguments and output, of their types
+        "pub fn args(&self) -> Option<&i64> {",
+        "pub fn set_output(&mut self, value: super::Pose) {",
+        // a typed request, and its typed end
+        "pub fn request_go_to(\n        engine: &mut bip_engine::Engine,\n        args: i64,\n    ) -> Result<GoToTicket, bip_engine::RequestError> {",
+        "Done(Option<super::Pose>),",
+        "Exception(GoToException),",
+        "\"e_lost\" => GoToEnd::Exception(GoToException::ELost),",
+    ] {
+        assert!(text.contains(want), "no `{want}` in\n{text}");
+    }
+    let contexts: Vec<&str> = text.split("pub struct GoTo").collect();
+    let start = contexts
+        .iter()
+        .find(|c| c.starts_with("StartCtx"))
+        .expect("start's context");
+    let main = contexts
+        .iter()
+        .find(|c| c.starts_with("MainCtx"))
+        .expect("main's context");
+    assert!(
+        !start.contains("fn write_pose"),
+        "start does not write pose"
+    );
+    assert!(
+        !main.contains("fn set_ids_gear"),
+        "main does not write gear"
+    );
+    // an untyped port has no typed accessor
+    assert!(!text.contains("read_nav_raw"), "{text}");
+}
+
+#[test]
+fn two_records_of_one_name_with_other_fields_are_an_error() {
+    let text = TYPED.replacen("(name: \"ok\", ty: Bool)", "(name: \"ok\", ty: Float)", 1);
+    let err = rust_bindings(&load(&text)).expect_err("a clash");
+    assert!(
+        matches!(&err, CodegenError::Clash { rust, .. } if rust == "Pose"),
+        "{err}"
+    );
 }
 
 #[test]

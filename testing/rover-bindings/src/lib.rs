@@ -1,5 +1,28 @@
 //! The bindings bip-codegen generates for robots/rover.ron, compiled under the workspace's
 //! lints (`clippy -D warnings`): that they compile, warning-free, is the test, and
 //! `tests/rover.rs` runs the rover through them.
+//!
+//! The model names three Rust types, `Rust("Scan")`, `Rust("Dtm")` and `Rust("Image")`:
+//! a Rust type is resolved where the bindings are included, so they are defined here.
+
+pub use bip_engine;
+
+/// A laser scan (port `sick.scan`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scan {
+    pub ranges: Vec<f64>,
+}
+
+/// A digital terrain model (port `aspect.dtm`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Dtm {
+    pub cells: usize,
+}
+
+/// A picture (port `camera.image`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Image {
+    pub shots: u32,
+}
 
 include!(concat!(env!("OUT_DIR"), "/rover.rs"));

@@ -1,13 +1,10 @@
-//! The example controller (examples/rover_controller.rs) on robots/rover.ron: its
-//! supervisor script meets each answer the model gives, and its recording is a path of
-//! the model along which every invariant holds (the controller checks that itself and
-//! fails otherwise).
+//! The example controller on robots/rover.ron: its supervisor script meets each answer
+//! the model gives, and its recording is a path of the model along which every invariant
+//! holds (the controller checks that itself and fails otherwise).
 
-#[allow(dead_code)]
-#[path = "../../examples/rover_controller.rs"]
-mod controller;
+use bip_rover_controller::rover::ndd;
 
-fn reply_texts<'a>(r: &'a controller::Report, service: &str) -> Vec<&'a str> {
+fn reply_texts<'a>(r: &'a bip_rover_controller::Report, service: &str) -> Vec<&'a str> {
     r.replies
         .iter()
         .filter(|(s, _, _)| s == service)
@@ -17,9 +14,9 @@ fn reply_texts<'a>(r: &'a controller::Report, service: &str) -> Vec<&'a str> {
 
 #[test]
 fn the_rover_controller_plays_its_script_within_the_model() {
-    let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots/rover.ron");
+    let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/rover.ron");
     let mut log = Vec::new();
-    let r = controller::run(&model, false, &mut |line| log.push(line))
+    let r = bip_rover_controller::run(&model, false, &mut |line| log.push(line))
         .unwrap_or_else(|e| panic!("the controller fails: {e}"));
     let log = log.join("\n");
     // refused: TrackSpeed before Init, with the reason
@@ -74,6 +71,19 @@ fn the_rover_controller_plays_its_script_within_the_model() {
         matches!(r.stopped_at.as_slice(), [a, b] if (a - 1.0).abs() < 0.05 && *b < 2.0),
         "{:?}",
         r.stopped_at
+    );
+    // the same ends, read through GoTo's typed tickets
+    assert!(
+        matches!(
+            r.goto_ends.as_slice(),
+            [
+                ndd::GoToEnd::Other(bip_engine::Outcome::Aborted),
+                ndd::GoToEnd::Done(Some(_)),
+                ndd::GoToEnd::Exception(ndd::GoToException::EBlocked)
+            ]
+        ),
+        "{:?}",
+        r.goto_ends
     );
     assert!(reply_texts(&r, "antenna.Communicate").contains(&"done: ether"));
     assert_eq!((r.overruns, r.faults), (1, 0), "{log}");

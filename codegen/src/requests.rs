@@ -1,0 +1,136 @@
+//! Per service a typed request and a typed end: `request_go_to(engine, goal: f64)` takes
+//! the arguments of the type the model declares, and its ticket reads the reply that ends
+//! the request as `GoToEnd::Done(output)`, `GoToEnd::Exception(GoToException::EBlocked)`
+//! or the engine's other outcomes.
+
+use std::fmt::Write as _;
+
+use bip_model::genom::map::{ModuleMap, ServiceMap};
+
+use crate::names::{camel, snake};
+use crate::types::{rust_type, At};
+
+/// The Rust names a service's request takes.
+pub(crate) struct RequestNames {
+    pub function: String,
+    pub ticket: String,
+    pub end: String,
+    pub exception: String,
+}
+
+impl RequestNames {
+    pub fn of(s: &ServiceMap) -> RequestNames {
+        let c = camel(&s.name);
+        RequestNames {
+            function: format!("request_{}", snake(&s.name).trim_start_matches("r#")),
+            ticket: format!("{c}Ticket"),
+            end: format!("{c}End"),
+            exception: format!("{c}Exception"),
+        }
+    }
+}
+
+/// The exceptions a service's codels may throw, each once, in declaration order.
+fn exceptions(s: &ServiceMap) -> Vec<&str> {
+    let mut all: Vec<&str> = Vec::new();
+    for c in &s.codels {
+        for e in &c.throws {
+            if !all.contains(&e.as_str()) {
+                all.push(e);
+            }
+        }
+    }
+    all
+}
+
+pub(crate) fn request(out: &mut String, m: &ModuleMap, s: &ServiceMap, n: &RequestNames) {
+    let (param, sent, ty_doc) = match &s.args {
+        Some(ty) => (
+            format!(",\n        args: {}", rust_type(ty, At::Module)),
+            "args",
+            format!(" with its arguments ({ty})"),
+        ),
+        None => (String::new(), "()", String::new()),
+    };
+    let _ = writeln!(
+        out,
+        "    /// Requests `{m}.{s}`{ty_doc}: the engine serves it at its next quiescent point.\n    pub fn {f}(\n        engine: &mut bip_engine::Engine{param},\n    ) -> Result<{t}, bip_engine::RequestError> {{\n        engine.request(\"{m}\", \"{s}\", {sent}).map({t})\n    }}\n",
+        m = m.name,
+        s = s.name,
+        f = n.function,
+        t = n.ticket,
+    );
+    let throws = exceptions(s);
+    if !throws.is_empty() {
+        let _ = writeln!(
+            out,
+            "    /// The exceptions of `{}.{}`.\n    #[derive(Clone, Copy, Debug, PartialEq, Eq)]\n    pub enum {} {{",
+            m.name, s.name, n.exception
+        );
+        for e in &throws {
+            let _ = writeln!(out, "        /// Exception `{e}`.\n        {},", camel(e));
+        }
+        out.push_str("    }\n\n");
+    }
+    let output = s.output.as_ref().map(|t| (t, rust_type(t, At::Module)));
+    let _ = writeln!(
+        out,
+        "    /// How a request of `{}.{}` ended.\n    #[derive(Clone, Debug, PartialEq)]\n    pub enum {} {{",
+        m.name, s.name, n.end
+    );
+    match &output {
+        Some((ty, t)) => {
+            let _ = writeln!(
+                out,
+                "        /// It ended well (`ether`), with the output ({ty}) its codels last gave.\n        Done(Option<{t}>),"
+            );
+        }
+        None => out.push_str("        /// It ended well (`ether`).\n        Done,\n"),
+    }
+    if !throws.is_empty() {
+        let _ = writeln!(
+            out,
+            "        /// A codel threw one of the service's exceptions.\n        Exception({}),",
+            n.exception
+        );
+    }
+    out.push_str("        /// It was interrupted, aborted by a rule of the model, or a codel was faulty.\n        Other(bip_engine::Outcome),\n    }\n\n");
+    let done = match &output {
+        Some((_, t)) => format!(
+            "{}::Done(output.as_ref().and_then(|o| o.get::<{t}>()).cloned())",
+            n.end
+        ),
+        None => format!("{}::Done", n.end),
+    };
+    let output_binding = if output.is_some() { "output" } else { ".." };
+    let _ = writeln!(
+        out,
+        "    /// A request of `{m}.{s}`: its ticket, which reads the reply that ends it.\n    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]\n    pub struct {t}(pub bip_engine::Ticket);\n\n    impl {t} {{\n        /// How the request ended, if `reply`, the reply to `ticket`, is its end.\n        pub fn end(self, ticket: bip_engine::Ticket, reply: &bip_engine::Reply) -> Option<{e}> {{\n            let bip_engine::Reply::Done {{ outcome, {output_binding} }} = reply else {{\n                return None;\n            }};\n            if ticket != self.0 {{\n                return None;\n            }}\n            Some(match outcome {{\n                bip_engine::Outcome::Ether => {done},",
+        m = m.name,
+        s = s.name,
+        t = n.ticket,
+        e = n.end,
+    );
+    if !throws.is_empty() {
+        out.push_str("                bip_engine::Outcome::Exception(e) => match &**e {\n");
+        for e in &throws {
+            let _ = writeln!(
+                out,
+                "                    \"{e}\" => {}::Exception({}::{}),",
+                n.end,
+                n.exception,
+                camel(e)
+            );
+        }
+        let _ = writeln!(
+            out,
+            "                    _ => {}::Other(outcome.clone()),\n                }},",
+            n.end
+        );
+    }
+    let _ = writeln!(
+        out,
+        "                _ => {}::Other(outcome.clone()),\n            }})\n        }}\n    }}\n",
+        n.end
+    );
+}

@@ -1,0 +1,8 @@
+//! robots/rover.ron's generated bindings from the outside: the rover run through them,
+//! random codels and requests through them under the step relation, and what must not
+//! compile.
+
+mod alloc;
+mod compile_fail;
+mod property;
+mod rover;

@@ -1,0 +1,221 @@
+//! The rover run through its generated bindings: each module's codels are a struct that
+//! implements the module's `Codels` trait, each codel reads and writes through its typed
+//! context and returns its own enum of outcomes, one `bind` registers them all, and typed
+//! requests read their typed ends. The run is a path of the model.
+
+use bip_engine::{Engine, Event, Until};
+use bip_rover_bindings::*;
+
+/// The wheels: drive at the requested speed, publish the odometry.
+#[derive(Default)]
+struct Wheels {
+    x: f64,
+}
+
+impl rflex::Codels for Wheels {
+    fn track_speed_start(
+        &mut self,
+        _: rflex::TrackSpeedStartCtx<'_, '_>,
+    ) -> rflex::TrackSpeedStart {
+        rflex::TrackSpeedStart::PauseTrack
+    }
+
+    fn track_speed_track(
+        &mut self,
+        mut ctx: rflex::TrackSpeedTrackCtx<'_, '_>,
+    ) -> rflex::TrackSpeedTrack {
+        let speed = ctx.args().copied().unwrap_or(0.0);
+        self.x += speed * 0.1;
+        if let Some(odo) = ctx.port_odo_mut() {
+            odo.x = self.x;
+            odo.travelled += speed.abs() * 0.1;
+        }
+        rflex::TrackSpeedTrack::PauseTrack
+    }
+}
+
+/// The laser: sees an obstacle this close, or none.
+struct Laser {
+    obstacle: Option<f64>,
+}
+
+impl sick::Codels for Laser {
+    fn scan_start(&mut self, _: sick::ScanStartCtx<'_, '_>) -> sick::ScanStart {
+        sick::ScanStart::PauseScan
+    }
+    fn scan_scan(&mut self, mut ctx: sick::ScanScanCtx<'_, '_>) -> sick::ScanScan {
+        let ranges = self.obstacle.into_iter().collect();
+        ctx.write_scan(Scan { ranges });
+        sick::ScanScan::PauseScan
+    }
+}
+
+/// The pose: the odometry's x.
+struct Fuse;
+
+impl pom::Codels for Fuse {
+    fn track_start(&mut self, _: pom::TrackStartCtx<'_, '_>) -> pom::TrackStart {
+        pom::TrackStart::PauseFuse
+    }
+    fn track_fuse(&mut self, mut ctx: pom::TrackFuseCtx<'_, '_>) -> pom::TrackFuse {
+        let x = ctx.read_rflex_odo().map_or(0.0, |o| o.x);
+        ctx.write_pose(Pose { x });
+        pom::TrackFuse::PauseFuse
+    }
+}
+
+/// Navigation: ends at the goal with where it stopped, blocked by a near obstacle.
+struct Navigation;
+
+impl ndd::Codels for Navigation {
+    fn go_to_start(&mut self, _: ndd::GoToStartCtx<'_, '_>) -> ndd::GoToStart {
+        ndd::GoToStart::PauseMove
+    }
+    fn go_to_move(&mut self, mut ctx: ndd::GoToMoveCtx<'_, '_>) -> ndd::GoToMove {
+        let goal = ctx.args().copied().unwrap_or(0.0);
+        let x = ctx.read_pom_pose().map_or(0.0, |p| p.x);
+        let blocked = ctx
+            .read_sick_scan()
+            .is_some_and(|s| s.ranges.iter().any(|&r| r < 0.5));
+        ctx.set_output(x);
+        if blocked {
+            ndd::GoToMove::EBlocked
+        } else if x >= goal {
+            ndd::GoToMove::Ether
+        } else {
+            ndd::GoToMove::PauseMove
+        }
+    }
+    fn go_to_stop(&mut self, _: ndd::GoToStopCtx<'_, '_>) -> ndd::GoToStop {
+        ndd::GoToStop::Ether
+    }
+}
+
+/// Every other module: starts, and ends at its first chance.
+struct Brief;
+
+impl aspect::Codels for Brief {
+    fn build_start(&mut self, _: aspect::BuildStartCtx<'_, '_>) -> aspect::BuildStart {
+        aspect::BuildStart::PauseFuse
+    }
+    fn build_fuse(&mut self, mut ctx: aspect::BuildFuseCtx<'_, '_>) -> aspect::BuildFuse {
+        ctx.write_dtm(Dtm { cells: 4 });
+        aspect::BuildFuse::Ether
+    }
+}
+
+impl antenna::Codels for Brief {
+    fn communicate_start(
+        &mut self,
+        _: antenna::CommunicateStartCtx<'_, '_>,
+    ) -> antenna::CommunicateStart {
+        antenna::CommunicateStart::PauseSend
+    }
+    fn communicate_send(
+        &mut self,
+        _: antenna::CommunicateSendCtx<'_, '_>,
+    ) -> antenna::CommunicateSend {
+        antenna::CommunicateSend::Ether
+    }
+}
+
+impl heating::Codels for Brief {
+    fn heat_start(&mut self, _: heating::HeatStartCtx<'_, '_>) -> heating::HeatStart {
+        heating::HeatStart::PauseHeat
+    }
+    fn heat_heat(&mut self, _: heating::HeatHeatCtx<'_, '_>) -> heating::HeatHeat {
+        heating::HeatHeat::Ether
+    }
+}
+
+impl camera::Codels for Brief {
+    fn shoot_start(&mut self, _: camera::ShootStartCtx<'_, '_>) -> camera::ShootStart {
+        camera::ShootStart::PauseExpose
+    }
+    fn shoot_expose(&mut self, mut ctx: camera::ShootExposeCtx<'_, '_>) -> camera::ShootExpose {
+        ctx.write_image(Image { shots: 1 });
+        camera::ShootExpose::Ether
+    }
+}
+
+pub(crate) fn system() -> bip_engine::System {
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../../robots/rover.ron");
+    bip_engine::load_file(model).unwrap_or_else(|e| panic!("{e:?}"))
+}
+
+/// The rover bound to its codels, the laser seeing `obstacle`, driving at 0.5 m/s; its
+/// steps recorded.
+fn rover(system: &bip_engine::System, obstacle: Option<f64>) -> Engine {
+    driving(Engine::builder(system.clone()).record(10_000), obstacle)
+}
+
+/// The rover built from `builder` with its codels bound, the laser seeing `obstacle`,
+/// driving at 0.5 m/s.
+pub(crate) fn driving(builder: bip_engine::EngineBuilder, obstacle: Option<f64>) -> Engine {
+    let laser = Laser { obstacle };
+    let wheels = Wheels::default();
+    let mut engine = bind(
+        builder, wheels, laser, Fuse, Navigation, Brief, Brief, Brief, Brief,
+    )
+    .build()
+    .expect("every codel is bound");
+    rflex::request_init(&mut engine).expect("queued");
+    sick::request_scan(&mut engine).expect("queued");
+    pom::request_track(&mut engine).expect("queued");
+    rflex::request_track_speed(&mut engine, 0.5).expect("queued");
+    engine.run_until(Until::Ticks(4)).expect("runs");
+    engine
+}
+
+/// How the request of `ticket` ended, once the engine ran `ticks` more.
+fn end_of(engine: &mut Engine, ticket: ndd::GoToTicket, ticks: u64) -> Option<ndd::GoToEnd> {
+    engine.run_until(Until::Ticks(ticks)).expect("runs");
+    engine.events().find_map(|ev| match ev {
+        Event::Reply {
+            ticket: t, reply, ..
+        } => ticket.end(t, &reply),
+        _ => None,
+    })
+}
+
+#[test]
+fn a_typed_request_ends_with_its_typed_output() {
+    let system = system();
+    let mut engine = rover(&system, None);
+    let goto = ndd::request_go_to(&mut engine, 0.4).expect("queued");
+    let Some(ndd::GoToEnd::Done(Some(x))) = end_of(&mut engine, goto, 30) else {
+        panic!("GoTo did not reach its goal");
+    };
+    assert!(x >= 0.4, "stopped at {x}");
+    assert_eq!(engine.inspect().stats().faults, 0);
+    let steps = engine
+        .record()
+        .replay(&system)
+        .expect("a path of the model");
+    assert!(steps.len() > 50, "{}", steps.len());
+}
+
+#[test]
+fn a_thrown_exception_is_the_services_exception_variant() {
+    let system = system();
+    let mut engine = rover(&system, Some(0.2));
+    let goto = ndd::request_go_to(&mut engine, 5.0).expect("queued");
+    assert_eq!(
+        end_of(&mut engine, goto, 10),
+        Some(ndd::GoToEnd::Exception(ndd::GoToException::EBlocked))
+    );
+    assert_eq!(engine.inspect().stats().faults, 0);
+    engine
+        .record()
+        .replay(&system)
+        .expect("a path of the model");
+}
+
+#[test]
+fn arguments_out_of_an_int_range_are_refused_at_the_request() {
+    let system = system();
+    let mut engine = rover(&system, None);
+    let err = antenna::request_communicate(&mut engine, 11).expect_err("out of Int(1, 10)");
+    assert!(err.to_string().contains("Int(1, 10)"), "{err}");
+    antenna::request_communicate(&mut engine, 3).expect("in range");
+}
