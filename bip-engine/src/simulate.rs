@@ -268,13 +268,13 @@ fn keep_budget_events(engine: &mut Engine, kept: &mut Vec<BudgetEvent>) {
                 codel,
                 took_us,
                 wcet_us,
-            } => Some((codel, BudgetEventKind::WcetExceeded { took_us, wcet_us })),
+            } => Some((codel.id, BudgetEventKind::WcetExceeded { took_us, wcet_us })),
             Event::DeadlineMissed {
                 codel,
                 elapsed_us,
                 deadline_us,
             } => Some((
-                codel,
+                codel.id,
                 BudgetEventKind::DeadlineMissed {
                     elapsed_us,
                     deadline_us,
