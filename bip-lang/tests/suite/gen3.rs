@@ -546,10 +546,13 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         // what bip's checks of a module find, in the .gen file
         ("component c { task t { period 1 s; }; activity a() { task t; codel<start> s() yield nowhere; }; };", "codel `start` yields to `nowhere`", 1, 85),
         ("component c { activity a() { task missing; codel<start> s() yield ether; }; };", "module `c` has no task `missing`", 1, 35),
+        // interfaces
+        ("interface i { task t { period 1 s; }; };", "interface `i` declares a task", 1, 20),
+        ("component c { provides i; };", "interface `i` is not declared", 1, 24),
+        ("interface j; component c { uses j, i; };", "interface `i` is not declared", 1, 36),
+        ("interface i { function f(); }; component c { provides i; function f(); };", "duplicate service of module `c` `f`", 1, 67),
         // unsupported GenoM3 constructs
-        ("interface i { };", "`interface` is not supported", 1, 1),
-        ("component c { provides i; };", "`provides` is not supported", 1, 15),
-        ("component c { uses i; };", "`uses` is not supported", 1, 15),
+        ("template t { };", "`template` is not supported", 1, 1),
         ("", "declares no component", 0, 0),
     ];
     let mut wrong = Vec::new();
@@ -703,4 +706,72 @@ fn a_two_thousand_line_component_imports() {
     assert_eq!(s.components[0].services.len(), 222);
     let modules = bip_lang::gen3::modules(&s, 10_000).unwrap_or_else(|e| panic!("{e:?}"));
     assert_eq!(modules[0].services.len(), s.components[0].services.len());
+}
+
+#[test]
+fn a_component_takes_in_the_interfaces_it_provides() {
+    let dir = TempDir::new();
+    dir.write(
+        "idl/pose_estimator.gen",
+        r#"
+interface pose_estimator {
+  exception e_lost;
+  ids { double quality; };
+  port multiple out double frame;
+  function Reset() { throw e_lost; };
+  attribute GetQuality(out quality);
+};
+interface clock { port out long ticks; function Now(out long t); };
+"#,
+    );
+    let path = dir.write(
+        "loc.gen",
+        r#"
+#include <pose_estimator.gen>
+component loc {
+  uses clock;
+  port out double speed;
+  provides pose_estimator;
+  task t { period 10 ms; };
+  activity Track() { task t; codel<start> track(port out frame) yield pause::start, ether; throw e_lost; };
+};
+"#,
+    );
+    let mut files = SourceMap::default();
+    let s = bip_lang::gen3::read(
+        &path,
+        "loc.gen",
+        &[dir.0.join("idl")],
+        &mut files,
+        0,
+        Default::default(),
+    )
+    .unwrap_or_else(|e| panic!("parses: {}", e.message));
+    assert_eq!(s.interfaces.len(), 2);
+    let c = &s.components[0];
+    let names =
+        |v: &[bip_lang::source::Text]| v.iter().map(|t| t.value.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&c.provides), ["pose_estimator"]);
+    assert_eq!(names(&c.uses), ["clock"], "kept as information");
+    // the provided objects are in the component where `provides` is written
+    let ports: Vec<&str> = c.ports.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        ports,
+        ["speed", "frame"],
+        "the used interface's ports are not its own"
+    );
+    assert_eq!(c.ids[0].name.value, "quality");
+    let m = &bip_lang::gen3::modules(&s, 10_000).unwrap_or_else(|e| panic!("{e:?}"))[0];
+    let services: Vec<&str> = m.services.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(services, ["Reset", "GetQuality", "Track"]);
+    let ports: Vec<&str> = m.ports.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(ports, ["speed", "frame"]);
+    // the codel writes the provided port; the provided exception is declared
+    assert_eq!(m.services[2].codels[0].writes[0].value, "frame");
+    assert_eq!(m.services[2].codels[0].throws[0].value, "e_lost");
+    // and the module loads
+    let def =
+        import_gen_file(&path, &[dir.0.join("idl")]).unwrap_or_else(|e| panic!("{}", e.summary()));
+    load_str("imported.ron", &def.to_ron().expect("prints"))
+        .unwrap_or_else(|e| panic!("{}", e.summary()));
 }
