@@ -443,6 +443,35 @@ component c {
 }
 
 #[test]
+fn function_like_macros_expand_with_their_arguments() {
+    let def = imported(
+        r#"
+#define MS(x) ((x) * 1000)
+#define PERIOD(base, k) MS(base) / 1000 * k
+#define ONE() 1
+#define TWICE(f, x) f(f(x))
+#define INC(x) (x + 1)
+component c {
+  task t { period PERIOD(10,
+      2) ms; };
+  task u { period TWICE(INC, 8) ms; };
+  task v { period ONE() * (30) ms; };
+  port out double MS;
+};
+"#,
+    );
+    let m = &def.modules[0];
+    assert_eq!(
+        def.tick_ms.as_ref().map(|t| t.value.to_string()),
+        Some("10".into())
+    );
+    let periods: Vec<String> = m.tasks.iter().map(|t| t.period.value.to_string()).collect();
+    assert_eq!(periods, ["2", "1", "3"]);
+    // a function-like macro's name without arguments is not a call
+    assert_eq!(m.ports[0].name.value, "MS");
+}
+
+#[test]
 fn malformed_preprocessor_input_is_an_error_at_its_place() {
     expect_error(
         "#include \"nowhere.gen\"\n",
@@ -457,11 +486,30 @@ fn malformed_preprocessor_input_is_an_error_at_its_place() {
         10,
     );
     expect_error("#include\n", "`#include` needs a file", 1, 1);
+    expect_error("#define F(x, x) x\n", "parameter `x` is repeated", 1, 14);
     expect_error(
-        "\n#define F(x) x\n",
-        "function-like macros are not supported",
+        "#define F(...) x\n",
+        "variadic macros are not supported",
+        1,
+        11,
+    );
+    expect_error(
+        "#define S(x) #x\n",
+        "the `#` and `##` operators are not supported",
+        1,
+        14,
+    );
+    expect_error(
+        "#define F(x, y) x\ncomponent c { task t { period F(1) ms; }; };\n",
+        "macro `F` takes 2 arguments, given 1",
         2,
-        9,
+        31,
+    );
+    expect_error(
+        "#define F(x) x\ncomponent c { task t { period F(1 ms; }; };\n#define G\n",
+        "the call of macro `F` has no closing `)`",
+        2,
+        31,
     );
     expect_error("#if 1\ncomponent c;\n", "this `#if` has no `#endif`", 1, 1);
     expect_error("#endif\n", "`#endif` without `#if`", 1, 1);
