@@ -251,7 +251,7 @@ fn bip_import_prints_the_types_as_the_model_writes_them() {
 fn the_gen_rover_has_the_types_of_its_ron_twin() {
     let robots = Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots");
     let load = |name: &str| {
-        load_file(&robots.join(name))
+        load_file(robots.join(name))
             .unwrap_or_else(|e| panic!("{}", e.summary()))
             .genom
             .expect("a GenoM layer")
