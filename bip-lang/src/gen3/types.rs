@@ -15,6 +15,9 @@ use crate::source::{ConstExpr, ConstValue, Span, Text};
 
 /// Nesting bound for typedefs and structures within each other (a cycle ends here).
 const MAX_DEPTH: usize = 64;
+/// Bound on the parts of one record, its fields within fields counted: structures that
+/// hold others several times grow exponentially with their nesting.
+const MAX_PARTS: usize = 10_000;
 
 /// An IDL type as the parser keeps its text: `unsigned long`, `sequence<rover::pose, 16>`,
 /// `string<32>`, `struct inner_s`, `double[3][2]`.
@@ -148,7 +151,8 @@ impl<'s> Types<'s> {
     /// array, which has no name and no Rust path (its place names a type instead).
     pub fn data_type(&self, text: &str, scope: &str, at: Span) -> Option<DataTypeDef> {
         let idl = parse(text);
-        if let Some(t) = self.model(&idl, scope, at, 0) {
+        let mut parts = MAX_PARTS;
+        if let Some(t) = self.model(&idl, scope, at, 0, &mut parts) {
             return Some(t);
         }
         let path = self.rust(&idl, scope);
@@ -156,10 +160,18 @@ impl<'s> Types<'s> {
     }
 
     /// The model type of `idl` (`Bool`, `Int`, `Float` or a record of them), if it has one.
-    fn model(&self, idl: &Idl, scope: &str, at: Span, depth: usize) -> Option<DataTypeDef> {
-        if depth > MAX_DEPTH {
+    fn model(
+        &self,
+        idl: &Idl,
+        scope: &str,
+        at: Span,
+        depth: usize,
+        parts: &mut usize,
+    ) -> Option<DataTypeDef> {
+        if depth > MAX_DEPTH || *parts == 0 {
             return None;
         }
+        *parts -= 1;
         let int = |lo: i64, hi: i64| {
             Some(DataTypeDef::Int(
                 ConstExpr::new(ConstValue::Int(lo), at),
@@ -188,7 +200,7 @@ impl<'s> Types<'s> {
                 match decl.kind {
                     "typedef" => {
                         let target = decl.members.first()?;
-                        self.model(&parse(&target.ty), inner_scope, at, depth + 1)
+                        self.model(&parse(&target.ty), inner_scope, at, depth + 1, parts)
                     }
                     "enum" => {
                         let n = i64::try_from(decl.members.len()).ok()?;
@@ -206,7 +218,8 @@ impl<'s> Types<'s> {
                             if !check_name(&mut quiet, &field, "field") {
                                 return None;
                             }
-                            let ty = self.model(&parse(&m.ty), &decl.name.value, at, depth + 1)?;
+                            let ty =
+                                self.model(&parse(&m.ty), &decl.name.value, at, depth + 1, parts)?;
                             fields.push(FieldDef { name: field, ty });
                         }
                         Some(DataTypeDef::Record { name, fields })
@@ -262,6 +275,7 @@ impl<'s> Types<'s> {
             return None;
         }
         let wanted = |d: Dir| if output { d != Dir::In } else { d != Dir::Out };
+        let mut parts = MAX_PARTS;
         let params: Vec<(&Text, &str)> = s
             .params
             .iter()
@@ -285,7 +299,7 @@ impl<'s> Types<'s> {
                     if !check_name(&mut Errors::default(), name, "field") {
                         return Some(named());
                     }
-                    match self.model(&parse(ty), "", name.span, 0) {
+                    match self.model(&parse(ty), "", name.span, 0, &mut parts) {
                         Some(ty) => fields.push(FieldDef {
                             name: (*name).clone(),
                             ty,

@@ -1,7 +1,7 @@
 //! The IDL types of a `.gen` file's ports and activity parameters as the model's data
-//! types (docs/genom.md, "GenoM3 files", "IDL types"): each kind of IDL type, what
-//! `bip import` prints loads with those types, and the rover's `.gen` files give the types
-//! its RON twin declares.
+//! types (docs/genom.md, "GenoM3 files", "IDL types"): each kind of IDL type, a bound on a
+//! record's size, what `bip import` prints loads with those types, and the rover's `.gen`
+//! files give the types its RON twin declares.
 
 use std::path::Path;
 
@@ -279,4 +279,31 @@ fn the_gen_rover_has_the_types_of_its_ron_twin() {
         "the rover's types are carried over: {from_gen:?}"
     );
     assert_eq!(from_gen, types(&written));
+}
+
+#[test]
+fn a_structure_that_would_grow_without_bound_is_named() {
+    // each structure holds the one before twice: 2^40 fields in all, as a record
+    let mut text = String::from("struct s0 { double x; };\n");
+    for k in 1..=40 {
+        text.push_str(&format!("struct s{k} {{ s{} a, b; }};\n", k - 1));
+    }
+    text.push_str(
+        "component c { port out s40 big; port out s3 small; task t { period 10 ms; }; };\n",
+    );
+    let dir = TempDir::new();
+    let path = dir.write("c.gen", &text);
+    let def = import_gen_file(&path, &[]).unwrap_or_else(|e| panic!("{}", e.summary()));
+    let text = def.to_ron_nested(6).expect("prints");
+    let genom = load_str("imported.ron", &text)
+        .unwrap_or_else(|e| panic!("{}", e.summary()))
+        .genom
+        .expect("a GenoM layer");
+    let ports = &genom.modules[0].ports;
+    assert_eq!(ports[0].ty, Some(rust("s40")));
+    assert!(
+        matches!(&ports[1].ty, Some(DataType::Record { name, .. }) if name == "s3"),
+        "{:?}",
+        ports[1].ty
+    );
 }
