@@ -21,7 +21,8 @@ use crate::source_map::SourceMap;
 const MAX_INCLUDE_DEPTH: usize = 32;
 /// Macro expansion nesting bound.
 const MAX_MACRO_DEPTH: usize = 64;
-/// Tokens after expansion: a bound on what macros may multiply.
+/// Tokens the expansion may write, its arguments and replacements counted: a bound on what
+/// macros may multiply.
 const MAX_TOKENS: usize = 1_000_000;
 
 /// Where the files come from and go to.
@@ -47,6 +48,7 @@ pub fn preprocess(
         macros: HashMap::new(),
         out: Vec::new(),
         depth: 0,
+        written: 0,
     };
     p.file(path, shown, at)?;
     Ok(p.out)
@@ -72,6 +74,8 @@ struct Preprocessor<'a> {
     macros: HashMap<String, Macro>,
     out: Vec<Token>,
     depth: usize,
+    /// Tokens written so far, to the output, an argument or a replacement.
+    written: usize,
 }
 
 impl Preprocessor<'_> {
@@ -360,6 +364,16 @@ impl Preprocessor<'_> {
         r
     }
 
+    /// Counts `n` tokens written, which the bound on the expansion limits.
+    fn count(&mut self, n: usize, at: Span) -> Result<(), ModelError> {
+        self.written = self.written.saturating_add(n);
+        if self.written > MAX_TOKENS {
+            return Err(ModelError::new("the file expands to too many tokens", at)
+                .with_help("a macro multiplies its tokens beyond what a `.gen` file needs"));
+        }
+        Ok(())
+    }
+
     /// `toks` with their macros expanded, aside from the output.
     fn expanded(
         &mut self,
@@ -380,12 +394,7 @@ impl Preprocessor<'_> {
         while i < toks.len() {
             let t = &toks[i];
             i += 1;
-            if self.out.len() >= MAX_TOKENS {
-                return Err(ModelError::new(
-                    "the file expands to too many tokens",
-                    t.span,
-                ));
-            }
+            self.count(1, t.span)?;
             let Some((name, m)) = t.ident().and_then(|n| {
                 let m = self.macros.get(n)?;
                 (!active.iter().any(|a| a == n)).then(|| (n.to_string(), m))
@@ -439,7 +448,10 @@ impl Preprocessor<'_> {
                     let mut out = Vec::new();
                     for b in &body {
                         match b.ident().and_then(|n| params.iter().position(|p| p == n)) {
-                            Some(k) => out.extend(values[k].iter().cloned()),
+                            Some(k) => {
+                                self.count(values[k].len(), t.span)?;
+                                out.extend(values[k].iter().cloned());
+                            }
                             None => out.push(placed(b)),
                         }
                     }

@@ -487,6 +487,13 @@ fn malformed_preprocessor_input_is_an_error_at_its_place() {
     );
     expect_error("#include\n", "`#include` needs a file", 1, 1);
     expect_error("#define F(x, x) x\n", "parameter `x` is repeated", 1, 14);
+    // each call doubles its argument: 2^40 tokens
+    let doubling = format!(
+        "#define D(x) x x\nconst long k = {}1{};\n",
+        "D(".repeat(40),
+        ")".repeat(40)
+    );
+    expect_error(&doubling, "the file expands to too many tokens", 2, 96);
     expect_error(
         "#define F(...) x\n",
         "variadic macros are not supported",
