@@ -1,6 +1,7 @@
 //! GenoM3 `.gen` files end to end: a model that takes its modules from `.gen` files
 //! verifies with the same verdicts and state counts as its RON equivalent and runs in the
-//! engine, and `bip import` prints a model that loads (docs/genom.md, "GenoM3 files").
+//! engine, `bip graph` draws it as its RON equivalent, and `bip import` prints a model that
+//! loads (docs/genom.md, "GenoM3 files").
 
 use crate::common::bip;
 
@@ -120,4 +121,89 @@ fn bip_import_shows_an_error_in_the_gen_file() {
         stderr.contains("cannot find the included file `rover.idl`"),
         "{stderr}"
     );
+}
+
+/// `bip graph` of the model that reads `.gen` files: its stdout, after checking it succeeded.
+fn graph(model: &str, args: &[&str]) -> String {
+    let mut all = vec!["graph", model];
+    all.extend_from_slice(args);
+    let out = bip(&all);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "bip graph {model} {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).to_string()
+}
+
+#[test]
+fn bip_graph_draws_the_gen_rover_as_its_ron_equivalent() {
+    let levels: [&[&str]; 4] = [
+        &["--format", "dot"],
+        &["--level", "core", "--format", "dot"],
+        &["--activity", "nav.GoTo", "--format", "dot"],
+        &["--activity", "loco.Move"],
+    ];
+    for args in levels {
+        let from_gen = graph("robots/genom3-rover.ron", args);
+        let written = graph("robots/genom3-rover-written.ron", args);
+        assert_eq!(from_gen, written, "bip graph {args:?}");
+    }
+    // the modules, their services and ports as the .gen files name them
+    let genom = graph("robots/genom3-rover.ron", &["--format", "dot"]);
+    for name in [
+        "\"module loco\"",
+        "\"module loc\"",
+        "\"module nav\"",
+        "\"port loc.pose\"",
+        "\"port loc.landmarks\"",
+        "Move (activity in motion), interrupts Move, after Init",
+        "Cancel (function), interrupts GoTo",
+    ] {
+        assert!(genom.contains(name), "{name} in\n{genom}");
+    }
+    let core = graph(
+        "robots/genom3-rover.ron",
+        &["--level", "core", "--format", "dot"],
+    );
+    for name in [
+        "\"nav_GoTo_move\"",
+        "\"loc_Track_estimate\"",
+        "\"loco_Init_request\"",
+    ] {
+        assert!(core.contains(name), "{name} in the core");
+    }
+    let goto = graph(
+        "robots/genom3-rover.ron",
+        &["--activity", "nav.GoTo", "--format", "dot"],
+    );
+    assert!(
+        goto.contains(r#""codel start" -> "codel move" [label="pause::move""#),
+        "{goto}"
+    );
+    assert!(goto.contains(r#"[label="e_blocked""#), "{goto}");
+    let svg = graph("robots/genom3-rover.ron", &[]);
+    assert!(svg.starts_with("<svg") && svg.contains(">nav</"), "{svg}");
+}
+
+#[test]
+fn bip_graph_shows_an_error_in_a_gen_file() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    std::fs::write(
+        dir.path().join("c.gen"),
+        "component c {\n  task t { period 10 ms; };\n  activity A() { task t; codel<start> f() yield nowhere; };\n};\n",
+    )
+    .expect("writes");
+    let model = dir.path().join("m.ron");
+    std::fs::write(
+        &model,
+        r#"System(name: "m", tick_ms: 10, modules: [Gen("c.gen")])"#,
+    )
+    .expect("writes");
+    let out = bip(&["graph", model.to_str().expect("utf-8")]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("c.gen:3:"), "{stderr}");
+    assert!(stderr.contains("nowhere"), "{stderr}");
 }

@@ -10,6 +10,8 @@ use crate::source::{Span, Text};
 #[derive(Clone, Debug, Default)]
 pub struct Spec {
     pub components: Vec<Component>,
+    /// The `interface` declarations: what a component that `provides` one takes in.
+    pub interfaces: Vec<Component>,
     pub types: Vec<TypeDecl>,
 }
 
@@ -42,6 +44,11 @@ pub struct Component {
     pub codels_require: Vec<Text>,
     /// `clock-rate`, in microseconds.
     pub clock_rate: Option<(u64, Span)>,
+    /// The interfaces it provides (their objects are in it, where `provides` is written).
+    pub provides: Vec<Text>,
+    /// The interfaces it uses (information: their ports are in ports of the component and
+    /// their services remote ones, which the model does not hold).
+    pub uses: Vec<Text>,
     pub ids: Vec<Member>,
     pub tasks: Vec<Task>,
     pub ports: Vec<Port>,

@@ -1,6 +1,7 @@
-//! GenoM3's own declarations: `component` and what it exports (its properties, `ids`,
-//! `task`, `port`, `attribute`, `function`, `activity`, and IDL declarations in its scope),
-//! with the properties of tasks and services and the codels.
+//! GenoM3's own declarations: `component` and `interface`, and what they export (their
+//! properties, `ids`, `task`, `port`, `attribute`, `function`, `activity`, `provides`,
+//! `uses`, and IDL declarations in their scope), with the properties of tasks and services
+//! and the codels.
 
 use super::ast::{
     Codel, CodelParam, Component, Dir, Kind, Param, Port, PortDir, Service, Source, Spec, Task,
@@ -13,12 +14,7 @@ use crate::diag::ModelError;
 use crate::source::{Span, Text};
 
 /// GenoM3 constructs outside what bip reads, with why.
-const UNSUPPORTED: &[(&str, &str)] = &[
-    ("interface", "GenoM3 `interface` declarations are not supported: declare the ports and services in the component"),
-    ("provides", "`provides` (interfaces) is not supported: declare the ports and services in the component"),
-    ("uses", "`uses` (interfaces) is not supported: declare the ports and services in the component"),
-    ("template", "`template` declarations are not supported"),
-];
+const UNSUPPORTED: &[(&str, &str)] = &[("template", "`template` declarations are not supported")];
 
 /// A whole preprocessed file.
 pub fn spec(c: &mut Cursor) -> Result<Spec, ModelError> {
@@ -26,8 +22,20 @@ pub fn spec(c: &mut Cursor) -> Result<Spec, ModelError> {
     let mut spec = Spec::default();
     while let Some(t) = c.peek() {
         if t.is_ident("component") {
-            let comp = component(c, &mut idl)?;
+            let comp = component(c, &mut idl, &spec.interfaces)?;
             spec.components.push(comp);
+        } else if t.is_ident("interface") {
+            let interface = component(c, &mut idl, &spec.interfaces)?;
+            if let Some(task) = interface.tasks.first() {
+                return Err(ModelError::new(
+                    format!("interface `{}` declares a task", interface.name),
+                    task.name.span,
+                )
+                .with_help(
+                    "an interface has no tasks: declare them in the components that provide it",
+                ));
+            }
+            spec.interfaces.push(interface);
         } else if let Some(e) = unsupported(c) {
             return Err(e);
         } else if t.ident().is_some_and(|w| DECLARATION_WORDS.contains(&w)) {
@@ -47,7 +55,12 @@ fn unsupported(c: &Cursor) -> Option<ModelError> {
     Some(ModelError::new(format!("`{word}` is not supported"), t.span).with_help(*why))
 }
 
-fn component(c: &mut Cursor, idl: &mut Idl) -> Result<Component, ModelError> {
+/// A `component` or an `interface` (the same declarations, an interface without tasks).
+fn component(
+    c: &mut Cursor,
+    idl: &mut Idl,
+    interfaces: &[Component],
+) -> Result<Component, ModelError> {
     c.next();
     let name = c.expect_name("the component's name")?;
     let mut comp = Component {
@@ -63,7 +76,7 @@ fn component(c: &mut Cursor, idl: &mut Idl) -> Result<Component, ModelError> {
         if c.at_end() {
             return Err(c.expected("`}` closing the component"));
         }
-        export(c, idl, &mut comp)?;
+        export(c, idl, interfaces, &mut comp)?;
     }
     c.expect_punct("}")?;
     c.expect_punct(";")?;
@@ -77,7 +90,12 @@ fn component(c: &mut Cursor, idl: &mut Idl) -> Result<Component, ModelError> {
     Ok(comp)
 }
 
-fn export(c: &mut Cursor, idl: &mut Idl, comp: &mut Component) -> Result<(), ModelError> {
+fn export(
+    c: &mut Cursor,
+    idl: &mut Idl,
+    interfaces: &[Component],
+    comp: &mut Component,
+) -> Result<(), ModelError> {
     if let Some(e) = unsupported(c) {
         return Err(e);
     }
@@ -106,6 +124,30 @@ fn export(c: &mut Cursor, idl: &mut Idl, comp: &mut Component) -> Result<(), Mod
                 comp.require.extend(list);
             } else {
                 comp.codels_require.extend(list);
+            }
+        }
+        "provides" | "uses" => {
+            c.next();
+            for name in c.list(|c| c.scoped_name("an interface's name"))? {
+                let Some(interface) = interfaces.iter().find(|i| i.name.value == name.value) else {
+                    let known: Vec<&str> = interfaces.iter().map(|i| i.name.as_str()).collect();
+                    let help = if known.is_empty() {
+                        "declare it (`interface name { ... };`) before the component, or include the file that does".to_string()
+                    } else {
+                        format!("the interfaces declared before are: {}", known.join(", "))
+                    };
+                    return Err(ModelError::new(
+                        format!("interface `{}` is not declared", name.value),
+                        name.span,
+                    )
+                    .with_help(help));
+                };
+                if word == "provides" {
+                    provide(comp, interface);
+                    comp.provides.push(name);
+                } else {
+                    comp.uses.push(name);
+                }
             }
         }
         "clock-rate" => {
@@ -140,6 +182,17 @@ fn export(c: &mut Cursor, idl: &mut Idl, comp: &mut Component) -> Result<(), Mod
     }
     c.expect_punct(";")?;
     Ok(())
+}
+
+/// The objects of a provided interface, in the component where `provides` is written:
+/// its ids members, ports, services, exceptions and types.
+fn provide(comp: &mut Component, interface: &Component) {
+    comp.ids.extend(interface.ids.iter().cloned());
+    comp.ports.extend(interface.ports.iter().cloned());
+    comp.services.extend(interface.services.iter().cloned());
+    comp.exceptions.extend(interface.exceptions.iter().cloned());
+    comp.types.extend(interface.types.iter().cloned());
+    comp.provides.extend(interface.provides.iter().cloned());
 }
 
 /// `50 ms`, `1 s`, `500 us`, `0.1` (seconds): a duration in whole microseconds.

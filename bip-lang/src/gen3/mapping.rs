@@ -1,13 +1,14 @@
 //! From a GenoM3 component to a module of bip's GenoM layer (docs/genom.md, "GenoM3
 //! files"): what is modelled (tasks and their periods, out ports, services, their
 //! interrupts, `after`, codel state machines with their yields, exceptions, the ports each
-//! codel writes) and what is refused because it would change the behaviour without being
+//! codel writes, the data types of ports and activities' parameters) and what is refused because it would change the behaviour without being
 //! modelled (a task without a period that an activity runs in, `delay`, `before`). The rest is kept in the
 //! component as information.
 
 use std::collections::HashSet;
 
 use super::ast::{Codel, Component, Kind, Port, PortDir, Service, Source, Spec};
+use super::types::Types;
 use crate::diag::{Errors, ModelError};
 use crate::genom::syntax::{CodelDef, ModuleDef, PortDef, ServiceDef, ServiceKind, TaskDef};
 use crate::source::{ConstValue, Spanned, Text};
@@ -26,10 +27,11 @@ pub fn modules(spec: &Spec, tick_us: u64) -> Result<Vec<ModuleDef>, Vec<ModelErr
             [full, last]
         })
         .collect();
+    let types = Types::new(spec);
     let out: Vec<ModuleDef> = spec
         .components
         .iter()
-        .map(|c| module(c, tick_us, &declared, &mut errors))
+        .map(|c| module(c, tick_us, &declared, &types, &mut errors))
         .collect();
     if errors.is_empty() {
         Ok(out)
@@ -48,6 +50,7 @@ fn module(
     c: &Component,
     tick_us: u64,
     exceptions: &HashSet<String>,
+    types: &Types,
     errors: &mut Errors,
 ) -> ModuleDef {
     let tasks = c
@@ -113,13 +116,13 @@ fn module(
         .map(|p| PortDef {
             name: p.name.clone(),
             doc: doc(&p.doc),
-            ty: None,
+            ty: types.data_type(&p.ty, "", p.name.span),
         })
         .collect();
     let services = c
         .services
         .iter()
-        .map(|s| service(c, s, exceptions, errors))
+        .map(|s| service(c, s, exceptions, types, errors))
         .collect();
     ModuleDef {
         name: c.name.clone(),
@@ -135,6 +138,7 @@ fn service(
     c: &Component,
     s: &Service,
     exceptions: &HashSet<String>,
+    types: &Types,
     errors: &mut Errors,
 ) -> ServiceDef {
     if let Some(b) = s.before.first() {
@@ -191,8 +195,8 @@ fn service(
         interrupts: s.interrupts.clone(),
         after: s.after.clone(),
         codels,
-        args: None,
-        output: None,
+        args: types.payload(c, s, false),
+        output: types.payload(c, s, true),
     }
 }
 

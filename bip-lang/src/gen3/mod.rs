@@ -8,7 +8,7 @@
 //! One concern per file: `lexer` (tokens), `preprocess` (`#include`, `#define`, `#if`),
 //! `cursor` (reading tokens, and what was expected instead), `consts` (constant
 //! expressions), `idl` (types and IDL declarations), `component` (GenoM's declarations),
-//! `ast` (what is read), `mapping` (to modules), `entries` (the `Gen(...)` entries of a
+//! `ast` (what is read), `mapping` (to modules), `types` (IDL types as data types), `entries` (the `Gen(...)` entries of a
 //! model's `modules`). Every error names the construct, with the file, line and column
 //! of its place in the `.gen` file.
 
@@ -21,6 +21,7 @@ mod idl;
 mod lexer;
 mod mapping;
 mod preprocess;
+mod types;
 
 use std::path::{Path, PathBuf};
 

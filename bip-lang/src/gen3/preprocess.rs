@@ -1,6 +1,8 @@
 //! The subset of the C preprocessor that `.gen` files use: `#include` of local files
 //! (`"file"` from the including file's directory, then the search path; `<file>` from the
-//! search path), object-like `#define` and `#undef`, `#if`/`#ifdef`/`#ifndef`/`#elif`/
+//! search path), `#define` of object-like and function-like macros (`#define MS(x) ((x) *
+//! 1000)`, without the `#` and `##` operators or variadic parameters) and `#undef`,
+//! `#if`/`#ifdef`/`#ifndef`/`#elif`/
 //! `#else`/`#endif` on them, `#pragma` (accepted and ignored: `require` and `native` say
 //! how to build the codels), and `#error`. Anything else is an error naming it.
 
@@ -19,7 +21,8 @@ use crate::source_map::SourceMap;
 const MAX_INCLUDE_DEPTH: usize = 32;
 /// Macro expansion nesting bound.
 const MAX_MACRO_DEPTH: usize = 64;
-/// Tokens after expansion: a bound on what macros may multiply.
+/// Tokens the expansion may write, its arguments and replacements counted: a bound on what
+/// macros may multiply.
 const MAX_TOKENS: usize = 1_000_000;
 
 /// Where the files come from and go to.
@@ -45,12 +48,15 @@ pub fn preprocess(
         macros: HashMap::new(),
         out: Vec::new(),
         depth: 0,
+        written: 0,
     };
     p.file(path, shown, at)?;
     Ok(p.out)
 }
 
 struct Macro {
+    /// The parameters of a function-like macro; `None` for an object-like one.
+    params: Option<Vec<String>>,
     body: Vec<Token>,
 }
 
@@ -68,6 +74,8 @@ struct Preprocessor<'a> {
     macros: HashMap<String, Macro>,
     out: Vec<Token>,
     depth: usize,
+    /// Tokens written so far, to the output, an argument or a replacement.
+    written: usize,
 }
 
 impl Preprocessor<'_> {
@@ -89,11 +97,14 @@ impl Preprocessor<'_> {
         let toks = tokenize(&text, base)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let mut conds: Vec<Cond> = Vec::new();
+        // the kept tokens since the last directive: a macro's arguments may span lines
+        let mut run: Vec<Token> = Vec::new();
         let mut i = 0;
         while i < toks.len() {
             let t = &toks[i];
             let active = conds.iter().all(|c| c.active);
             if t.is_punct("#") && t.line_start {
+                self.expand(&std::mem::take(&mut run), &mut Vec::new())?;
                 let mut j = i + 1;
                 while j < toks.len() && !toks[j].line_start {
                     j += 1;
@@ -104,10 +115,11 @@ impl Preprocessor<'_> {
                 continue;
             }
             if active {
-                self.expand(t, &mut Vec::new())?;
+                run.push(t.clone());
             }
             i += 1;
         }
+        self.expand(&run, &mut Vec::new())?;
         if let Some(c) = conds.last() {
             return Err(ModelError::new("this `#if` has no `#endif`", c.span));
         }
@@ -183,19 +195,27 @@ impl Preprocessor<'_> {
                 let Some(name) = args.first().and_then(|t| t.ident().map(|n| (n, t.span))) else {
                     return Err(ModelError::new("`#define` needs a name", span));
                 };
-                if let Some(paren) = args.get(1) {
-                    if paren.is_punct("(") && paren.span.start == name.1.end {
-                        return Err(ModelError::new(
-                            "function-like macros are not supported",
-                            Span::new(name.1.start, paren.span.end),
-                        )
-                        .with_help("only `#define NAME value` is read in a `.gen` file"));
-                    }
+                let function_like = args
+                    .get(1)
+                    .is_some_and(|p| p.is_punct("(") && p.span.start == name.1.end);
+                let (params, body) = if function_like {
+                    let (params, rest) = parameters(&args[2..], span)?;
+                    (Some(params), rest)
+                } else {
+                    (None, &args[1..])
+                };
+                if let Some(op) = body.iter().find(|t| t.is_punct("#")) {
+                    return Err(ModelError::new(
+                        "the `#` and `##` operators are not supported",
+                        op.span,
+                    )
+                    .with_help("a `.gen` file's macros substitute their arguments as they are"));
                 }
                 self.macros.insert(
                     name.0.to_string(),
                     Macro {
-                        body: args[1..].to_vec(),
+                        params,
+                        body: body.to_vec(),
                     },
                 );
             }
@@ -261,12 +281,12 @@ impl Preprocessor<'_> {
                 });
                 continue;
             }
-            let before = std::mem::take(&mut self.out);
-            let r = self.expand(t, &mut Vec::new());
-            let expanded = std::mem::replace(&mut self.out, before);
-            r?;
-            toks.extend(expanded);
-            k += 1;
+            // up to the next `defined`, expanded together (a macro call is whole)
+            let end = (k + 1..args.len())
+                .find(|&e| args[e].is_ident("defined"))
+                .unwrap_or(args.len());
+            toks.extend(self.expanded(&args[k..end], &mut Vec::new())?);
+            k = end;
         }
         if toks.is_empty() {
             return Err(ModelError::new("`#if` needs a condition", span));
@@ -344,41 +364,186 @@ impl Preprocessor<'_> {
         r
     }
 
-    /// Appends a token, or what a macro it names expands to; `active` are the macros being
-    /// expanded, which are not expanded again (as in C).
-    fn expand(&mut self, t: &Token, active: &mut Vec<String>) -> Result<(), ModelError> {
-        if self.out.len() >= MAX_TOKENS {
-            return Err(ModelError::new(
-                "the file expands to too many tokens",
-                t.span,
-            ));
+    /// Counts `n` tokens written, which the bound on the expansion limits.
+    fn count(&mut self, n: usize, at: Span) -> Result<(), ModelError> {
+        self.written = self.written.saturating_add(n);
+        if self.written > MAX_TOKENS {
+            return Err(ModelError::new("the file expands to too many tokens", at)
+                .with_help("a macro multiplies its tokens beyond what a `.gen` file needs"));
         }
-        let name = match &t.tok {
-            Tok::Ident(n) if self.macros.contains_key(n) && !active.contains(n) => n.clone(),
-            _ => {
+        Ok(())
+    }
+
+    /// `toks` with their macros expanded, aside from the output.
+    fn expanded(
+        &mut self,
+        toks: &[Token],
+        active: &mut Vec<String>,
+    ) -> Result<Vec<Token>, ModelError> {
+        let before = std::mem::take(&mut self.out);
+        let r = self.expand(toks, active);
+        let out = std::mem::replace(&mut self.out, before);
+        r.map(|()| out)
+    }
+
+    /// Appends `toks`, each macro they name replaced by its expansion; `active` are the
+    /// macros being expanded, which are not expanded again (as in C). A function-like
+    /// macro's name not followed by `(` is kept as it is.
+    fn expand(&mut self, toks: &[Token], active: &mut Vec<String>) -> Result<(), ModelError> {
+        let mut i = 0;
+        while i < toks.len() {
+            let t = &toks[i];
+            i += 1;
+            self.count(1, t.span)?;
+            let Some((name, m)) = t.ident().and_then(|n| {
+                let m = self.macros.get(n)?;
+                (!active.iter().any(|a| a == n)).then(|| (n.to_string(), m))
+            }) else {
                 self.out.push(t.clone());
-                return Ok(());
+                continue;
+            };
+            let call = m.params.is_some() && toks.get(i).is_some_and(|p| p.is_punct("("));
+            if m.params.is_some() && !call {
+                self.out.push(t.clone());
+                continue;
             }
-        };
-        if active.len() >= MAX_MACRO_DEPTH {
-            return Err(ModelError::new("macros nested too deeply", t.span));
-        }
-        let body: Vec<Token> = self
-            .macros
-            .get(&name)
-            .map(|m| m.body.clone())
-            .unwrap_or_default();
-        active.push(name);
-        for b in &body {
-            // an expanded token is shown where the macro is used
-            let placed = Token {
+            if active.len() >= MAX_MACRO_DEPTH {
+                return Err(ModelError::new("macros nested too deeply", t.span));
+            }
+            let (params, body) = (m.params.clone(), m.body.clone());
+            // an expanded token of the body is shown where the macro is used
+            let placed = |b: &Token| Token {
                 tok: b.tok.clone(),
                 span: t.span,
                 line_start: false,
             };
-            self.expand(&placed, active)?;
+            let replacement: Vec<Token> = match params {
+                None => body.iter().map(placed).collect(),
+                Some(params) => {
+                    let (args, next) = arguments(toks, i, &name, t.span)?;
+                    i = next;
+                    let wanted = params.len().max(1);
+                    if args.len() != wanted && !(params.is_empty() && args.len() == 1) {
+                        return Err(ModelError::new(
+                            format!(
+                                "macro `{name}` takes {} argument{}, given {}",
+                                params.len(),
+                                if params.len() == 1 { "" } else { "s" },
+                                args.len()
+                            ),
+                            t.span,
+                        ));
+                    }
+                    if params.is_empty() && args.first().is_some_and(|a| !a.is_empty()) {
+                        return Err(ModelError::new(
+                            format!("macro `{name}` takes no argument"),
+                            t.span,
+                        ));
+                    }
+                    // each argument is expanded on its own, then put in place
+                    let mut values = Vec::with_capacity(args.len());
+                    for a in &args {
+                        values.push(self.expanded(a, active)?);
+                    }
+                    let mut out = Vec::new();
+                    for b in &body {
+                        match b.ident().and_then(|n| params.iter().position(|p| p == n)) {
+                            Some(k) => {
+                                self.count(values[k].len(), t.span)?;
+                                out.extend(values[k].iter().cloned());
+                            }
+                            None => out.push(placed(b)),
+                        }
+                    }
+                    out
+                }
+            };
+            active.push(name);
+            let r = self.expand(&replacement, active);
+            active.pop();
+            r?;
         }
-        active.pop();
         Ok(())
     }
+}
+
+/// The parameters of a function-like `#define` after its `(`, and the body after the `)`.
+fn parameters(toks: &[Token], at: Span) -> Result<(Vec<String>, &[Token]), ModelError> {
+    let mut params = Vec::new();
+    let mut k = 0;
+    if toks.first().is_some_and(|t| t.is_punct(")")) {
+        return Ok((params, &toks[1..]));
+    }
+    loop {
+        let Some(t) = toks.get(k) else {
+            return Err(ModelError::new(
+                "expected `)` closing the macro's parameters",
+                at,
+            ));
+        };
+        if t.is_punct(".") {
+            return Err(ModelError::new("variadic macros are not supported", t.span));
+        }
+        let Some(n) = t.ident() else {
+            return Err(ModelError::new(
+                format!("expected a parameter name, found {}", t.describe()),
+                t.span,
+            ));
+        };
+        if params.iter().any(|p| p == n) {
+            return Err(ModelError::new(
+                format!("parameter `{n}` is repeated"),
+                t.span,
+            ));
+        }
+        params.push(n.to_string());
+        match toks.get(k + 1) {
+            Some(p) if p.is_punct(",") => k += 2,
+            Some(p) if p.is_punct(")") => return Ok((params, &toks[k + 2..])),
+            Some(p) => {
+                return Err(ModelError::new(
+                    format!("expected `,` or `)`, found {}", p.describe()),
+                    p.span,
+                ))
+            }
+            None => {
+                return Err(ModelError::new(
+                    "expected `)` closing the macro's parameters",
+                    at,
+                ))
+            }
+        }
+    }
+}
+
+/// The arguments of a macro call whose `(` is at `toks[open]`: split at the commas outside
+/// parentheses, and the index after the closing `)`.
+fn arguments(
+    toks: &[Token],
+    open: usize,
+    name: &str,
+    at: Span,
+) -> Result<(Vec<Vec<Token>>, usize), ModelError> {
+    let mut args = vec![Vec::new()];
+    let mut depth = 0usize;
+    for (k, t) in toks.iter().enumerate().skip(open + 1) {
+        if t.is_punct(")") && depth == 0 {
+            return Ok((args, k + 1));
+        }
+        if t.is_punct("(") {
+            depth += 1;
+        } else if t.is_punct(")") {
+            depth -= 1;
+        } else if t.is_punct(",") && depth == 0 {
+            args.push(Vec::new());
+            continue;
+        }
+        if let Some(last) = args.last_mut() {
+            last.push(t.clone());
+        }
+    }
+    Err(
+        ModelError::new(format!("the call of macro `{name}` has no closing `)`"), at)
+            .with_help("a macro's arguments end before the next preprocessor directive"),
+    )
 }

@@ -101,7 +101,7 @@ impl SystemDef {
 /// Writes printed RON the way docs/model.md does: the inner structs without their type names
 /// (`(from: …)`, not `TransitionDef(from: …)`), and lists of plain values on one line.
 fn tidy_ron(text: &str) -> String {
-    const INNER: [&str; 10] = [
+    const INNER: [&str; 11] = [
         "VarDef(",
         "TransitionDef(",
         "ComponentDef(",
@@ -112,6 +112,7 @@ fn tidy_ron(text: &str) -> String {
         "PortDef(",
         "ServiceDef(",
         "CodelDef(",
+        "FieldDef(",
     ];
     let lines: Vec<&str> = text.lines().collect();
     let mut out = String::with_capacity(text.len());
@@ -152,17 +153,39 @@ fn tidy_ron(text: &str) -> String {
     out
 }
 
-/// Removes a struct name that starts the line's content (outside strings: a printed line
-/// starts with indentation, then a field name, a struct name or a string).
+/// Removes the struct names that start a value on the line (its content, or an item of a
+/// list or a field's value written on it), outside strings.
 fn strip_inner(line: &str, names: &[&str]) -> String {
-    let content = line.trim_start();
-    let indent = &line[..line.len() - content.len()];
-    for n in names {
-        if let Some(rest) = content.strip_prefix(n) {
-            return format!("{indent}({rest}");
+    let mut out = String::with_capacity(line.len());
+    let mut in_string = false;
+    let mut escaped = false;
+    // a value starts the line's content or follows `(`, `[`, `,` or `:`
+    let mut value_starts = true;
+    let mut i = 0;
+    while let Some(ch) = line[i..].chars().next() {
+        if !in_string && value_starts {
+            if let Some(n) = names.iter().find(|n| line[i..].starts_with(**n)) {
+                i += n.len() - 1;
+                continue;
+            }
+        }
+        out.push(ch);
+        i += ch.len_utf8();
+        if in_string {
+            match ch {
+                _ if escaped => escaped = false,
+                '\\' => escaped = true,
+                '"' => in_string = false,
+                _ => {}
+            }
+        } else if ch == '"' {
+            in_string = true;
+            value_starts = false;
+        } else if !ch.is_whitespace() {
+            value_starts = matches!(ch, '(' | '[' | ',' | ':');
         }
     }
-    line.to_string()
+    out
 }
 
 /// An atom type: an automaton with ports and bounded data.

@@ -443,6 +443,35 @@ component c {
 }
 
 #[test]
+fn function_like_macros_expand_with_their_arguments() {
+    let def = imported(
+        r#"
+#define MS(x) ((x) * 1000)
+#define PERIOD(base, k) MS(base) / 1000 * k
+#define ONE() 1
+#define TWICE(f, x) f(f(x))
+#define INC(x) (x + 1)
+component c {
+  task t { period PERIOD(10,
+      2) ms; };
+  task u { period TWICE(INC, 8) ms; };
+  task v { period ONE() * (30) ms; };
+  port out double MS;
+};
+"#,
+    );
+    let m = &def.modules[0];
+    assert_eq!(
+        def.tick_ms.as_ref().map(|t| t.value.to_string()),
+        Some("10".into())
+    );
+    let periods: Vec<String> = m.tasks.iter().map(|t| t.period.value.to_string()).collect();
+    assert_eq!(periods, ["2", "1", "3"]);
+    // a function-like macro's name without arguments is not a call
+    assert_eq!(m.ports[0].name.value, "MS");
+}
+
+#[test]
 fn malformed_preprocessor_input_is_an_error_at_its_place() {
     expect_error(
         "#include \"nowhere.gen\"\n",
@@ -457,11 +486,37 @@ fn malformed_preprocessor_input_is_an_error_at_its_place() {
         10,
     );
     expect_error("#include\n", "`#include` needs a file", 1, 1);
+    expect_error("#define F(x, x) x\n", "parameter `x` is repeated", 1, 14);
+    // each call doubles its argument: 2^40 tokens
+    let doubling = format!(
+        "#define D(x) x x\nconst long k = {}1{};\n",
+        "D(".repeat(40),
+        ")".repeat(40)
+    );
+    expect_error(&doubling, "the file expands to too many tokens", 2, 96);
     expect_error(
-        "\n#define F(x) x\n",
-        "function-like macros are not supported",
+        "#define F(...) x\n",
+        "variadic macros are not supported",
+        1,
+        11,
+    );
+    expect_error(
+        "#define S(x) #x\n",
+        "the `#` and `##` operators are not supported",
+        1,
+        14,
+    );
+    expect_error(
+        "#define F(x, y) x\ncomponent c { task t { period F(1) ms; }; };\n",
+        "macro `F` takes 2 arguments, given 1",
         2,
-        9,
+        31,
+    );
+    expect_error(
+        "#define F(x) x\ncomponent c { task t { period F(1 ms; }; };\n#define G\n",
+        "the call of macro `F` has no closing `)`",
+        2,
+        31,
     );
     expect_error("#if 1\ncomponent c;\n", "this `#if` has no `#endif`", 1, 1);
     expect_error("#endif\n", "`#endif` without `#if`", 1, 1);
@@ -546,10 +601,13 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         // what bip's checks of a module find, in the .gen file
         ("component c { task t { period 1 s; }; activity a() { task t; codel<start> s() yield nowhere; }; };", "codel `start` yields to `nowhere`", 1, 85),
         ("component c { activity a() { task missing; codel<start> s() yield ether; }; };", "module `c` has no task `missing`", 1, 35),
+        // interfaces
+        ("interface i { task t { period 1 s; }; };", "interface `i` declares a task", 1, 20),
+        ("component c { provides i; };", "interface `i` is not declared", 1, 24),
+        ("interface j; component c { uses j, i; };", "interface `i` is not declared", 1, 36),
+        ("interface i { function f(); }; component c { provides i; function f(); };", "duplicate service of module `c` `f`", 1, 67),
         // unsupported GenoM3 constructs
-        ("interface i { };", "`interface` is not supported", 1, 1),
-        ("component c { provides i; };", "`provides` is not supported", 1, 15),
-        ("component c { uses i; };", "`uses` is not supported", 1, 15),
+        ("template t { };", "`template` is not supported", 1, 1),
         ("", "declares no component", 0, 0),
     ];
     let mut wrong = Vec::new();
@@ -703,4 +761,72 @@ fn a_two_thousand_line_component_imports() {
     assert_eq!(s.components[0].services.len(), 222);
     let modules = bip_lang::gen3::modules(&s, 10_000).unwrap_or_else(|e| panic!("{e:?}"));
     assert_eq!(modules[0].services.len(), s.components[0].services.len());
+}
+
+#[test]
+fn a_component_takes_in_the_interfaces_it_provides() {
+    let dir = TempDir::new();
+    dir.write(
+        "idl/pose_estimator.gen",
+        r#"
+interface pose_estimator {
+  exception e_lost;
+  ids { double quality; };
+  port multiple out double frame;
+  function Reset() { throw e_lost; };
+  attribute GetQuality(out quality);
+};
+interface clock { port out long ticks; function Now(out long t); };
+"#,
+    );
+    let path = dir.write(
+        "loc.gen",
+        r#"
+#include <pose_estimator.gen>
+component loc {
+  uses clock;
+  port out double speed;
+  provides pose_estimator;
+  task t { period 10 ms; };
+  activity Track() { task t; codel<start> track(port out frame) yield pause::start, ether; throw e_lost; };
+};
+"#,
+    );
+    let mut files = SourceMap::default();
+    let s = bip_lang::gen3::read(
+        &path,
+        "loc.gen",
+        &[dir.0.join("idl")],
+        &mut files,
+        0,
+        Default::default(),
+    )
+    .unwrap_or_else(|e| panic!("parses: {}", e.message));
+    assert_eq!(s.interfaces.len(), 2);
+    let c = &s.components[0];
+    let names =
+        |v: &[bip_lang::source::Text]| v.iter().map(|t| t.value.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&c.provides), ["pose_estimator"]);
+    assert_eq!(names(&c.uses), ["clock"], "kept as information");
+    // the provided objects are in the component where `provides` is written
+    let ports: Vec<&str> = c.ports.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        ports,
+        ["speed", "frame"],
+        "the used interface's ports are not its own"
+    );
+    assert_eq!(c.ids[0].name.value, "quality");
+    let m = &bip_lang::gen3::modules(&s, 10_000).unwrap_or_else(|e| panic!("{e:?}"))[0];
+    let services: Vec<&str> = m.services.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(services, ["Reset", "GetQuality", "Track"]);
+    let ports: Vec<&str> = m.ports.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(ports, ["speed", "frame"]);
+    // the codel writes the provided port; the provided exception is declared
+    assert_eq!(m.services[2].codels[0].writes[0].value, "frame");
+    assert_eq!(m.services[2].codels[0].throws[0].value, "e_lost");
+    // and the module loads
+    let def =
+        import_gen_file(&path, &[dir.0.join("idl")]).unwrap_or_else(|e| panic!("{}", e.summary()));
+    load_str("imported.ron", &def.to_ron().expect("prints"))
+        .unwrap_or_else(|e| panic!("{}", e.summary()));
 }
