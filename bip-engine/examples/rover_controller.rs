@@ -106,6 +106,8 @@ pub struct Report {
     /// Codel runs past their WCET, and task periods past their deadline.
     pub over_budget: usize,
     pub faults: usize,
+    /// Bounded response properties of the model that a tick found late.
+    pub late_responses: Vec<String>,
 }
 
 /// The supervisor script: at which tick to send which request (in order of ticks).
@@ -298,6 +300,7 @@ pub fn run(
         stopped_at: Vec::new(),
         overruns: 0,
         over_budget: 0,
+        late_responses: Vec::new(),
         faults: 0,
     };
     let mut script = SCRIPT.iter().peekable();
@@ -430,6 +433,7 @@ impl Report {
             Event::Fault(_) => self.faults += 1,
             Event::Overrun { .. } => self.overruns += 1,
             Event::WcetExceeded { .. } | Event::DeadlineMissed { .. } => self.over_budget += 1,
+            Event::ResponseLate { .. } => self.late_responses.push(event.to_string()),
         }
     }
 }

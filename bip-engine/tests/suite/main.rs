@@ -11,6 +11,7 @@ mod golden;
 mod property;
 mod replay;
 mod requests;
+mod response;
 mod rover_controller;
 mod scheduling;
 mod simulate;
