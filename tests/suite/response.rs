@@ -85,6 +85,9 @@ fn a_lasso_is_printed_saved_and_replayed_with_its_cycle() {
     assert_eq!(o.status.code(), Some(1), "{text}");
     assert!(text.contains("forever"), "{text}");
     assert!(text.contains("result: phil0_eats fails"), "{text}");
+    // the engine's replay names the cycle's steps, the first being step `stem + 1`
+    let first = lines[at + 1].split_whitespace().nth(1).unwrap();
+    assert!(text.contains(&format!("forever ({first}")), "{text}");
     // a cycle that does not close is not a lasso of the model
     let k: usize = saved
         .split("loop_start: ")
@@ -128,6 +131,34 @@ fn a_truncated_run_is_inconclusive_and_a_vacuous_property_is_warned_about() {
     let text = out(&o);
     assert!(
         text.contains("warning: nobody_eats_twice holds vacuously: its trigger never happens"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_simulation_reports_the_bounded_responses_that_are_late() {
+    let model = format!("{}/robots/served.ron", env!("CARGO_MANIFEST_DIR"));
+    let o = bip(&["simulate", &model, "--steps", "40", "--seed", "3"]);
+    let text = out(&o);
+    // a late response is reported, not a failed check of the simulation
+    assert_eq!(o.status.code(), Some(0), "{text}");
+    assert!(
+        text.contains("2 bounded response properties watched at every step:"),
+        "{text}"
+    );
+    let late: Vec<&str> = text.lines().filter(|l| l.contains("no response")).collect();
+    assert!(!late.is_empty(), "{text}");
+    for l in &late {
+        assert!(
+            l.contains(
+                "answered_in_one: no response 2 ticks after its trigger, past its bound of 1"
+            ),
+            "{text}"
+        );
+    }
+    assert!(!text.contains("answered_in_two:"), "{text}");
+    assert!(
+        text.contains(&format!("watched at every step: {} late", late.len())),
         "{text}"
     );
 }
