@@ -109,6 +109,9 @@ pub fn run(args: &Args) -> u8 {
         );
         return exit::ERROR;
     }
+    for (step, late) in &result.late {
+        println!("after step {step}, the engine's monitor: {late}");
+    }
     match &result.end {
         Some(End::Recording) | None => {
             println!("result: every step was allowed; the engine ends in the recorded state");

@@ -162,3 +162,26 @@ fn a_simulation_reports_the_bounded_responses_that_are_late() {
         "{text}"
     );
 }
+
+#[test]
+fn a_bound_passed_replays_with_the_engine_monitor_reporting_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = format!("{}/robots/served.ron", env!("CARGO_MANIFEST_DIR"));
+    let traces = dir.path().join("traces");
+    let o = bip(&["verify", &model, "--trace-dir", traces.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", out(&o));
+    let file = traces.join("answered_in_one.trace.ron");
+    let o = bip(&["replay", &model, file.to_str().unwrap()]);
+    let text = out(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    // the counterexample's last step is the tick past the bound, and the engine sees it
+    let n = text.lines().filter(|l| l.contains("allowed:")).count();
+    assert!(
+        text.contains(&format!(
+            "after step {n}, the engine's monitor: response late: answered_in_one: no response 2 ticks after its trigger, past its bound of 1"
+        )),
+        "{text}"
+    );
+    assert_eq!(text.matches("the engine's monitor").count(), 1, "{text}");
+    assert!(text.contains("result: answered_in_one fails"), "{text}");
+}
