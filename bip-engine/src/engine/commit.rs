@@ -37,7 +37,7 @@ impl Engine {
             debug_assert_eq!(moves, self.t.step_moves_request(i, picks));
         }
         let ticket = match &cause {
-            Cause::Request { ticket, .. } => *ticket,
+            Cause::Request { ticket, .. } if !self.monitor.is_empty() => *ticket,
             _ => None,
         };
         if moves {
@@ -62,10 +62,7 @@ impl Engine {
             return Err(EngineError::Range(e));
         }
         if !self.monitor.is_empty() {
-            if let Err(e) = self.monitor_step(label, ticket) {
-                self.stopped = Some(e.clone());
-                return Err(EngineError::Range(e));
-            }
+            self.monitor_step(label, ticket)?;
         }
         Ok(())
     }

@@ -12,6 +12,7 @@ use crate::prelude::*;
 use bip_model::{Label, Property, RangeError, ResponseSpec, ResponseWatch, State, Step, System};
 
 use super::Engine;
+use crate::error::EngineError;
 use crate::event::{Event, Ticket};
 
 /// The watches of the model's bounded response properties; empty when it has none, and
@@ -60,12 +61,21 @@ fn bounded(p: &Property) -> Option<ResponseSpec<'_>> {
 
 impl Engine {
     /// Watches the step just committed with `label` (from the gate's previous state to its
-    /// state); `ticket` is the request it accepted, if any.
+    /// state); `ticket` is the request it accepted, if any. A property out of range stops
+    /// the engine, as a step does.
+    #[inline(never)]
     pub(super) fn monitor_step(
         &mut self,
         label: Label,
         ticket: Option<Ticket>,
-    ) -> Result<(), RangeError> {
+    ) -> Result<(), EngineError> {
+        self.watch_step(label, ticket).map_err(|e| {
+            self.stopped = Some(e.clone());
+            EngineError::Range(e)
+        })
+    }
+
+    fn watch_step(&mut self, label: Label, ticket: Option<Ticket>) -> Result<(), RangeError> {
         for k in 0..self.monitor.watches.len() {
             let system = self.gate.system();
             let (before, after) = (self.gate.previous(), self.gate.state());
