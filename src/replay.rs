@@ -109,6 +109,9 @@ pub fn run(args: &Args) -> u8 {
         );
         return exit::ERROR;
     }
+    for (step, late) in &result.late {
+        println!("after step {step}, the engine's monitor: {late}");
+    }
     match &result.end {
         Some(End::Recording) | None => {
             println!("result: every step was allowed; the engine ends in the recorded state");
@@ -142,9 +145,10 @@ pub fn run(args: &Args) -> u8 {
         }) => {
             match loop_start {
                 Some(k) => println!(
-                    "the run repeats steps {}-{} forever (the last step returns to the state after step {k}), and `{property}`'s response never comes on it",
+                    "the run repeats steps {}-{} forever ({}; the last step returns to the state after step {k}), and `{property}`'s response never comes on it",
                     k + 1,
-                    trace.steps.len()
+                    trace.steps.len(),
+                    cycle_names(&trace, *k)
                 ),
                 None => println!("`{property}`'s trigger goes unanswered at the end of the trace"),
             }
@@ -161,4 +165,17 @@ pub fn run(args: &Args) -> u8 {
             exit::ERROR
         }
     }
+}
+
+/// The names of a lasso's cycle steps, from `loop_start` on: all of a short cycle, the
+/// first and the count of a long one.
+fn cycle_names(trace: &bip_model::Trace, loop_start: usize) -> String {
+    const SHOWN: usize = 6;
+    let cycle = trace.steps.get(loop_start..).unwrap_or_default();
+    let names: Vec<&str> = cycle.iter().take(SHOWN).map(|s| s.step.as_str()).collect();
+    let mut out = names.join(", ");
+    if cycle.len() > SHOWN {
+        out.push_str(&format!(", … {} more", cycle.len() - SHOWN));
+    }
+    out
 }

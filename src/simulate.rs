@@ -153,6 +153,7 @@ pub fn run(args: &Args) -> u8 {
         }
     }
     print!("{}", budgets(&sim, args.codel_time));
+    print!("{}", late_responses(&sim));
     if code == exit::FAILED {
         let last = &sim.last_steps;
         print!(
@@ -263,6 +264,41 @@ fn budgets(sim: &Simulation, codel_time: CodelTimeArg) -> String {
     let all = stats.wcet_exceeded + stats.deadlines_missed;
     if all > shown {
         let _ = writeln!(out, "    ... and {} more", all - shown);
+    }
+    out
+}
+
+/// The bounded response properties watched, and the deadline misses the run saw.
+fn late_responses(sim: &Simulation) -> String {
+    use std::fmt::Write as _;
+    let mut out = String::new();
+    if sim.responses_monitored == 0 {
+        return out;
+    }
+    let late = sim.stats.responses_late;
+    let n = sim.responses_monitored;
+    let properties = if n == 1 { "property" } else { "properties" };
+    let _ = writeln!(
+        out,
+        "  {n} bounded response {properties} watched at every step: {late} late"
+    );
+    for e in &sim.late_responses {
+        let request = e
+            .ticket
+            .map_or(String::new(), |t| format!(" (request #{t})"));
+        let _ = writeln!(
+            out,
+            "    after step {}, at {}: {}: no response {} after its trigger{request}, past its bound of {}",
+            e.step,
+            show(e.at_us),
+            e.property,
+            count(e.elapsed_ticks, "tick"),
+            e.within
+        );
+    }
+    let shown = sim.late_responses.len() as u64;
+    if late > shown {
+        let _ = writeln!(out, "    ... and {} more", late - shown);
     }
     out
 }

@@ -99,6 +99,14 @@ fn conditions(f: &mut fmt::Formatter<'_>, list: &[String], reasons: Reasons) -> 
     Ok(())
 }
 
+fn ticks(n: u64) -> &'static str {
+    if n == 1 {
+        "tick"
+    } else {
+        "ticks"
+    }
+}
+
 /// A callback for every event.
 pub type EventFn = Box<dyn FnMut(&Event) + Send>;
 
@@ -146,6 +154,22 @@ pub enum Event {
         codel: Arc<Codel>,
         elapsed_us: u64,
         deadline_us: u64,
+    },
+    /// A bounded response property of the model (`Response ... within`,
+    /// `Replies(within)`) was not answered in time: a tick passed its bound while its
+    /// oldest trigger waited. Reported once per trigger; the engine goes on.
+    ResponseLate {
+        /// The property's name as reports show it (`Replies(ndd.GoTo, within: 20)` unless
+        /// it has a `name`).
+        property: Arc<str>,
+        within: u64,
+        /// The ticks since the trigger: `within + 1`, the tick that passed the bound.
+        elapsed_ticks: u64,
+        /// The request that the engine accepted in the step on which the trigger happened:
+        /// for a `request(m.S)` trigger (and so `Replies`), the request that started the
+        /// wait. `None` if the trigger happened on another step (a codel, a tick, a request
+        /// sent by a connector of the model) or in the initial state.
+        ticket: Option<Ticket>,
     },
 }
 
@@ -400,6 +424,22 @@ impl fmt::Display for Event {
                 f,
                 "deadline missed: {codel} ended its task's work {elapsed_us} µs after the release, past {deadline_us} µs"
             ),
+            Event::ResponseLate {
+                property,
+                within,
+                elapsed_ticks,
+                ticket,
+            } => {
+                write!(
+                    f,
+                    "response late: {property}: no response {elapsed_ticks} {} after its trigger, past its bound of {within}",
+                    ticks(*elapsed_ticks)
+                )?;
+                match ticket {
+                    Some(t) => write!(f, " (request #{})", t.0),
+                    None => Ok(()),
+                }
+            }
         }
     }
 }

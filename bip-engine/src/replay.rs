@@ -68,6 +68,9 @@ pub struct Replay {
     pub refused: Option<Refused>,
     /// The verdict's check at the end (only if every step was taken).
     pub end: Option<End>,
+    /// What the engine's response monitor reported, after which step (numbered from 1):
+    /// [`crate::Event::ResponseLate`]s.
+    pub late: Vec<(usize, crate::Event)>,
     /// The engine after the replay (its state, its recording).
     pub engine: Engine,
 }
@@ -81,9 +84,17 @@ pub fn replay(system: System, trace: &Trace) -> Result<Replay, BuildError> {
         .record(trace.steps.len())
         .build()?;
     let mut steps = Vec::with_capacity(path.len());
+    let mut late = Vec::new();
     for (k, (step, state)) in path.iter().enumerate() {
         let name = engine.inspect().system().label_name(step.label);
-        match engine.step_as(step.as_step()) {
+        let taken = engine.step_as(step.as_step());
+        late.extend(
+            engine
+                .events()
+                .filter(|e| matches!(e, crate::Event::ResponseLate { .. }))
+                .map(|e| (k + 1, e)),
+        );
+        match taken {
             Ok(stepped) if engine.inspect().state() == state => {
                 steps.push(ReplayedStep { name, stepped })
             }
@@ -121,6 +132,7 @@ pub fn replay(system: System, trace: &Trace) -> Result<Replay, BuildError> {
         steps,
         refused: None,
         end: Some(end),
+        late,
         engine,
     })
 }
@@ -141,6 +153,7 @@ fn refused_at(
             reasons: Vec::new(),
         }),
         end: None,
+        late: Vec::new(),
         engine,
     }
 }

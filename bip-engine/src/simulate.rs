@@ -67,6 +67,19 @@ pub struct BudgetEvent {
     pub kind: BudgetEventKind,
 }
 
+/// A bounded response property not answered in time ([`Event::ResponseLate`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LateResponse {
+    /// The engine's time and step count when the tick that passed the bound was taken.
+    pub at_us: u64,
+    pub step: u64,
+    pub property: String,
+    pub within: u64,
+    pub elapsed_ticks: u64,
+    /// The request accepted on the trigger's step, if any.
+    pub ticket: Option<u64>,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BudgetEventKind {
     WcetExceeded { took_us: u64, wcet_us: u64 },
@@ -130,6 +143,11 @@ pub struct Simulation {
     /// The first [`KEPT_BUDGET_EVENTS`] overruns of a WCET and misses of a deadline
     /// (`stats` counts them all).
     pub budget_events: Vec<BudgetEvent>,
+    /// How many bounded response properties were watched at every step.
+    pub responses_monitored: usize,
+    /// The first [`KEPT_BUDGET_EVENTS`] response deadline misses (`stats.responses_late`
+    /// counts them all).
+    pub late_responses: Vec<LateResponse>,
 }
 
 /// Simulates `system` (see the module documentation).
@@ -156,6 +174,11 @@ pub fn simulate_with(
         .iter()
         .filter(|p| matches!(p.kind, PropertyKind::Invariant(_)))
         .count();
+    let responses_monitored = system
+        .properties
+        .iter()
+        .filter(|p| p.kind.response_spec().is_some_and(|s| s.within.is_some()))
+        .count();
     let mut engine = Engine::builder(system)
         .default_codels(DefaultCodels::Random(options.seed))
         .policy(Policy::Seeded(options.seed))
@@ -164,6 +187,7 @@ pub fn simulate_with(
         .codel_time(options.codel_time)
         .build()?;
     let mut budget_events = Vec::new();
+    let mut late_responses = Vec::new();
     let mut checks = Checks {
         deadlock_free,
         steps: Steps::new(),
@@ -198,6 +222,7 @@ pub fn simulate_with(
                     Err(e) => Some(SimulationEnd::RangeError(e.to_string())),
                     Ok(_) => checks.check(&engine),
                 };
+                keep_events(&mut engine, &mut budget_events, &mut late_responses);
                 continue;
             }
         }
@@ -216,7 +241,7 @@ pub fn simulate_with(
         if end.is_none() && engine.inspect().stats().steps != before {
             end = checks.check(&engine);
         }
-        keep_budget_events(&mut engine, &mut budget_events);
+        keep_events(&mut engine, &mut budget_events, &mut late_responses);
     }
     let end = end.unwrap_or(SimulationEnd::Completed);
     let verdict = match &end {
@@ -252,17 +277,38 @@ pub fn simulate_with(
         last_steps,
         codels: codel_reports(&engine),
         budget_events,
+        responses_monitored,
+        late_responses,
     })
 }
 
 /// Events the engine queues between two drains: a step emits a few.
 const EVENT_QUEUE: usize = 64;
 
-/// Takes the engine's events, keeping the first overruns and misses.
-fn keep_budget_events(engine: &mut Engine, kept: &mut Vec<BudgetEvent>) {
+/// Takes the engine's events, keeping the first overruns, misses and late responses.
+fn keep_events(engine: &mut Engine, kept: &mut Vec<BudgetEvent>, late: &mut Vec<LateResponse>) {
     let at_us = engine.inspect().now_us();
+    let step = engine.inspect().stats().steps;
     for event in engine.events() {
         let (codel, kind) = match event {
+            Event::ResponseLate {
+                property,
+                within,
+                elapsed_ticks,
+                ticket,
+            } => {
+                if late.len() < KEPT_BUDGET_EVENTS {
+                    late.push(LateResponse {
+                        at_us,
+                        step,
+                        property: property.to_string(),
+                        within,
+                        elapsed_ticks,
+                        ticket: ticket.map(|t| t.0),
+                    });
+                }
+                continue;
+            }
             Event::WcetExceeded {
                 codel,
                 took_us,

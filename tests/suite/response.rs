@@ -85,6 +85,9 @@ fn a_lasso_is_printed_saved_and_replayed_with_its_cycle() {
     assert_eq!(o.status.code(), Some(1), "{text}");
     assert!(text.contains("forever"), "{text}");
     assert!(text.contains("result: phil0_eats fails"), "{text}");
+    // the engine's replay names the cycle's steps, the first being step `stem + 1`
+    let first = lines[at + 1].split_whitespace().nth(1).unwrap();
+    assert!(text.contains(&format!("forever ({first}")), "{text}");
     // a cycle that does not close is not a lasso of the model
     let k: usize = saved
         .split("loop_start: ")
@@ -130,4 +133,55 @@ fn a_truncated_run_is_inconclusive_and_a_vacuous_property_is_warned_about() {
         text.contains("warning: nobody_eats_twice holds vacuously: its trigger never happens"),
         "{text}"
     );
+}
+
+#[test]
+fn a_simulation_reports_the_bounded_responses_that_are_late() {
+    let model = format!("{}/robots/served.ron", env!("CARGO_MANIFEST_DIR"));
+    let o = bip(&["simulate", &model, "--steps", "40", "--seed", "3"]);
+    let text = out(&o);
+    // a late response is reported, not a failed check of the simulation
+    assert_eq!(o.status.code(), Some(0), "{text}");
+    assert!(
+        text.contains("2 bounded response properties watched at every step:"),
+        "{text}"
+    );
+    let late: Vec<&str> = text.lines().filter(|l| l.contains("no response")).collect();
+    assert!(!late.is_empty(), "{text}");
+    for l in &late {
+        assert!(
+            l.contains(
+                "answered_in_one: no response 2 ticks after its trigger, past its bound of 1"
+            ),
+            "{text}"
+        );
+    }
+    assert!(!text.contains("answered_in_two:"), "{text}");
+    assert!(
+        text.contains(&format!("watched at every step: {} late", late.len())),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_bound_passed_replays_with_the_engine_monitor_reporting_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = format!("{}/robots/served.ron", env!("CARGO_MANIFEST_DIR"));
+    let traces = dir.path().join("traces");
+    let o = bip(&["verify", &model, "--trace-dir", traces.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", out(&o));
+    let file = traces.join("answered_in_one.trace.ron");
+    let o = bip(&["replay", &model, file.to_str().unwrap()]);
+    let text = out(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    // the counterexample's last step is the tick past the bound, and the engine sees it
+    let n = text.lines().filter(|l| l.contains("allowed:")).count();
+    assert!(
+        text.contains(&format!(
+            "after step {n}, the engine's monitor: response late: answered_in_one: no response 2 ticks after its trigger, past its bound of 1"
+        )),
+        "{text}"
+    );
+    assert_eq!(text.matches("the engine's monitor").count(), 1, "{text}");
+    assert!(text.contains("result: answered_in_one fails"), "{text}");
 }

@@ -224,6 +224,8 @@ impl EngineBuilder {
             )
         });
         let gate = Gate::new(system, self.state_cache).map_err(BuildError::Range)?;
+        let monitor =
+            super::monitor::Monitor::new(gate.system(), gate.state()).map_err(BuildError::Range)?;
         let pool = gate.enabled().pool();
         let plan_moves = gate
             .plans()
@@ -318,6 +320,7 @@ impl EngineBuilder {
             stats: Stats::default(),
             budgets,
             stopped: None,
+            monitor,
             #[cfg(feature = "std")]
             remote: None,
         })

@@ -36,6 +36,10 @@ impl Engine {
             let picks = self.chosen.picks(self.gate.enabled());
             debug_assert_eq!(moves, self.t.step_moves_request(i, picks));
         }
+        let ticket = match &cause {
+            Cause::Request { ticket, .. } if !self.monitor.is_empty() => *ticket,
+            _ => None,
+        };
         if moves {
             self.track(cause);
         }
@@ -56,6 +60,9 @@ impl Engine {
         if let Some(e) = unevaluated {
             self.stopped = Some(e.clone());
             return Err(EngineError::Range(e));
+        }
+        if !self.monitor.is_empty() {
+            self.monitor_step(label, ticket)?;
         }
         Ok(())
     }

@@ -17,8 +17,9 @@
 //! `builder.rs` (building), `schedule.rs` (the step loop and the policy's choices),
 //! `requests.rs`, `codels.rs` (running a codel and judging its outcome), `commit.rs`,
 //! `replies.rs` (following the activities to reply), `held.rs` (held codels),
-//! `forced.rs` (taking a given step, for replay), `inspect.rs` (the inspection view) and
-//! `remote.rs` (requests from other threads). They see each other only through
+//! `forced.rs` (taking a given step, for replay), `inspect.rs` (the inspection view),
+//! `monitor.rs` (the bounded response properties, watched at run time) and `remote.rs`
+//! (requests from other threads). They see each other only through
 //! [`Engine`] and the types of this file.
 
 use alloc::collections::VecDeque;
@@ -45,6 +46,7 @@ mod commit;
 mod forced;
 mod held;
 mod inspect;
+mod monitor;
 #[cfg(feature = "std")]
 mod remote;
 mod replies;
@@ -73,6 +75,8 @@ pub struct Stats {
     pub requests_refused: u64,
     /// Events dropped because nobody drained the queue.
     pub events_dropped: u64,
+    /// Bounded response properties whose bound a tick passed ([`Event::ResponseLate`]).
+    pub responses_late: u64,
 }
 
 /// The runtime engine: it runs your codels and takes only the steps the model allows.
@@ -107,6 +111,8 @@ pub struct Engine {
     budgets: Budgets,
     /// The range error that stopped the engine.
     stopped: Option<RangeError>,
+    /// The bounded response properties, watched step by step.
+    monitor: monitor::Monitor,
     #[cfg(feature = "std")]
     remote: Option<crate::handle::Remote>,
 }

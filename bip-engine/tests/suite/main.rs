@@ -11,6 +11,7 @@ mod golden;
 mod property;
 mod replay;
 mod requests;
+mod response;
 mod scheduling;
 mod simulate;
 mod soak;

@@ -97,6 +97,8 @@ pub struct Report {
     /// Codel runs past their WCET, and task periods past their deadline.
     pub over_budget: usize,
     pub faults: usize,
+    /// Bounded response properties of the model that a tick found late.
+    pub late_responses: Vec<String>,
 }
 
 /// Builds the engine with the simulated hardware behind the codels, plays the script,
@@ -154,6 +156,7 @@ pub fn run(
         overruns: 0,
         over_budget: 0,
         faults: 0,
+        late_responses: Vec::new(),
     };
     let mut gotos: Vec<ndd::GoToTicket> = Vec::new();
     let mut script = SCRIPT.iter().peekable();
@@ -305,6 +308,7 @@ impl Report {
             Event::Fault(_) => self.faults += 1,
             Event::Overrun { .. } => self.overruns += 1,
             Event::WcetExceeded { .. } | Event::DeadlineMissed { .. } => self.over_budget += 1,
+            Event::ResponseLate { .. } => self.late_responses.push(event.to_string()),
         }
     }
 }

@@ -207,5 +207,6 @@ pub fn event_kind(e: &Event) -> &'static str {
         Event::Overrun { .. } => "overrun",
         Event::WcetExceeded { .. } => "over its WCET",
         Event::DeadlineMissed { .. } => "deadline missed",
+        Event::ResponseLate { .. } => "response late",
     }
 }
