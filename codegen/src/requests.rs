@@ -1,7 +1,8 @@
 //! Per service a typed request and a typed end: `request_go_to(engine, goal: f64)` takes
 //! the arguments of the type the model declares, and its ticket reads the reply that ends
-//! the request as `GoToEnd::Done(output)`, `GoToEnd::Exception(GoToException::EBlocked)`
-//! or the engine's other outcomes.
+//! the request as `GoToEnd::Done(output)`, `GoToEnd::Exception(GoToException::EBlocked,
+//! output)` (the output its codels gave before the throw; no output when the service
+//! declares none) or the engine's other outcomes.
 
 use std::fmt::Write as _;
 
@@ -88,20 +89,32 @@ pub(crate) fn request(out: &mut String, m: &ModuleMap, s: &ServiceMap, n: &Reque
         None => out.push_str("        /// It ended well (`ether`).\n        Done,\n"),
     }
     if !throws.is_empty() {
-        let _ = writeln!(
-            out,
-            "        /// A codel threw one of the service's exceptions.\n        Exception({}),",
-            n.exception
-        );
+        match &output {
+            Some((ty, t)) => {
+                let _ = writeln!(
+                    out,
+                    "        /// A codel threw one of the service's exceptions, with the output ({ty})\n        /// its codels gave before.\n        Exception({}, Option<{t}>),",
+                    n.exception
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    out,
+                    "        /// A codel threw one of the service's exceptions.\n        Exception({}),",
+                    n.exception
+                );
+            }
+        }
     }
     out.push_str("        /// It was interrupted, aborted by a rule of the model, or a codel was faulty.\n        Other(bip_engine::Outcome),\n    }\n\n");
-    let done = match &output {
-        Some((_, t)) => format!(
-            "{}::Done(output.as_ref().and_then(|o| o.get::<{t}>()).cloned())",
-            n.end
-        ),
+    let typed_output = output
+        .as_ref()
+        .map(|(_, t)| format!("output.as_ref().and_then(|o| o.get::<{t}>()).cloned()"));
+    let done = match &typed_output {
+        Some(o) => format!("{}::Done({o})", n.end),
         None => format!("{}::Done", n.end),
     };
+    let thrown_output = typed_output.map_or(String::new(), |o| format!(", {o}"));
     let output_binding = if output.is_some() { "output" } else { ".." };
     let _ = writeln!(
         out,
@@ -116,7 +129,7 @@ pub(crate) fn request(out: &mut String, m: &ModuleMap, s: &ServiceMap, n: &Reque
         for e in &throws {
             let _ = writeln!(
                 out,
-                "                    \"{e}\" => {}::Exception({}::{}),",
+                "                    \"{e}\" => {}::Exception({}::{}{thrown_output}),",
                 n.end,
                 n.exception,
                 camel(e)

@@ -83,8 +83,8 @@ fn the_bindings_type_what_each_codel_may_touch() {
         // a typed request, and its typed end
         "pub fn request_go_to(\n        engine: &mut bip_engine::Engine,\n        args: i64,\n    ) -> Result<GoToTicket, bip_engine::RequestError> {",
         "Done(Option<super::Pose>),",
-        "Exception(GoToException),",
-        "\"e_lost\" => GoToEnd::Exception(GoToException::ELost),",
+        "Exception(GoToException, Option<super::Pose>),",
+        "\"e_lost\" => GoToEnd::Exception(GoToException::ELost, output.as_ref().and_then(|o| o.get::<super::Pose>()).cloned()),",
     ] {
         assert!(text.contains(want), "no `{want}` in\n{text}");
     }

@@ -90,8 +90,8 @@ pub struct Report {
     pub held: Vec<(String, Vec<String>)>,
     /// How each ndd.GoTo ended, read through its typed ticket.
     pub goto_ends: Vec<ndd::GoToEnd>,
-    /// Where ndd.GoTo stopped, from each of its replies' output (also given when a codel
-    /// threw).
+    /// Where ndd.GoTo stopped, from each of its typed ends' output (also given when a
+    /// codel threw).
     pub stopped_at: Vec<f64>,
     pub overruns: usize,
     /// Codel runs past their WCET, and task periods past their deadline.
@@ -291,14 +291,12 @@ impl Report {
                     Reply::Refused(_) => event.to_string(),
                     _ => reply.to_string(),
                 };
-                if let Reply::Done {
-                    output: Some(out), ..
-                } = reply
-                {
-                    self.stopped_at.extend(out.get::<f64>());
+                if let Some(end) = gotos.iter().find_map(|g| g.end(*ticket, reply)) {
+                    if let ndd::GoToEnd::Done(Some(x)) | ndd::GoToEnd::Exception(_, Some(x)) = end {
+                        self.stopped_at.push(x);
+                    }
+                    self.goto_ends.push(end);
                 }
-                self.goto_ends
-                    .extend(gotos.iter().find_map(|g| g.end(*ticket, reply)));
                 self.replies.push((service.to_string(), *ticket, text));
             }
             Event::Held { codel, reasons, .. } => {
