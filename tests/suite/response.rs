@@ -1,7 +1,8 @@
 //! End-to-end tests of response properties: a lasso counterexample printed with its cycle
 //! marked, saved with its loop start and replayed through the engine; a trace whose cycle
 //! does not close refused; a truncated run inconclusive (exit 3); a vacuous property
-//! warned about.
+//! warned about; late responses in a simulation and a replay; the rover's mission answered
+//! in time, and not without its operator.
 
 use crate::common::bip;
 
@@ -184,4 +185,96 @@ fn a_bound_passed_replays_with_the_engine_monitor_reporting_it() {
     );
     assert_eq!(text.matches("the engine's monitor").count(), 1, "{text}");
     assert!(text.contains("result: answered_in_one fails"), "{text}");
+}
+
+/// robots/rover-mission.ron with only the GoTo replies among its properties (the verdicts
+/// the README shows), and with its operator's bound on goals or without it.
+fn rover_mission(dir: &Path, bounded_goals: bool) -> String {
+    let text = std::fs::read_to_string(format!(
+        "{}/robots/rover-mission.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let operator =
+        "        (name: \"ndd_GoTo_request\", ports: [\"operator.goal\"], role: Environment),\n";
+    assert!(text.contains(operator), "the operator sends the goals");
+    let text = if bounded_goals {
+        text
+    } else {
+        text.replace(operator, "")
+    };
+    let at = text.rfind("properties: [").unwrap();
+    let text = format!(
+        r#"{}properties: [
+        Replies(service: "ndd.GoTo"),
+        Replies(service: "ndd.GoTo", within: 8),
+        Replies(name: "goto_in_7", service: "ndd.GoTo", within: 7),
+    ],
+)
+"#,
+        &text[..at]
+    );
+    let path = dir.join(if bounded_goals {
+        "mission.ron"
+    } else {
+        "unbounded.ron"
+    });
+    std::fs::write(&path, text).unwrap();
+    path.display().to_string()
+}
+
+#[test]
+fn the_rover_mission_gets_its_replies_in_time_and_not_without_its_operator() {
+    let dir = tempfile::tempdir().unwrap();
+    let caps = [
+        "--method",
+        "explicit",
+        "--max-states",
+        "8000000",
+        "--max-memory",
+        "3G",
+    ];
+    let model = rover_mission(dir.path(), true);
+    let o = bip(&[&["verify", &model][..], &caps].concat());
+    let text = out(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    let verdict = |name: &str| {
+        text.lines()
+            .find(|l| l.trim_start().starts_with(name))
+            .unwrap_or_else(|| panic!("no {name} in {text}"))
+            .to_string()
+    };
+    assert!(verdict("Replies(ndd.GoTo) ").contains("holds"), "{text}");
+    assert!(
+        verdict("Replies(ndd.GoTo, within: 8)").contains("holds"),
+        "{text}"
+    );
+    let tight = verdict("goto_in_7");
+    assert!(
+        tight.contains("FAILS") && tight.contains("the response does not come within 7 ticks"),
+        "{text}"
+    );
+    assert!(text.contains("5813697 states"), "{text}");
+    // without the operator, goals come for ever: the infinite-interrupt lasso
+    let model = rover_mission(dir.path(), false);
+    let o = bip(&[&["verify", &model][..], &caps].concat());
+    let text = out(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    let goto = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("Replies(ndd.GoTo) "))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        goto.contains("FAILS") && goto.contains("a cycle of 8 steps repeats forever"),
+        "{text}"
+    );
+    let cycle = text
+        .split("┌ the cycle: the steps below repeat forever")
+        .nth(1)
+        .and_then(|rest| rest.split("└ back to").next())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        cycle.contains("ndd_GoTo_start") && cycle.contains("ndd_GoTo_request"),
+        "a new goal interrupts the running one in the cycle: {text}"
+    );
 }
