@@ -11,6 +11,8 @@
 //!   candidates examined with the step relation and confirmed by explicit search;
 //! - `induction.rs`: invariants, reachability and range errors by bounded model checking
 //!   and k-induction strengthened with the same invariants;
+//! - `response.rs`: bounded response by the same two methods on the product with the
+//!   tick-counting observer (unbounded response is left inconclusive);
 //! - `confirm.rs`: symbolic findings turned into traces with the step relation.
 //!
 //! Nothing here says "holds" without a proof: an unknown solver answer, a candidate that is

@@ -404,14 +404,19 @@ fn confirm(
             "internal error: a symbolic counterexample does not replay ({e})"
         ));
     }
+    // worded as the explicit method words it
     let within = spec.within.unwrap_or(0);
-    let late = passes_bound(sys, spec, &path, name);
     let n = path.len();
-    let steps = format!("after {n} step{}", if n == 1 { "" } else { "s" });
-    let reason = if late {
-        format!("no response within {within} ticks of a trigger ({steps})")
+    let reason = if passes_bound(sys, spec, &path, name) {
+        format!(
+            "the response does not come within {within} tick{}: the tick of step {n} passes the bound",
+            if within == 1 { "" } else { "s" }
+        )
     } else {
-        format!("the run stops with a trigger unanswered ({steps})")
+        format!(
+            "the response never comes: the run stops after {n} step{} with the trigger unanswered (bound {within} ticks)",
+            if n == 1 { "" } else { "s" }
+        )
     };
     Finding::Fails(trace, reason)
 }
