@@ -106,7 +106,6 @@ impl Observer<'_> {
 
     /// The observer after the step `v` from `(f, o)` into `g`, and when evaluating the
     /// trigger or response on the way fails.
-    #[allow(clippy::too_many_arguments)]
     fn after_step(
         &self,
         p: &Prover<'_>,
@@ -119,8 +118,9 @@ impl Observer<'_> {
         let tick = or(labels
             .iter()
             .enumerate()
-            .filter_map(|(k, l)| (p.sys().role(*l) == Role::Time).then(|| v.sel.is(k as i64))));
-        let waiting = o.ge(&num(1));
+            .filter(|(_, l)| p.sys().role(**l) == Role::Time)
+            .map(|(k, _)| v.sel.is(k as i64)));
+        let waiting = o.ge(1);
         let at_bound = eq_num(o, self.late - 1);
         let late = and([waiting.clone(), tick.clone(), at_bound]);
         let counted = ite_int(&and2(&waiting, &tick), &(o + 1i64), o);
@@ -142,7 +142,7 @@ impl Observer<'_> {
     fn bad(&self, p: &Prover<'_>, x: &Product) -> Bool {
         let (_, t_err) = self.in_state(p, self.spec.trigger, &x.frame);
         let (_, r_err) = self.in_state(p, self.spec.response, &x.frame);
-        let waiting = and2(&x.obs.ge(&num(1)), &x.obs.le(&num(self.late - 1)));
+        let waiting = and2(&x.obs.ge(1), &x.obs.le(self.late - 1));
         or([
             eq_num(&x.obs, self.late),
             and2(&waiting, &stuck(p, &x.en)),
@@ -155,8 +155,8 @@ impl Observer<'_> {
     /// A fresh observer in its range, named after `prefix`.
     fn fresh(&self, solver: &z3::Solver, prefix: &str) -> Int {
         let o = Int::new_const(format!("{prefix}!obs"));
-        solver.assert(o.ge(&num(0)));
-        solver.assert(o.le(&num(self.late)));
+        solver.assert(o.ge(0));
+        solver.assert(o.le(self.late));
         o
     }
 }
