@@ -370,3 +370,79 @@ fn ctrl_c_reaches_a_symbolic_run_inside_a_solver_call() {
         "{stdout}"
     );
 }
+
+/// A counter that ticks to 100,000: its bounded response fails only at depth 100,000, and
+/// k-induction cannot prove it, so the symbolic method's observer encoding runs deeper and
+/// deeper until a limit ends it.
+fn deep_response(dir: &Path) -> String {
+    let path = dir.join("deep-response.ron");
+    std::fs::write(
+        &path,
+        r#"System(
+    name: "deep",
+    atoms: { "Counter": Atom(locations: ["s"], initial: "s", ports: ["tick"],
+        vars: [(name: "n", ty: Int(0, 100000))],
+        transitions: [(from: "s", port: "tick", to: "s", guard: "n < 100000", action: "n = n + 1")]) },
+    components: [(name: "x", atom: "Counter")],
+    connectors: [(name: "tick", ports: ["x.tick"], role: Time)],
+    properties: [Response(name: "late", trigger: "x.n == 99999", response: "false", within: 0)],
+)"#,
+    )
+    .unwrap();
+    path.display().to_string()
+}
+
+#[test]
+fn the_time_limit_holds_in_the_symbolic_response_encoding() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = deep_response(dir.path());
+    let (out, doc, _) = capped_verify(
+        &model,
+        &[
+            "--method",
+            "symbolic",
+            "--max-depth",
+            "100000",
+            "--timeout",
+            "2",
+            "--max-memory",
+            "1G",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(3), "{doc}");
+    assert_eq!(doc["stopped"]["reason"], "timeout", "{doc}");
+    let late = doc["properties"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "late")
+        .unwrap();
+    assert_eq!(late["verdict"], "inconclusive", "{doc}");
+    assert!(
+        doc["seconds"].as_f64().unwrap() < 5.0,
+        "--timeout 2 ran {} s",
+        doc["seconds"]
+    );
+}
+
+#[test]
+fn ctrl_c_ends_a_symbolic_response_proof() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = deep_response(dir.path());
+    let mut run = Running::start(&[&model, "--method", "symbolic", "--max-depth", "100000"]);
+    run.wait_for("late: bounded model checking of the observer");
+    std::thread::sleep(Duration::from_millis(500));
+    run.interrupt();
+    let (code, stdout) = run.finish(Duration::from_secs(30));
+    assert_eq!(code, Some(3), "{stdout}");
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.trim_start().starts_with("late") && l.ends_with("the run was interrupted")),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("stopped: the run was interrupted"),
+        "{stdout}"
+    );
+}

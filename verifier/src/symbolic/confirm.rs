@@ -15,7 +15,7 @@ use std::hash::{Hash, Hasher};
 
 use bip_model::eval::Expr;
 use bip_model::{
-    Liveness, LivenessChecker, OwnedStep, Property, State, Steps, System, Trace, TraceStep,
+    Label, Liveness, LivenessChecker, OwnedStep, Property, State, Steps, System, Trace, TraceStep,
     Verdict as TraceVerdict,
 };
 
@@ -31,6 +31,22 @@ pub fn trace_through(
     states: &[State],
     verdict: TraceVerdict,
 ) -> Result<Trace, String> {
+    let path = path_through(sys, states, &[])?;
+    let trace = Trace::from_path(sys, verdict, &path);
+    trace
+        .replay(sys)
+        .map_err(|e| format!("the trace does not replay: {e}"))?;
+    Ok(trace)
+}
+
+/// The steps through `states` (the first is the initial state), each with the state it
+/// leads to, found with the step relation; with `labels`, the `k`-th step has the `k`-th
+/// label (which two steps of the same effect may not share: a tick and another step).
+pub fn path_through(
+    sys: &System,
+    states: &[State],
+    labels: &[Label],
+) -> Result<Vec<(OwnedStep, State)>, String> {
     let mut steps = Steps::new();
     let mut path: Vec<(OwnedStep, State)> = Vec::with_capacity(states.len());
     if states.first() != Some(&sys.initial_state()) {
@@ -43,7 +59,8 @@ pub fn trace_through(
         let mut next = from.clone();
         let mut found = None;
         for s in steps.iter() {
-            if sys.fire(from, s, &mut next).is_ok() && &next == to {
+            let labelled = labels.get(k).is_none_or(|l| *l == s.label);
+            if labelled && sys.fire(from, s, &mut next).is_ok() && &next == to {
                 found = Some(s.to_owned());
                 break;
             }
@@ -52,11 +69,7 @@ pub fn trace_through(
             found.ok_or_else(|| format!("no step leads from state {k} of the path to the next"))?;
         path.push((step, to.clone()));
     }
-    let trace = Trace::from_path(sys, verdict, &path);
-    trace
-        .replay(sys)
-        .map_err(|e| format!("the trace does not replay: {e}"))?;
-    Ok(trace)
+    Ok(path)
 }
 
 /// What a bounded explicit exploration says about one property.

@@ -11,6 +11,8 @@
 //!   candidates examined with the step relation and confirmed by explicit search;
 //! - `induction.rs`: invariants, reachability and range errors by bounded model checking
 //!   and k-induction strengthened with the same invariants;
+//! - `response.rs`: bounded response by the same two methods on the product with the
+//!   tick-counting observer (unbounded response is left inconclusive);
 //! - `confirm.rs`: symbolic findings turned into traces with the step relation.
 //!
 //! Nothing here says "holds" without a proof: an unknown solver answer, a candidate that is
@@ -29,6 +31,7 @@ mod induction;
 mod invariants;
 mod net;
 mod prover;
+mod response;
 mod semiflows;
 mod solver;
 mod term;
@@ -236,11 +239,15 @@ fn run(
                     safety(p, Goal::Reach(e, &prop.name))
                 }),
             ),
+            ModelKind::Response { within: Some(_), .. } => (
+                check_kind(&prop.kind),
+                decide(&mut p, &prop.name, &|p| bounded_response(p, prop)),
+            ),
             // no proof method for them yet: never a verdict without one
-            ModelKind::Response { .. } => (
+            ModelKind::Response { within: None, .. } => (
                 check_kind(&prop.kind),
                 Outcome::unknown(
-                    "the symbolic method does not decide response properties; `--method explicit` does"
+                    "the symbolic method decides bounded response only (`within`); unbounded ones (LeadsTo, Replies without a bound, Terminates) need a liveness proof it does not have: `--method explicit` decides them"
                         .into(),
                 ),
             ),
@@ -430,5 +437,24 @@ fn safety(p: &mut Prover<'_>, goal: Goal<'_>) -> Outcome {
             Outcome::symbolic(verdict, Some("bounded model checking".into()))
         }
         Finding::Unknown(why) => Outcome::unknown(why),
+    }
+}
+
+fn bounded_response(p: &mut Prover<'_>, prop: &bip_model::Property) -> Outcome {
+    let Some(spec) = prop.kind.response_spec() else {
+        return Outcome::unknown("internal error: not a response property".into());
+    };
+    match response::bounded(p, spec, &prop.name) {
+        response::Finding::Holds { how } => {
+            Outcome::symbolic(PropertyVerdict::Holds { witness: None }, Some(how))
+        }
+        response::Finding::Fails(trace, reason) => Outcome::symbolic(
+            PropertyVerdict::Fails {
+                reason,
+                trace: Some(trace),
+            },
+            Some("bounded model checking with the observer, confirmed by the step relation".into()),
+        ),
+        response::Finding::Unknown(why) => Outcome::unknown(why),
     }
 }

@@ -92,6 +92,8 @@ pub struct StepEnc {
     pub fire_err: Bool,
     /// The successor's slots.
     pub next: Vec<Sym>,
+    /// The labels the selector numbers: `sel == k` chooses `labels[k]`.
+    pub labels: Vec<Label>,
 }
 
 impl Encoding<'_> {
@@ -123,6 +125,7 @@ impl Encoding<'_> {
                 valid: ff(),
                 fire_err: ff(),
                 next: f.slots.clone(),
+                labels,
             };
         }
         let sel_is = |k: i64| v.sel.is(k);
@@ -272,6 +275,7 @@ impl Encoding<'_> {
             valid: and(valid),
             fire_err: or(fire_errs),
             next,
+            labels,
         }
     }
 
@@ -338,10 +342,22 @@ impl Encoding<'_> {
         filter: &StepFilter,
         g: &Frame,
     ) -> Bool {
+        self.transition_labelled(f, en, v, filter, g).0
+    }
+
+    /// [`Encoding::transition`], with the labels `v.sel` numbers (for observers of steps).
+    pub fn transition_labelled(
+        &self,
+        f: &Frame,
+        en: &Enabling,
+        v: &StepVars,
+        filter: &StepFilter,
+        g: &Frame,
+    ) -> (Bool, Vec<Label>) {
         let s = self.step(f, en, v, filter);
         let mut parts = vec![not(&en.guard_error), s.valid, not(&s.fire_err)];
         parts.extend(g.slots.iter().zip(&s.next).map(|(a, b)| sym_eq(a, b)));
-        and(parts)
+        (and(parts), s.labels)
     }
 
     /// Some enabled step of `f` fails to fire, or its enabled steps cannot be computed:

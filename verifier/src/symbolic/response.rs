@@ -1,0 +1,444 @@
+//! Bounded response (`Response`, `Replies(within)`): bounded model checking and
+//! k-induction on the product of the step relation with an observer, the counter of
+//! `bip_model::ResponseWatch` (docs/symbolic.md, "Response properties").
+//!
+//! The observer is one integer per frame: 0 when no trigger waits, `c + 1` when the oldest
+//! trigger not yet answered came `c` ticks ago, and `K + 2` ("late") once a tick passes the
+//! bound `K`. A step updates it as `ResponseWatch::observe` does: a tick counts first (or
+//! makes it late), then a response (on the step or in the state it leads to) clears it,
+//! else a trigger starts it if none waits; a step both trigger and response clears it.
+//! The product's bad states are the late ones, those where a trigger waits and no step is
+//! enabled (the run stops unanswered), and those where the trigger or response cannot be
+//! evaluated. Bounded model checking finds a shortest bad path, which counts only once
+//! `System::shows_unanswered` confirms it on the run the step relation gives; k-induction,
+//! strengthened with the invariants on every frame, proves that none is reachable.
+
+use bip_model::{Happens, Label, ResponseSpec, ResponseWatch, Role, State, System, Trace};
+use z3::ast::{Bool, Int};
+
+use super::confirm::path_through;
+use super::encode::{Enabling, Frame, StepFilter, StepVars};
+use super::prover::Prover;
+use super::solver::Answer;
+use super::term::{and, and2, eq_num, err_formula, ff, ite_int, not, num, or};
+
+pub enum Finding {
+    Holds {
+        how: String,
+    },
+    /// A shortest run that leaves a trigger unanswered, confirmed, and why it fails.
+    Fails(Trace, String),
+    Unknown(String),
+}
+
+/// One frame of the product: the state's terms, what is enabled in it, its observer, and
+/// the condition that evaluating the trigger or response failed on the way into it.
+struct Product {
+    frame: Frame,
+    en: Enabling,
+    obs: Int,
+    err_in: Bool,
+}
+
+struct Observer<'a> {
+    spec: ResponseSpec<'a>,
+    /// `K + 2`, the late value.
+    late: i64,
+}
+
+impl Observer<'_> {
+    /// What `happens` says of a frame alone, and when its evaluation fails.
+    fn in_state(&self, p: &Prover<'_>, happens: &Happens, f: &Frame) -> (Bool, Bool) {
+        match happens {
+            Happens::State(e) => {
+                let v = p.eval(e, f);
+                (v.bool_term(), err_formula(&v.err))
+            }
+            Happens::Step(_) => (ff(), ff()),
+        }
+    }
+
+    /// What `happens` says of the step `v` (numbering `labels`) from `f` to `g`, and when
+    /// its evaluation fails (each part is evaluated only where the step relation's
+    /// `System::happens_on` evaluates it).
+    fn on_step(
+        &self,
+        p: &Prover<'_>,
+        happens: &Happens,
+        labels: &[Label],
+        v: &StepVars,
+        f: &Frame,
+        g: &Frame,
+    ) -> (Bool, Bool) {
+        let Happens::Step(patterns) = happens else {
+            return (ff(), ff());
+        };
+        let sys = p.sys();
+        let mut holds = Vec::new();
+        let mut errs = Vec::new();
+        for pat in patterns {
+            let on = or(labels.iter().enumerate().filter_map(|(k, l)| {
+                let matches = pat.connectors.is_empty()
+                    || matches!(*l, Label::Interaction(i)
+                        if pat.connectors.contains(&sys.interactions[i as usize].connector));
+                matches.then(|| v.sel.is(k as i64))
+            }));
+            let (before, before_err) = match &pat.before {
+                Some(e) => {
+                    let x = p.eval(e, f);
+                    (x.bool_term(), err_formula(&x.err))
+                }
+                None => (Bool::from_bool(true), ff()),
+            };
+            let (after, after_err) = match &pat.after {
+                Some(e) => {
+                    let x = p.eval(e, g);
+                    (x.bool_term(), err_formula(&x.err))
+                }
+                None => (Bool::from_bool(true), ff()),
+            };
+            errs.push(and2(&on, &before_err));
+            errs.push(and([on.clone(), before.clone(), after_err]));
+            holds.push(and([on, before, after]));
+        }
+        (or(holds), or(errs))
+    }
+
+    /// The observer after the step `v` from `(f, o)` into `g`, and when evaluating the
+    /// trigger or response on the way fails.
+    fn after_step(
+        &self,
+        p: &Prover<'_>,
+        o: &Int,
+        labels: &[Label],
+        v: &StepVars,
+        f: &Frame,
+        g: &Frame,
+    ) -> (Int, Bool) {
+        let tick = or(labels
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| p.sys().role(**l) == Role::Time)
+            .map(|(k, _)| v.sel.is(k as i64)));
+        let waiting = o.ge(1);
+        let at_bound = eq_num(o, self.late - 1);
+        let late = and([waiting.clone(), tick.clone(), at_bound]);
+        let counted = ite_int(&and2(&waiting, &tick), &(o + 1i64), o);
+        let (rs, rs_err) = self.on_step(p, self.spec.response, labels, v, f, g);
+        let (ra, ra_err) = self.in_state(p, self.spec.response, g);
+        let (ts, ts_err) = self.on_step(p, self.spec.trigger, labels, v, f, g);
+        let (ta, ta_err) = self.in_state(p, self.spec.trigger, g);
+        let answered = or([rs, ra]);
+        let triggered = and2(&eq_num(&counted, 0), &or([ts, ta]));
+        let next = ite_int(
+            &late,
+            &num(self.late),
+            &ite_int(&answered, &num(0), &ite_int(&triggered, &num(1), &counted)),
+        );
+        (next, or([rs_err, ra_err, ts_err, ta_err]))
+    }
+
+    /// The product frame is bad.
+    fn bad(&self, p: &Prover<'_>, x: &Product) -> Bool {
+        let (_, t_err) = self.in_state(p, self.spec.trigger, &x.frame);
+        let (_, r_err) = self.in_state(p, self.spec.response, &x.frame);
+        let waiting = and2(&x.obs.ge(1), &x.obs.le(self.late - 1));
+        or([
+            eq_num(&x.obs, self.late),
+            and2(&waiting, &stuck(p, &x.en)),
+            t_err,
+            r_err,
+            x.err_in.clone(),
+        ])
+    }
+
+    /// A fresh observer in its range, named after `prefix`.
+    fn fresh(&self, solver: &z3::Solver, prefix: &str) -> Int {
+        let o = Int::new_const(format!("{prefix}!obs"));
+        solver.assert(o.ge(0));
+        solver.assert(o.le(self.late));
+        o
+    }
+}
+
+/// No step at all is enabled in the frame, and its enabled steps can be computed (the
+/// explicit method's state with no edge and no range error).
+fn stuck(p: &Prover<'_>, en: &Enabling) -> Bool {
+    let mut parts = vec![not(&en.guard_error)];
+    parts.extend(en.allowed.iter().map(not));
+    for (c, comp) in p.sys().components.iter().enumerate() {
+        let internal = p.enc.by_port[comp.atom as usize].len() - 1;
+        parts.push(not(&en.port_en[c][internal]));
+    }
+    and(parts)
+}
+
+/// Decides the bounded response property `name` within `max_depth` steps of bounded model
+/// checking and k-induction up to `max_depth`.
+pub fn bounded(p: &mut Prover<'_>, spec: ResponseSpec<'_>, name: &str) -> Finding {
+    let sys = p.sys();
+    let context = format!("property {name}");
+    let Some(k_bound) = spec.within.and_then(|k| i64::try_from(k).ok()) else {
+        return Finding::Unknown("the bound is too large for the symbolic observer".into());
+    };
+    let Some(late) = k_bound.checked_add(2) else {
+        return Finding::Unknown("the bound is too large for the symbolic observer".into());
+    };
+    let obs = Observer { spec, late };
+    let init = sys.initial_state();
+    let start = match ResponseWatch::start(sys, spec, &init, &context) {
+        Ok(w) => w.waiting.map_or(0, |_| 1),
+        Err(e) => {
+            return Finding::Unknown(format!(
+                "range error in the initial state ({e}); `--method explicit` reports it"
+            ))
+        }
+    };
+    let max = p.options.symbolic.max_depth as usize;
+    let all = StepFilter::all(sys);
+    let bmc = p.solver();
+    let first = p.enc.concrete_frame(&init);
+    let mut path = vec![Product {
+        en: p.enc.enabling(&first),
+        frame: first,
+        obs: num(start),
+        err_in: ff(),
+    }];
+    let mut path_steps: Vec<(StepVars, Vec<Label>)> = Vec::new();
+    let step = p.solver();
+    let placed = p.reachable_frame(&step);
+    let name0 = p.fresh_name("o");
+    let mut frames = vec![Product {
+        en: p.enc.enabling(&placed.frame),
+        frame: placed.frame,
+        obs: obs.fresh(&step, &name0),
+        err_in: ff(),
+    }];
+    let mut distinct = false;
+    let mut induction_open = true;
+    let mut unknown: Option<String> = None;
+    for k in 1..=max.max(1) {
+        let d = k - 1;
+        p.step(format!(
+            "bounded model checking of the observer at depth {d}{}",
+            if induction_open {
+                format!(", k-induction at k = {k}")
+            } else {
+                String::new()
+            }
+        ));
+        bmc.push();
+        bmc.assert(obs.bad(p, &path[d]));
+        let answer = p.check(&bmc, &[]);
+        if answer == Answer::Sat {
+            let read = bmc.get_model().and_then(|m| {
+                let states: Option<Vec<State>> = path
+                    .iter()
+                    .map(|x| p.enc.read_state(&m, &x.frame))
+                    .collect();
+                let labels: Option<Vec<Label>> = path_steps
+                    .iter()
+                    .map(|(v, labels)| {
+                        (0..labels.len()).find_map(|k| {
+                            m.eval(&v.sel.is(k as i64), true)?
+                                .as_bool()?
+                                .then_some(labels[k])
+                        })
+                    })
+                    .collect();
+                Some((states?, labels?))
+            });
+            bmc.pop(1);
+            let Some((states, labels)) = read else {
+                return Finding::Unknown("the solver gave no model for a counterexample".into());
+            };
+            return confirm(sys, spec, name, &states, &labels);
+        }
+        bmc.pop(1);
+        if let Answer::Unknown(why) = answer {
+            return Finding::Unknown(format!("bounded model checking at depth {d}: {why}"));
+        }
+        if induction_open {
+            let good = not(&obs.bad(p, &frames[k - 1]));
+            step.assert(&good);
+            let placed = p.reachable_frame(&step);
+            let v = StepVars::fresh(sys, &p.fresh_name("s"));
+            let prev = &frames[k - 1];
+            let (t, labels) =
+                p.enc
+                    .transition_labelled(&prev.frame, &prev.en, &v, &all, &placed.frame);
+            step.assert(&t);
+            let (o_next, err_in) =
+                obs.after_step(p, &prev.obs, &labels, &v, &prev.frame, &placed.frame);
+            let name = p.fresh_name("o");
+            let o = obs.fresh(&step, &name);
+            step.assert(o.eq(&o_next));
+            let next = Product {
+                en: p.enc.enabling(&placed.frame),
+                frame: placed.frame,
+                obs: o,
+                err_in,
+            };
+            if distinct {
+                for x in &frames {
+                    step.assert(not(&same(p, x, &next)));
+                }
+            }
+            frames.push(next);
+            loop {
+                step.push();
+                step.assert(obs.bad(p, &frames[k]));
+                let answer = p.check(&step, &[]);
+                let model = (answer == Answer::Sat).then(|| step.get_model()).flatten();
+                step.pop(1);
+                match answer {
+                    Answer::Unsat => {
+                        return Finding::Holds {
+                            how: format!("{k}-induction on the product with the observer"),
+                        }
+                    }
+                    Answer::Unknown(why) => {
+                        unknown = Some(format!("k-induction at k = {k}: {why}"));
+                        induction_open = false;
+                        break;
+                    }
+                    Answer::Sat => {}
+                }
+                let repeats = model.is_some_and(|m| {
+                    let seen: Vec<Option<(State, Option<i64>)>> = frames
+                        .iter()
+                        .map(|x| {
+                            let s = p.enc.read_state(&m, &x.frame)?;
+                            Some((s, m.eval(&x.obs, true).and_then(|o| o.as_i64())))
+                        })
+                        .collect();
+                    (0..seen.len()).any(|i| (i + 1..seen.len()).any(|j| seen[i] == seen[j]))
+                });
+                if repeats && !distinct {
+                    distinct = true;
+                    for i in 0..frames.len() {
+                        for j in i + 1..frames.len() {
+                            step.assert(not(&same(p, &frames[i], &frames[j])));
+                        }
+                    }
+                    continue;
+                }
+                break;
+            }
+        }
+        // extend the bounded path by one step
+        let name = p.fresh_name("i");
+        let (next, domain) = p.enc.fresh_frame(&name);
+        for c in domain {
+            bmc.assert(&c);
+        }
+        let v = StepVars::fresh(sys, &p.fresh_name("p"));
+        let prev = &path[d];
+        let (t, labels) = p
+            .enc
+            .transition_labelled(&prev.frame, &prev.en, &v, &all, &next);
+        bmc.assert(&t);
+        let (o_next, err_in) = obs.after_step(p, &prev.obs, &labels, &v, &prev.frame, &next);
+        let o = obs.fresh(&bmc, &name);
+        bmc.assert(o.eq(&o_next));
+        path.push(Product {
+            en: p.enc.enabling(&next),
+            frame: next,
+            obs: o,
+            err_in,
+        });
+        path_steps.push((v, labels));
+        if let Some(stop) = p.budget.watch.look() {
+            return Finding::Unknown(stop.to_string());
+        }
+    }
+    let mut why = format!(
+        "neither proved (k-induction up to k = {max}) nor refuted (no counterexample within {} steps)",
+        max.max(1) - 1
+    );
+    if let Some(u) = unknown {
+        why.push_str(&format!("; {u}"));
+    }
+    Finding::Unknown(why)
+}
+
+/// Two product frames are the same state with the same observer.
+fn same(p: &Prover<'_>, a: &Product, b: &Product) -> Bool {
+    and2(&p.enc.frames_equal(&a.frame, &b.frame), &a.obs.eq(&b.obs))
+}
+
+/// The run through `states` by steps of `labels`, reported only if the step relation and
+/// `System::shows_unanswered` agree that it leaves a trigger unanswered.
+fn confirm(
+    sys: &System,
+    spec: ResponseSpec<'_>,
+    name: &str,
+    states: &[State],
+    labels: &[Label],
+) -> Finding {
+    let path = match path_through(sys, states, labels) {
+        Ok(path) => path,
+        Err(e) => {
+            return Finding::Unknown(format!(
+                "internal error: a symbolic counterexample is not a run of the model ({e})"
+            ))
+        }
+    };
+    match sys.shows_unanswered(spec, &path, None, &format!("property {name}")) {
+        Ok(true) => {}
+        Ok(false) => {
+            return Finding::Unknown(
+                "internal error: the observer and the step relation disagree on a counterexample"
+                    .into(),
+            )
+        }
+        Err(e) => {
+            return Finding::Unknown(format!(
+                "range error in the trigger or response ({e}); `--method explicit` reports it with its trace"
+            ))
+        }
+    }
+    let trace = Trace::from_path(sys, bip_model::Verdict::Violation(name.to_string()), &path);
+    if let Err(e) = trace.replay(sys) {
+        return Finding::Unknown(format!(
+            "internal error: a symbolic counterexample does not replay ({e})"
+        ));
+    }
+    // worded as the explicit method words it
+    let within = spec.within.unwrap_or(0);
+    let n = path.len();
+    let reason = if passes_bound(sys, spec, &path, name) {
+        format!(
+            "the response does not come within {within} tick{}: the tick of step {n} passes the bound",
+            if within == 1 { "" } else { "s" }
+        )
+    } else {
+        format!(
+            "the response never comes: the run stops after {n} step{} with the trigger unanswered (bound {within} ticks)",
+            if n == 1 { "" } else { "s" }
+        )
+    };
+    Finding::Fails(trace, reason)
+}
+
+/// The last step of `path` is a tick past the bound (rather than a stop with a trigger
+/// waiting).
+fn passes_bound(
+    sys: &System,
+    spec: ResponseSpec<'_>,
+    path: &[(bip_model::OwnedStep, State)],
+    name: &str,
+) -> bool {
+    let context = format!("property {name}");
+    let mut before = sys.initial_state();
+    let Ok(mut watch) = ResponseWatch::start(sys, spec, &before, &context) else {
+        return false;
+    };
+    for (s, after) in path {
+        if let Ok(true) = watch.observe(sys, spec, &before, s.as_step(), after, &context) {
+            return true;
+        }
+        before = after.clone();
+    }
+    false
+}
