@@ -13,8 +13,13 @@ use crate::names::{camel, ident, snake};
 use crate::requests::{self, RequestNames};
 use crate::{context, types, CodegenError};
 
-/// The bindings of `layer`, the GenoM layer of the system named `system`.
-pub(crate) fn bindings(system: &str, layer: &GenomMap) -> Result<String, CodegenError> {
+/// The bindings of `layer`, the GenoM layer of the system named `system`; with requests
+/// through a `Handle` if `handle` (bip-engine with `std`).
+pub(crate) fn bindings(
+    system: &str,
+    layer: &GenomMap,
+    handle: bool,
+) -> Result<String, CodegenError> {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -24,7 +29,7 @@ pub(crate) fn bindings(system: &str, layer: &GenomMap) -> Result<String, Codegen
     let mut seen = Scope::default();
     for m in &layer.modules {
         seen.claim(ident(&m.name), format!("module `{}`", m.name))?;
-        module(&mut out, layer, m)?;
+        module(&mut out, layer, m, handle)?;
     }
     let modules: Vec<&ModuleMap> = layer.modules.iter().filter(|m| has_codels(m)).collect();
     top_bind(&mut out, &modules);
@@ -64,7 +69,12 @@ struct Named<'a> {
     method: String,
 }
 
-fn module(out: &mut String, layer: &GenomMap, m: &ModuleMap) -> Result<(), CodegenError> {
+fn module(
+    out: &mut String,
+    layer: &GenomMap,
+    m: &ModuleMap,
+    handle: bool,
+) -> Result<(), CodegenError> {
     let mut types = Scope::default();
     let mut methods = Scope::default();
     let mut values = Scope::default();
@@ -98,6 +108,13 @@ fn module(out: &mut String, layer: &GenomMap, m: &ModuleMap) -> Result<(), Codeg
         let what = format!("the request of `{}.{}`", m.name, s.name);
         values.claim(n.function.clone(), what.clone())?;
         types.claim(n.ticket.clone(), format!("the ticket of {what}"))?;
+        if handle {
+            values.claim(n.from_handle.clone(), format!("{what} from a handle"))?;
+            types.claim(
+                n.pending.clone(),
+                format!("the replies of {what} from a handle"),
+            )?;
+        }
         types.claim(n.end.clone(), format!("the end of {what}"))?;
         types.claim(n.exception.clone(), format!("the exceptions of {what}"))?;
     }
@@ -105,6 +122,9 @@ fn module(out: &mut String, layer: &GenomMap, m: &ModuleMap) -> Result<(), Codeg
     let _ = writeln!(out, "pub mod {} {{", ident(&m.name));
     for (s, n) in &requests {
         requests::request(out, m, s, n);
+        if handle {
+            requests::request_from_handle(out, m, s, n);
+        }
     }
     if codels.is_empty() {
         out.push_str("}\n\n");

@@ -46,10 +46,19 @@ pub enum CodegenError {
     },
 }
 
-/// The bindings of `system`'s GenoM layer, as the text of a Rust module.
+/// The bindings of `system`'s GenoM layer, as the text of a Rust module, for bip-engine
+/// with its `std` feature (the default): with typed requests from other threads too
+/// (`request_go_to_from(&handle, ..)`, through a `bip_engine::Handle`).
 pub fn rust_bindings(system: &System) -> Result<String, CodegenError> {
     let layer = system.genom.as_ref().ok_or(CodegenError::NoGenomLayer)?;
-    emit::bindings(&system.name, layer)
+    emit::bindings(&system.name, layer, true)
+}
+
+/// The bindings for bip-engine without `std`: as [`rust_bindings`], without the requests
+/// from other threads (there is no `Handle` without `std`).
+pub fn rust_bindings_no_std(system: &System) -> Result<String, CodegenError> {
+    let layer = system.genom.as_ref().ok_or(CodegenError::NoGenomLayer)?;
+    emit::bindings(&system.name, layer, false)
 }
 
 /// Loads the model at `model`, writes its bindings to `out`, and tells cargo to run the

@@ -14,7 +14,11 @@ use crate::types::{rust_type, At};
 /// The Rust names a service's request takes.
 pub(crate) struct RequestNames {
     pub function: String,
+    /// The request through a `Handle`, from another thread.
+    pub from_handle: String,
     pub ticket: String,
+    /// The replies of a request made through a `Handle`.
+    pub pending: String,
     pub end: String,
     pub exception: String,
 }
@@ -22,9 +26,12 @@ pub(crate) struct RequestNames {
 impl RequestNames {
     pub fn of(s: &ServiceMap) -> RequestNames {
         let c = camel(&s.name);
+        let function = format!("request_{}", snake(&s.name).trim_start_matches("r#"));
         RequestNames {
-            function: format!("request_{}", snake(&s.name).trim_start_matches("r#")),
+            from_handle: format!("{function}_from"),
+            function,
             ticket: format!("{c}Ticket"),
+            pending: format!("{c}Pending"),
             end: format!("{c}End"),
             exception: format!("{c}Exception"),
         }
@@ -145,5 +152,32 @@ pub(crate) fn request(out: &mut String, m: &ModuleMap, s: &ServiceMap, n: &Reque
         out,
         "                _ => {}::Other(outcome.clone()),\n            }})\n        }}\n    }}\n",
         n.end
+    );
+}
+
+/// The same request from another thread, through a `bip_engine::Handle`, and its replies
+/// read as the typed end.
+pub(crate) fn request_from_handle(
+    out: &mut String,
+    m: &ModuleMap,
+    s: &ServiceMap,
+    n: &RequestNames,
+) {
+    let (param, sent) = match &s.args {
+        Some(ty) => (
+            format!(",\n        args: {}", rust_type(ty, At::Module)),
+            "args",
+        ),
+        None => (String::new(), "()"),
+    };
+    let _ = writeln!(
+        out,
+        "    /// Requests `{m}.{s}` from another thread, through `handle`; its replies come on\n    /// the returned channel (bip-engine with `std`).\n    pub fn {f}(\n        handle: &bip_engine::Handle{param},\n    ) -> Result<{p}, bip_engine::RequestError> {{\n        handle.request(\"{m}\", \"{s}\", {sent}).map({p})\n    }}\n\n    /// The replies of a request of `{m}.{s}` made through a `Handle`.\n    pub struct {p}(pub bip_engine::PendingReply);\n\n    impl {p} {{\n        /// How the request ended: waits at most `timeout` for each of its replies until\n        /// the one that ends it; `None` if one does not come in time or the engine is gone.\n        pub fn end(&self, timeout: std::time::Duration) -> Option<{e}> {{\n            loop {{\n                let (ticket, reply) = self.0.next(timeout)?;\n                if let Some(end) = {t}(ticket).end(ticket, &reply) {{\n                    return Some(end);\n                }}\n            }}\n        }}\n    }}\n",
+        m = m.name,
+        s = s.name,
+        f = n.from_handle,
+        p = n.pending,
+        t = n.ticket,
+        e = n.end,
     );
 }

@@ -2,7 +2,7 @@
 //! build script's rewrite only on change. That the rover's bindings compile and run is
 //! `testing/rover-bindings`.
 
-use bip_codegen::{rust_bindings, write_rust_bindings, CodegenError};
+use bip_codegen::{rust_bindings, rust_bindings_no_std, write_rust_bindings, CodegenError};
 
 fn load(text: &str) -> bip_model::System {
     bip_lang::load_str("m.ron", text).unwrap_or_else(|e| panic!("{e:?}"))
@@ -107,6 +107,28 @@ fn the_bindings_type_what_each_codel_may_touch() {
     );
     // an untyped port has no typed accessor
     assert!(!text.contains("read_nav_raw"), "{text}");
+}
+
+#[test]
+fn requests_from_other_threads_are_left_out_without_std() {
+    let with_std = rust_bindings(&load(TYPED)).expect("generates");
+    let handle_request = "pub fn request_go_to_from(\n        handle: &bip_engine::Handle,\n        args: i64,\n    ) -> Result<GoToPending, bip_engine::RequestError> {";
+    assert!(with_std.contains(handle_request), "{with_std}");
+    assert!(with_std.contains("pub struct GoToPending(pub bip_engine::PendingReply);"));
+    let without = rust_bindings_no_std(&load(TYPED)).expect("generates");
+    assert!(
+        !without.contains("Handle") && !without.contains("std::"),
+        "{without}"
+    );
+    // the rest is there: the requests, their tickets and ends
+    for want in [
+        "pub fn request_go_to(",
+        "pub struct GoToTicket(pub bip_engine::Ticket);",
+        "pub enum GoToEnd {",
+    ] {
+        assert!(without.contains(want), "no `{want}` in\n{without}");
+    }
+    assert!(!without.contains("Pending"), "{without}");
 }
 
 #[test]

@@ -196,6 +196,32 @@ fn a_typed_request_ends_with_its_typed_output() {
 }
 
 #[test]
+fn a_typed_request_from_another_thread_reads_its_typed_end() {
+    let system = system();
+    let mut engine = rover(&system, None);
+    let handle = engine.handle();
+    let client = std::thread::spawn(move || {
+        let pending = ndd::request_go_to_from(&handle, 0.4).expect("queued");
+        pending.end(std::time::Duration::from_secs(60))
+    });
+    // the engine serves the other thread's request as it runs
+    while !client.is_finished() {
+        engine.run_until(Until::Ticks(1)).expect("runs");
+        std::thread::yield_now();
+    }
+    let Some(ndd::GoToEnd::Done(Some(x))) = client.join().expect("the client") else {
+        panic!("GoTo did not reach its goal");
+    };
+    assert!(x >= 0.4, "stopped at {x}");
+    // arguments of the wrong type are refused at the request, from a thread too
+    let handle = engine.handle();
+    assert!(matches!(
+        handle.request("ndd", "GoTo", 0.4f32),
+        Err(bip_engine::RequestError::WrongArguments { .. })
+    ));
+}
+
+#[test]
 fn a_thrown_exception_is_the_services_exception_variant() {
     let system = system();
     let mut engine = rover(&system, Some(0.2));
