@@ -314,12 +314,7 @@ mod tests {
         );
         svg.text(5.0, 6.0, "x < y && z", Font::new(12.0).bold());
         let doc = svg.finish(100.0, 50.0, "T & U");
-        let parsed = roxmltree::Document::parse(&doc).expect("well-formed");
-        let texts: Vec<&str> = parsed
-            .descendants()
-            .filter(|n| n.has_tag_name("text"))
-            .filter_map(|n| n.text())
-            .collect();
+        let texts = crate::xml::read::texts(&doc);
         assert_eq!(texts, ["x < y && z"]);
         assert!(doc.contains(r#"width="3.5""#) && doc.contains(r#"height="4.25""#));
     }

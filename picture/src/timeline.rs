@@ -246,13 +246,8 @@ mod tests {
             legend: vec![("running".into(), "runs a codel".into())],
         };
         let doc = to_svg(&t);
-        let parsed = roxmltree::Document::parse(&doc).expect("well-formed");
-        let count = |prefix: &str| {
-            parsed
-                .descendants()
-                .filter(|n| n.attribute("class").is_some_and(|c| c.starts_with(prefix)))
-                .count()
-        };
+        let classes = crate::xml::read::classes(&doc);
+        let count = |prefix: &str| classes.iter().filter(|c| c.starts_with(prefix)).count();
         assert_eq!(count("lane"), 1);
         assert_eq!(count("segment"), 2);
         assert_eq!(count("event request"), 1);

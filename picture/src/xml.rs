@@ -18,6 +18,30 @@ pub fn escape(text: &str) -> String {
     out
 }
 
+/// What the pictures' tests read back from an SVG (which must parse as XML): its texts and
+/// the class of each element.
+#[cfg(test)]
+pub(crate) mod read {
+    pub(crate) fn texts(doc: &str) -> Vec<String> {
+        parsed(doc)
+            .descendants()
+            .filter(|n| n.has_tag_name("text"))
+            .filter_map(|n| n.text().map(str::to_string))
+            .collect()
+    }
+
+    pub(crate) fn classes(doc: &str) -> Vec<String> {
+        parsed(doc)
+            .descendants()
+            .filter_map(|n| n.attribute("class").map(str::to_string))
+            .collect()
+    }
+
+    fn parsed(doc: &str) -> roxmltree::Document<'_> {
+        roxmltree::Document::parse(doc).expect("well-formed XML")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
