@@ -193,11 +193,10 @@ fn bad_properties_are_load_errors_with_positions() {
     assert_eq!(o.status.code(), Some(2));
 }
 
-#[test]
-fn a_hundred_million_states_under_a_state_limit_end_inconclusive() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = write_model(
-        dir.path(),
+/// Eight counters of ten values each: 10^8 states, past every limit the tests set.
+fn huge_model(dir: &Path) -> String {
+    write_model(
+        dir,
         "huge.ron",
         r#"System(
             name: "huge",
@@ -205,7 +204,13 @@ fn a_hundred_million_states_under_a_state_limit_end_inconclusive() {
                                transitions: [(from: "s", to: "s", action: "v = (v + 1) % 10")]) },
             components: [(name: "c", atom: "C", count: 8)],
         )"#,
-    );
+    )
+}
+
+#[test]
+fn a_hundred_million_states_under_a_state_limit_end_inconclusive() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = huge_model(dir.path());
     let start = std::time::Instant::now();
     let o = bip(&[
         "verify",
@@ -299,16 +304,7 @@ fn symbolic_and_auto_methods() {
     let o = bip(&["verify", &weak, "--method", "explicit", "-q"]);
     assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
     // auto: past its state budget the explicit method hands over to the symbolic one
-    let huge = write_model(
-        dir.path(),
-        "huge.ron",
-        r#"System(
-            name: "huge",
-            atoms: { "C": Atom(locations: ["s"], initial: "s", vars: [(name: "v", ty: Int(0, 9))],
-                               transitions: [(from: "s", to: "s", action: "v = (v + 1) % 10")]) },
-            components: [(name: "c", atom: "C", count: 8)],
-        )"#,
-    );
+    let huge = huge_model(dir.path());
     let o = bip(&["verify", &huge, "--max-states", "10000", "-q"]);
     assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
     assert!(stdout(&o).contains("[symbolic]"), "{}", stdout(&o));
@@ -574,16 +570,7 @@ fn a_range_error_trace_ends_with_the_step_that_makes_it() {
 #[test]
 fn auto_reports_each_phase_and_the_whole_run() {
     let dir = tempfile::tempdir().unwrap();
-    let huge = write_model(
-        dir.path(),
-        "huge.ron",
-        r#"System(
-            name: "huge",
-            atoms: { "C": Atom(locations: ["s"], initial: "s", vars: [(name: "v", ty: Int(0, 9))],
-                               transitions: [(from: "s", to: "s", action: "v = (v + 1) % 10")]) },
-            components: [(name: "c", atom: "C", count: 8)],
-        )"#,
-    );
+    let huge = huge_model(dir.path());
     let o = bip(&["verify", &huge, "--max-states", "10000"]);
     assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
     let text = stdout(&o);
