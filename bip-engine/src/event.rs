@@ -272,6 +272,8 @@ pub enum FaultKind {
     BadTransition(&'static str),
     /// It threw an exception that is not among its `throws`.
     UndeclaredException(&'static str),
+    /// It returned [`crate::Next::Declared`] past its declared outcomes.
+    UndeclaredOutcome(u16),
     /// It wrote an ids field its `writes` does not list (or the module has no such field).
     UndeclaredIdsWrite(String),
     /// It left an ids field out of its range.
@@ -303,6 +305,12 @@ impl fmt::Display for FaultKind {
             FaultKind::BadTransition(y) => write!(f, "returned `{y}`, which it does not yield"),
             FaultKind::UndeclaredException(e) => {
                 write!(f, "threw `{e}`, which it does not declare")
+            }
+            FaultKind::UndeclaredOutcome(k) => {
+                write!(
+                    f,
+                    "returned outcome {k}, past the yields and exceptions it declares"
+                )
             }
             FaultKind::UndeclaredIdsWrite(x) => {
                 write!(f, "wrote ids field `{x}`, which its `writes` does not list")

@@ -77,6 +77,7 @@ mod policy;
 mod ports;
 mod record;
 pub mod replay;
+mod signature;
 pub mod simulate;
 #[cfg(feature = "std")]
 mod threads;
@@ -106,3 +107,4 @@ pub use event::{
 pub use handle::{Handle, PendingReply};
 pub use policy::Policy;
 pub use record::Window;
+pub use signature::CodelSignature;

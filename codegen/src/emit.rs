@@ -1,7 +1,7 @@
 //! The text of the bindings: per module a `mod` with, per codel, an enum of its yields and
 //! exceptions (and its conversion to `bip_engine::Next`), a `Codels` trait with one method
-//! per codel, and a `bind`; at the top, one `bind` for every module. The text is written
-//! formatted as rustfmt would, and documented.
+//! per codel, the codels' signature `CODELS` and a `bind`; at the top, one `bind` for
+//! every module. The text is written formatted as rustfmt would, and documented.
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -80,6 +80,10 @@ fn module(
     let mut values = Scope::default();
     types.claim("Codels".into(), "the trait of the module's codels".into())?;
     values.claim("bind".into(), "the module's `bind`".into())?;
+    values.claim(
+        "CODELS".into(),
+        "the signature of the module's codels".into(),
+    )?;
     let mut codels = Vec::new();
     for s in &m.services {
         for c in &s.codels {
@@ -156,6 +160,7 @@ fn module(
         );
     }
     out.push_str("    }\n\n");
+    signature(out, m, &codels);
     let _ = writeln!(
         out,
         "    /// Binds every codel of module `{}` to the methods of `codels`.",
@@ -166,7 +171,7 @@ fn module(
     );
     let _ = write!(
         out,
-        "        builder.module(\"{}\", move |codel, ctx| match codel {{",
+        "        builder.module(\"{}\", CODELS, move |codel, ctx| match codel {{",
         m.name
     );
     for (k, n) in codels.iter().enumerate() {
@@ -193,25 +198,22 @@ fn outcome_enum(out: &mut String, m: &ModuleMap, n: &Named<'_>) -> Result<(), Co
     for y in &n.codel.yields {
         let v = camel(&y.target);
         variants.claim(v.clone(), format!("yield `{}`", y.target))?;
-        arms.push((
-            v,
-            format!("yield `{}`", y.target),
-            format!("Yield(\"{}\")", y.target),
-        ));
+        arms.push((v, format!("yield `{}`", y.target)));
     }
     for e in &n.codel.throws {
         let v = camel(e);
         variants.claim(v.clone(), format!("exception `{e}`"))?;
-        arms.push((v, format!("exception `{e}`"), format!("Throw(\"{e}\")")));
+        arms.push((v, format!("exception `{e}`")));
     }
     let _ = writeln!(
         out,
         "    /// What codel `{}` of `{}.{}` may end with: its yields and exceptions.",
         n.codel.state, m.name, n.service.name
     );
-    out.push_str("    #[derive(Clone, Copy, Debug, PartialEq, Eq)]\n");
+    // numbered from 0 as declared: the outcome's index for `Next::Declared`
+    out.push_str("    #[derive(Clone, Copy, Debug, PartialEq, Eq)]\n    #[repr(u16)]\n");
     let _ = writeln!(out, "    pub enum {} {{", n.ty);
-    for (v, doc, _) in &arms {
+    for (v, doc) in &arms {
         let _ = writeln!(out, "        /// The {doc}.\n        {v},");
     }
     out.push_str("    }\n\n");
@@ -222,26 +224,42 @@ fn outcome_enum(out: &mut String, m: &ModuleMap, n: &Named<'_>) -> Result<(), Co
         len = arms.len(),
         all = arms
             .iter()
-            .map(|(v, _, _)| format!("{}::{v}", n.ty))
+            .map(|(v, _)| format!("{}::{v}", n.ty))
             .collect::<Vec<_>>()
             .join(", "),
     );
-    let _ = writeln!(out, "    impl From<{}> for bip_engine::Next {{", n.ty);
     let _ = writeln!(
         out,
-        "        fn from(outcome: {}) -> bip_engine::Next {{",
-        n.ty
+        "    impl From<{ty}> for bip_engine::Next {{\n        fn from(outcome: {ty}) -> bip_engine::Next {{\n            // the variants are numbered as the model declares the outcomes, which `bind`\n            // checks\n            bip_engine::Next::Declared(outcome as u16)\n        }}\n    }}\n",
+        ty = n.ty
     );
-    out.push_str("            match outcome {\n");
-    for (v, _, next) in &arms {
+    Ok(())
+}
+
+/// The module's codels as `bind` numbers them, with their outcomes as their enums number
+/// them: the engine checks them against the model it is built for.
+fn signature(out: &mut String, m: &ModuleMap, codels: &[Named<'_>]) {
+    let _ = writeln!(
+        out,
+        "    /// The codels of module `{}` as [`bind`] numbers them, with their outcomes: the\n    /// engine refuses to build if its model declares others.\n    pub const CODELS: &[bip_engine::CodelSignature] = &[",
+        m.name
+    );
+    let list = |xs: Vec<&str>| -> String {
+        xs.iter()
+            .map(|x| format!("{x:?}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    for n in codels {
+        let yields = list(n.codel.yields.iter().map(|y| y.target.as_str()).collect());
+        let throws = list(n.codel.throws.iter().map(String::as_str).collect());
         let _ = writeln!(
             out,
-            "                {}::{v} => bip_engine::Next::{next},",
-            n.ty
+            "        bip_engine::CodelSignature {{\n            service: {:?},\n            codel: {:?},\n            yields: &[{yields}],\n            throws: &[{throws}],\n        }},",
+            n.service.name, n.codel.state
         );
     }
-    out.push_str("            }\n        }\n    }\n\n");
-    Ok(())
+    out.push_str("    ];\n\n");
 }
 
 /// One `bind` for every module with codels.

@@ -19,6 +19,7 @@ use crate::per_state::PerState;
 use crate::policy::{Chooser, Policy, Rng};
 use crate::ports::PortStore;
 use crate::record::Recording;
+use crate::signature::CodelSignature;
 
 /// How many states [`EngineBuilder::state_cache`] remembers by default: about 1.5 MiB
 /// for a model the size of robots/rover.ron, at the 1.5 KiB per state measured there
@@ -29,7 +30,7 @@ pub const DEFAULT_STATE_CACHE: usize = 1024;
 pub struct EngineBuilder {
     system: System,
     bindings: Vec<((String, String, String), CodelFn)>,
-    modules: Vec<(String, ModuleFn)>,
+    modules: Vec<(String, &'static [CodelSignature], ModuleFn)>,
     defaults: Option<DefaultCodels>,
     clock: Option<Box<dyn Clock>>,
     policy: Policy,
@@ -65,16 +66,18 @@ impl EngineBuilder {
 
     /// Binds every codel of module `module` to one object: `f(k, ctx)` runs the module's
     /// `k`-th codel, in the GenoM map's order (its services, then their codels, as
-    /// declared). This is how generated bindings bind a module (docs/codegen.md): one
+    /// declared), which `codels` names with their outcomes: the build fails if the model
+    /// says otherwise. This is how generated bindings bind a module (docs/codegen.md): one
     /// object serves all its codels, with no lock, since the engine calls one codel at a
     /// time. With [`EngineBuilder::threads`], a module whose codels run on several tasks
     /// is called from their threads one at a time, behind a lock.
     pub fn module(
         mut self,
         module: &str,
+        codels: &'static [CodelSignature],
         f: impl FnMut(usize, &mut Ctx<'_>) -> Next + Send + 'static,
     ) -> Self {
-        self.modules.push((module.into(), Box::new(f)));
+        self.modules.push((module.into(), codels, Box::new(f)));
         self
     }
 
@@ -160,12 +163,19 @@ impl EngineBuilder {
             bodies[k] = Some(Body::Bound(f));
         }
         let mut modules = Vec::with_capacity(self.modules.len());
-        for (m, f) in self.modules {
+        for (m, signature, f) in self.modules {
             let codels: Vec<usize> = (0..t.codels.len())
                 .filter(|&k| t.codels[k].info.module == m)
                 .collect();
-            if codels.is_empty() {
+            let map = system.genom.as_ref().and_then(|g| g.module(&m));
+            let (false, Some(map)) = (codels.is_empty(), map) else {
                 return Err(BuildError::UnknownModule(m));
+            };
+            if let Some(difference) = crate::signature::difference(signature, map) {
+                return Err(BuildError::OtherModel {
+                    module: m,
+                    difference,
+                });
             }
             for (local, &k) in codels.iter().enumerate() {
                 if bodies[k].is_some() {

@@ -212,20 +212,6 @@ impl Engine {
             }
             None => (None, None),
         };
-        // a module object's codel is called through a closure on the stack, so that both
-        // kinds take the one call below
-        let mut dispatch;
-        let f: &mut dyn FnMut(&mut Ctx<'_>) -> Next = match &mut self.runner.bodies[ck] {
-            Body::Bound(f) => f,
-            &mut Body::Module { module, local } => {
-                let Some(m) = self.runner.modules.get_mut(module) else {
-                    return Err("no such module object".into());
-                };
-                dispatch = move |ctx: &mut Ctx<'_>| m(local, ctx);
-                &mut dispatch
-            }
-            _ => return Err("not a bound codel".into()),
-        };
         let mut ctx = Ctx {
             info: &self.t.codels[ck].info,
             ids: &mut self.runner.ids,
@@ -237,7 +223,14 @@ impl Engine {
             now_us,
             tick,
         };
-        call_guarded(&mut ctx, f)
+        match &mut self.runner.bodies[ck] {
+            Body::Bound(f) => call_guarded(&mut ctx, f),
+            &mut Body::Module { module, local } => match self.runner.modules.get_mut(module) {
+                Some(m) => call_guarded(&mut ctx, |ctx: &mut Ctx<'_>| m(local, ctx)),
+                None => Err("no such module object".into()),
+            },
+            _ => Err("not a bound codel".into()),
+        }
     }
 
     pub(super) fn classify(&mut self, ck: usize, result: Result<Next, String>) -> CodelEnd {
@@ -263,25 +256,35 @@ impl Engine {
             };
             return fault(&c.name, kind);
         }
-        match next {
+        let yield_k = match next {
             Next::Yield(y) => match c.yield_index(y) {
-                None => fault(&c.name, FaultKind::BadTransition(y)),
-                Some(k) => {
-                    for (j, f) in c.info.fields.iter().enumerate() {
-                        let v = self.runner.ids[j];
-                        if self.runner.written >> j & 1 == 1 && (v < f.lo || v > f.hi) {
-                            let field = f.name.clone();
-                            return fault(&c.name, FaultKind::IdsOutOfRange { field, value: v });
-                        }
+                Some(k) => k,
+                None => return fault(&c.name, FaultKind::BadTransition(y)),
+            },
+            Next::Throw(e) => {
+                return match c.throws.iter().find(|x| &***x == e) {
+                    Some(x) => CodelEnd::Failed(Outcome::Exception(Arc::clone(x))),
+                    None => fault(&c.name, FaultKind::UndeclaredException(e)),
+                }
+            }
+            Next::Declared(k) => match usize::from(k).checked_sub(c.map.yields.len()) {
+                None => usize::from(k),
+                Some(e) => {
+                    return match c.throws.get(e) {
+                        Some(x) => CodelEnd::Failed(Outcome::Exception(Arc::clone(x))),
+                        None => fault(&c.name, FaultKind::UndeclaredOutcome(k)),
                     }
-                    CodelEnd::Yielded { yield_k: k }
                 }
             },
-            Next::Throw(e) => match c.throws.iter().find(|x| &***x == e) {
-                Some(x) => CodelEnd::Failed(Outcome::Exception(Arc::clone(x))),
-                None => fault(&c.name, FaultKind::UndeclaredException(e)),
-            },
+        };
+        for (j, f) in c.info.fields.iter().enumerate() {
+            let v = self.runner.ids[j];
+            if self.runner.written >> j & 1 == 1 && (v < f.lo || v > f.hi) {
+                let field = f.name.clone();
+                return fault(&c.name, FaultKind::IdsOutOfRange { field, value: v });
+            }
         }
+        CodelEnd::Yielded { yield_k }
     }
 
     /// A default codel's outcome: what the forced step says, the first yield, or a

@@ -4,8 +4,8 @@
 use crate::common;
 
 use bip_engine::{
-    DefaultCodels, Engine, EngineBuilder, Event, FaultKind, Next, Outcome, RealClock, Reply,
-    RequestError, Stepped, Until,
+    CodelSignature, DefaultCodels, Engine, EngineBuilder, Event, FaultKind, Next, Outcome,
+    RealClock, Reply, RequestError, Stepped, Until,
 };
 use common::*;
 
@@ -409,7 +409,7 @@ fn a_module_object_serves_all_its_codels_by_index() {
         let seen = calls.clone();
         let mut runs = 0;
         let mut e = Engine::builder(load_text(IDS_MODEL))
-            .module("m", move |codel, ctx| {
+            .module("m", IDS_MODULE, move |codel, ctx| {
                 seen.lock()
                     .expect("lock")
                     .push((codel, ctx.state().to_string()));
@@ -460,7 +460,7 @@ fn a_module_object_serves_all_its_codels_by_index() {
 #[test]
 fn a_module_object_is_bound_to_a_module_with_codels_and_only_once() {
     let err = Engine::builder(load_text(IDS_MODEL))
-        .module("n", |_, _| Next::ETHER)
+        .module("n", IDS_MODULE, |_, _| Next::ETHER)
         .build()
         .err();
     assert!(
@@ -469,11 +469,88 @@ fn a_module_object_is_bound_to_a_module_with_codels_and_only_once() {
     );
     let err = Engine::builder(load_text(IDS_MODEL))
         .codel(("m", "S", "main"), |_| Next::ETHER)
-        .module("m", |_, _| Next::ETHER)
+        .module("m", IDS_MODULE, |_, _| Next::ETHER)
         .build()
         .err();
     assert!(
         matches!(err, Some(bip_engine::BuildError::BoundTwice(..))),
         "{err:?}"
     );
+}
+
+/// Module `m` of IDS_MODEL as a module object numbers its codels and outcomes.
+const IDS_MODULE: &[CodelSignature] = &[
+    CodelSignature {
+        service: "S",
+        codel: "start",
+        yields: &["pause::main"],
+        throws: &[],
+    },
+    CodelSignature {
+        service: "S",
+        codel: "main",
+        yields: &["pause::main", "ether"],
+        throws: &["e_bad"],
+    },
+];
+
+/// A module object made for another version of the model (bindings not regenerated) is
+/// refused when the engine is built, with the first difference, rather than having its
+/// codels and outcomes called by the wrong numbers.
+#[test]
+fn a_module_object_made_for_another_model_is_refused() {
+    let build = |signature: Vec<CodelSignature>| {
+        Engine::builder(load_text(IDS_MODEL))
+            .module("m", signature.leak(), |_, _| Next::ETHER)
+            .build()
+            .err()
+            .map(|e| e.to_string())
+    };
+    assert_eq!(build(IDS_MODULE.to_vec()), None);
+    let reordered = vec![
+        CodelSignature {
+            yields: &["ether", "pause::main"],
+            ..IDS_MODULE[1]
+        },
+        IDS_MODULE[0],
+    ];
+    let stale = [
+        (IDS_MODULE[..1].to_vec(), "they have 1 codels, the model 2"),
+        (
+            reordered,
+            "their codel 0 is `S.main`, the model's is `S.start`",
+        ),
+        (
+            vec![
+                IDS_MODULE[0],
+                CodelSignature {
+                    yields: &["ether", "pause::main"],
+                    ..IDS_MODULE[1]
+                },
+            ],
+            "codel `S.main` yields [\"ether\", \"pause::main\"] in them, [\"pause::main\", \"ether\"] in the model",
+        ),
+        (
+            vec![
+                IDS_MODULE[0],
+                CodelSignature {
+                    throws: &[],
+                    ..IDS_MODULE[1]
+                },
+            ],
+            "codel `S.main` throws [] in them, [\"e_bad\"] in the model",
+        ),
+        (
+            vec![IDS_MODULE[0], IDS_MODULE[1], IDS_MODULE[1]],
+            "they have 3 codels, the model 2",
+        ),
+    ];
+    for (signature, difference) in stale {
+        assert_eq!(
+            build(signature),
+            Some(format!(
+                "module `m` was bound for another model: {difference}; regenerate its bindings from this model"
+            ))
+        );
+    }
 }

@@ -161,6 +161,33 @@ fn an_undeclared_exception_is_a_fault_and_a_declared_one_an_outcome() {
     );
 }
 
+/// `Next::Declared(k)` numbers `main`'s outcomes as the model declares them: `pause::main`,
+/// `ether`, then `e_bad`; past them is a fault.
+#[test]
+fn a_declared_outcome_is_numbered_yields_then_exceptions() {
+    let (_, events) = run_main(|_| Next::Declared(1), None);
+    assert!(faults(&events).is_empty(), "{events:?}");
+    assert_eq!(done(&events).last(), Some(&Outcome::Ether));
+    let (_, events) = run_main(|_| Next::Declared(2), None);
+    assert!(faults(&events).is_empty(), "{events:?}");
+    assert_eq!(
+        done(&events).last(),
+        Some(&Outcome::Exception("e_bad".into()))
+    );
+    let (e, events) = run_main(|_| Next::Declared(3), None);
+    assert_eq!(faults(&events)[0], FaultKind::UndeclaredOutcome(3));
+    assert_error_path_and_recovery(e, &events);
+    // `pause::main` loops: the codel runs again, and ends the second time
+    let runs = Arc::new(AtomicU32::new(0));
+    let r = runs.clone();
+    let (_, events) = run_main(
+        move |_| Next::Declared(u16::from(r.fetch_add(1, Ordering::SeqCst) > 0)),
+        None,
+    );
+    assert!(runs.load(Ordering::SeqCst) >= 2);
+    assert_eq!(done(&events).last(), Some(&Outcome::Ether));
+}
+
 #[test]
 fn ids_left_out_of_range_are_a_fault_and_are_not_written() {
     let (e, events) = run_main(

@@ -32,10 +32,13 @@ fn the_bindings_hold_an_enum_per_codel_a_trait_and_binds() {
         "        PauseMain,\n",
         "        Ether,\n",
         "        ELost,\n",
-        "RunMain::ELost => bip_engine::Next::Throw(\"e_lost\"),",
-        "RunMain::PauseMain => bip_engine::Next::Yield(\"pause::main\"),",
+        // numbered as the model declares them, as `Next::Declared` takes them
+        "#[repr(u16)]\n    pub enum RunMain {",
+        "bip_engine::Next::Declared(outcome as u16)",
         "fn run_start(&mut self, ctx: RunStartCtx<'_, '_>) -> RunStart;",
-        "builder.module(\"type\", move |codel, ctx| match codel {",
+        // the numbering the engine checks against its model
+        "bip_engine::CodelSignature {\n            service: \"Run\",\n            codel: \"main\",\n            yields: &[\"pause::main\", \"ether\"],\n            throws: &[\"e_lost\"],\n        },",
+        "builder.module(\"type\", CODELS, move |codel, ctx| match codel {",
         "1 => codels.run_main(RunMainCtx { ctx }).into(),",
         "pub fn bind(\n    builder: bip_engine::EngineBuilder,\n    r#type: impl r#type::Codels,\n",
     ] {
