@@ -76,7 +76,15 @@ const CRATES: &[Layers] = &[
             ),
             (
                 "codels",
-                &["codel", "event", "bind", "chosen", "per_state", "record"],
+                &[
+                    "codel",
+                    "event",
+                    "bind",
+                    "chosen",
+                    "per_state",
+                    "record",
+                    "signature",
+                ],
             ),
             ("remote", &["handle", "threads"]),
             ("engine", &["engine"]),

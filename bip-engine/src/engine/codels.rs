@@ -13,7 +13,7 @@ use bip_model::Step;
 use super::replies::Cause;
 use super::schedule::count_first;
 use super::{Engine, Stepped};
-use crate::bind::RunStep;
+use crate::bind::{CodelTable, RunStep};
 use crate::budgets::CodelTime;
 use crate::codel::{call_guarded, Body, Ctx, CtxFault, DefaultCodels, Next};
 use crate::error::{EngineError, StepAsError};
@@ -256,35 +256,20 @@ impl Engine {
             };
             return fault(&c.name, kind);
         }
-        let yield_k = match next {
+        match next {
             Next::Yield(y) => match c.yield_index(y) {
-                Some(k) => k,
-                None => return fault(&c.name, FaultKind::BadTransition(y)),
+                Some(k) => ids_in_range(c, &self.runner.ids, self.runner.written, k),
+                None => fault(&c.name, FaultKind::BadTransition(y)),
             },
-            Next::Throw(e) => {
-                return match c.throws.iter().find(|x| &***x == e) {
-                    Some(x) => CodelEnd::Failed(Outcome::Exception(Arc::clone(x))),
-                    None => fault(&c.name, FaultKind::UndeclaredException(e)),
-                }
-            }
             Next::Declared(k) => match usize::from(k).checked_sub(c.map.yields.len()) {
-                None => usize::from(k),
-                Some(e) => {
-                    return match c.throws.get(e) {
-                        Some(x) => CodelEnd::Failed(Outcome::Exception(Arc::clone(x))),
-                        None => fault(&c.name, FaultKind::UndeclaredOutcome(k)),
-                    }
-                }
+                None => ids_in_range(c, &self.runner.ids, self.runner.written, usize::from(k)),
+                Some(_) => declared_exception(c, k),
             },
-        };
-        for (j, f) in c.info.fields.iter().enumerate() {
-            let v = self.runner.ids[j];
-            if self.runner.written >> j & 1 == 1 && (v < f.lo || v > f.hi) {
-                let field = f.name.clone();
-                return fault(&c.name, FaultKind::IdsOutOfRange { field, value: v });
-            }
+            Next::Throw(e) => match c.throws.iter().find(|x| &***x == e) {
+                Some(x) => CodelEnd::Failed(Outcome::Exception(Arc::clone(x))),
+                None => fault(&c.name, FaultKind::UndeclaredException(e)),
+            },
         }
-        CodelEnd::Yielded { yield_k }
     }
 
     /// A default codel's outcome: what the forced step says, the first yield, or a
@@ -518,6 +503,28 @@ impl Engine {
 }
 
 /// The end of a faulty run of `codel`.
+/// The exception `Next::Declared(k)` names, or a fault if `k` is past them.
+#[cold]
+fn declared_exception(c: &CodelTable, k: u16) -> CodelEnd {
+    match c.throws.get(usize::from(k) - c.map.yields.len()) {
+        Some(x) => CodelEnd::Failed(Outcome::Exception(Arc::clone(x))),
+        None => fault(&c.name, FaultKind::UndeclaredOutcome(k)),
+    }
+}
+
+/// Yield `yield_k`, unless the codel left an ids field it wrote out of its range.
+fn ids_in_range(c: &CodelTable, ids: &[i64], written: u64, yield_k: usize) -> CodelEnd {
+    for (j, f) in c.info.fields.iter().enumerate() {
+        let v = ids[j];
+        if written >> j & 1 == 1 && (v < f.lo || v > f.hi) {
+            let field = f.name.clone();
+            return fault(&c.name, FaultKind::IdsOutOfRange { field, value: v });
+        }
+    }
+    CodelEnd::Yielded { yield_k }
+}
+
+#[cold]
 fn fault(codel: &Arc<Codel>, kind: FaultKind) -> CodelEnd {
     CodelEnd::Failed(Outcome::Fault(Fault {
         codel: Arc::clone(codel),

@@ -248,3 +248,41 @@ fn arguments_out_of_an_int_range_are_refused_at_the_request() {
     assert!(err.to_string().contains("Int(1, 10)"), "{err}");
     antenna::request_communicate(&mut engine, 3).expect("in range");
 }
+
+/// Bindings generated from one version of the model, bound to an engine built for
+/// another (here `rflex.TrackSpeed.track` yields `ether` first): the build fails and says
+/// what differs, where the codels' outcomes would otherwise be taken by the wrong number.
+#[test]
+fn bindings_of_another_version_of_the_model_are_refused() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../robots/rover.ron");
+    let text = std::fs::read_to_string(path).expect("the rover");
+    let from = r#"(state: "track", yields: ["pause::track", "ether"]"#;
+    assert!(text.contains(from), "the rover's rflex track codel");
+    let edited = text.replace(
+        from,
+        r#"(state: "track", yields: ["ether", "pause::track"]"#,
+    );
+    let system = bip_engine::load_str("rover.ron", &edited).unwrap_or_else(|e| panic!("{e:?}"));
+    let err = bind(
+        Engine::builder(system),
+        Wheels::default(),
+        Laser { obstacle: None },
+        Fuse,
+        Navigation,
+        Brief,
+        Brief,
+        Brief,
+        Brief,
+    )
+    .build()
+    .err()
+    .map(|e| e.to_string());
+    assert_eq!(
+        err.as_deref(),
+        Some(
+            "module `rflex` was bound for another model: codel `TrackSpeed.track` yields \
+             [\"pause::track\", \"ether\"] in them, [\"ether\", \"pause::track\"] in the model; \
+             regenerate its bindings from this model"
+        )
+    );
+}
