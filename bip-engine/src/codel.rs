@@ -15,15 +15,15 @@ use crate::ports::{PortStore, WrongType};
 /// What a codel returns: where its activity goes next, or an exception.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Next {
-    /// A yield as the model writes it: `"main"`, `"pause::main"` or `"ether"`.
-    Yield(&'static str),
-    /// One of the codel's declared `throws`.
-    Throw(&'static str),
     /// The codel's `k`-th declared outcome: its yields, then its exceptions, in the
     /// model's order. What generated bindings return: no text to look up, and the
     /// numbering is checked against the model when they are bound
     /// ([`crate::CodelSignature`]). A `k` past the codel's outcomes is a fault.
     Declared(u16),
+    /// A yield as the model writes it: `"main"`, `"pause::main"` or `"ether"`.
+    Yield(&'static str),
+    /// One of the codel's declared `throws`.
+    Throw(&'static str),
 }
 
 impl Next {
