@@ -40,7 +40,9 @@ impl<const LO: i64, const HI: i64> Bounded<LO, HI> {
         }
     }
 
-    /// The constant `V`, which the compiler checks is in `LO..=HI`.
+    /// The constant `V`, which the compiler checks is in `LO..=HI`: out of range, the
+    /// build fails where the function that names it is compiled to code (`cargo build`;
+    /// `cargo check` does not get that far), or at once in a `const` item.
     pub const fn of<const V: i64>() -> Self {
         const {
             assert!(
