@@ -63,6 +63,7 @@ mod prelude {
 }
 
 mod bind;
+mod bounded;
 mod budgets;
 mod chosen;
 mod clock;
@@ -90,6 +91,7 @@ pub use bip_lang::{load_file, load_str, LoadError};
 /// out: an embedder depends on bip-engine alone.
 pub use bip_model;
 pub use bip_model::{CacheStats, State, System, Trace};
+pub use bounded::{Bounded, OutOfRange};
 pub use budgets::{CodelTime, CodelTimes, BUCKETS as CODEL_TIME_BUCKETS};
 pub use clock::Clock;
 #[cfg(feature = "std")]

@@ -9,7 +9,16 @@ use std::fmt::Write as _;
 use bip_model::genom::map::{ModuleMap, ServiceMap};
 
 use crate::names::{camel, snake};
-use crate::types::{rust_type, At};
+use crate::types::{is_int, rust_type, At};
+
+/// The arguments as the engine takes them: an `Int`'s `Bounded` as its `i64`.
+fn sent(s: &ServiceMap) -> &'static str {
+    match &s.args {
+        Some(ty) if is_int(ty) => "args.get()",
+        Some(_) => "args",
+        None => "()",
+    }
+}
 
 /// The Rust names a service's request takes.
 pub(crate) struct RequestNames {
@@ -52,13 +61,13 @@ fn exceptions(s: &ServiceMap) -> Vec<&str> {
 }
 
 pub(crate) fn request(out: &mut String, m: &ModuleMap, s: &ServiceMap, n: &RequestNames) {
-    let (param, sent, ty_doc) = match &s.args {
+    let sent = sent(s);
+    let (param, ty_doc) = match &s.args {
         Some(ty) => (
             format!(",\n        args: {}", rust_type(ty, At::Module)),
-            "args",
             format!(" with its arguments ({ty})"),
         ),
-        None => (String::new(), "()", String::new()),
+        None => (String::new(), String::new()),
     };
     let _ = writeln!(
         out,
@@ -114,9 +123,13 @@ pub(crate) fn request(out: &mut String, m: &ModuleMap, s: &ServiceMap, n: &Reque
         }
     }
     out.push_str("        /// It was interrupted, aborted by a rule of the model, or a codel was faulty.\n        Other(bip_engine::Outcome),\n    }\n\n");
-    let typed_output = output
-        .as_ref()
-        .map(|(_, t)| format!("output.as_ref().and_then(|o| o.get::<{t}>()).cloned()"));
+    let typed_output = output.as_ref().map(|(ty, t)| {
+        if is_int(ty) {
+            "output.as_ref().and_then(|o| o.get::<i64>()).and_then(|v| bip_engine::Bounded::new(*v))".to_string()
+        } else {
+            format!("output.as_ref().and_then(|o| o.get::<{t}>()).cloned()")
+        }
+    });
     let done = match &typed_output {
         Some(o) => format!("{}::Done({o})", n.end),
         None => format!("{}::Done", n.end),
@@ -163,12 +176,10 @@ pub(crate) fn request_from_handle(
     s: &ServiceMap,
     n: &RequestNames,
 ) {
-    let (param, sent) = match &s.args {
-        Some(ty) => (
-            format!(",\n        args: {}", rust_type(ty, At::Module)),
-            "args",
-        ),
-        None => (String::new(), "()"),
+    let sent = sent(s);
+    let param = match &s.args {
+        Some(ty) => format!(",\n        args: {}", rust_type(ty, At::Module)),
+        None => String::new(),
     };
     let _ = writeln!(
         out,

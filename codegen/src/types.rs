@@ -1,7 +1,8 @@
 //! The model's data types as Rust: a record becomes a struct of its name (its fields
-//! `bool`, `i64`, `f64`, records or Rust types), so that the engine's run-time check
-//! (which compares type names) and the generated type agree by construction; an `Int` is
-//! an `i64` (the engine checks its range where a value enters: a request's arguments); a
+//! `bool`, `Bounded`, `f64`, records or Rust types), so that the engine's run-time check
+//! (which compares type names) and the generated type agree by construction; an
+//! `Int(lo, hi)` is a `bip_engine::Bounded<lo, hi>`, which holds only values in range (the
+//! engine keeps it as an `i64`: the API converts where a value enters or leaves it); a
 //! `Rust("path")` type is used as written, resolved where the bindings are included.
 
 use std::collections::BTreeMap;
@@ -25,12 +26,34 @@ pub(crate) fn rust_type(ty: &DataType, at: At) -> String {
     let up = if at == At::Module { "super::" } else { "" };
     match ty {
         DataType::Bool => "bool".into(),
-        DataType::Int { .. } => "i64".into(),
+        DataType::Int { lo, hi } => bounded(*lo, *hi),
         DataType::Float => "f64".into(),
         DataType::Record { name, .. } => format!("{up}{name}"),
         DataType::Rust(path) if is_absolute(path) => path.clone(),
         DataType::Rust(path) => format!("{up}{path}"),
     }
+}
+
+/// `bip_engine::Bounded<lo, hi>`, the type of the model's `Int(lo, hi)` and of an ids
+/// field of that range.
+pub(crate) fn bounded(lo: i64, hi: i64) -> String {
+    // a negative literal is a const argument, but `i64::MIN`'s digits overflow before
+    // the minus applies
+    let arg = |v: i64| {
+        if v == i64::MIN {
+            "{ i64::MIN }".to_string()
+        } else {
+            v.to_string()
+        }
+    };
+    format!("bip_engine::Bounded<{}, {}>", arg(lo), arg(hi))
+}
+
+/// Whether the engine keeps a value of `ty` as an `i64` that the API gives and takes as a
+/// `Bounded`, by value (an `Int`); every other type is kept as its Rust type and read by
+/// reference.
+pub(crate) fn is_int(ty: &DataType) -> bool {
+    matches!(ty, DataType::Int { .. })
 }
 
 /// A path that names the same type wherever it is written.
@@ -102,4 +125,20 @@ pub(crate) fn records(out: &mut String, layer: &GenomMap) -> Result<(), CodegenE
         out.push_str("}\n\n");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_int_is_a_bounded_of_its_range() {
+        let int = |lo, hi| rust_type(&DataType::Int { lo, hi }, At::Module);
+        assert_eq!(int(-3, 7), "bip_engine::Bounded<-3, 7>");
+        // i64::MIN's digits do not make a literal: a block does
+        assert_eq!(
+            int(i64::MIN, i64::MAX),
+            format!("bip_engine::Bounded<{{ i64::MIN }}, {}>", i64::MAX)
+        );
+    }
 }

@@ -72,7 +72,9 @@ const CRATES: &[Layers] = &[
         layers: &[
             (
                 "values",
-                &["clock", "policy", "ports", "error", "budgets", "types"],
+                &[
+                    "clock", "policy", "ports", "error", "budgets", "types", "bounded",
+                ],
             ),
             (
                 "codels",

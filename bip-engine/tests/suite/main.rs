@@ -4,6 +4,7 @@
 //! differential property test.
 
 mod api;
+mod bounded;
 mod budgets;
 mod common;
 mod faults;

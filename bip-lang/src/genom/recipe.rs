@@ -130,13 +130,15 @@ impl Recipe {
             let mut ids = Vec::new();
             for x in &m.ids {
                 let var = atom.var_index(x).ok_or_else(|| missing(x))?;
-                let (lo, hi) = atom.vars[var as usize].ty.range();
+                let ty = &atom.vars[var as usize].ty;
+                let (lo, hi) = ty.range();
                 ids.push(IdsField {
                     name: x.clone(),
                     var,
                     slot: system.components[mc as usize].var_slot(var),
                     lo,
                     hi,
+                    is_bool: *ty == bip_model::VarType::Bool,
                 });
             }
             let mut services = Vec::new();

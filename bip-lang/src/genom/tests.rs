@@ -552,6 +552,16 @@ fn a_codel_that_writes_ids_takes_every_value_and_errors_write_nothing() {
     );
     assert_eq!(codel.ids_transitions.len(), 8);
     assert_eq!(codel.ids_transition(|k| [4, 0][k]), None);
+    // the module's fields say which is a Bool (generated bindings read it as a `bool`)
+    assert_eq!(
+        map.module("m")
+            .expect("module")
+            .ids
+            .iter()
+            .map(|f| (f.name.as_str(), f.is_bool))
+            .collect::<Vec<_>>(),
+        [("speed", false), ("on", true)]
+    );
     let module = map.module("m").expect("module").component;
     let t = codel.ids_transition(|k| [2, 1][k]).expect("in range");
     let running = ex

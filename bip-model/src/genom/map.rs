@@ -60,6 +60,9 @@ pub struct IdsField {
     pub slot: u32,
     pub lo: i64,
     pub hi: i64,
+    /// A `Bool` variable (`lo..=hi` is `0..=1`): generated bindings read and write it as
+    /// a `bool`.
+    pub is_bool: bool,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -53,15 +53,19 @@ const TYPED: &str = r#"System(
     modules: [(
         name: "nav",
         tasks: [(name: "t", period: 1)],
-        ids: [(name: "gear", ty: Int(0, 3), init: 0)],
+        ids: [(name: "gear", ty: Int(-1, 3), init: 0), (name: "armed", ty: Bool, init: false)],
         ports: [(name: "pose", ty: Record(name: "Pose", fields: [(name: "x", ty: Float), (name: "ok", ty: Bool)])),
-                (name: "map", ty: Rust("crate::world::Map")), (name: "raw")],
+                (name: "map", ty: Rust("crate::world::Map")), (name: "raw"),
+                (name: "level", ty: Int(0, 100)),
+                (name: "cell", ty: Record(name: "Cell", fields: [(name: "row", ty: Int(-8, 8))]))],
         services: [
             (name: "GoTo", kind: Activity, task: "t", args: Int(0, 9), output: Record(name: "Pose", fields: [(name: "x", ty: Float), (name: "ok", ty: Bool)]),
              codels: [
-                (state: "start", yields: ["main"], writes: ["gear"]),
-                (state: "main", yields: ["pause::main", "ether"], throws: ["e_lost"], writes: ["pose"]),
+                (state: "start", yields: ["main"], writes: ["gear", "armed"]),
+                (state: "main", yields: ["pause::main", "ether"], throws: ["e_lost"], writes: ["pose", "level"]),
             ]),
+            (name: "Count", kind: Activity, task: "t", output: Int(0, 9),
+             codels: [(state: "start", yields: ["ether"], throws: ["e_lost"])]),
         ],
     )],
 )"#;
@@ -78,13 +82,25 @@ fn the_bindings_type_what_each_codel_may_touch() {
         // only the codel that writes a port or an ids field has its writer
         "pub fn write_pose(&mut self, value: super::Pose) {",
         "pub fn port_pose_mut(&mut self) -> Option<&mut super::Pose> {",
-        "pub fn set_ids_gear(&mut self, value: i64) {",
-        "pub fn ids_gear(&self) -> i64 {",
-        // the service's arguments and output, of their types
-        "pub fn args(&self) -> Option<&i64> {",
+        // an ids field of a range is a Bounded, a Bool one a bool
+        "pub fn set_ids_gear(&mut self, value: bip_engine::Bounded<-1, 3>) {\n            self.ctx.set(\"gear\", value.get());",
+        "pub fn ids_gear(&self) -> bip_engine::Bounded<-1, 3> {",
+        "pub fn ids_armed(&self) -> bool {\n            self.ctx.get_bool(\"armed\").unwrap_or_default()",
+        "pub fn set_ids_armed(&mut self, value: bool) {\n            self.ctx.set_bool(\"armed\", value);",
+        // an Int port: the engine holds an i64, the context gives and takes a Bounded by
+        // value, and gives no `&mut i64`
+        "pub fn read_nav_level(&self) -> Option<bip_engine::Bounded<0, 100>> {\n            self.ctx.port::<i64>(\"nav\", \"level\").and_then(|v| bip_engine::Bounded::new(*v))",
+        "pub fn write_level(&mut self, value: bip_engine::Bounded<0, 100>) {\n            self.ctx.write_port(\"level\", value.get());",
+        // a record's Int field is a Bounded
+        "pub struct Cell {\n    /// Field `row`: Int(-8, 8).\n    pub row: bip_engine::Bounded<-8, 8>,\n}",
+        // the service's arguments and output, of their types; an Int's by value
+        "pub fn args(&self) -> Option<bip_engine::Bounded<0, 9>> {\n            self.ctx.args::<i64>().and_then(|v| bip_engine::Bounded::new(*v))",
         "pub fn set_output(&mut self, value: super::Pose) {",
-        // a typed request, and its typed end
-        "pub fn request_go_to(\n        engine: &mut bip_engine::Engine,\n        args: i64,\n    ) -> Result<GoToTicket, bip_engine::RequestError> {",
+        "pub fn set_output(&mut self, value: bip_engine::Bounded<0, 9>) {\n            self.ctx.set_output(value.get());",
+        // a typed request, and its typed end; an Int is sent as its i64
+        "pub fn request_go_to(\n        engine: &mut bip_engine::Engine,\n        args: bip_engine::Bounded<0, 9>,\n    ) -> Result<GoToTicket, bip_engine::RequestError> {\n        engine.request(\"nav\", \"GoTo\", args.get()).map(GoToTicket)",
+        "Done(Option<bip_engine::Bounded<0, 9>>),",
+        "\"e_lost\" => CountEnd::Exception(CountException::ELost, output.as_ref().and_then(|o| o.get::<i64>()).and_then(|v| bip_engine::Bounded::new(*v))),",
         "Done(Option<super::Pose>),",
         "Exception(GoToException, Option<super::Pose>),",
         "\"e_lost\" => GoToEnd::Exception(GoToException::ELost, output.as_ref().and_then(|o| o.get::<super::Pose>()).cloned()),",
@@ -108,6 +124,10 @@ fn the_bindings_type_what_each_codel_may_touch() {
         !main.contains("fn set_ids_gear"),
         "main does not write gear"
     );
+    assert!(
+        !text.contains("port_level_mut"),
+        "no `&mut i64` to an Int port"
+    );
     // an untyped port has no typed accessor
     assert!(!text.contains("read_nav_raw"), "{text}");
 }
@@ -115,7 +135,7 @@ fn the_bindings_type_what_each_codel_may_touch() {
 #[test]
 fn requests_from_other_threads_are_left_out_without_std() {
     let with_std = rust_bindings(&load(TYPED)).expect("generates");
-    let handle_request = "pub fn request_go_to_from(\n        handle: &bip_engine::Handle,\n        args: i64,\n    ) -> Result<GoToPending, bip_engine::RequestError> {";
+    let handle_request = "pub fn request_go_to_from(\n        handle: &bip_engine::Handle,\n        args: bip_engine::Bounded<0, 9>,\n    ) -> Result<GoToPending, bip_engine::RequestError> {\n        handle.request(\"nav\", \"GoTo\", args.get()).map(GoToPending)";
     assert!(with_std.contains(handle_request), "{with_std}");
     assert!(with_std.contains("pub struct GoToPending(pub bip_engine::PendingReply);"));
     let without = rust_bindings_no_std(&load(TYPED)).expect("generates");

@@ -3,7 +3,7 @@
 //! writer) and returns its own enum of outcomes (only its declared yields and exceptions
 //! exist).
 
-use bip_engine::VirtualClock;
+use bip_engine::{Bounded, VirtualClock};
 
 use crate::hardware::{Dtm, Hardware, Image, Scan};
 use crate::rover::{antenna, aspect, camera, heating, ndd, pom, rflex, sick, Odometry, Pose};
@@ -154,10 +154,11 @@ impl antenna::Codels for Antenna {
         &mut self,
         ctx: antenna::CommunicateSendCtx<'_, '_>,
     ) -> antenna::CommunicateSend {
-        let want = ctx.args().copied().unwrap_or(1);
+        // an Int(1, 10): a Bounded, at least one packet
+        let want = ctx.args().unwrap_or(Bounded::MIN);
         let mut w = self.hw.world();
         w.sent += 1;
-        if i64::from(w.sent) >= want {
+        if i64::from(w.sent) >= want.get() {
             antenna::CommunicateSend::Ether
         } else {
             antenna::CommunicateSend::PauseSend

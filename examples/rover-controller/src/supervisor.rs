@@ -6,7 +6,7 @@ use std::error::Error;
 
 use bip_engine::bip_model::{PropertyKind, Verdict};
 use bip_engine::{
-    CodelId, Engine, Event, RealClock, Reply, RequestError, System, Ticket, Trace, Until,
+    Bounded, CodelId, Engine, Event, RealClock, Reply, RequestError, System, Ticket, Trace, Until,
     VirtualClock,
 };
 
@@ -28,8 +28,8 @@ pub enum Order {
     /// The goal on the x axis (m).
     GoTo(f64),
     Build,
-    /// Packets to send (`Int(1, 10)`).
-    Communicate(i64),
+    /// Packets to send (`Int(1, 10)`: a number out of range does not compile).
+    Communicate(Bounded<1, 10>),
     Report,
     Heat,
     Shoot,
@@ -61,7 +61,7 @@ const SCRIPT: &[(u64, Order)] = &[
     (0, Order::TrackSpeed(0.5)), // refused: after rflex.Init
     (1, Order::Init),
     (2, Order::TrackSpeed(0.5)), // drives; the battery Guard holds it at times
-    (5, Order::Communicate(3)),  // held: Exclusive with TrackSpeed
+    (5, Order::Communicate(Bounded::of::<3>())), // held: Exclusive with TrackSpeed
     (9, Order::StopWheels),      // interrupts TrackSpeed, frees the antenna
     (14, Order::GoTo(1.0)),      // no laser: aborted (the rover's rule)
     (16, Order::Scan),

@@ -1,6 +1,9 @@
 //! The bindings bip-codegen generates for robots/rover.ron, compiled under the workspace's
 //! lints (`clippy -D warnings`): that they compile, warning-free, is the test, and
-//! `tests/rover.rs` runs the rover through them.
+//! `tests/rover.rs` runs the rover through them. [`typed`] holds the bindings of
+//! `models/typed.ron`, the model types the rover has no use for (ids of a range and a
+//! `Bool`, an `Int` port, an `Int` output, a record with an `Int` field), under the same
+//! test.
 //!
 //! The model names three Rust types, `Rust("Scan")`, `Rust("Dtm")` and `Rust("Image")`:
 //! a Rust type is resolved where the bindings are included, so they are defined here.
@@ -26,3 +29,8 @@ pub struct Image {
 }
 
 include!(concat!(env!("OUT_DIR"), "/rover.rs"));
+
+/// The bindings of `models/typed.ron`.
+pub mod typed {
+    include!(concat!(env!("OUT_DIR"), "/typed.rs"));
+}

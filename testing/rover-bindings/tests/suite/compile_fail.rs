@@ -1,8 +1,9 @@
 //! What the bindings make a compile error: an undeclared yield, a missing codel, data of
-//! another type on a port, arguments of another type, and a port the codel does not
-//! write. Each case is a small crate compiled by rustc against this crate's library (the
-//! one cargo built for these tests), in a temporary directory, within a time bound; the
-//! test checks the compiler's message names the mistake.
+//! another type on a port, arguments of another type, a port the codel does not write, a
+//! plain `i64` where an `Int` is wanted, and a constant out of an `Int`'s range. Each case
+//! is a small crate compiled by rustc against this crate's library (the one cargo built for
+//! these tests), in a temporary directory, within a time bound; the test checks the
+//! compiler's message names the mistake.
 
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
@@ -27,6 +28,16 @@ fn library() -> (PathBuf, PathBuf) {
     (newest, deps)
 }
 
+/// The compiler that built the library the cases use (another one cannot read it): the
+/// one cargo built this crate with, as the build script recorded it, if it is still
+/// there; else `$RUSTC`, else `rustc` on the path.
+fn rustc() -> std::ffi::OsString {
+    match option_env!("BIP_CASES_RUSTC") {
+        Some(built_with) if std::path::Path::new(built_with).is_file() => built_with.into(),
+        _ => std::env::var_os("RUSTC").unwrap_or_else(|| "rustc".into()),
+    }
+}
+
 /// Whether `source`, a crate that uses `bip_rover_bindings`, compiles, and the
 /// compiler's messages.
 fn compile(source: &str) -> (bool, String) {
@@ -34,16 +45,10 @@ fn compile(source: &str) -> (bool, String) {
     let dir = tempfile_dir();
     let file = dir.join("case.rs");
     std::fs::write(&file, source).expect("writes the case");
-    let rustc = std::env::var_os("RUSTC").unwrap_or_else(|| "rustc".into());
-    let mut child = Command::new(rustc)
-        .args([
-            "--edition",
-            "2021",
-            "--crate-type",
-            "lib",
-            "--emit",
-            "metadata",
-        ])
+    let mut child = Command::new(rustc())
+        // `link`, not `metadata`: an `Int` constant out of range is an error found when
+        // the function that names it is compiled to code
+        .args(["--edition", "2021", "--crate-type", "lib", "--emit", "link"])
         .arg("--out-dir")
         .arg(&dir)
         .arg("--extern")
@@ -197,4 +202,75 @@ fn arguments_of_another_type_do_not_compile() {
         ],
     );
     assert_compiles(&request.replace("0.5f32", "0.5"));
+}
+
+#[test]
+fn a_plain_integer_where_an_int_is_wanted_does_not_compile() {
+    // Communicate takes an Int(1, 10): a `Bounded<1, 10>`, not an `i64`
+    let request = "pub fn talk(engine: &mut bip_rover_bindings::bip_engine::Engine) {
+    let _ = bip_rover_bindings::antenna::request_communicate(engine, 3i64);
+}
+";
+    let errors = errors_of(request);
+    assert_says(
+        &errors,
+        &["error[E0308]", "expected `Bounded<1, 10>`, found `i64`"],
+    );
+    assert_compiles(&request.replace("3i64", "bip_rover_bindings::bip_engine::Bounded::of::<3>()"));
+    // a value known only at run time goes through `new` or `try_from`, which check it
+    assert_compiles(&request.replace(
+        "3i64",
+        "bip_rover_bindings::bip_engine::Bounded::new(3).expect(\"in range\")",
+    ));
+}
+
+#[test]
+fn a_constant_out_of_an_ints_range_does_not_compile() {
+    let request = "pub fn talk(engine: &mut bip_rover_bindings::bip_engine::Engine) {
+    let packets = bip_rover_bindings::bip_engine::Bounded::of::<11>();
+    let _ = bip_rover_bindings::antenna::request_communicate(engine, packets);
+}
+";
+    let errors = errors_of(request);
+    assert_says(
+        &errors,
+        &[
+            "error[E0080]",
+            "V is out of the range LO..=HI",
+            "Bounded::<1, 10>::of::<11>",
+        ],
+    );
+    assert_compiles(&request.replace("of::<11>", "of::<10>"));
+}
+
+#[test]
+fn an_ids_value_out_of_range_has_no_way_through_the_context() {
+    // gear of typed.ron's arm is an Int(-2, 3): its setter takes a `Bounded<-2, 3>`
+    let arm = |value: &str| {
+        format!(
+            "use bip_rover_bindings::typed::arm;
+use bip_rover_bindings::bip_engine::Bounded;
+pub struct Arm;
+impl arm::Codels for Arm {{
+    fn move_start(&mut self, mut ctx: arm::MoveStartCtx<'_, '_>) -> arm::MoveStart {{
+        ctx.set_ids_gear({value});
+        ctx.set_ids_armed(true);
+        arm::MoveStart::Main
+    }}
+    fn move_main(&mut self, _ctx: arm::MoveMainCtx<'_, '_>) -> arm::MoveMain {{
+        arm::MoveMain::Ether
+    }}
+}}
+"
+        )
+    };
+    assert_says(
+        &errors_of(&arm("7")),
+        &["error[E0308]", "expected `Bounded<-2, 3>`, found integer"],
+    );
+    assert_says(
+        &errors_of(&arm("Bounded::of::<7>()")),
+        &["error[E0080]", "Bounded::<-2, 3>::of::<7>"],
+    );
+    assert_compiles(&arm("Bounded::of::<-2>()"));
 }

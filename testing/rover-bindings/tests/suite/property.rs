@@ -153,7 +153,8 @@ const REQUESTS: &[(&str, &str, Request)] = &[
         aspect::request_build(e).map(|t| t.0)
     }),
     ("antenna", "Communicate", |e, r| {
-        let packets = 1 + r.pick(&[0, 1, 2, 3, 4, 5, 6, 7, 8, 9]);
+        let packets = bip_engine::Bounded::new(r.pick(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10]))
+            .expect("1..=10 is Int(1, 10)");
         antenna::request_communicate(e, packets).map(|t| t.0)
     }),
     ("battery", "Report", |e, _| {

@@ -241,12 +241,21 @@ fn a_thrown_exception_is_the_services_exception_variant() {
 }
 
 #[test]
-fn arguments_out_of_an_int_range_are_refused_at_the_request() {
+fn an_int_argument_is_made_in_range_or_not_at_all() {
     let system = system();
     let mut engine = rover(&system, None);
-    let err = antenna::request_communicate(&mut engine, 11).expect_err("out of Int(1, 10)");
+    // Communicate takes an Int(1, 10): 11 is no `Bounded<1, 10>`
+    let err = bip_engine::Bounded::<1, 10>::try_from(11).expect_err("out of Int(1, 10)");
+    assert_eq!(
+        err.to_string(),
+        "11 is out of the range 1..=10 (Int(1, 10))"
+    );
+    // untyped, the engine refuses it at the request
+    let err = engine
+        .request("antenna", "Communicate", 11i64)
+        .expect_err("out of Int(1, 10)");
     assert!(err.to_string().contains("Int(1, 10)"), "{err}");
-    antenna::request_communicate(&mut engine, 3).expect("in range");
+    antenna::request_communicate(&mut engine, bip_engine::Bounded::of::<3>()).expect("in range");
 }
 
 /// Bindings generated from one version of the model, bound to an engine built for
