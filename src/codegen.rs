@@ -1,7 +1,7 @@
 //! `bip codegen FILE --rust OUT`: write a model's Rust bindings to a file, what
 //! `bip_codegen::write_rust_bindings` does from a build script (docs/codegen.md).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crate::{exit, load};
 
@@ -18,20 +18,10 @@ pub fn run(args: &Args) -> u8 {
     let Some(system) = load::system(&args.file) else {
         return exit::ERROR;
     };
-    match bip_codegen::rust_bindings(&system) {
-        Ok(text) => write(&args.rust, &text),
-        Err(e) => {
-            eprintln!("error: {e}");
-            exit::ERROR
-        }
-    }
-}
-
-fn write(out: &Path, text: &str) -> u8 {
-    match std::fs::write(out, text) {
+    match bip_codegen::write_bindings_of(&system, &args.rust) {
         Ok(()) => exit::OK,
         Err(e) => {
-            eprintln!("error: cannot write {}: {e}", out.display());
+            eprintln!("error: {e}");
             exit::ERROR
         }
     }

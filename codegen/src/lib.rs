@@ -71,7 +71,15 @@ pub fn write_rust_bindings(
     let model = model.as_ref();
     println!("cargo:rerun-if-changed={}", model.display());
     let system = bip_lang::load_file(model).map_err(CodegenError::Load)?;
-    let text = rust_bindings(&system)?;
+    write_bindings_of(&system, out)
+}
+
+/// Writes the bindings of `system` to `out`, formatted by rustfmt where it is installed
+/// (`$RUSTFMT`, else `rustfmt` on the path; they compile as well unformatted), only if
+/// the text changed: what [`write_rust_bindings`] does once the model is loaded, and
+/// `bip codegen`.
+pub fn write_bindings_of(system: &System, out: impl AsRef<Path>) -> Result<(), CodegenError> {
+    let text = rust_bindings(system)?;
     let text = rustfmt(&text).unwrap_or(text);
     let out = out.as_ref();
     if std::fs::read_to_string(out).is_ok_and(|old| old == text) {
