@@ -1,6 +1,6 @@
 //! bip-lang's integration tests, in one binary: every kind of bad input with its message and
 //! position (`diagnostics`, `genom`, `genom_terms`, `timing`), and the GenoM expansion on
-//! random layers (`genom_random`); GenoM3 files (`gen3`, their IDL types `gen3_types`,
+//! random layers (`genom_random`); GenoM3 files (`gen3`, in a model `gen3_layer`, their IDL types `gen3_types`,
 //! mutated `gen3_fuzz`); reproducers of crashes and hangs (`robustness`) and
 //! mutated example models through the loader (`fuzz`).
 
@@ -9,6 +9,7 @@ mod diagnostics;
 mod fuzz;
 mod gen3;
 mod gen3_fuzz;
+mod gen3_layer;
 mod gen3_types;
 mod genom;
 mod genom_random;

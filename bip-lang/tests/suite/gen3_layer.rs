@@ -1,0 +1,213 @@
+//! GenoM3 `.gen` files in a model: task periods in model ticks, `Gen(...)` entries among
+//! RON modules, the repository's examples against their RON equivalent, a large
+//! component, and the interfaces a component provides. Reading them is `gen3`.
+
+use std::path::{Path, PathBuf};
+
+use crate::gen3::TempDir;
+use bip_lang::source_map::SourceMap;
+use bip_lang::{expand_str, import_gen_file, load_file, load_str};
+
+#[test]
+fn the_period_of_a_gen_task_is_a_whole_number_of_model_ticks() {
+    let dir = TempDir::new();
+    dir.write("a.gen", "component a { task t { period 25 ms; }; };\n");
+    let model = dir.write(
+        "m.ron",
+        r#"System(name: "m", tick_ms: 10, modules: [Gen("a.gen")])"#,
+    );
+    let e = load_file(&model).expect_err("an error");
+    assert!(e.summary().contains("a.gen:1:31: the period of task `t` (25000 µs) is not a whole number of ticks of 10000 µs"), "{}", e.summary());
+    let model = dir.write("n.ron", r#"System(name: "m", modules: [Gen("a.gen")])"#);
+    let e = load_file(&model).expect_err("an error");
+    assert!(
+        e.summary()
+            .contains("n.ron:1:34: a model with `.gen` modules needs `tick_ms`"),
+        "{}",
+        e.summary()
+    );
+    let model = dir.write(
+        "huge.ron",
+        r#"System(name: "m", tick_ms: 9223372036854775807, modules: [Gen("a.gen")])"#,
+    );
+    let e = load_file(&model).expect_err("an error");
+    assert!(
+        e.summary()
+            .contains("huge.ron:1:28: with `.gen` modules, `tick_ms` must be a positive number"),
+        "{}",
+        e.summary()
+    );
+    let model = dir.write(
+        "o.ron",
+        r#"System(name: "m", tick_ms: 5, modules: [Gen("missing.gen")])"#,
+    );
+    let e = load_file(&model).expect_err("an error");
+    assert!(
+        e.summary().contains("o.ron:1:46: cannot read"),
+        "{}",
+        e.summary()
+    );
+}
+
+#[test]
+fn gen_entries_take_their_places_among_ron_modules() {
+    let dir = TempDir::new();
+    dir.write("idl/t.idl", "#define P 20\n");
+    dir.write("a.gen", "component a { task t { period 10 ms; }; };\n");
+    dir.write(
+        "b.gen",
+        "#include <t.idl>\ncomponent b { task t { period P ms; }; };\n",
+    );
+    let model = dir.write(
+        "m.ron",
+        r#"System(name: "m", tick_ms: 10, modules: [
+            Gen("a.gen"),
+            (name: "r", tasks: [(name: "t", period: 3)]),
+            Gen(file: "b.gen", include: ["idl/"]),
+        ])"#,
+    );
+    let text = std::fs::read_to_string(&model).expect("reads");
+    let def = bip_lang::parse_str(&model.display().to_string(), &text)
+        .unwrap_or_else(|e| panic!("{}", e.summary()));
+    let names: Vec<(&str, String)> = def
+        .modules
+        .iter()
+        .map(|m| (m.name.value.as_str(), m.tasks[0].period.value.to_string()))
+        .collect();
+    assert_eq!(
+        names,
+        [("a", "1".into()), ("r", "3".into()), ("b", "2".into())]
+    );
+    load_file(&model).unwrap_or_else(|e| panic!("{}", e.summary()));
+    // an entry of that shape with another name is an error at the name
+    let model = dir.write(
+        "p.ron",
+        r#"System(name: "m", tick_ms: 10, modules: [Gem("a.gen"), Gen ( file : "a.gen")])"#,
+    );
+    let e = load_file(&model).expect_err("an error");
+    assert_eq!(e.errors().len(), 1, "{}", e.summary());
+    assert!(
+        e.summary()
+            .contains("p.ron:1:42: a module from a GenoM3 file is written `Gen(\"file.gen\")`"),
+        "{}",
+        e.summary()
+    );
+    // an unknown field of a Gen entry is an error in the model file
+    let model = dir.write(
+        "n.ron",
+        r#"System(name: "m", tick_ms: 10, modules: [Gen(file: "a.gen", includes: [])])"#,
+    );
+    assert!(load_file(&model).is_err());
+}
+
+fn robots() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots")
+}
+
+#[test]
+fn the_examples_import_to_their_ron_equivalent() {
+    let robots = robots();
+    let from_gen = std::fs::read_to_string(robots.join("genom3-rover.ron")).expect("reads");
+    let written = std::fs::read_to_string(robots.join("genom3-rover-written.ron")).expect("reads");
+    let name = robots.join("genom3-rover.ron").display().to_string();
+    let a = expand_str(&name, &from_gen).unwrap_or_else(|e| panic!("{}", e.summary()));
+    let b = expand_str("genom3-rover-written.ron", &written)
+        .unwrap_or_else(|e| panic!("{}", e.summary()));
+    // the same core, transition for transition
+    assert_eq!(a.to_ron().expect("prints"), b.to_ron().expect("prints"));
+    // each file on its own imports, and what `bip import` prints loads
+    for f in ["loco", "loc", "nav"] {
+        let path = robots.join("genom3").join(format!("{f}.gen"));
+        let def = import_gen_file(&path, &[robots.join("genom3/idl")])
+            .unwrap_or_else(|e| panic!("{}", e.summary()));
+        let text = def.to_ron_nested(6).expect("prints");
+        load_str("imported.ron", &text).unwrap_or_else(|e| panic!("{f}: {}", e.summary()));
+    }
+}
+
+#[test]
+fn a_two_thousand_line_component_imports() {
+    let path = robots().join("bench/genom3-component.gen");
+    let text = std::fs::read_to_string(&path).expect("reads");
+    assert!(text.lines().count() >= 2_000);
+    let s = bip_lang::gen3::read(
+        &path,
+        "big.gen",
+        &[],
+        &mut SourceMap::default(),
+        0,
+        Default::default(),
+    )
+    .unwrap_or_else(|e| panic!("{}", e.message));
+    assert_eq!(s.components[0].services.len(), 222);
+    let modules = bip_lang::gen3::modules(&s, 10_000).unwrap_or_else(|e| panic!("{e:?}"));
+    assert_eq!(modules[0].services.len(), s.components[0].services.len());
+}
+
+#[test]
+fn a_component_takes_in_the_interfaces_it_provides() {
+    let dir = TempDir::new();
+    dir.write(
+        "idl/pose_estimator.gen",
+        r#"
+interface pose_estimator {
+  exception e_lost;
+  ids { double quality; };
+  port multiple out double frame;
+  function Reset() { throw e_lost; };
+  attribute GetQuality(out quality);
+};
+interface clock { port out long ticks; function Now(out long t); };
+"#,
+    );
+    let path = dir.write(
+        "loc.gen",
+        r#"
+#include <pose_estimator.gen>
+component loc {
+  uses clock;
+  port out double speed;
+  provides pose_estimator;
+  task t { period 10 ms; };
+  activity Track() { task t; codel<start> track(port out frame) yield pause::start, ether; throw e_lost; };
+};
+"#,
+    );
+    let mut files = SourceMap::default();
+    let s = bip_lang::gen3::read(
+        &path,
+        "loc.gen",
+        &[dir.0.join("idl")],
+        &mut files,
+        0,
+        Default::default(),
+    )
+    .unwrap_or_else(|e| panic!("parses: {}", e.message));
+    assert_eq!(s.interfaces.len(), 2);
+    let c = &s.components[0];
+    let names =
+        |v: &[bip_lang::source::Text]| v.iter().map(|t| t.value.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&c.provides), ["pose_estimator"]);
+    assert_eq!(names(&c.uses), ["clock"], "kept as information");
+    // the provided objects are in the component where `provides` is written
+    let ports: Vec<&str> = c.ports.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        ports,
+        ["speed", "frame"],
+        "the used interface's ports are not its own"
+    );
+    assert_eq!(c.ids[0].name.value, "quality");
+    let m = &bip_lang::gen3::modules(&s, 10_000).unwrap_or_else(|e| panic!("{e:?}"))[0];
+    let services: Vec<&str> = m.services.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(services, ["Reset", "GetQuality", "Track"]);
+    let ports: Vec<&str> = m.ports.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(ports, ["speed", "frame"]);
+    // the codel writes the provided port; the provided exception is declared
+    assert_eq!(m.services[2].codels[0].writes[0].value, "frame");
+    assert_eq!(m.services[2].codels[0].throws[0].value, "e_lost");
+    // and the module loads
+    let def =
+        import_gen_file(&path, &[dir.0.join("idl")]).unwrap_or_else(|e| panic!("{}", e.summary()));
+    load_str("imported.ron", &def.to_ron().expect("prints"))
+        .unwrap_or_else(|e| panic!("{}", e.summary()));
+}
