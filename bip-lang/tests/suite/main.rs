@@ -1,8 +1,8 @@
 //! bip-lang's integration tests, in one binary: every kind of bad input with its message and
 //! position (`diagnostics`, `genom`, `genom_terms`, `timing`), and the GenoM expansion on
-//! random layers (`genom_random`); GenoM3 files (`gen3`, in a model `gen3_layer`, their IDL types `gen3_types`,
-//! mutated `gen3_fuzz`); reproducers of crashes and hangs (`robustness`) and
-//! mutated example models through the loader (`fuzz`).
+//! random layers (`genom_random`); GenoM3 files (`gen3`, in a model `gen3_layer`, their
+//! IDL types `gen3_types`, mutated `gen3_fuzz`); reproducers of crashes and hangs
+//! (`robustness`) and mutated example models through the loader (`fuzz`).
 
 mod data_types;
 mod diagnostics;
