@@ -14,6 +14,8 @@ pub enum BuildError {
     UnknownCodel(String, String, String),
     #[error("the model has no module `{0}` with codels")]
     UnknownModule(String),
+    #[error("the model has no module `{0}`")]
+    NoSuchModule(String),
     #[error("module `{module}` was bound for another model: {difference}; regenerate its bindings from this model")]
     OtherModel { module: String, difference: String },
     #[error("codel ({0}, {1}, {2}) is bound twice")]

@@ -109,4 +109,4 @@ pub use event::{
 pub use handle::{Handle, PendingReply};
 pub use policy::Policy;
 pub use record::Window;
-pub use signature::CodelSignature;
+pub use signature::{CodelSignature, ModuleTypes, ServiceTypes, Typed};

@@ -1,12 +1,13 @@
-//! What a module object was made for: its codels in the order it numbers them, each with
-//! its outcomes in the order [`crate::Next::Declared`] numbers them. Checked against the
-//! model when the engine is built, so that bindings generated from another version of the
-//! model are a build error rather than codels called by the wrong numbers.
+//! What bindings were made for: a module object's codels in the order it numbers them,
+//! each with its outcomes in the order [`crate::Next::Declared`] numbers them, and the
+//! data types of a module that typed code assumes. Checked against the model when the
+//! engine is built, so that bindings generated from another version of the model are a
+//! build error rather than codels called by the wrong numbers or data of the wrong type.
 
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use bip_model::genom::map::ModuleMap;
+use bip_model::genom::map::{DataType, ModuleMap};
 
 /// One codel of a module object, as the object numbers it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,4 +63,96 @@ pub(crate) fn difference(signature: &[CodelSignature], module: &ModuleMap) -> Op
             signature.len() + more
         )
     })
+}
+
+/// The data types of a module as typed code assumes them, each written in full as a model
+/// file writes it ([`DataType::written`]; `""` where the model declares none).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ModuleTypes {
+    /// Its ids fields: `Bool` or `Int(lo, hi)`.
+    pub ids: &'static [Typed],
+    pub ports: &'static [Typed],
+    pub services: &'static [ServiceTypes],
+}
+
+/// A name and its type, written in full.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Typed {
+    pub name: &'static str,
+    pub ty: &'static str,
+}
+
+/// A service and the types of its arguments and output, written in full.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ServiceTypes {
+    pub name: &'static str,
+    pub args: &'static str,
+    pub output: &'static str,
+}
+
+/// The first difference between `types` and the data types of `module`, in words.
+pub(crate) fn types_difference(types: &ModuleTypes, module: &ModuleMap) -> Option<String> {
+    let written = |ty: &Option<DataType>| ty.as_ref().map_or(String::new(), DataType::written);
+    let ids: Vec<(&str, String)> = module
+        .ids
+        .iter()
+        .map(|f| (f.name.as_str(), f.ty().written()))
+        .collect();
+    let ports: Vec<(&str, String)> = module
+        .ports
+        .iter()
+        .map(|p| (p.name.as_str(), written(&p.ty)))
+        .collect();
+    let args: Vec<(&str, String)> = module
+        .services
+        .iter()
+        .map(|s| (s.name.as_str(), written(&s.args)))
+        .collect();
+    let outputs: Vec<(&str, String)> = module
+        .services
+        .iter()
+        .map(|s| (s.name.as_str(), written(&s.output)))
+        .collect();
+    let theirs = |xs: &[Typed]| -> Vec<(&'static str, &'static str)> {
+        xs.iter().map(|x| (x.name, x.ty)).collect()
+    };
+    let services = |f: fn(&ServiceTypes) -> &'static str| -> Vec<(&'static str, &'static str)> {
+        types.services.iter().map(|s| (s.name, f(s))).collect()
+    };
+    compare("ids field", &theirs(types.ids), &ids)
+        .or_else(|| compare("port", &theirs(types.ports), &ports))
+        .or_else(|| compare("service", &services(|s| s.args), &args).map(|d| d + " (arguments)"))
+        .or_else(|| compare("service", &services(|s| s.output), &outputs).map(|d| d + " (output)"))
+}
+
+/// The first difference between two lists of typed names: the names, then a type.
+fn compare(what: &str, theirs: &[(&str, &str)], model: &[(&str, String)]) -> Option<String> {
+    let names = |xs: Vec<&str>| xs.join(", ");
+    let their_names: Vec<&str> = theirs.iter().map(|x| x.0).collect();
+    let model_names: Vec<&str> = model.iter().map(|x| x.0).collect();
+    if their_names != model_names {
+        return Some(format!(
+            "their {what}s are [{}], the model's [{}]",
+            names(their_names),
+            names(model_names)
+        ));
+    }
+    let untyped = |t: &str| {
+        if t.is_empty() {
+            "untyped".to_string()
+        } else {
+            t.to_string()
+        }
+    };
+    theirs
+        .iter()
+        .zip(model)
+        .find(|((_, a), (_, b))| *a != b.as_str())
+        .map(|((name, a), (_, b))| {
+            format!(
+                "{what} `{name}` is {} in them, {} in the model",
+                untyped(a),
+                untyped(b)
+            )
+        })
 }

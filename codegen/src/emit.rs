@@ -11,7 +11,7 @@ use bip_model::genom::GenomMap;
 
 use crate::names::{camel, ident, snake};
 use crate::requests::{self, RequestNames};
-use crate::{context, types, CodegenError};
+use crate::{context, signature, types, CodegenError};
 
 /// The bindings of `layer`, the GenoM layer of the system named `system`; with requests
 /// through a `Handle` if `handle` (bip-engine with `std`).
@@ -31,8 +31,7 @@ pub(crate) fn bindings(
         seen.claim(ident(&m.name), format!("module `{}`", m.name))?;
         module(&mut out, layer, m, handle)?;
     }
-    let modules: Vec<&ModuleMap> = layer.modules.iter().filter(|m| has_codels(m)).collect();
-    top_bind(&mut out, &modules);
+    top_bind(&mut out, &layer.modules);
     Ok(out)
 }
 
@@ -133,6 +132,7 @@ fn module(
             requests::request_from_handle(out, m, s, n);
         }
     }
+    signature::types(out, m);
     if codels.is_empty() {
         out.push_str("}\n\n");
         return Ok(());
@@ -163,7 +163,7 @@ fn module(
         );
     }
     out.push_str("    }\n\n");
-    signature(out, m, &codels);
+    signature::codels(out, m, codels.iter().map(|n| (n.service, n.codel)));
     let _ = writeln!(
         out,
         "    /// Binds every codel of module `{}` to the methods of `codels`.",
@@ -174,19 +174,19 @@ fn module(
     );
     let _ = write!(
         out,
-        "        builder.module(\"{}\", CODELS, move |codel, ctx| match codel {{",
-        m.name
+        "        builder\n            .typed_as(\"{m}\", &TYPES)\n            .module(\"{m}\", CODELS, move |codel, ctx| match codel {{",
+        m = m.name
     );
     for (k, n) in codels.iter().enumerate() {
         let _ = write!(
             out,
-            "\n            {k} => codels.{}({} {{ ctx }}).into(),",
+            "\n                {k} => codels.{}({} {{ ctx }}).into(),",
             n.method, n.context
         );
     }
     let _ = write!(
         out,
-        "\n            // the engine calls the module's codels only, by their index\n            _ => unreachable!(\"module `{}` has {} codels\"),\n        }})",
+        "\n                // the engine calls the module's codels only, by their index\n                _ => unreachable!(\"module `{}` has {} codels\"),\n            }})",
         m.name,
         codels.len()
     );
@@ -239,43 +239,19 @@ fn outcome_enum(out: &mut String, m: &ModuleMap, n: &Named<'_>) -> Result<(), Co
     Ok(())
 }
 
-/// The module's codels as `bind` numbers them, with their outcomes as their enums number
-/// them: the engine checks them against the model it is built for.
-fn signature(out: &mut String, m: &ModuleMap, codels: &[Named<'_>]) {
-    let _ = writeln!(
-        out,
-        "    /// The codels of module `{}` as [`bind`] numbers them, with their outcomes: the\n    /// engine refuses to build if its model declares others.\n    pub const CODELS: &[bip_engine::CodelSignature] = &[",
-        m.name
-    );
-    let list = |xs: Vec<&str>| -> String {
-        xs.iter()
-            .map(|x| format!("{x:?}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    for n in codels {
-        let yields = list(n.codel.yields.iter().map(|y| y.target.as_str()).collect());
-        let throws = list(n.codel.throws.iter().map(String::as_str).collect());
-        let _ = writeln!(
-            out,
-            "        bip_engine::CodelSignature {{\n            service: {:?},\n            codel: {:?},\n            yields: &[{yields}],\n            throws: &[{throws}],\n        }},",
-            n.service.name, n.codel.state
-        );
-    }
-    out.push_str("    ];\n\n");
-}
-
-/// One `bind` for every module with codels.
-fn top_bind(out: &mut String, modules: &[&ModuleMap]) {
+/// One `bind` for every module with codels, which also declares the data types of the
+/// modules without.
+fn top_bind(out: &mut String, modules: &[ModuleMap]) {
     out.push_str(
         "/// Binds every codel of the model: one implementation of `Codels` per module.\n",
     );
+    let bound: Vec<&ModuleMap> = modules.iter().filter(|m| has_codels(m)).collect();
     // clippy's bound on a function's parameters: the builder and one per module
-    if modules.len() + 1 > 7 {
+    if bound.len() + 1 > 7 {
         out.push_str("#[allow(clippy::too_many_arguments)]\n");
     }
     out.push_str("#[allow(dead_code)]\npub fn bind(\n    builder: bip_engine::EngineBuilder,\n");
-    for m in modules {
+    for m in &bound {
         let _ = writeln!(
             out,
             "    {}: impl {}::Codels,",
@@ -284,15 +260,25 @@ fn top_bind(out: &mut String, modules: &[&ModuleMap]) {
         );
     }
     out.push_str(") -> bip_engine::EngineBuilder {\n");
-    for (k, m) in modules.iter().enumerate() {
-        let call = format!("{}::bind(builder, {})", ident(&m.name), ident(&m.name));
-        if k + 1 == modules.len() {
+    let calls: Vec<String> = modules
+        .iter()
+        .map(|m| match has_codels(m) {
+            true => format!("{}::bind(builder, {})", ident(&m.name), ident(&m.name)),
+            false => format!(
+                "builder.typed_as(\"{}\", &{}::TYPES)",
+                m.name,
+                ident(&m.name)
+            ),
+        })
+        .collect();
+    for (k, call) in calls.iter().enumerate() {
+        if k + 1 == calls.len() {
             let _ = writeln!(out, "    {call}");
         } else {
             let _ = writeln!(out, "    let builder = {call};");
         }
     }
-    if modules.is_empty() {
+    if calls.is_empty() {
         out.push_str("    builder\n");
     }
     out.push_str("}\n");

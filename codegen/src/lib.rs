@@ -19,6 +19,7 @@ mod context;
 mod emit;
 mod names;
 mod requests;
+mod signature;
 mod types;
 
 use std::path::{Path, PathBuf};

@@ -138,7 +138,7 @@ const CRATES: &[Layers] = &[
         layers: &[
             ("names", &["names"]),
             ("types", &["types"]),
-            ("parts", &["context", "requests"]),
+            ("parts", &["context", "requests", "signature"]),
             ("text", &["emit"]),
         ],
     },

@@ -19,7 +19,7 @@ use crate::per_state::PerState;
 use crate::policy::{Chooser, Policy, Rng};
 use crate::ports::PortStore;
 use crate::record::Recording;
-use crate::signature::CodelSignature;
+use crate::signature::{CodelSignature, ModuleTypes};
 
 /// How many states [`EngineBuilder::state_cache`] remembers by default: about 1.5 MiB
 /// for a model the size of robots/rover.ron, at the 1.5 KiB per state measured there
@@ -31,6 +31,7 @@ pub struct EngineBuilder {
     system: System,
     bindings: Vec<((String, String, String), CodelFn)>,
     modules: Vec<(String, &'static [CodelSignature], ModuleFn)>,
+    typed: Vec<(String, &'static ModuleTypes)>,
     defaults: Option<DefaultCodels>,
     clock: Option<Box<dyn Clock>>,
     policy: Policy,
@@ -78,6 +79,13 @@ impl EngineBuilder {
         f: impl FnMut(usize, &mut Ctx<'_>) -> Next + Send + 'static,
     ) -> Self {
         self.modules.push((module.into(), codels, Box::new(f)));
+        self
+    }
+
+    /// Declares the data types of module `module` that typed code assumes (generated
+    /// bindings do, for every module): the build fails if the model declares others.
+    pub fn typed_as(mut self, module: &str, types: &'static ModuleTypes) -> Self {
+        self.typed.push((module.into(), types));
         self
     }
 
@@ -161,6 +169,17 @@ impl EngineBuilder {
                 return Err(BuildError::BoundTwice(m, s, c));
             }
             bodies[k] = Some(Body::Bound(f));
+        }
+        for (m, types) in &self.typed {
+            let Some(map) = system.genom.as_ref().and_then(|g| g.module(m)) else {
+                return Err(BuildError::NoSuchModule(m.clone()));
+            };
+            if let Some(difference) = crate::signature::types_difference(types, map) {
+                return Err(BuildError::OtherModel {
+                    module: m.clone(),
+                    difference,
+                });
+            }
         }
         let mut modules = Vec::with_capacity(self.modules.len());
         for (m, signature, f) in self.modules {
@@ -354,6 +373,7 @@ impl Engine {
             system,
             bindings: Vec::new(),
             modules: Vec::new(),
+            typed: Vec::new(),
             defaults: None,
             clock: None,
             policy: Policy::default(),

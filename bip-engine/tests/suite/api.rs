@@ -4,8 +4,8 @@
 use crate::common;
 
 use bip_engine::{
-    CodelSignature, DefaultCodels, Engine, EngineBuilder, Event, FaultKind, Next, Outcome,
-    RealClock, Reply, RequestError, Stepped, Until,
+    CodelSignature, DefaultCodels, Engine, EngineBuilder, Event, FaultKind, ModuleTypes, Next,
+    Outcome, RealClock, Reply, RequestError, ServiceTypes, Stepped, Typed, Until,
 };
 use common::*;
 
@@ -553,4 +553,96 @@ fn a_module_object_made_for_another_model_is_refused() {
             ))
         );
     }
+}
+
+/// Module `m` of IDS_MODEL's data types, as typed code assumes them.
+const IDS_TYPES: ModuleTypes = ModuleTypes {
+    ids: &[
+        Typed {
+            name: "speed",
+            ty: "Int(0, 3)",
+        },
+        Typed {
+            name: "on",
+            ty: "Bool",
+        },
+    ],
+    ports: &[Typed {
+        name: "pose",
+        ty: "",
+    }],
+    services: &[
+        ServiceTypes {
+            name: "Init",
+            args: "",
+            output: "",
+        },
+        ServiceTypes {
+            name: "S",
+            args: "",
+            output: "",
+        },
+        ServiceTypes {
+            name: "Stop",
+            args: "",
+            output: "",
+        },
+    ],
+};
+
+/// Typed code made for other data types than the model's (bindings generated before a
+/// type changed) is refused when the engine is built, with the first difference, rather
+/// than faulting at run time when a codel reads or writes.
+#[test]
+fn types_assumed_for_another_model_are_refused() {
+    let build = |module: &str, types: ModuleTypes| {
+        Engine::builder(load_text(IDS_MODEL))
+            .default_codels(DefaultCodels::FirstYield)
+            .typed_as(module, Box::leak(Box::new(types)))
+            .build()
+            .err()
+            .map(|e| e.to_string())
+    };
+    assert_eq!(build("m", IDS_TYPES), None);
+    let wider = [Typed {
+        name: "speed",
+        ty: "Int(0, 4)",
+    }];
+    let mut args = IDS_TYPES.services.to_vec();
+    args[1].args = "Float";
+    let stale = [
+        (
+            ModuleTypes {
+                ids: Box::leak(Box::new([wider[0], IDS_TYPES.ids[1]])),
+                ..IDS_TYPES
+            },
+            "ids field `speed` is Int(0, 4) in them, Int(0, 3) in the model",
+        ),
+        (
+            ModuleTypes {
+                ports: &[],
+                ..IDS_TYPES
+            },
+            "their ports are [], the model's [pose]",
+        ),
+        (
+            ModuleTypes {
+                services: args.leak(),
+                ..IDS_TYPES
+            },
+            "service `S` is Float in them, untyped in the model (arguments)",
+        ),
+    ];
+    for (types, difference) in stale {
+        assert_eq!(
+            build("m", types),
+            Some(format!(
+                "module `m` was bound for another model: {difference}; regenerate its bindings from this model"
+            ))
+        );
+    }
+    assert_eq!(
+        build("n", IDS_TYPES),
+        Some("the model has no module `n`".to_string())
+    );
 }

@@ -65,6 +65,19 @@ pub struct IdsField {
     pub is_bool: bool,
 }
 
+impl IdsField {
+    /// Its type as a data type: `Bool`, or `Int(lo, hi)`.
+    pub fn ty(&self) -> DataType {
+        match self.is_bool {
+            true => DataType::Bool,
+            false => DataType::Int {
+                lo: self.lo,
+                hi: self.hi,
+            },
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct TaskMap {
     pub name: String,
@@ -170,6 +183,24 @@ impl DataType {
                         .strip_suffix(want)
                         .is_some_and(|rest| rest.ends_with("::"))
             }
+        }
+    }
+}
+
+impl DataType {
+    /// The type in full, as a model file writes it: a record with its fields
+    /// (`Record(name: "Pose", fields: [(name: "x", ty: Float)])`), where `Display` names
+    /// it only. Two types are the same exactly when they are written the same.
+    pub fn written(&self) -> String {
+        match self {
+            DataType::Record { name, fields } => {
+                let fields: Vec<String> = fields
+                    .iter()
+                    .map(|(f, t)| format!("(name: \"{f}\", ty: {})", t.written()))
+                    .collect();
+                format!("Record(name: \"{name}\", fields: [{}])", fields.join(", "))
+            }
+            other => other.to_string(),
         }
     }
 }

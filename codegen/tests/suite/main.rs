@@ -38,7 +38,9 @@ fn the_bindings_hold_an_enum_per_codel_a_trait_and_binds() {
         "fn run_start(&mut self, ctx: RunStartCtx<'_, '_>) -> RunStart;",
         // the numbering the engine checks against its model
         "bip_engine::CodelSignature {\n            service: \"Run\",\n            codel: \"main\",\n            yields: &[\"pause::main\", \"ether\"],\n            throws: &[\"e_lost\"],\n        },",
-        "builder.module(\"type\", CODELS, move |codel, ctx| match codel {",
+        // and the data types the typed code assumes, declared where the module is bound
+        "pub const TYPES: bip_engine::ModuleTypes = bip_engine::ModuleTypes {\n        ids: &[],\n        ports: &[],\n        services: &[\n            bip_engine::ServiceTypes {\n                name: \"Run\",\n                args: \"\",\n                output: \"\",\n            },",
+        "builder\n            .typed_as(\"type\", &TYPES)\n            .module(\"type\", CODELS, move |codel, ctx| match codel {",
         "1 => codels.run_main(RunMainCtx { ctx }).into(),",
         "pub fn bind(\n    builder: bip_engine::EngineBuilder,\n    r#type: impl r#type::Codels,\n",
     ] {
@@ -91,6 +93,10 @@ fn the_bindings_type_what_each_codel_may_touch() {
         // value, and gives no `&mut i64`
         "pub fn read_nav_level(&self) -> Option<bip_engine::Bounded<0, 100>> {\n            self.ctx.port::<i64>(\"nav\", \"level\").and_then(|v| bip_engine::Bounded::new(*v))",
         "pub fn write_level(&mut self, value: bip_engine::Bounded<0, 100>) {\n            self.ctx.write_port(\"level\", value.get());",
+        // the data types the code assumes, a record's in full, for the engine to check
+        "bip_engine::Typed {\n                name: \"gear\",\n                ty: \"Int(-1, 3)\",\n            },",
+        "bip_engine::Typed {\n                name: \"pose\",\n                ty: \"Record(name: \\\"Pose\\\", fields: [(name: \\\"x\\\", ty: Float), (name: \\\"ok\\\", ty: Bool)])\",\n            },",
+        "bip_engine::Typed {\n                name: \"raw\",\n                ty: \"\",\n            },",
         // a record's Int field is a Bounded
         "pub struct Cell {\n    /// Field `row`: Int(-8, 8).\n    pub row: bip_engine::Bounded<-8, 8>,\n}",
         // the service's arguments and output, of their types; an Int's by value

@@ -259,39 +259,47 @@ fn an_int_argument_is_made_in_range_or_not_at_all() {
 }
 
 /// Bindings generated from one version of the model, bound to an engine built for
-/// another (here `rflex.TrackSpeed.track` yields `ether` first): the build fails and says
-/// what differs, where the codels' outcomes would otherwise be taken by the wrong number.
+/// another (`rflex.TrackSpeed.track` yields `ether` first; `antenna.Communicate` takes up
+/// to 20 packets): the build fails and says what differs, where the codels' outcomes
+/// would otherwise be taken by the wrong number, or typed data refused at run time.
 #[test]
 fn bindings_of_another_version_of_the_model_are_refused() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../robots/rover.ron");
     let text = std::fs::read_to_string(path).expect("the rover");
-    let from = r#"(state: "track", yields: ["pause::track", "ether"]"#;
-    assert!(text.contains(from), "the rover's rflex track codel");
-    let edited = text.replace(
-        from,
-        r#"(state: "track", yields: ["ether", "pause::track"]"#,
-    );
-    let system = bip_engine::load_str("rover.ron", &edited).unwrap_or_else(|e| panic!("{e:?}"));
-    let err = bind(
-        Engine::builder(system),
-        Wheels::default(),
-        Laser { obstacle: None },
-        Fuse,
-        Navigation,
-        Brief,
-        Brief,
-        Brief,
-        Brief,
-    )
-    .build()
-    .err()
-    .map(|e| e.to_string());
-    assert_eq!(
-        err.as_deref(),
-        Some(
+    let edits = [
+        (
+            r#"(state: "track", yields: ["pause::track", "ether"]"#,
+            r#"(state: "track", yields: ["ether", "pause::track"]"#,
             "module `rflex` was bound for another model: codel `TrackSpeed.track` yields \
              [\"pause::track\", \"ether\"] in them, [\"ether\", \"pause::track\"] in the model; \
-             regenerate its bindings from this model"
+             regenerate its bindings from this model",
+        ),
+        (
+            r#"(name: "Communicate", kind: Activity, task: "comm", args: Int(1, 10)"#,
+            r#"(name: "Communicate", kind: Activity, task: "comm", args: Int(1, 20)"#,
+            "module `antenna` was bound for another model: service `Communicate` is \
+             Int(1, 10) in them, Int(1, 20) in the model (arguments); regenerate its \
+             bindings from this model",
+        ),
+    ];
+    for (from, to, refused) in edits {
+        assert!(text.contains(from), "the rover has {from}");
+        let edited = text.replace(from, to);
+        let system = bip_engine::load_str("rover.ron", &edited).unwrap_or_else(|e| panic!("{e:?}"));
+        let err = bind(
+            Engine::builder(system),
+            Wheels::default(),
+            Laser { obstacle: None },
+            Fuse,
+            Navigation,
+            Brief,
+            Brief,
+            Brief,
+            Brief,
         )
-    );
+        .build()
+        .err()
+        .map(|e| e.to_string());
+        assert_eq!(err.as_deref(), Some(refused));
+    }
 }
