@@ -8,44 +8,41 @@ use crate::gen3::TempDir;
 use bip_lang::source_map::SourceMap;
 use bip_lang::{expand_str, import_gen_file, load_file, load_str};
 
+/// Loading `text`, written as `name` in `dir`, fails with one error that says `want`.
+fn assert_load_fails(dir: &TempDir, name: &str, text: &str, want: &str) {
+    let model = dir.write(name, text);
+    let e = load_file(&model).expect_err("an error");
+    assert_eq!(e.errors().len(), 1, "{}", e.summary());
+    assert!(e.summary().contains(want), "{}", e.summary());
+}
+
 #[test]
 fn the_period_of_a_gen_task_is_a_whole_number_of_model_ticks() {
     let dir = TempDir::new();
     dir.write("a.gen", "component a { task t { period 25 ms; }; };\n");
-    let model = dir.write(
+    assert_load_fails(
+        &dir,
         "m.ron",
         r#"System(name: "m", tick_ms: 10, modules: [Gen("a.gen")])"#,
+        "a.gen:1:31: the period of task `t` (25000 µs) is not a whole number of ticks of 10000 µs",
     );
-    let e = load_file(&model).expect_err("an error");
-    assert!(e.summary().contains("a.gen:1:31: the period of task `t` (25000 µs) is not a whole number of ticks of 10000 µs"), "{}", e.summary());
-    let model = dir.write("n.ron", r#"System(name: "m", modules: [Gen("a.gen")])"#);
-    let e = load_file(&model).expect_err("an error");
-    assert!(
-        e.summary()
-            .contains("n.ron:1:34: a model with `.gen` modules needs `tick_ms`"),
-        "{}",
-        e.summary()
+    assert_load_fails(
+        &dir,
+        "n.ron",
+        r#"System(name: "m", modules: [Gen("a.gen")])"#,
+        "n.ron:1:34: a model with `.gen` modules needs `tick_ms`",
     );
-    let model = dir.write(
+    assert_load_fails(
+        &dir,
         "huge.ron",
         r#"System(name: "m", tick_ms: 9223372036854775807, modules: [Gen("a.gen")])"#,
+        "huge.ron:1:28: with `.gen` modules, `tick_ms` must be a positive number",
     );
-    let e = load_file(&model).expect_err("an error");
-    assert!(
-        e.summary()
-            .contains("huge.ron:1:28: with `.gen` modules, `tick_ms` must be a positive number"),
-        "{}",
-        e.summary()
-    );
-    let model = dir.write(
+    assert_load_fails(
+        &dir,
         "o.ron",
         r#"System(name: "m", tick_ms: 5, modules: [Gen("missing.gen")])"#,
-    );
-    let e = load_file(&model).expect_err("an error");
-    assert!(
-        e.summary().contains("o.ron:1:46: cannot read"),
-        "{}",
-        e.summary()
+        "o.ron:1:46: cannot read",
     );
 }
 
@@ -80,17 +77,11 @@ fn gen_entries_take_their_places_among_ron_modules() {
     );
     load_file(&model).unwrap_or_else(|e| panic!("{}", e.summary()));
     // an entry of that shape with another name is an error at the name
-    let model = dir.write(
+    assert_load_fails(
+        &dir,
         "p.ron",
         r#"System(name: "m", tick_ms: 10, modules: [Gem("a.gen"), Gen ( file : "a.gen")])"#,
-    );
-    let e = load_file(&model).expect_err("an error");
-    assert_eq!(e.errors().len(), 1, "{}", e.summary());
-    assert!(
-        e.summary()
-            .contains("p.ron:1:42: a module from a GenoM3 file is written `Gen(\"file.gen\")`"),
-        "{}",
-        e.summary()
+        "p.ron:1:42: a module from a GenoM3 file is written `Gen(\"file.gen\")`",
     );
     // an unknown field of a Gen entry is an error in the model file
     let model = dir.write(

@@ -7,3 +7,19 @@ mod compile_fail;
 mod property;
 mod rover;
 mod typed;
+
+use bip_engine::{Engine, Event, Reply, Ticket, Until};
+
+/// How a request ended, once the engine ran `ticks` more: the first reply its typed
+/// ticket reads as its end (`|t, r| ticket.end(t, r)`).
+pub(crate) fn end_of<E>(
+    engine: &mut Engine,
+    ticks: u64,
+    end: impl Fn(Ticket, &Reply) -> Option<E>,
+) -> Option<E> {
+    engine.run_until(Until::Ticks(ticks)).expect("runs");
+    engine.events().find_map(|ev| match ev {
+        Event::Reply { ticket, reply, .. } => end(ticket, &reply),
+        _ => None,
+    })
+}

@@ -3,7 +3,8 @@
 //! context and returns its own enum of outcomes, one `bind` registers them all, and typed
 //! requests read their typed ends. The run is a path of the model.
 
-use bip_engine::{Engine, Event, Until};
+use crate::end_of;
+use bip_engine::{Engine, Until};
 use bip_rover_bindings::*;
 
 /// The wheels: drive at the requested speed, publish the odometry.
@@ -167,23 +168,12 @@ pub(crate) fn driving(builder: bip_engine::EngineBuilder, obstacle: Option<f64>)
     engine
 }
 
-/// How the request of `ticket` ended, once the engine ran `ticks` more.
-fn end_of(engine: &mut Engine, ticket: ndd::GoToTicket, ticks: u64) -> Option<ndd::GoToEnd> {
-    engine.run_until(Until::Ticks(ticks)).expect("runs");
-    engine.events().find_map(|ev| match ev {
-        Event::Reply {
-            ticket: t, reply, ..
-        } => ticket.end(t, &reply),
-        _ => None,
-    })
-}
-
 #[test]
 fn a_typed_request_ends_with_its_typed_output() {
     let system = system();
     let mut engine = rover(&system, None);
     let goto = ndd::request_go_to(&mut engine, 0.4).expect("queued");
-    let Some(ndd::GoToEnd::Done(Some(x))) = end_of(&mut engine, goto, 30) else {
+    let Some(ndd::GoToEnd::Done(Some(x))) = end_of(&mut engine, 30, |t, r| goto.end(t, r)) else {
         panic!("GoTo did not reach its goal");
     };
     assert!(x >= 0.4, "stopped at {x}");
@@ -227,7 +217,7 @@ fn a_thrown_exception_is_the_services_exception_variant() {
     let mut engine = rover(&system, Some(0.2));
     let goto = ndd::request_go_to(&mut engine, 5.0).expect("queued");
     // the exception keeps the output the codel gave before it threw: where it stopped
-    match end_of(&mut engine, goto, 10) {
+    match end_of(&mut engine, 10, |t, r| goto.end(t, r)) {
         Some(ndd::GoToEnd::Exception(ndd::GoToException::EBlocked, Some(x))) => {
             assert!((0.0..5.0).contains(&x), "stopped at {x}")
         }

@@ -3,7 +3,8 @@
 //! field, an `Int` port, a record with an `Int` field, an `Int`'s arguments and output),
 //! and what the engine holds is what the codels gave. The run is a path of the model.
 
-use bip_engine::{Bounded, Engine, Event, Until};
+use crate::end_of;
+use bip_engine::{Bounded, Engine};
 use bip_rover_bindings::typed::{self, arm, Joint};
 
 /// The arm: `start` shifts the gear up and arms; `main` moves the joint to the requested
@@ -59,17 +60,6 @@ fn system() -> bip_engine::System {
     bip_engine::load_file(model).unwrap_or_else(|e| panic!("{e:?}"))
 }
 
-/// How the request of `ticket` ended, once the engine ran `ticks` more.
-fn end_of(engine: &mut Engine, ticket: arm::MoveTicket, ticks: u64) -> Option<arm::MoveEnd> {
-    engine.run_until(Until::Ticks(ticks)).expect("runs");
-    engine.events().find_map(|ev| match ev {
-        Event::Reply {
-            ticket: t, reply, ..
-        } => ticket.end(t, &reply),
-        _ => None,
-    })
-}
-
 #[test]
 fn ints_and_bools_cross_the_typed_context_as_the_model_declares_them() {
     let system = system();
@@ -79,7 +69,7 @@ fn ints_and_bools_cross_the_typed_context_as_the_model_declares_them() {
         .expect("every codel is bound");
     let to_75 = arm::request_move(&mut engine, Bounded::of::<75>()).expect("queued");
     // 0, 30, 60, 75: the output is the angle reached, a Bounded of the output's range
-    let end = end_of(&mut engine, to_75, 20);
+    let end = end_of(&mut engine, 20, |t, r| to_75.end(t, r));
     assert_eq!(end, Some(arm::MoveEnd::Done(Some(Bounded::of::<75>()))));
     let inspect = engine.inspect();
     assert_eq!(inspect.ids("arm", "gear"), Some(1));
@@ -96,7 +86,7 @@ fn ints_and_bools_cross_the_typed_context_as_the_model_declares_them() {
 
     // back to -15 (a level below 0 saturates to 0); start shifts up and disarms
     let to_minus_15 = arm::request_move(&mut engine, Bounded::of::<-15>()).expect("queued");
-    let end = end_of(&mut engine, to_minus_15, 20);
+    let end = end_of(&mut engine, 20, |t, r| to_minus_15.end(t, r));
     assert_eq!(end, Some(arm::MoveEnd::Done(Some(Bounded::of::<-15>()))));
     assert_eq!(engine.inspect().ids("arm", "gear"), Some(2));
     assert_eq!(engine.inspect().ids("arm", "armed"), Some(0));
@@ -125,7 +115,7 @@ fn the_readers_give_what_the_writers_gave() {
         .build()
         .expect("every codel is bound");
     let ticket = arm::request_move(&mut engine, Bounded::of::<-60>()).expect("queued");
-    let end = end_of(&mut engine, ticket, 20);
+    let end = end_of(&mut engine, 20, |t, r| ticket.end(t, r));
     assert_eq!(end, Some(arm::MoveEnd::Done(Some(Bounded::of::<-60>()))));
     let seen = &arm.lock().expect("not poisoned").seen;
     let angle = |a: i64| Bounded::new(a).expect("in -90..=90");
