@@ -8,7 +8,7 @@ mod property;
 mod rover;
 mod typed;
 
-use bip_engine::{Engine, Event, Reply, Ticket, Until};
+use bip_engine::{Engine, Event, Reply, System, Ticket, Until};
 
 /// How a request ended, once the engine ran `ticks` more: the first reply its typed
 /// ticket reads as its end (`|t, r| ticket.end(t, r)`).
@@ -22,4 +22,11 @@ pub(crate) fn end_of<E>(
         Event::Reply { ticket, reply, .. } => end(ticket, &reply),
         _ => None,
     })
+}
+
+/// No codel was faulty, and the recorded run is a path of `system`: its steps, replayed.
+pub(crate) fn assert_clean_path(engine: &mut Engine, system: &System) -> usize {
+    assert_eq!(engine.inspect().stats().faults, 0);
+    let steps = engine.record().replay(system).expect("a path of the model");
+    steps.len()
 }

@@ -3,7 +3,7 @@
 //! context and returns its own enum of outcomes, one `bind` registers them all, and typed
 //! requests read their typed ends. The run is a path of the model.
 
-use crate::end_of;
+use crate::{assert_clean_path, end_of};
 use bip_engine::{Engine, Until};
 use bip_rover_bindings::*;
 
@@ -177,12 +177,8 @@ fn a_typed_request_ends_with_its_typed_output() {
         panic!("GoTo did not reach its goal");
     };
     assert!(x >= 0.4, "stopped at {x}");
-    assert_eq!(engine.inspect().stats().faults, 0);
-    let steps = engine
-        .record()
-        .replay(&system)
-        .expect("a path of the model");
-    assert!(steps.len() > 50, "{}", steps.len());
+    let steps = assert_clean_path(&mut engine, &system);
+    assert!(steps > 50, "{steps}");
 }
 
 #[test]
@@ -223,11 +219,7 @@ fn a_thrown_exception_is_the_services_exception_variant() {
         }
         other => panic!("{other:?}"),
     }
-    assert_eq!(engine.inspect().stats().faults, 0);
-    engine
-        .record()
-        .replay(&system)
-        .expect("a path of the model");
+    assert_clean_path(&mut engine, &system);
 }
 
 #[test]
