@@ -7,7 +7,7 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use bip_model::genom::map::{DataType, ModuleMap};
+use bip_model::genom::map::{DataType, ModuleMap, ServiceMap};
 
 /// One codel of a module object, as the object numbers it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -103,26 +103,29 @@ pub(crate) fn types_difference(types: &ModuleTypes, module: &ModuleMap) -> Optio
         .iter()
         .map(|p| (p.name.as_str(), written(&p.ty)))
         .collect();
-    let args: Vec<(&str, String)> = module
-        .services
-        .iter()
-        .map(|s| (s.name.as_str(), written(&s.args)))
-        .collect();
-    let outputs: Vec<(&str, String)> = module
-        .services
-        .iter()
-        .map(|s| (s.name.as_str(), written(&s.output)))
-        .collect();
+    let services = |f: fn(&ServiceMap) -> &Option<DataType>| -> Vec<(&str, String)> {
+        module
+            .services
+            .iter()
+            .map(|s| (s.name.as_str(), written(f(s))))
+            .collect()
+    };
+    let (args, outputs) = (services(|s| &s.args), services(|s| &s.output));
     let theirs = |xs: &[Typed]| -> Vec<(&'static str, &'static str)> {
         xs.iter().map(|x| (x.name, x.ty)).collect()
     };
-    let services = |f: fn(&ServiceTypes) -> &'static str| -> Vec<(&'static str, &'static str)> {
-        types.services.iter().map(|s| (s.name, f(s))).collect()
-    };
+    let their_services =
+        |f: fn(&ServiceTypes) -> &'static str| -> Vec<(&'static str, &'static str)> {
+            types.services.iter().map(|s| (s.name, f(s))).collect()
+        };
     compare("ids field", &theirs(types.ids), &ids)
         .or_else(|| compare("port", &theirs(types.ports), &ports))
-        .or_else(|| compare("service", &services(|s| s.args), &args).map(|d| d + " (arguments)"))
-        .or_else(|| compare("service", &services(|s| s.output), &outputs).map(|d| d + " (output)"))
+        .or_else(|| {
+            compare("service", &their_services(|s| s.args), &args).map(|d| d + " (arguments)")
+        })
+        .or_else(|| {
+            compare("service", &their_services(|s| s.output), &outputs).map(|d| d + " (output)")
+        })
 }
 
 /// The first difference between two lists of typed names: the names, then a type.

@@ -20,30 +20,30 @@ fn assert_load_fails(dir: &TempDir, name: &str, text: &str, want: &str) {
 fn the_period_of_a_gen_task_is_a_whole_number_of_model_ticks() {
     let dir = TempDir::new();
     dir.write("a.gen", "component a { task t { period 25 ms; }; };\n");
-    assert_load_fails(
-        &dir,
-        "m.ron",
-        r#"System(name: "m", tick_ms: 10, modules: [Gen("a.gen")])"#,
-        "a.gen:1:31: the period of task `t` (25000 µs) is not a whole number of ticks of 10000 µs",
-    );
-    assert_load_fails(
-        &dir,
-        "n.ron",
-        r#"System(name: "m", modules: [Gen("a.gen")])"#,
-        "n.ron:1:34: a model with `.gen` modules needs `tick_ms`",
-    );
-    assert_load_fails(
-        &dir,
-        "huge.ron",
-        r#"System(name: "m", tick_ms: 9223372036854775807, modules: [Gen("a.gen")])"#,
-        "huge.ron:1:28: with `.gen` modules, `tick_ms` must be a positive number",
-    );
-    assert_load_fails(
-        &dir,
-        "o.ron",
-        r#"System(name: "m", tick_ms: 5, modules: [Gen("missing.gen")])"#,
-        "o.ron:1:46: cannot read",
-    );
+    for (name, text, want) in [
+        (
+            "m.ron",
+            r#"System(name: "m", tick_ms: 10, modules: [Gen("a.gen")])"#,
+            "a.gen:1:31: the period of task `t` (25000 µs) is not a whole number of ticks of 10000 µs",
+        ),
+        (
+            "n.ron",
+            r#"System(name: "m", modules: [Gen("a.gen")])"#,
+            "n.ron:1:34: a model with `.gen` modules needs `tick_ms`",
+        ),
+        (
+            "huge.ron",
+            r#"System(name: "m", tick_ms: 9223372036854775807, modules: [Gen("a.gen")])"#,
+            "huge.ron:1:28: with `.gen` modules, `tick_ms` must be a positive number",
+        ),
+        (
+            "o.ron",
+            r#"System(name: "m", tick_ms: 5, modules: [Gen("missing.gen")])"#,
+            "o.ron:1:46: cannot read",
+        ),
+    ] {
+        assert_load_fails(&dir, name, text, want);
+    }
 }
 
 #[test]
