@@ -451,7 +451,7 @@ fn bounded_response(p: &mut Prover<'_>, prop: &bip_model::Property) -> Outcome {
         response::Finding::Holds { how } => {
             Outcome::symbolic(PropertyVerdict::Holds { witness: None }, Some(how))
         }
-        response::Finding::Fails(trace, reason) => Outcome::symbolic(
+        response::Finding::Bad((trace, reason)) => Outcome::symbolic(
             PropertyVerdict::Fails {
                 reason,
                 trace: Some(trace),
