@@ -247,23 +247,14 @@ impl Unrolling for Safety<'_> {
     }
 
     /// The first frame may be unreachable: a trap may say so.
-    fn learn(
-        &mut self,
-        p: &mut Prover<'_>,
-        step: &Solver,
-        chain: &mut [Plain],
-        seen: &[State],
-    ) -> bool {
-        let Some(first) = seen.first() else {
-            return false;
-        };
-        if p.learn_traps(first) == 0 {
-            return false;
-        }
+    fn learn(&mut self, p: &mut Prover<'_>, seen: &[State]) -> bool {
+        seen.first().is_some_and(|first| p.learn_traps(first) > 0)
+    }
+
+    fn give_learned(&mut self, p: &mut Prover<'_>, step: &Solver, chain: &mut [Plain]) {
         for f in chain {
             p.give_traps(step, &mut f.placed);
         }
-        true
     }
 
     fn counterexample(

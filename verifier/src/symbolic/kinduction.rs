@@ -70,7 +70,8 @@ pub trait Unrolling {
         v: &StepVars,
         next: Placed,
     ) -> Self::Frame;
-    /// The frame is good, as a hypothesis of the step case (at least not bad).
+    /// What the step case assumes of the frames before its last: not bad, or the part of
+    /// that which needs no choice of a step.
     fn good(&mut self, p: &mut Prover<'_>, f: &Self::Frame) -> Bool;
     /// The frame is bad.
     fn bad(&mut self, p: &mut Prover<'_>, f: &Self::Frame) -> Bool;
@@ -80,17 +81,13 @@ pub trait Unrolling {
     fn read_path(&self, p: &Prover<'_>, m: &Model, path: &[Self::Frame]) -> Option<Self::Path>;
     /// The chain in a model.
     fn read_chain(&self, p: &Prover<'_>, m: &Model, chain: &[Self::Frame]) -> Vec<Self::Seen>;
-    /// Learns from a step case's model, read as `seen`, invariants that rule it out, and
-    /// asserts them on `chain`; false if there are none (the default).
-    fn learn(
-        &mut self,
-        _p: &mut Prover<'_>,
-        _step: &Solver,
-        _chain: &mut [Self::Frame],
-        _seen: &[Self::Seen],
-    ) -> bool {
+    /// Learns from a step case's model, read as `seen`, invariants that may rule it out;
+    /// false if there are none (the default).
+    fn learn(&mut self, _p: &mut Prover<'_>, _seen: &[Self::Seen]) -> bool {
         false
     }
+    /// Asserts on the chain the invariants learned since it was last given them.
+    fn give_learned(&mut self, _p: &mut Prover<'_>, _step: &Solver, _chain: &mut [Self::Frame]) {}
     /// The finding of a bad path read from a model (`bmc` as it was before the bad frame
     /// was asked for).
     fn counterexample(
@@ -160,6 +157,7 @@ pub fn decide<U: Unrolling>(
             }
             chain.push(next);
             loop {
+                u.give_learned(p, &step, &mut chain);
                 let bad = u.bad(p, &chain[k]);
                 step.push();
                 step.assert(&bad);
@@ -182,7 +180,7 @@ pub fn decide<U: Unrolling>(
                 let seen = model
                     .map(|m| u.read_chain(p, &m, &chain))
                     .unwrap_or_default();
-                if u.learn(p, &step, &mut chain, &seen) {
+                if u.learn(p, &seen) {
                     continue;
                 }
                 let repeats =
