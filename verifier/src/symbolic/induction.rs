@@ -18,10 +18,12 @@
 use bip_model::eval::Expr;
 use bip_model::{State, Steps, System, Trace, Verdict as TraceVerdict};
 use z3::ast::Bool;
+use z3::{Model, Solver};
 
 use super::confirm::trace_through;
 use super::encode::{Enabling, Frame, StepFilter, StepVars};
-use super::prover::Prover;
+use super::kinduction::{self, Unrolling};
+use super::prover::{Placed, Prover};
 use super::solver::Answer;
 use super::term::{and, err_formula, not, or};
 
@@ -36,15 +38,8 @@ pub enum Goal<'a> {
     RangeError,
 }
 
-pub enum Finding {
-    /// No bad state is reachable; `how` says which argument proved it.
-    Holds {
-        how: String,
-    },
-    /// A shortest path to a bad state, replayed.
-    Bad(Trace),
-    Unknown(String),
-}
+/// A shortest path to a bad state is a trace, replayed.
+pub type Finding = kinduction::Finding<Trace>;
 
 impl Goal<'_> {
     fn bad(&self, p: &mut Prover<'_>, f: &Frame, en: &Enabling) -> Bool {
@@ -150,141 +145,127 @@ pub fn prove(p: &mut Prover<'_>, goal: Goal<'_>) -> Finding {
         }
     }
     // 2. and 3. bounded model checking and k-induction, side by side
-    let max = p.options.symbolic.max_depth as usize;
-    let all = StepFilter::all(sys);
-    let bmc = p.solver();
-    let mut path: Vec<Frame> = vec![p.enc.concrete_frame(&sys.initial_state())];
-    let mut path_en: Vec<Enabling> = vec![p.enc.enabling(&path[0])];
-    let step = p.solver();
-    let mut frames = vec![p.reachable_frame(&step)];
-    let mut frames_en = vec![p.enc.enabling(&frames[0].frame)];
-    let mut distinct = false;
-    let mut induction_open = true;
-    for k in 1..=max.max(1) {
-        // base: no bad state at depth k - 1
-        let d = k - 1;
-        p.step(format!(
-            "bounded model checking at depth {d}{}",
-            if induction_open {
-                format!(", k-induction at k = {k}")
-            } else {
-                String::new()
-            }
-        ));
-        let bad = goal.bad(p, &path[d], &path_en[d]);
-        bmc.push();
-        bmc.assert(&bad);
-        let answer = p.check(&bmc, &[]);
-        if answer == Answer::Sat {
-            let states: Option<Vec<State>> = bmc
-                .get_model()
-                .and_then(|m| path.iter().map(|f| p.enc.read_state(&m, f)).collect());
-            bmc.pop(1);
-            let Some(states) = states else {
-                return Finding::Unknown("the solver gave no model for a counterexample".into());
-            };
-            return counterexample(p, goal, &bmc, &path, &path_en, states);
-        }
-        bmc.pop(1);
-        if let Answer::Unknown(why) = answer {
-            return Finding::Unknown(format!("bounded model checking at depth {d}: {why}"));
-        }
-        // step: k good frames satisfying the invariants, then a bad one
-        if induction_open {
-            let good = goal.good(p, &frames[k - 1].frame, &frames_en[k - 1]);
-            step.assert(&good);
-            let next = p.reachable_frame(&step);
-            let v = StepVars::fresh(sys, &p.fresh_name("s"));
-            step.assert(p.enc.transition(
-                &frames[k - 1].frame,
-                &frames_en[k - 1],
-                &v,
-                &all,
-                &next.frame,
-            ));
-            let en_next = p.enc.enabling(&next.frame);
-            if distinct {
-                for f in &frames {
-                    step.assert(not(&p.enc.frames_equal(&f.frame, &next.frame)));
-                }
-            }
-            frames.push(next);
-            frames_en.push(en_next);
-            loop {
-                for f in &mut frames {
-                    p.give_traps(&step, f);
-                }
-                let bad = goal.bad(p, &frames[k].frame, &frames_en[k]);
-                step.push();
-                step.assert(&bad);
-                let answer = p.check(&step, &[]);
-                let model = (answer == Answer::Sat).then(|| step.get_model()).flatten();
-                step.pop(1);
-                match answer {
-                    Answer::Unsat => {
-                        return Finding::Holds {
-                            how: format!("{k}-induction"),
-                        }
-                    }
-                    Answer::Unknown(why) => {
-                        unknown = Some(format!("k-induction at k = {k}: {why}"));
-                        induction_open = false;
-                        break;
-                    }
-                    Answer::Sat => {}
-                }
-                let states: Vec<State> = model
-                    .map(|m| {
-                        frames
-                            .iter()
-                            .filter_map(|f| p.enc.read_state(&m, &f.frame))
-                            .collect()
-                    })
-                    .unwrap_or_default();
-                // the first frame may be unreachable: a trap may say so
-                if let Some(first) = states.first() {
-                    if p.learn_traps(first) > 0 {
-                        continue;
-                    }
-                }
-                let repeats = (0..states.len())
-                    .any(|i| (i + 1..states.len()).any(|j| states[i] == states[j]));
-                if repeats && !distinct {
-                    distinct = true;
-                    for i in 0..frames.len() {
-                        for j in i + 1..frames.len() {
-                            step.assert(not(&p
-                                .enc
-                                .frames_equal(&frames[i].frame, &frames[j].frame)));
-                        }
-                    }
-                    continue;
-                }
-                break;
-            }
-        }
-        // extend the bounded path by one step
-        let name = p.fresh_name("i");
-        let (next, domain) = p.enc.fresh_frame(&name);
-        for c in domain {
-            bmc.assert(&c);
-        }
-        let v = StepVars::fresh(sys, &p.fresh_name("p"));
-        bmc.assert(p.enc.transition(&path[d], &path_en[d], &v, &all, &next));
-        path_en.push(p.enc.enabling(&next));
-        path.push(next);
-        if let Some(stop) = p.budget.watch.look() {
-            return Finding::Unknown(stop.to_string());
+    let mut safety = Safety {
+        goal,
+        all: StepFilter::all(sys),
+    };
+    kinduction::decide(p, &mut safety, unknown)
+}
+
+/// A frame of the path or of the chain, and what is enabled in it.
+struct Plain {
+    placed: Placed,
+    en: Enabling,
+}
+
+/// The step relation unrolled for a goal.
+struct Safety<'a> {
+    goal: Goal<'a>,
+    all: StepFilter,
+}
+
+impl Safety<'_> {
+    fn plain(p: &Prover<'_>, placed: Placed) -> Plain {
+        Plain {
+            en: p.enc.enabling(&placed.frame),
+            placed,
         }
     }
-    let mut why = format!(
-        "neither proved (k-induction up to k = {max}) nor refuted (no counterexample within {} steps)",
-        max.max(1) - 1
-    );
-    if let Some(u) = unknown {
-        why.push_str(&format!("; {u}"));
+}
+
+impl Unrolling for Safety<'_> {
+    type Frame = Plain;
+    type Seen = State;
+    type Path = Vec<State>;
+    type Bad = Trace;
+    const CHECKING: &'static str = "bounded model checking";
+    const ON: &'static str = "";
+
+    fn initial(&mut self, p: &mut Prover<'_>) -> Plain {
+        let frame = p.enc.concrete_frame(&p.sys().initial_state());
+        Safety::plain(p, Placed::bare(frame))
     }
-    Finding::Unknown(why)
+
+    fn place(&mut self, p: &mut Prover<'_>, _step: &Solver, placed: Placed) -> Plain {
+        Safety::plain(p, placed)
+    }
+
+    fn follow_path(
+        &mut self,
+        p: &mut Prover<'_>,
+        bmc: &Solver,
+        last: &Plain,
+        v: StepVars,
+        next: Frame,
+        _name: &str,
+    ) -> Plain {
+        bmc.assert(
+            p.enc
+                .transition(&last.placed.frame, &last.en, &v, &self.all, &next),
+        );
+        Safety::plain(p, Placed::bare(next))
+    }
+
+    fn follow_chain(
+        &mut self,
+        p: &mut Prover<'_>,
+        step: &Solver,
+        last: &Plain,
+        v: &StepVars,
+        next: Placed,
+    ) -> Plain {
+        step.assert(
+            p.enc
+                .transition(&last.placed.frame, &last.en, v, &self.all, &next.frame),
+        );
+        Safety::plain(p, next)
+    }
+
+    fn good(&mut self, p: &mut Prover<'_>, f: &Plain) -> Bool {
+        self.goal.good(p, &f.placed.frame, &f.en)
+    }
+
+    fn bad(&mut self, p: &mut Prover<'_>, f: &Plain) -> Bool {
+        self.goal.bad(p, &f.placed.frame, &f.en)
+    }
+
+    fn same(&self, p: &Prover<'_>, a: &Plain, b: &Plain) -> Bool {
+        p.enc.frames_equal(&a.placed.frame, &b.placed.frame)
+    }
+
+    fn read_path(&self, p: &Prover<'_>, m: &Model, path: &[Plain]) -> Option<Vec<State>> {
+        path.iter()
+            .map(|f| p.enc.read_state(m, &f.placed.frame))
+            .collect()
+    }
+
+    fn read_chain(&self, p: &Prover<'_>, m: &Model, chain: &[Plain]) -> Vec<State> {
+        chain
+            .iter()
+            .filter_map(|f| p.enc.read_state(m, &f.placed.frame))
+            .collect()
+    }
+
+    /// The first frame may be unreachable: a trap may say so.
+    fn learn(&mut self, p: &mut Prover<'_>, seen: &[State]) -> bool {
+        seen.first().is_some_and(|first| p.learn_traps(first) > 0)
+    }
+
+    fn give_learned(&mut self, p: &mut Prover<'_>, step: &Solver, chain: &mut [Plain]) {
+        for f in chain {
+            p.give_traps(step, &mut f.placed);
+        }
+    }
+
+    fn counterexample(
+        &mut self,
+        p: &mut Prover<'_>,
+        bmc: &Solver,
+        path: &[Plain],
+        states: Vec<State>,
+    ) -> Finding {
+        counterexample(p, self.goal, bmc, path, states)
+    }
 }
 
 /// The trace to a bad state found at the end of `states`. For a `Reachable` goal, a
@@ -293,9 +274,8 @@ pub fn prove(p: &mut Prover<'_>, goal: Goal<'_>) -> Finding {
 fn counterexample(
     p: &mut Prover<'_>,
     goal: Goal<'_>,
-    bmc: &z3::Solver,
-    path: &[Frame],
-    path_en: &[Enabling],
+    bmc: &Solver,
+    path: &[Plain],
     states: Vec<State>,
 ) -> Finding {
     let sys = p.sys();
@@ -310,12 +290,11 @@ fn counterexample(
     };
     if let Goal::Reach(e, _) = goal {
         let d = path.len() - 1;
-        let v = p.eval(e, &path[d]);
+        let v = p.eval(e, &path[d].placed.frame);
         let other = match verdict {
             TraceVerdict::Witness(_) => err_formula(&v.err),
             _ => and([v.bool_term(), not(&err_formula(&v.err))]),
         };
-        let _ = &path_en[d];
         bmc.push();
         bmc.assert(&other);
         let answer = p.check(bmc, &[]);

@@ -9,6 +9,8 @@
 //!   and semiflows (these locations' weighted occupation is constant);
 //! - `deadlock.rs`: deadlock freedom as "invariants ∧ deadlock predicate is unsatisfiable",
 //!   candidates examined with the step relation and confirmed by explicit search;
+//! - `kinduction.rs`: bounded model checking and k-induction side by side, on an
+//!   unrolling of the step relation that `induction.rs` and `response.rs` give;
 //! - `induction.rs`: invariants, reachability and range errors by bounded model checking
 //!   and k-induction strengthened with the same invariants;
 //! - `response.rs`: bounded response by the same two methods on the product with the
@@ -29,6 +31,7 @@ mod encode;
 mod encoding_tests;
 mod induction;
 mod invariants;
+mod kinduction;
 mod net;
 mod prover;
 mod response;
@@ -448,7 +451,7 @@ fn bounded_response(p: &mut Prover<'_>, prop: &bip_model::Property) -> Outcome {
         response::Finding::Holds { how } => {
             Outcome::symbolic(PropertyVerdict::Holds { witness: None }, Some(how))
         }
-        response::Finding::Fails(trace, reason) => Outcome::symbolic(
+        response::Finding::Bad((trace, reason)) => Outcome::symbolic(
             PropertyVerdict::Fails {
                 reason,
                 trace: Some(trace),

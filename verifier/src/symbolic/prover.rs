@@ -48,6 +48,16 @@ pub struct Placed {
     traps_given: usize,
 }
 
+impl Placed {
+    /// A frame given no trap: one on a path from the initial state, reachable anyway.
+    pub fn bare(frame: Frame) -> Placed {
+        Placed {
+            frame,
+            traps_given: 0,
+        }
+    }
+}
+
 impl<'s> Prover<'s> {
     pub fn new(
         sys: &'s System,

@@ -15,25 +15,20 @@
 
 use bip_model::{Happens, Label, ResponseSpec, ResponseWatch, Role, State, System, Trace};
 use z3::ast::{Bool, Int};
+use z3::{Model, Solver};
 
 use super::confirm::path_through;
 use super::encode::{Enabling, Frame, StepFilter, StepVars};
-use super::prover::Prover;
-use super::solver::Answer;
+use super::kinduction::{self, Unrolling};
+use super::prover::{Placed, Prover};
 use super::term::{and, and2, eq_num, err_formula, ff, ite_int, not, num, or};
 
-pub enum Finding {
-    Holds {
-        how: String,
-    },
-    /// A shortest run that leaves a trigger unanswered, confirmed, and why it fails.
-    Fails(Trace, String),
-    Unknown(String),
-}
+/// A shortest run that leaves a trigger unanswered is confirmed, with why it fails.
+pub type Finding = kinduction::Finding<(Trace, String)>;
 
 /// One frame of the product: the state's terms, what is enabled in it, its observer, and
 /// the condition that evaluating the trigger or response failed on the way into it.
-struct Product {
+struct Observed {
     frame: Frame,
     en: Enabling,
     obs: Int,
@@ -139,7 +134,7 @@ impl Observer<'_> {
     }
 
     /// The product frame is bad.
-    fn bad(&self, p: &Prover<'_>, x: &Product) -> Bool {
+    fn bad(&self, p: &Prover<'_>, x: &Observed) -> Bool {
         let (_, t_err) = self.in_state(p, self.spec.trigger, &x.frame);
         let (_, r_err) = self.in_state(p, self.spec.response, &x.frame);
         let waiting = and2(&x.obs.ge(1), &x.obs.le(self.late - 1));
@@ -194,177 +189,173 @@ pub fn bounded(p: &mut Prover<'_>, spec: ResponseSpec<'_>, name: &str) -> Findin
             ))
         }
     };
-    let max = p.options.symbolic.max_depth as usize;
-    let all = StepFilter::all(sys);
-    let bmc = p.solver();
-    let first = p.enc.concrete_frame(&init);
-    let mut path = vec![Product {
-        en: p.enc.enabling(&first),
-        frame: first,
-        obs: num(start),
-        err_in: ff(),
-    }];
-    let mut path_steps: Vec<(StepVars, Vec<Label>)> = Vec::new();
-    let step = p.solver();
-    let placed = p.reachable_frame(&step);
-    let name0 = p.fresh_name("o");
-    let mut frames = vec![Product {
-        en: p.enc.enabling(&placed.frame),
-        frame: placed.frame,
-        obs: obs.fresh(&step, &name0),
-        err_in: ff(),
-    }];
-    let mut distinct = false;
-    let mut induction_open = true;
-    let mut unknown: Option<String> = None;
-    for k in 1..=max.max(1) {
-        let d = k - 1;
-        p.step(format!(
-            "bounded model checking of the observer at depth {d}{}",
-            if induction_open {
-                format!(", k-induction at k = {k}")
-            } else {
-                String::new()
-            }
-        ));
-        bmc.push();
-        bmc.assert(obs.bad(p, &path[d]));
-        let answer = p.check(&bmc, &[]);
-        if answer == Answer::Sat {
-            let read = bmc.get_model().and_then(|m| {
-                let states: Option<Vec<State>> = path
-                    .iter()
-                    .map(|x| p.enc.read_state(&m, &x.frame))
-                    .collect();
-                let labels: Option<Vec<Label>> = path_steps
-                    .iter()
-                    .map(|(v, labels)| {
-                        (0..labels.len()).find_map(|k| {
-                            m.eval(&v.sel.is(k as i64), true)?
-                                .as_bool()?
-                                .then_some(labels[k])
-                        })
-                    })
-                    .collect();
-                Some((states?, labels?))
-            });
-            bmc.pop(1);
-            let Some((states, labels)) = read else {
-                return Finding::Unknown("the solver gave no model for a counterexample".into());
-            };
-            return confirm(sys, spec, name, &states, &labels);
-        }
-        bmc.pop(1);
-        if let Answer::Unknown(why) = answer {
-            return Finding::Unknown(format!("bounded model checking at depth {d}: {why}"));
-        }
-        if induction_open {
-            let good = not(&obs.bad(p, &frames[k - 1]));
-            step.assert(&good);
-            let placed = p.reachable_frame(&step);
-            let v = StepVars::fresh(sys, &p.fresh_name("s"));
-            let prev = &frames[k - 1];
-            let (t, labels) =
-                p.enc
-                    .transition_labelled(&prev.frame, &prev.en, &v, &all, &placed.frame);
-            step.assert(&t);
-            let (o_next, err_in) =
-                obs.after_step(p, &prev.obs, &labels, &v, &prev.frame, &placed.frame);
-            let name = p.fresh_name("o");
-            let o = obs.fresh(&step, &name);
-            step.assert(o.eq(&o_next));
-            let next = Product {
-                en: p.enc.enabling(&placed.frame),
-                frame: placed.frame,
-                obs: o,
-                err_in,
-            };
-            if distinct {
-                for x in &frames {
-                    step.assert(not(&same(p, x, &next)));
-                }
-            }
-            frames.push(next);
-            loop {
-                step.push();
-                step.assert(obs.bad(p, &frames[k]));
-                let answer = p.check(&step, &[]);
-                let model = (answer == Answer::Sat).then(|| step.get_model()).flatten();
-                step.pop(1);
-                match answer {
-                    Answer::Unsat => {
-                        return Finding::Holds {
-                            how: format!("{k}-induction on the product with the observer"),
-                        }
-                    }
-                    Answer::Unknown(why) => {
-                        unknown = Some(format!("k-induction at k = {k}: {why}"));
-                        induction_open = false;
-                        break;
-                    }
-                    Answer::Sat => {}
-                }
-                let repeats = model.is_some_and(|m| {
-                    let seen: Vec<Option<(State, Option<i64>)>> = frames
-                        .iter()
-                        .map(|x| {
-                            let s = p.enc.read_state(&m, &x.frame)?;
-                            Some((s, m.eval(&x.obs, true).and_then(|o| o.as_i64())))
-                        })
-                        .collect();
-                    (0..seen.len()).any(|i| (i + 1..seen.len()).any(|j| seen[i] == seen[j]))
-                });
-                if repeats && !distinct {
-                    distinct = true;
-                    for i in 0..frames.len() {
-                        for j in i + 1..frames.len() {
-                            step.assert(not(&same(p, &frames[i], &frames[j])));
-                        }
-                    }
-                    continue;
-                }
-                break;
-            }
-        }
-        // extend the bounded path by one step
-        let name = p.fresh_name("i");
-        let (next, domain) = p.enc.fresh_frame(&name);
-        for c in domain {
-            bmc.assert(&c);
-        }
-        let v = StepVars::fresh(sys, &p.fresh_name("p"));
-        let prev = &path[d];
+    let mut product = Product {
+        obs,
+        start,
+        all: StepFilter::all(sys),
+        name,
+        path_steps: Vec::new(),
+    };
+    kinduction::decide(p, &mut product, None)
+}
+
+/// The step relation's product with the observer, unrolled.
+struct Product<'a> {
+    obs: Observer<'a>,
+    /// The observer in the initial state.
+    start: i64,
+    all: StepFilter,
+    /// The property's name.
+    name: &'a str,
+    /// The steps of the path so far, and the labels they number.
+    path_steps: Vec<(StepVars, Vec<Label>)>,
+}
+
+impl Product<'_> {
+    /// The frame after the step `v` from `prev` into `next`, its observer named after
+    /// `name`, the step and the observer's update asserted in `solver`; and the labels `v`
+    /// numbers.
+    fn follow(
+        &self,
+        p: &Prover<'_>,
+        solver: &Solver,
+        prev: &Observed,
+        v: &StepVars,
+        next: Frame,
+        name: &str,
+    ) -> (Observed, Vec<Label>) {
         let (t, labels) = p
             .enc
-            .transition_labelled(&prev.frame, &prev.en, &v, &all, &next);
-        bmc.assert(&t);
-        let (o_next, err_in) = obs.after_step(p, &prev.obs, &labels, &v, &prev.frame, &next);
-        let o = obs.fresh(&bmc, &name);
-        bmc.assert(o.eq(&o_next));
-        path.push(Product {
+            .transition_labelled(&prev.frame, &prev.en, v, &self.all, &next);
+        solver.assert(&t);
+        let (o_next, err_in) = self
+            .obs
+            .after_step(p, &prev.obs, &labels, v, &prev.frame, &next);
+        let o = self.obs.fresh(solver, name);
+        solver.assert(o.eq(&o_next));
+        let x = Observed {
             en: p.enc.enabling(&next),
             frame: next,
             obs: o,
             err_in,
-        });
-        path_steps.push((v, labels));
-        if let Some(stop) = p.budget.watch.look() {
-            return Finding::Unknown(stop.to_string());
-        }
+        };
+        (x, labels)
     }
-    let mut why = format!(
-        "neither proved (k-induction up to k = {max}) nor refuted (no counterexample within {} steps)",
-        max.max(1) - 1
-    );
-    if let Some(u) = unknown {
-        why.push_str(&format!("; {u}"));
-    }
-    Finding::Unknown(why)
 }
 
-/// Two product frames are the same state with the same observer.
-fn same(p: &Prover<'_>, a: &Product, b: &Product) -> Bool {
-    and2(&p.enc.frames_equal(&a.frame, &b.frame), &a.obs.eq(&b.obs))
+impl Unrolling for Product<'_> {
+    type Frame = Observed;
+    type Seen = Option<(State, Option<i64>)>;
+    type Path = (Vec<State>, Vec<Label>);
+    type Bad = (Trace, String);
+    const CHECKING: &'static str = "bounded model checking of the observer";
+    const ON: &'static str = " on the product with the observer";
+
+    fn initial(&mut self, p: &mut Prover<'_>) -> Observed {
+        let first = p.enc.concrete_frame(&p.sys().initial_state());
+        Observed {
+            en: p.enc.enabling(&first),
+            frame: first,
+            obs: num(self.start),
+            err_in: ff(),
+        }
+    }
+
+    fn place(&mut self, p: &mut Prover<'_>, step: &Solver, placed: Placed) -> Observed {
+        let name = p.fresh_name("o");
+        Observed {
+            en: p.enc.enabling(&placed.frame),
+            frame: placed.frame,
+            obs: self.obs.fresh(step, &name),
+            err_in: ff(),
+        }
+    }
+
+    fn follow_path(
+        &mut self,
+        p: &mut Prover<'_>,
+        bmc: &Solver,
+        last: &Observed,
+        v: StepVars,
+        next: Frame,
+        name: &str,
+    ) -> Observed {
+        let (x, labels) = self.follow(p, bmc, last, &v, next, name);
+        self.path_steps.push((v, labels));
+        x
+    }
+
+    fn follow_chain(
+        &mut self,
+        p: &mut Prover<'_>,
+        step: &Solver,
+        last: &Observed,
+        v: &StepVars,
+        next: Placed,
+    ) -> Observed {
+        let name = p.fresh_name("o");
+        self.follow(p, step, last, v, next.frame, &name).0
+    }
+
+    fn good(&mut self, p: &mut Prover<'_>, x: &Observed) -> Bool {
+        not(&self.obs.bad(p, x))
+    }
+
+    fn bad(&mut self, p: &mut Prover<'_>, x: &Observed) -> Bool {
+        self.obs.bad(p, x)
+    }
+
+    /// The same state with the same observer.
+    fn same(&self, p: &Prover<'_>, a: &Observed, b: &Observed) -> Bool {
+        and2(&p.enc.frames_equal(&a.frame, &b.frame), &a.obs.eq(&b.obs))
+    }
+
+    fn read_path(
+        &self,
+        p: &Prover<'_>,
+        m: &Model,
+        path: &[Observed],
+    ) -> Option<(Vec<State>, Vec<Label>)> {
+        let states: Option<Vec<State>> =
+            path.iter().map(|x| p.enc.read_state(m, &x.frame)).collect();
+        let labels: Option<Vec<Label>> = self
+            .path_steps
+            .iter()
+            .map(|(v, labels)| {
+                (0..labels.len()).find_map(|k| {
+                    m.eval(&v.sel.is(k as i64), true)?
+                        .as_bool()?
+                        .then_some(labels[k])
+                })
+            })
+            .collect();
+        Some((states?, labels?))
+    }
+
+    fn read_chain(
+        &self,
+        p: &Prover<'_>,
+        m: &Model,
+        chain: &[Observed],
+    ) -> Vec<Option<(State, Option<i64>)>> {
+        chain
+            .iter()
+            .map(|x| {
+                let s = p.enc.read_state(m, &x.frame)?;
+                Some((s, m.eval(&x.obs, true).and_then(|o| o.as_i64())))
+            })
+            .collect()
+    }
+
+    fn counterexample(
+        &mut self,
+        p: &mut Prover<'_>,
+        _bmc: &Solver,
+        _path: &[Observed],
+        (states, labels): (Vec<State>, Vec<Label>),
+    ) -> Finding {
+        confirm(p.sys(), self.obs.spec, self.name, &states, &labels)
+    }
 }
 
 /// The run through `states` by steps of `labels`, reported only if the step relation and
@@ -418,7 +409,7 @@ fn confirm(
             if n == 1 { "" } else { "s" }
         )
     };
-    Finding::Fails(trace, reason)
+    Finding::Bad((trace, reason))
 }
 
 /// The last step of `path` is a tick past the bound (rather than a stop with a trigger
