@@ -6,7 +6,7 @@ use crate::prelude::*;
 use bip_model::RangeError;
 
 /// The engine cannot be built as asked.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, PartialEq, Eq, thiserror::Error)]
 pub enum BuildError {
     #[error("codel ({0}, {1}, {2}) is not bound; bind it, or ask for default codels")]
     Unbound(String, String, String),
@@ -32,7 +32,7 @@ pub enum BuildError {
 
 /// The engine cannot go on: the model computed a value outside a range (which `bip
 /// verify` reports as a `RangeErrors` violation), or it stopped after such an error.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, PartialEq, Eq, thiserror::Error)]
 pub enum EngineError {
     #[error("range error: {0}")]
     Range(RangeError),
@@ -41,7 +41,7 @@ pub enum EngineError {
 }
 
 /// A request the engine cannot even queue (the model's refusals come as replies).
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, PartialEq, Eq, thiserror::Error)]
 pub enum RequestError {
     #[error("the model has no service {0}.{1}")]
     UnknownService(String, String),
@@ -66,6 +66,20 @@ pub enum RequestError {
         value: i64,
     },
 }
+
+/// An error's `Debug` is its message: `?` out of `main` prints the `Debug` of what it
+/// returns, and a user reads the error in the model's terms there too.
+macro_rules! debug_is_display {
+    ($($error:ty),*) => {$(
+        impl core::fmt::Debug for $error {
+            fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                core::fmt::Display::fmt(self, f)
+            }
+        }
+    )*};
+}
+
+debug_is_display!(BuildError, EngineError, RequestError);
 
 /// `Engine::step_as` (replay, simulation) could not take the step.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]

@@ -252,6 +252,26 @@ fn bip_engine_alone_loads_a_model_and_names_its_types() {
     assert!(debug.starts_with("bad.ron:1:"), "{debug}");
 }
 
+/// The engine's errors print their message as their `Debug` too, so that `?` out of
+/// `main` says it in the model's terms rather than as a struct.
+#[test]
+fn the_engines_errors_debug_as_their_message() {
+    let Err(build) = Engine::builder(load("rover.ron")).build() else {
+        panic!("built with its codels unbound")
+    };
+    assert_eq!(format!("{build:?}"), build.to_string());
+    assert!(build.to_string().starts_with("codel ("), "{build}");
+    let mut e = Engine::builder(load("rover.ron"))
+        .default_codels(DefaultCodels::FirstYield)
+        .build()
+        .expect("builds");
+    let request = e.request("rflex", "Warp", ()).expect_err("no such service");
+    assert_eq!(
+        format!("{request:?}"),
+        "the model has no service rflex.Warp"
+    );
+}
+
 /// rover.ron declares `rflex.TrackSpeed`'s arguments a `Float`: an `f32` is refused when
 /// it is sent (it used to reach the codel as `None`, and the rover drove at speed 0), as
 /// are arguments to a function, and an `Int` outside its range.
