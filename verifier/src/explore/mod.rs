@@ -18,10 +18,13 @@
 //!
 //! This module holds the driver (levels, batches, the two phases, the limits) and the
 //! data it hands each batch; `expand` is phase 1 on one chunk, `targets` the properties a
-//! run checks and how its findings become verdicts and traces, `response` the response
-//! properties, decided on the stored graph once the exploration is complete.
+//! run checks and how its findings become verdicts and traces, `graph` the state graph
+//! stored once the exploration is complete, `response` the response properties, decided
+//! on it. [`state_graph`] explores and stores the graph for questions asked elsewhere
+//! (the scheduling analysis's demands).
 
 mod expand;
+pub(crate) mod graph;
 mod response;
 mod targets;
 
@@ -41,7 +44,8 @@ use crate::visited::{Chunk, ShardFull, StateId, Visited};
 use crate::watch::Watch;
 
 use expand::{read_hash, read_parent, REC_HEADER};
-use targets::{targets, Target};
+use graph::{Graph, Keep};
+use targets::{range_errors, targets, Target};
 
 /// States per chunk: large enough to amortise scheduling, small enough to balance.
 const CHUNK_STATES: u32 = 1024;
@@ -100,6 +104,73 @@ pub(crate) fn verify(
     options: &Options,
     progress: &(dyn Fn(&Progress) + Sync),
 ) -> Result<Report, VerifyError> {
+    let (pool, jobs) = workers(options)?;
+    let watch = Watch::new(options, options.max_memory.or_else(memory::default_limit));
+    watch.around(
+        || {},
+        || {
+            pool.install(|| {
+                Explorer::new(system, options, jobs, &watch, targets(system)).run(progress)
+            })
+        },
+    )
+}
+
+/// Why [`state_graph`] stored no graph.
+#[derive(Debug)]
+pub(crate) enum Unstored {
+    /// A limit of the run was reached, in the exploration or in storing the graph.
+    Stopped(Stop),
+    /// A state has a range error: the first in the exploration's order.
+    RangeError(String),
+    Failed(VerifyError),
+}
+
+/// Explores every reachable state of `system`, checking range errors only, and stores the
+/// graph of its steps with what `keep` keeps of them: for questions about paths rather
+/// than states. Every limit of `options` holds, in the exploration and in the storing.
+pub(crate) fn state_graph<K: Keep>(
+    system: &System,
+    options: &Options,
+    keep: &K,
+) -> Result<Graph<K::Edge, K::Notes>, Unstored> {
+    // a range error leaves steps out of the graph: the first one ends the run
+    let options = Options {
+        stop_at_first: true,
+        ..options.clone()
+    };
+    let (pool, jobs) = workers(&options).map_err(Unstored::Failed)?;
+    let watch = Watch::new(&options, options.max_memory.or_else(memory::default_limit));
+    let stored = || {
+        let mut explorer = Explorer::new(system, &options, jobs, &watch, vec![range_errors()]);
+        let stopped = explorer
+            .explore(&|_: &Progress| {})
+            .map_err(Unstored::Failed)?;
+        if let Some(Finding {
+            what: Found::RangeError(message),
+            ..
+        }) = &explorer.findings[0]
+        {
+            return Err(Unstored::RangeError(message.clone()));
+        }
+        if let Some(stop) = stopped {
+            return Err(Unstored::Stopped(stop));
+        }
+        // the explorer's buffers are freed before the graph is built
+        let Explorer { visited, .. } = explorer;
+        watch.rebase();
+        graph::build(system, &visited, keep, &watch).ok_or_else(|| match watch.stopped() {
+            Some(stop) => Unstored::Stopped(stop.clone()),
+            None => Unstored::Failed(VerifyError::Internal(
+                "a successor of an explored state is not stored".into(),
+            )),
+        })
+    };
+    watch.around(|| {}, || pool.install(stored))
+}
+
+/// The pool of `options.jobs` workers (one per core for 0), and their number.
+fn workers(options: &Options) -> Result<(rayon::ThreadPool, usize), VerifyError> {
     let jobs = if options.jobs == 0 {
         std::thread::available_parallelism().map_or(1, |n| n.get())
     } else {
@@ -110,11 +181,7 @@ pub(crate) fn verify(
         .thread_name(|i| format!("bip-verify-{i}"))
         .build()
         .map_err(|e| VerifyError::Threads(e.to_string()))?;
-    let watch = Watch::new(options, options.max_memory.or_else(memory::default_limit));
-    watch.around(
-        || {},
-        || pool.install(|| Explorer::new(system, options, jobs, &watch).run(progress)),
-    )
+    Ok((pool, jobs))
 }
 
 struct Explorer<'a> {
@@ -144,8 +211,8 @@ impl<'a> Explorer<'a> {
         options: &'a Options,
         jobs: usize,
         watch: &'a Watch,
+        targets: Vec<Target<'a>>,
     ) -> Explorer<'a> {
-        let targets = targets(system);
         let slots = system.slot_count();
         let memo = (LIVENESS_MEMO_BYTES / (slots * 8 + 64)).clamp(1_000, 1_000_000);
         let scratch = (0..jobs)
@@ -186,6 +253,15 @@ impl<'a> Explorer<'a> {
     }
 
     fn run(mut self, progress: &(dyn Fn(&Progress) + Sync)) -> Result<Report, VerifyError> {
+        let stopped = self.explore(progress)?;
+        self.report(stopped)
+    }
+
+    /// Explores level by level until every state is, or the run must stop (why, then).
+    fn explore(
+        &mut self,
+        progress: &(dyn Fn(&Progress) + Sync),
+    ) -> Result<Option<Stop>, VerifyError> {
         let initial = self.system.layout.pack(&self.system.initial_state());
         self.visited.start_level();
         if self.visited.insert(&initial, StateId::NONE).is_err() {
@@ -282,7 +358,7 @@ impl<'a> Explorer<'a> {
             }
             level += 1;
         }
-        self.report(stopped)
+        Ok(stopped)
     }
 
     /// A limit that stops the run before the next batch, if any.
