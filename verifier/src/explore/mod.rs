@@ -20,7 +20,7 @@
 //! data it hands each batch; `expand` is phase 1 on one chunk, `targets` the properties a
 //! run checks and how its findings become verdicts and traces, `graph` the state graph
 //! stored once the exploration is complete, `response` the response properties, decided
-//! on it. [`state_graph`] explores and stores the graph for questions asked elsewhere
+//! on it. [`on_state_graph`] explores and stores the graph for questions asked elsewhere
 //! (the scheduling analysis's demands).
 
 mod expand;
@@ -116,7 +116,7 @@ pub(crate) fn verify(
     )
 }
 
-/// Why [`state_graph`] stored no graph.
+/// Why [`on_state_graph`] gave no answer.
 #[derive(Debug)]
 pub(crate) enum Unstored {
     /// A limit of the run was reached, in the exploration or in storing the graph.
@@ -126,14 +126,17 @@ pub(crate) enum Unstored {
     Failed(VerifyError),
 }
 
-/// Explores every reachable state of `system`, checking range errors only, and stores the
-/// graph of its steps with what `keep` keeps of them: for questions about paths rather
-/// than states. Every limit of `options` holds, in the exploration and in the storing.
-pub(crate) fn state_graph<K: Keep>(
+/// Explores every reachable state of `system`, checking range errors only, stores the
+/// graph of its steps with what `keep` keeps of them, and answers `question` on it: for
+/// questions about paths rather than states. Every limit of `options` holds, in the
+/// exploration, in the storing, and in `question`, which polls the watch it is given
+/// and returns `None` once it says stop.
+pub(crate) fn on_state_graph<K: Keep, R: Send>(
     system: &System,
     options: &Options,
     keep: &K,
-) -> Result<Graph<K::Edge, K::Notes>, Unstored> {
+    question: impl FnOnce(Graph<K::Edge, K::Notes>, &Watch) -> Option<R> + Send,
+) -> Result<R, Unstored> {
     // a range error leaves steps out of the graph: the first one ends the run
     let options = Options {
         stop_at_first: true,
@@ -159,12 +162,15 @@ pub(crate) fn state_graph<K: Keep>(
         // the explorer's buffers are freed before the graph is built
         let Explorer { visited, .. } = explorer;
         watch.rebase();
-        graph::build(system, &visited, keep, &watch).ok_or_else(|| match watch.stopped() {
+        let stopped = |what: &str| match watch.stopped() {
             Some(stop) => Unstored::Stopped(stop.clone()),
-            None => Unstored::Failed(VerifyError::Internal(
-                "a successor of an explored state is not stored".into(),
-            )),
-        })
+            None => Unstored::Failed(VerifyError::Internal(what.into())),
+        };
+        let graph = graph::build(system, &visited, keep, &watch)
+            .ok_or_else(|| stopped("a successor of an explored state is not stored"))?;
+        drop(visited);
+        watch.rebase();
+        question(graph, &watch).ok_or_else(|| stopped("the question on the graph failed"))
     };
     watch.around(|| {}, || pool.install(stored))
 }

@@ -16,9 +16,10 @@ use bip_model::{Label, State, Step, System};
 
 use super::tasks::{TaskKind, TaskTable};
 use crate::explore::graph::{Graph, Keep};
-use crate::explore::{state_graph, Unstored};
+use crate::explore::{on_state_graph, Unstored};
 use crate::options::Options;
 use crate::report::Stop;
+use crate::watch::Watch;
 
 /// The exact demands, and the size of what was explored.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -29,6 +30,9 @@ pub struct Exact {
     pub states: u64,
     pub transitions: u64,
 }
+
+/// Components handled between two looks at the limits.
+const COMPONENTS_PER_LOOK: u32 = 4096;
 
 /// Tasks whose demands one pass over the graph finds: a component holds a row of as
 /// many values while the pass runs (at most 64, the bits of a word).
@@ -63,7 +67,7 @@ impl Keep for Labels {
 /// The explored graph, with each edge's label.
 type Labelled = Graph<u32>;
 
-/// Explores `system` within the limits of `options` and computes every task's demand;
+/// Explores `system` and computes every task's demand, within the limits of `options`;
 /// `Err` says why it could not (a limit, or a range error in the model).
 pub fn exact_demands(
     system: &System,
@@ -71,14 +75,21 @@ pub fn exact_demands(
     options: &Options,
 ) -> Result<Exact, String> {
     let tick = table.tick.ok_or("no task runs codels")?;
-    let mut graph = state_graph(system, options, &Labels).map_err(|why| match why {
+    on_state_graph(system, options, &Labels, |graph, watch| {
+        demands(graph, table, tick, watch)
+    })
+    .map_err(|why| match why {
         Unstored::Stopped(stop) => stopped(&stop),
         Unstored::RangeError(e) => format!("a range error ({e}); `bip verify` shows it"),
         Unstored::Failed(e) => e.to_string(),
-    })?;
+    })
+}
+
+/// The demands on the explored graph; `None` once `watch` says stop.
+fn demands(mut graph: Labelled, table: &TaskTable, tick: u32, watch: &Watch) -> Option<Exact> {
     let states = graph.len() as u64;
     let transitions = graph.targets.len() as u64;
-    let mut components = condense(&graph, tick);
+    let mut components = condense(&graph, tick, watch)?;
     let starts = period_starts(&graph, tick, &components.of);
     // from here on an edge leads to its target's component; what the passes do not read
     // is freed first
@@ -100,12 +111,12 @@ pub fn exact_demands(
         .filter(|&t| matches!(table.tasks[t].kind, TaskKind::Genom { .. }))
         .collect();
     for tasks in genom.chunks(TASKS_PER_PASS) {
-        let found = longest_periods(&graph, &starts, table, tick, tasks, &components);
+        let found = longest_periods(&graph, &starts, table, tick, tasks, &components, watch)?;
         for (&t, d) in tasks.iter().zip(found) {
             demands[t] = d;
         }
     }
-    Ok(Exact {
+    Some(Exact {
         demands,
         states,
         transitions,
@@ -163,8 +174,12 @@ impl Components {
 /// Strongly connected components of the non-tick steps (iterative Tarjan). Components
 /// are numbered in the order they were completed, so every component comes after those
 /// it reaches.
-fn condense(graph: &Labelled, tick: u32) -> Components {
+fn condense(graph: &Labelled, tick: u32, watch: &Watch) -> Option<Components> {
     let n = graph.len();
+    // index, low, scc_of, members, and on_stack
+    if !watch.expect(n as u64 * 17) {
+        return None;
+    }
     const UNSEEN: u32 = u32::MAX;
     let mut index = vec![UNSEEN; n];
     let mut low = vec![0u32; n];
@@ -213,6 +228,9 @@ fn condense(graph: &Labelled, tick: u32) -> Components {
             }
             if low[v as usize] == index[v as usize] {
                 let id = starts.len() as u32 - 1;
+                if id.is_multiple_of(COMPONENTS_PER_LOOK) && watch.stopped().is_some() {
+                    return None;
+                }
                 while let Some(w) = stack.pop() {
                     on_stack[w as usize] = false;
                     scc_of[w as usize] = id;
@@ -225,11 +243,11 @@ fn condense(graph: &Labelled, tick: u32) -> Components {
             }
         }
     }
-    Components {
+    Some(Components {
         of: scc_of,
         starts,
         members,
-    }
+    })
 }
 
 /// The costliest periods of `tasks` (at most 64), over every period start (a component,
@@ -243,9 +261,13 @@ fn longest_periods(
     tick: u32,
     tasks: &[usize],
     components: &Components,
-) -> Vec<Option<u64>> {
+    watch: &Watch,
+) -> Option<Vec<Option<u64>>> {
     const NONE: usize = usize::MAX;
     let k = tasks.len();
+    if !watch.expect((components.len() * (k + 1) * 8) as u64) {
+        return None;
+    }
     // each task's place in a component's row
     let mut slot = vec![NONE; table.tasks.len()];
     for (i, &t) in tasks.iter().enumerate() {
@@ -256,6 +278,9 @@ fn longest_periods(
     let mut unbounded = vec![0u64; components.len()];
     let mut here = vec![0u64; k];
     for c in 0..components.len() as u32 {
+        if c.is_multiple_of(COMPONENTS_PER_LOOK) && watch.stopped().is_some() {
+            return None;
+        }
         here.fill(0);
         let mut looping = 0u64;
         for &v in components.members(c) {
@@ -288,11 +313,12 @@ fn longest_periods(
         best[c as usize * k..(c as usize + 1) * k].copy_from_slice(&here);
         unbounded[c as usize] = looping;
     }
-    (0..k)
+    let found = (0..k)
         .map(|i| {
             starts.iter().try_fold(0u64, |m, &s| {
                 (unbounded[s as usize] & (1 << i) == 0).then(|| m.max(best[s as usize * k + i]))
             })
         })
-        .collect()
+        .collect();
+    Some(found)
 }

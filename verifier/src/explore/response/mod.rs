@@ -18,8 +18,8 @@ use crate::report::PropertyVerdict;
 use crate::visited::Visited;
 use crate::watch::Watch;
 
-use watched::{Flagged, Watched, Watching, MAX_WATCHED};
 use run::Run;
+use watched::{Flagged, Watched, Watching, MAX_WATCHED};
 
 /// A response property's verdict, with a note when its trigger never happens.
 pub(super) struct Decided {
