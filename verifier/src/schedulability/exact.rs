@@ -111,7 +111,22 @@ fn demands(mut graph: Labelled, table: &TaskTable, tick: u32, watch: &Watch) -> 
         .filter(|&t| matches!(table.tasks[t].kind, TaskKind::Genom { .. }))
         .collect();
     for tasks in genom.chunks(TASKS_PER_PASS) {
-        let found = longest_periods(&graph, &starts, table, tick, tasks, &components, watch)?;
+        let pass = |narrow: bool| {
+            let (g, c) = (&graph, &components);
+            if narrow {
+                longest_periods::<u32>(g, &starts, table, tick, tasks, c, watch)
+            } else {
+                longest_periods::<u64>(g, &starts, table, tick, tasks, c, watch)
+            }
+        };
+        let found = match pass(true) {
+            Pass::Found(found) => found,
+            Pass::TooCostly => match pass(false) {
+                Pass::Found(found) => found,
+                Pass::TooCostly | Pass::Stopped => return None,
+            },
+            Pass::Stopped => return None,
+        };
         for (&t, d) in tasks.iter().zip(found) {
             demands[t] = d;
         }
@@ -250,11 +265,20 @@ fn condense(graph: &Labelled, tick: u32, watch: &Watch) -> Option<Components> {
     })
 }
 
+/// What a pass found.
+enum Pass {
+    /// Per task, its costliest period; `None` if unbounded.
+    Found(Vec<Option<u64>>),
+    /// A path costs more than the rows' values hold.
+    TooCostly,
+    Stopped,
+}
+
 /// The costliest periods of `tasks` (at most 64), over every period start (a component,
-/// as every edge's target now is); `None` for a task that is unbounded. One pass over
-/// the components for all of them: each component's best path per task, and the tasks
-/// it can loop costly for, as bits.
-fn longest_periods(
+/// as every edge's target now is). One pass over the components for all of them: each
+/// component's costliest path per task, as a `V` (a `u32` halves the rows and holds any
+/// period up to an hour), and the tasks it can loop costly for, as bits.
+fn longest_periods<V: Copy + Default + Into<u64> + TryFrom<u64>>(
     graph: &Labelled,
     starts: &[u32],
     table: &TaskTable,
@@ -262,11 +286,12 @@ fn longest_periods(
     tasks: &[usize],
     components: &Components,
     watch: &Watch,
-) -> Option<Vec<Option<u64>>> {
+) -> Pass {
     const NONE: usize = usize::MAX;
     let k = tasks.len();
-    if !watch.expect((components.len() * (k + 1) * 8) as u64) {
-        return None;
+    let row_bytes = k * std::mem::size_of::<V>() + 8;
+    if !watch.expect((components.len() * row_bytes) as u64) {
+        return Pass::Stopped;
     }
     // each task's place in a component's row
     let mut slot = vec![NONE; table.tasks.len()];
@@ -274,12 +299,12 @@ fn longest_periods(
         slot[t] = i;
     }
     // best[c * k + i]: the costliest path of task tasks[i] from any state of component c
-    let mut best = vec![0u64; components.len() * k];
+    let mut best = vec![V::default(); components.len() * k];
     let mut unbounded = vec![0u64; components.len()];
     let mut here = vec![0u64; k];
     for c in 0..components.len() as u32 {
         if c.is_multiple_of(COMPONENTS_PER_LOOK) && watch.stopped().is_some() {
-            return None;
+            return Pass::Stopped;
         }
         here.fill(0);
         let mut looping = 0u64;
@@ -303,22 +328,32 @@ fn longest_periods(
                 looping |= unbounded[d as usize];
                 let row = &best[d as usize * k..(d as usize + 1) * k];
                 for (h, &b) in here.iter_mut().zip(row) {
-                    *h = (*h).max(b);
+                    *h = (*h).max(b.into());
                 }
                 if i != NONE {
-                    here[i] = here[i].max(row[i].saturating_add(w));
+                    here[i] = here[i].max(row[i].into().saturating_add(w));
                 }
             }
         }
-        best[c as usize * k..(c as usize + 1) * k].copy_from_slice(&here);
+        for (b, &h) in best[c as usize * k..(c as usize + 1) * k]
+            .iter_mut()
+            .zip(&here)
+        {
+            let Ok(h) = V::try_from(h) else {
+                return Pass::TooCostly;
+            };
+            *b = h;
+        }
         unbounded[c as usize] = looping;
     }
-    let found = (0..k)
-        .map(|i| {
-            starts.iter().try_fold(0u64, |m, &s| {
-                (unbounded[s as usize] & (1 << i) == 0).then(|| m.max(best[s as usize * k + i]))
+    Pass::Found(
+        (0..k)
+            .map(|i| {
+                starts.iter().try_fold(0u64, |m, &s| {
+                    (unbounded[s as usize] & (1 << i) == 0)
+                        .then(|| m.max(best[s as usize * k + i].into()))
+                })
             })
-        })
-        .collect();
-    Some(found)
+            .collect(),
+    )
 }

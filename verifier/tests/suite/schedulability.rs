@@ -167,6 +167,11 @@ fn the_exact_demand_is_the_costliest_period_and_the_bound_is_above_it() {
     constraints: [Exclusive(services: ["m.A", "m.B"])],
 )"#;
     assert_eq!(first_task(apart), (2300, 2400));
+    // periods of hours: a demand past what 32 bits of microseconds hold
+    let long = layer(false, "t")
+        .replace("tick_ms: 10,", "tick_ms: 10000000,")
+        .replace(r#"wcet: "2ms""#, r#"wcet: "5000s""#);
+    assert_eq!(first_task(&long), (5_000_000_800, 5_000_000_800));
 }
 
 #[test]
@@ -332,11 +337,7 @@ fn module_tasks_and_atoms_share_a_cpu() {
 #[test]
 fn exact_demands_are_the_same_with_any_workers_and_stop_at_every_limit() {
     let system = load_str("budget.ron", &layer(true, "t")).unwrap();
-    let with = |options: Options| {
-        schedulability(&system, &options, Assignment::Given, DemandChoice::Exact)
-            .unwrap()
-            .expect("the model has WCETs")
-    };
+    let with = |options: Options| exact_with(&system, options);
     let one = with(Options {
         jobs: 1,
         ..Options::default()
@@ -389,19 +390,20 @@ fn exact_demands_are_the_same_with_any_workers_and_stop_at_every_limit() {
         "    modules: [",
         "    atoms: { \"Overflow\": Atom(locations: [\"s\"], initial: \"s\", vars: [(name: \"y\", ty: Int(0, 5))], transitions: [(from: \"s\", to: \"s\", action: \"y = y + 2\")]) },\n    components: [(name: \"b\", atom: \"Overflow\")],\n    modules: [",
     );
-    let system = load_str("overflow.ron", &overflow).unwrap();
-    let s = schedulability(
-        &system,
-        &Options::default(),
-        Assignment::Given,
-        DemandChoice::Exact,
-    )
-    .unwrap()
-    .unwrap();
+    let s = exact_with(
+        &load_str("overflow.ron", &overflow).unwrap(),
+        Options::default(),
+    );
     assert_eq!(
         s.method,
         DemandMethod::Bound {
             why: format!("{not_all}a range error (b.y = 6 is outside its range Int(0, 5) in the action of b: s -internal-> s); `bip verify` shows it")
         }
     );
+}
+
+fn exact_with(system: &System, options: Options) -> bip_verifier::Schedulability {
+    schedulability(system, &options, Assignment::Given, DemandChoice::Exact)
+        .unwrap()
+        .expect("the model has WCETs")
 }
