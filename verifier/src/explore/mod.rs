@@ -118,8 +118,8 @@ pub(crate) fn verify(
 
 /// Why [`on_state_graph`] gave no answer.
 #[derive(Debug)]
-pub(crate) enum Unstored {
-    /// A limit of the run was reached, in the exploration or in storing the graph.
+pub(crate) enum Unanswered {
+    /// A limit of the run was reached: in the exploration, the storing or the answer.
     Stopped(Stop),
     /// A state has a range error: the first in the exploration's order.
     RangeError(String),
@@ -136,35 +136,35 @@ pub(crate) fn on_state_graph<K: Keep, R: Send>(
     options: &Options,
     keep: &K,
     question: impl FnOnce(Graph<K::Edge, K::Notes>, &Watch) -> Option<R> + Send,
-) -> Result<R, Unstored> {
+) -> Result<R, Unanswered> {
     // a range error leaves steps out of the graph: the first one ends the run
     let options = Options {
         stop_at_first: true,
         ..options.clone()
     };
-    let (pool, jobs) = workers(&options).map_err(Unstored::Failed)?;
+    let (pool, jobs) = workers(&options).map_err(Unanswered::Failed)?;
     let watch = Watch::new(&options, options.max_memory.or_else(memory::default_limit));
     let stored = || {
         let mut explorer = Explorer::new(system, &options, jobs, &watch, vec![range_errors()]);
         let stopped = explorer
             .explore(&|_: &Progress| {})
-            .map_err(Unstored::Failed)?;
+            .map_err(Unanswered::Failed)?;
         if let Some(Finding {
             what: Found::RangeError(message),
             ..
         }) = &explorer.findings[0]
         {
-            return Err(Unstored::RangeError(message.clone()));
+            return Err(Unanswered::RangeError(message.clone()));
         }
         if let Some(stop) = stopped {
-            return Err(Unstored::Stopped(stop));
+            return Err(Unanswered::Stopped(stop));
         }
         // the explorer's buffers are freed before the graph is built
         let Explorer { visited, .. } = explorer;
         watch.rebase();
         let stopped = |what: &str| match watch.stopped() {
-            Some(stop) => Unstored::Stopped(stop.clone()),
-            None => Unstored::Failed(VerifyError::Internal(what.into())),
+            Some(stop) => Unanswered::Stopped(stop.clone()),
+            None => Unanswered::Failed(VerifyError::Internal(what.into())),
         };
         let graph = graph::build(system, &visited, keep, &watch)
             .ok_or_else(|| stopped("a successor of an explored state is not stored"))?;

@@ -16,7 +16,7 @@ use bip_model::{Label, State, Step, System};
 
 use super::tasks::{TaskKind, TaskTable};
 use crate::explore::graph::{Graph, Keep};
-use crate::explore::{on_state_graph, Unstored};
+use crate::explore::{on_state_graph, Unanswered};
 use crate::options::Options;
 use crate::report::Stop;
 use crate::watch::Watch;
@@ -79,9 +79,9 @@ pub fn exact_demands(
         demands(graph, table, tick, watch)
     })
     .map_err(|why| match why {
-        Unstored::Stopped(stop) => stopped(&stop),
-        Unstored::RangeError(e) => format!("a range error ({e}); `bip verify` shows it"),
-        Unstored::Failed(e) => e.to_string(),
+        Unanswered::Stopped(stop) => stopped(&stop),
+        Unanswered::RangeError(e) => format!("a range error ({e}); `bip verify` shows it"),
+        Unanswered::Failed(e) => e.to_string(),
     })
 }
 
