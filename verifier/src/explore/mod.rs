@@ -18,10 +18,13 @@
 //!
 //! This module holds the driver (levels, batches, the two phases, the limits) and the
 //! data it hands each batch; `expand` is phase 1 on one chunk, `targets` the properties a
-//! run checks and how its findings become verdicts and traces, `response` the response
-//! properties, decided on the stored graph once the exploration is complete.
+//! run checks and how its findings become verdicts and traces, `graph` the state graph
+//! stored once the exploration is complete, `response` the response properties, decided
+//! on it. [`on_state_graph`] explores and stores the graph for questions asked elsewhere
+//! (the scheduling analysis's demands).
 
 mod expand;
+pub(crate) mod graph;
 mod response;
 mod targets;
 
@@ -41,7 +44,8 @@ use crate::visited::{Chunk, ShardFull, StateId, Visited};
 use crate::watch::Watch;
 
 use expand::{read_hash, read_parent, REC_HEADER};
-use targets::{targets, Target};
+use graph::{Graph, Keep};
+use targets::{range_errors, targets, Target};
 
 /// States per chunk: large enough to amortise scheduling, small enough to balance.
 const CHUNK_STATES: u32 = 1024;
@@ -100,6 +104,79 @@ pub(crate) fn verify(
     options: &Options,
     progress: &(dyn Fn(&Progress) + Sync),
 ) -> Result<Report, VerifyError> {
+    let (pool, jobs) = workers(options)?;
+    let watch = Watch::new(options, options.max_memory.or_else(memory::default_limit));
+    watch.around(
+        || {},
+        || {
+            pool.install(|| {
+                Explorer::new(system, options, jobs, &watch, targets(system)).run(progress)
+            })
+        },
+    )
+}
+
+/// Why [`on_state_graph`] gave no answer.
+#[derive(Debug)]
+pub(crate) enum Unanswered {
+    /// A limit of the run was reached: in the exploration, the storing or the answer.
+    Stopped(Stop),
+    /// A state has a range error: the first in the exploration's order.
+    RangeError(String),
+    Failed(VerifyError),
+}
+
+/// Explores every reachable state of `system`, checking range errors only, stores the
+/// graph of its steps with what `keep` keeps of them, and answers `question` on it: for
+/// questions about paths rather than states. Every limit of `options` holds, in the
+/// exploration, in the storing, and in `question`, which polls the watch it is given
+/// and returns `None` once it says stop.
+pub(crate) fn on_state_graph<K: Keep, R: Send>(
+    system: &System,
+    options: &Options,
+    keep: &K,
+    question: impl FnOnce(Graph<K::Edge, K::Notes>, &Watch) -> Option<R> + Send,
+) -> Result<R, Unanswered> {
+    // a range error leaves steps out of the graph: the first one ends the run
+    let options = Options {
+        stop_at_first: true,
+        ..options.clone()
+    };
+    let (pool, jobs) = workers(&options).map_err(Unanswered::Failed)?;
+    let watch = Watch::new(&options, options.max_memory.or_else(memory::default_limit));
+    let stored = || {
+        let mut explorer = Explorer::new(system, &options, jobs, &watch, vec![range_errors()]);
+        let stopped = explorer
+            .explore(&|_: &Progress| {})
+            .map_err(Unanswered::Failed)?;
+        if let Some(Finding {
+            what: Found::RangeError(message),
+            ..
+        }) = &explorer.findings[0]
+        {
+            return Err(Unanswered::RangeError(message.clone()));
+        }
+        if let Some(stop) = stopped {
+            return Err(Unanswered::Stopped(stop));
+        }
+        // the explorer's buffers are freed before the graph is built
+        let Explorer { visited, .. } = explorer;
+        watch.rebase();
+        let stopped = |what: &str| match watch.stopped() {
+            Some(stop) => Unanswered::Stopped(stop.clone()),
+            None => Unanswered::Failed(VerifyError::Internal(what.into())),
+        };
+        let graph = graph::build(system, &visited, keep, &watch)
+            .ok_or_else(|| stopped("a successor of an explored state is not stored"))?;
+        drop(visited);
+        watch.rebase();
+        question(graph, &watch).ok_or_else(|| stopped("the question on the graph failed"))
+    };
+    watch.around(|| {}, || pool.install(stored))
+}
+
+/// The pool of `options.jobs` workers (one per core for 0), and their number.
+fn workers(options: &Options) -> Result<(rayon::ThreadPool, usize), VerifyError> {
     let jobs = if options.jobs == 0 {
         std::thread::available_parallelism().map_or(1, |n| n.get())
     } else {
@@ -110,11 +187,7 @@ pub(crate) fn verify(
         .thread_name(|i| format!("bip-verify-{i}"))
         .build()
         .map_err(|e| VerifyError::Threads(e.to_string()))?;
-    let watch = Watch::new(options, options.max_memory.or_else(memory::default_limit));
-    watch.around(
-        || {},
-        || pool.install(|| Explorer::new(system, options, jobs, &watch).run(progress)),
-    )
+    Ok((pool, jobs))
 }
 
 struct Explorer<'a> {
@@ -144,8 +217,8 @@ impl<'a> Explorer<'a> {
         options: &'a Options,
         jobs: usize,
         watch: &'a Watch,
+        targets: Vec<Target<'a>>,
     ) -> Explorer<'a> {
-        let targets = targets(system);
         let slots = system.slot_count();
         let memo = (LIVENESS_MEMO_BYTES / (slots * 8 + 64)).clamp(1_000, 1_000_000);
         let scratch = (0..jobs)
@@ -186,6 +259,15 @@ impl<'a> Explorer<'a> {
     }
 
     fn run(mut self, progress: &(dyn Fn(&Progress) + Sync)) -> Result<Report, VerifyError> {
+        let stopped = self.explore(progress)?;
+        self.report(stopped)
+    }
+
+    /// Explores level by level until every state is, or the run must stop (why, then).
+    fn explore(
+        &mut self,
+        progress: &(dyn Fn(&Progress) + Sync),
+    ) -> Result<Option<Stop>, VerifyError> {
         let initial = self.system.layout.pack(&self.system.initial_state());
         self.visited.start_level();
         if self.visited.insert(&initial, StateId::NONE).is_err() {
@@ -282,7 +364,7 @@ impl<'a> Explorer<'a> {
             }
             level += 1;
         }
-        self.report(stopped)
+        Ok(stopped)
     }
 
     /// A limit that stops the run before the next batch, if any.

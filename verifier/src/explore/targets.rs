@@ -83,13 +83,18 @@ pub(super) fn targets(system: &System) -> Vec<Target<'_>> {
             }
         })
         .collect();
-    out.push(Target {
+    out.push(range_errors());
+    out
+}
+
+/// The range errors, which every run checks.
+pub(super) fn range_errors<'a>() -> Target<'a> {
+    Target {
         name: RANGE_ERRORS.into(),
         kind: CheckKind::RangeErrors,
         expr: String::new(),
         check: Check::RangeErrors,
-    });
-    out
+    }
 }
 
 impl Explorer<'_> {

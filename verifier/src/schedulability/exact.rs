@@ -1,32 +1,25 @@
 //! A task's exact demand per period: the most WCET of its codels that any run of the
 //! model can pack between two ticks.
 //!
-//! The reachable states are explored with their steps (the graph is kept: the question is
-//! about paths, not states). Each state is stored once, packed, in the verifier's visited
-//! set; the graph numbers states in the order they were explored. A task's period is a path of steps other than the tick,
-//! starting where a tick (or the start) left the model; its cost is the sum of the WCETs
-//! of the task's codel runs on it. The longest such path is found on the graph of
-//! non-tick steps condensed into strongly connected components: a component with a costly
-//! step inside it is a loop the task can run forever in one period (no bound), the others
-//! form a DAG, costed from its sinks up in the order Tarjan's algorithm completes them.
+//! The question is about paths, not states: the explicit exploration stores the graph of
+//! the reachable states (`explore::state_graph`, in parallel), keeping each step's
+//! interaction. A task's period is a path of steps other than the tick, starting where a
+//! tick (or the start) left the model; its cost is the sum of the WCETs of the task's
+//! codel runs on it. The longest such path is found on the graph of non-tick steps
+//! condensed into strongly connected components: a component with a costly step inside
+//! it is a loop the task can run forever in one period (no bound), the others form a DAG,
+//! costed from its sinks up in the order Tarjan's algorithm completes them, for several
+//! tasks in one pass (the pass is a walk of the whole graph; a task more is a word more
+//! per component).
 
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
-
-use bip_model::{Label, State, Steps, System};
+use bip_model::{Label, State, Step, System};
 
 use super::tasks::{TaskKind, TaskTable};
-use crate::visited::{hash, StateId, Visited, SHARDS};
-
-/// What the exploration may use.
-#[derive(Clone, Copy, Debug)]
-pub struct Limits<'a> {
-    pub max_states: u64,
-    pub max_bytes: u64,
-    pub deadline: Option<Instant>,
-    /// Raised by Ctrl-C.
-    pub interrupt: Option<&'a AtomicBool>,
-}
+use crate::explore::graph::{Graph, Keep};
+use crate::explore::{on_state_graph, Unanswered};
+use crate::options::Options;
+use crate::report::Stop;
+use crate::watch::Watch;
 
 /// The exact demands, and the size of what was explored.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -38,150 +31,140 @@ pub struct Exact {
     pub transitions: u64,
 }
 
+/// Components handled between two looks at the limits.
+const COMPONENTS_PER_LOOK: u32 = 4096;
+
+/// Tasks whose demands one pass over the graph finds: a component holds a row of as
+/// many values while the pass runs (at most 64, the bits of a word).
+const TASKS_PER_PASS: usize = 8;
+
 /// Label of an internal transition in the graph (it belongs to no task, and is no tick).
 const INTERNAL: u32 = u32::MAX;
 
-/// The explored graph, in compressed rows.
-struct Graph {
-    /// Edges of state `s`: `offsets[s]..offsets[s + 1]`.
-    offsets: Vec<u32>,
-    targets: Vec<u32>,
-    labels: Vec<u32>,
-    /// States a period starts in: the initial state and every tick's target.
-    starts: Vec<u32>,
+/// What the demands keep of each step: its interaction, or [`INTERNAL`].
+struct Labels;
+
+impl Keep for Labels {
+    type Edge = u32;
+    type Notes = ();
+
+    fn notes(&self) {}
+
+    fn state(&self, _: &State, _: u32, _: &mut ()) -> u32 {
+        0
+    }
+
+    fn edge(&self, _: &State, step: Step<'_>, _: &State, _: u32, _: &mut ()) -> u32 {
+        match step.label {
+            Label::Interaction(i) => i,
+            Label::Internal { .. } => INTERNAL,
+        }
+    }
+
+    fn merge(&self, _: &mut (), _: ()) {}
 }
 
-/// Explores `system` and computes every task's demand; `Err` says why it could not
-/// (a limit, or a range error in the model).
+/// The explored graph, with each edge's label.
+type Labelled = Graph<u32>;
+
+/// Explores `system` and computes every task's demand, within the limits of `options`;
+/// `Err` says why it could not (a limit, or a range error in the model).
 pub fn exact_demands(
     system: &System,
     table: &TaskTable,
-    limits: Limits<'_>,
+    options: &Options,
 ) -> Result<Exact, String> {
     let tick = table.tick.ok_or("no task runs codels")?;
-    let graph = explore(system, tick, limits)?;
-    let states = graph.offsets.len() as u64 - 1;
+    on_state_graph(system, options, &Labels, |graph, watch| {
+        demands(graph, table, tick, watch)
+    })
+    .map_err(|why| match why {
+        Unanswered::Stopped(stop) => stopped(&stop),
+        Unanswered::RangeError(e) => format!("a range error ({e}); `bip verify` shows it"),
+        Unanswered::Failed(e) => e.to_string(),
+    })
+}
+
+/// The demands on the explored graph; `None` once `watch` says stop.
+fn demands(mut graph: Labelled, table: &TaskTable, tick: u32, watch: &Watch) -> Option<Exact> {
+    let states = graph.len() as u64;
     let transitions = graph.targets.len() as u64;
-    let components = condense(&graph, tick);
-    let demands = (0..table.tasks.len())
-        .map(|t| match table.tasks[t].kind {
+    let mut components = condense(&graph, tick, watch)?;
+    let starts = period_starts(&graph, tick, &components.of);
+    // from here on an edge leads to its target's component; what the passes do not read
+    // is freed first
+    for t in &mut graph.targets {
+        *t = components.of[*t as usize];
+    }
+    components.of = Vec::new();
+    graph.ids = Vec::new();
+    graph.state_flags = Vec::new();
+    let mut demands: Vec<Option<u64>> = table
+        .tasks
+        .iter()
+        .map(|t| match t.kind {
             TaskKind::Component { wcet_us, .. } => Some(wcet_us),
-            TaskKind::Genom { .. } => longest_period(&graph, table, tick, t, &components),
+            TaskKind::Genom { .. } => None,
         })
         .collect();
-    Ok(Exact {
+    let genom: Vec<usize> = (0..table.tasks.len())
+        .filter(|&t| matches!(table.tasks[t].kind, TaskKind::Genom { .. }))
+        .collect();
+    for tasks in genom.chunks(TASKS_PER_PASS) {
+        let pass = |narrow: bool| {
+            let (g, c) = (&graph, &components);
+            if narrow {
+                longest_periods::<u32>(g, &starts, table, tick, tasks, c, watch)
+            } else {
+                longest_periods::<u64>(g, &starts, table, tick, tasks, c, watch)
+            }
+        };
+        let found = match pass(true) {
+            Pass::Found(found) => found,
+            Pass::TooCostly => match pass(false) {
+                Pass::Found(found) => found,
+                Pass::TooCostly | Pass::Stopped => return None,
+            },
+            Pass::Stopped => return None,
+        };
+        for (&t, d) in tasks.iter().zip(found) {
+            demands[t] = d;
+        }
+    }
+    Some(Exact {
         demands,
         states,
         transitions,
     })
 }
 
-fn explore(system: &System, tick: u32, limits: Limits<'_>) -> Result<Graph, String> {
-    let layout = &system.layout;
-    // each state stored once, packed, in the visited set's arenas; explored level by
-    // level, so that a state's number is its place in the order of exploration
-    let mut visited = Visited::new(layout.bytes());
-    let full = |_| "more states than the demand's graph can number".to_string();
-    visited.start_level();
-    let initial = layout.pack(&system.initial_state());
-    let root = visited
-        .insert(&initial, StateId::NONE)
-        .map_err(full)?
-        .ok_or("the visited set refused the first state")?;
-    // a state's number, by shard and index in it, once it is explored
-    let mut number: Vec<Vec<u32>> = vec![Vec::new(); SHARDS];
-    let mut graph = Graph {
-        offsets: vec![0],
-        targets: Vec::new(),
-        labels: Vec::new(),
-        starts: Vec::new(),
-    };
-    let mut ticked: Vec<u32> = Vec::new();
-    let mut steps = Steps::new();
-    let mut state = system.initial_state();
-    let mut next = State::from_slots(vec![0; system.slot_count()]);
-    let mut packed = vec![0u8; layout.bytes()];
-    let mut explored: u32 = 0;
-    let mut level = 0;
-    while visited.level_len(level) > 0 {
-        visited.start_level();
-        for chunk in visited.chunks(level, u32::MAX) {
-            for local in chunk.start..chunk.end {
-                let id = visited.id(chunk.shard, local);
-                layout.decode(visited.state(id), &mut state);
-                let numbers = &mut number[chunk.shard];
-                if numbers.len() <= local as usize {
-                    numbers.resize(local as usize + 1, u32::MAX);
-                }
-                numbers[local as usize] = explored;
-                explored = explored
-                    .checked_add(1)
-                    .ok_or("more states than the demand's graph can number")?;
-                system
-                    .enabled_steps(&state, &mut steps)
-                    .map_err(|e| format!("a range error ({e}); `bip verify` shows it"))?;
-                for step in steps.iter() {
-                    system
-                        .fire(&state, step, &mut next)
-                        .map_err(|e| format!("a range error ({e}); `bip verify` shows it"))?;
-                    layout.encode(&next, &mut packed);
-                    // most successors are known: look them up before inserting
-                    let target = match visited.find(hash(&packed), &packed) {
-                        Some(known) => known,
-                        None => visited
-                            .insert(&packed, id)
-                            .map_err(full)?
-                            .ok_or("the visited set lost a state")?,
-                    };
-                    let label = match step.label {
-                        Label::Interaction(i) => i,
-                        Label::Internal { .. } => INTERNAL,
-                    };
-                    if label == tick {
-                        ticked.push(target.to_bits());
-                    }
-                    // the target's id for now: its number once every state has one
-                    graph.targets.push(target.to_bits());
-                    graph.labels.push(label);
-                }
-                graph.offsets.push(
-                    u32::try_from(graph.targets.len())
-                        .map_err(|_| "more transitions than the demand's graph can number")?,
-                );
-                if explored.is_multiple_of(4096) {
-                    let used = visited.allocated_bytes()
-                        + 8 * graph.targets.capacity() as u64
-                        + 4 * (graph.offsets.capacity() + ticked.capacity()) as u64
-                        + 4 * u64::from(explored);
-                    if visited.len() > limits.max_states {
-                        return Err(format!("more than {} states", limits.max_states));
-                    }
-                    if used > limits.max_bytes {
-                        return Err(format!("more than {} bytes of graph", limits.max_bytes));
-                    }
-                    if limits.deadline.is_some_and(|d| Instant::now() >= d) {
-                        return Err("the time limit".into());
-                    }
-                    if limits.interrupt.is_some_and(|i| i.load(Ordering::Relaxed)) {
-                        return Err("interrupted".into());
-                    }
-                }
-            }
-        }
-        level += 1;
+/// Why the exploration stopped, in the words of `bip sched`'s demand line.
+fn stopped(stop: &Stop) -> String {
+    match stop {
+        Stop::MaxStates { limit } => format!("more than {limit} states"),
+        Stop::MaxMemory { limit } => format!("more than {limit} bytes of graph"),
+        Stop::Timeout { .. } => "the time limit".into(),
+        Stop::Interrupted => "interrupted".into(),
+        Stop::TooManyStates => "more states than the demand's graph can number".into(),
+        Stop::FirstFailure => stop.to_string(),
     }
-    let renumber = |bits: u32| {
-        let id = StateId::from_bits(bits);
-        number[id.shard()][id.local() as usize]
-    };
-    for t in graph.targets.iter_mut() {
-        *t = renumber(*t);
-    }
-    graph.starts = ticked.into_iter().map(renumber).collect();
-    graph.starts.push(renumber(root.to_bits()));
-    graph.starts.sort_unstable();
-    graph.starts.dedup();
-    Ok(graph)
+}
+
+/// The components a period starts in: those of the initial state and of every tick's
+/// target (`of` gives each state's component), in order.
+fn period_starts(graph: &Labelled, tick: u32, of: &[u32]) -> Vec<u32> {
+    let mut starts: Vec<u32> = graph
+        .targets
+        .iter()
+        .zip(&graph.edge_data)
+        .filter(|&(_, &label)| label == tick)
+        .map(|(&t, _)| of[t as usize])
+        .collect();
+    // the initial state is the first explored
+    starts.push(of[0]);
+    starts.sort_unstable();
+    starts.dedup();
+    starts
 }
 
 /// The strongly connected components of the graph's non-tick steps.
@@ -206,8 +189,12 @@ impl Components {
 /// Strongly connected components of the non-tick steps (iterative Tarjan). Components
 /// are numbered in the order they were completed, so every component comes after those
 /// it reaches.
-fn condense(graph: &Graph, tick: u32) -> Components {
-    let n = graph.offsets.len() - 1;
+fn condense(graph: &Labelled, tick: u32, watch: &Watch) -> Option<Components> {
+    let n = graph.len();
+    // index, low, scc_of, members, and on_stack
+    if !watch.expect(n as u64 * 17) {
+        return None;
+    }
     const UNSEEN: u32 = u32::MAX;
     let mut index = vec![UNSEEN; n];
     let mut low = vec![0u32; n];
@@ -218,24 +205,23 @@ fn condense(graph: &Graph, tick: u32) -> Components {
     let mut members: Vec<u32> = Vec::with_capacity(n);
     let mut counter = 0u32;
     // (state, next edge to look at)
-    let mut calls: Vec<(u32, u32)> = Vec::new();
+    let mut calls: Vec<(u32, usize)> = Vec::new();
     for root in 0..n as u32 {
         if index[root as usize] != UNSEEN {
             continue;
         }
-        calls.push((root, graph.offsets[root as usize]));
+        calls.push((root, graph.edges(root).start));
         index[root as usize] = counter;
         low[root as usize] = counter;
         counter += 1;
         stack.push(root);
         on_stack[root as usize] = true;
-        while let Some(&(v, e)) = calls.last() {
-            if e < graph.offsets[v as usize + 1] {
-                let edge = e as usize;
+        while let Some(&(v, edge)) = calls.last() {
+            if edge < graph.edges(v).end {
                 if let Some(top) = calls.last_mut() {
                     top.1 += 1;
                 }
-                if graph.labels[edge] == tick {
+                if graph.edge_data[edge] == tick {
                     continue;
                 }
                 let w = graph.targets[edge];
@@ -245,7 +231,7 @@ fn condense(graph: &Graph, tick: u32) -> Components {
                     counter += 1;
                     stack.push(w);
                     on_stack[w as usize] = true;
-                    calls.push((w, graph.offsets[w as usize]));
+                    calls.push((w, graph.edges(w).start));
                 } else if on_stack[w as usize] {
                     low[v as usize] = low[v as usize].min(index[w as usize]);
                 }
@@ -257,6 +243,9 @@ fn condense(graph: &Graph, tick: u32) -> Components {
             }
             if low[v as usize] == index[v as usize] {
                 let id = starts.len() as u32 - 1;
+                if id.is_multiple_of(COMPONENTS_PER_LOOK) && watch.stopped().is_some() {
+                    return None;
+                }
                 while let Some(w) = stack.pop() {
                     on_stack[w as usize] = false;
                     scc_of[w as usize] = id;
@@ -269,57 +258,102 @@ fn condense(graph: &Graph, tick: u32) -> Components {
             }
         }
     }
-    Components {
+    Some(Components {
         of: scc_of,
         starts,
         members,
-    }
+    })
 }
 
-/// Task `task`'s costliest period, over every period start; `None` if unbounded.
-fn longest_period(
-    graph: &Graph,
+/// What a pass found.
+enum Pass {
+    /// Per task, its costliest period; `None` if unbounded.
+    Found(Vec<Option<u64>>),
+    /// A path costs more than the rows' values hold.
+    TooCostly,
+    Stopped,
+}
+
+/// The costliest periods of `tasks` (at most 64), over every period start (a component,
+/// as every edge's target now is). One pass over the components for all of them: each
+/// component's costliest path per task, as a `V` (a `u32` halves the rows and holds any
+/// period up to an hour), and the tasks it can loop costly for, as bits.
+fn longest_periods<V: Copy + Default + Into<u64> + TryFrom<u64>>(
+    graph: &Labelled,
+    starts: &[u32],
     table: &TaskTable,
     tick: u32,
-    task: usize,
+    tasks: &[usize],
     components: &Components,
-) -> Option<u64> {
-    let scc_of = &components.of;
-    let cost = |edge: usize| -> u64 {
-        match table.cost.get(graph.labels[edge] as usize) {
-            Some(Some((t, w))) if *t == task => *w,
-            _ => 0,
-        }
-    };
-    // best[c]: the costliest path from any state of component c; None: unbounded
-    let mut best: Vec<Option<u64>> = vec![Some(0); components.len()];
+    watch: &Watch,
+) -> Pass {
+    const NONE: usize = usize::MAX;
+    let k = tasks.len();
+    let row_bytes = k * std::mem::size_of::<V>() + 8;
+    if !watch.expect((components.len() * row_bytes) as u64) {
+        return Pass::Stopped;
+    }
+    // each task's place in a component's row
+    let mut slot = vec![NONE; table.tasks.len()];
+    for (i, &t) in tasks.iter().enumerate() {
+        slot[t] = i;
+    }
+    // best[c * k + i]: the costliest path of task tasks[i] from any state of component c
+    let mut best = vec![V::default(); components.len() * k];
+    let mut unbounded = vec![0u64; components.len()];
+    let mut here = vec![0u64; k];
     for c in 0..components.len() as u32 {
-        let mut here = Some(0u64);
-        'states: for &v in components.members(c) {
-            let v = v as usize;
-            for edge in graph.offsets[v] as usize..graph.offsets[v + 1] as usize {
-                if graph.labels[edge] == tick {
+        if c.is_multiple_of(COMPONENTS_PER_LOOK) && watch.stopped().is_some() {
+            return Pass::Stopped;
+        }
+        here.fill(0);
+        let mut looping = 0u64;
+        for &v in components.members(c) {
+            for edge in graph.edges(v) {
+                let label = graph.edge_data[edge];
+                if label == tick {
                     continue;
                 }
-                let w = cost(edge);
-                let target = scc_of[graph.targets[edge] as usize];
-                let through = if target == c {
-                    (w == 0).then_some(0)
-                } else {
-                    best[target as usize].map(|b| b.saturating_add(w))
+                let (i, w) = match table.cost.get(label as usize) {
+                    Some(&Some((t, w))) => (slot[t], w),
+                    _ => (NONE, 0),
                 };
-                match (here, through) {
-                    (Some(h), Some(t)) => here = Some(h.max(t)),
-                    _ => {
-                        here = None;
-                        break 'states;
+                let d = graph.targets[edge];
+                if d == c {
+                    if i != NONE && w > 0 {
+                        looping |= 1 << i;
                     }
+                    continue;
+                }
+                looping |= unbounded[d as usize];
+                let row = &best[d as usize * k..(d as usize + 1) * k];
+                for (h, &b) in here.iter_mut().zip(row) {
+                    *h = (*h).max(b.into());
+                }
+                if i != NONE {
+                    here[i] = here[i].max(row[i].into().saturating_add(w));
                 }
             }
         }
-        best[c as usize] = here;
+        for (b, &h) in best[c as usize * k..(c as usize + 1) * k]
+            .iter_mut()
+            .zip(&here)
+        {
+            let Ok(h) = V::try_from(h) else {
+                return Pass::TooCostly;
+            };
+            *b = h;
+        }
+        unbounded[c as usize] = looping;
     }
-    graph.starts.iter().try_fold(0u64, |m, &s| {
-        Some(m.max(best[scc_of[s as usize] as usize]?))
-    })
+    Pass::Found(
+        (0..k)
+            .map(|i| {
+                starts.iter().try_fold(0u64, |m, &s| {
+                    (unbounded[s as usize] & (1 << i) == 0)
+                        .then(|| m.max(best[s as usize * k + i].into()))
+                })
+            })
+            .collect(),
+    )
 }

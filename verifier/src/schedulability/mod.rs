@@ -11,8 +11,6 @@ mod bound;
 mod exact;
 mod tasks;
 
-use std::time::Instant;
-
 use bip_model::System;
 use bip_sched::{
     analyse, show_micros as show, Analysis, Assignment, ResponseTime, SchedError, Task, TaskSet,
@@ -223,16 +221,17 @@ pub fn schedulability(
             },
         ),
         DemandChoice::Exact => {
-            let limits = exact::Limits {
-                max_states: options.max_states.unwrap_or(20_000_000),
-                max_bytes: options
-                    .max_memory
-                    .or_else(memory::default_limit)
-                    .unwrap_or(4 << 30),
-                deadline: options.timeout.map(|t| Instant::now() + t),
-                interrupt: options.interrupt.as_deref(),
+            let limits = Options {
+                max_states: Some(options.max_states.unwrap_or(20_000_000)),
+                max_memory: Some(
+                    options
+                        .max_memory
+                        .or_else(memory::default_limit)
+                        .unwrap_or(4 << 30),
+                ),
+                ..options.clone()
             };
-            match exact::exact_demands(system, &table, limits) {
+            match exact::exact_demands(system, &table, &limits) {
                 Ok(found) => (
                     found.demands,
                     DemandMethod::Exact {

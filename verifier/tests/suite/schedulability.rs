@@ -167,6 +167,11 @@ fn the_exact_demand_is_the_costliest_period_and_the_bound_is_above_it() {
     constraints: [Exclusive(services: ["m.A", "m.B"])],
 )"#;
     assert_eq!(first_task(apart), (2300, 2400));
+    // periods of hours: a demand past what 32 bits of microseconds hold
+    let long = layer(false, "t")
+        .replace("tick_ms: 10,", "tick_ms: 10000000,")
+        .replace(r#"wcet: "2ms""#, r#"wcet: "5000s""#);
+    assert_eq!(first_task(&long), (5_000_000_800, 5_000_000_800));
 }
 
 #[test]
@@ -324,4 +329,81 @@ fn module_tasks_and_atoms_share_a_cpu() {
     let responses: Vec<ResponseTime> = a.tasks.iter().map(|t| t.response).collect();
     assert_eq!(responses, [3500, 3800, 1000].map(ResponseTime::Exact));
     assert_eq!(a.tasks[2].rank, 0);
+}
+
+/// The exact demands come from the parallel exploration: the same demands and counts with
+/// one worker as with two. A limit reached (states, memory, time, Ctrl-C) or a range
+/// error falls back to the bound and says why.
+#[test]
+fn exact_demands_are_the_same_with_any_workers_and_stop_at_every_limit() {
+    let system = load_str("budget.ron", &layer(true, "t")).unwrap();
+    let with = |options: Options| exact_with(&system, options);
+    let one = with(Options {
+        jobs: 1,
+        ..Options::default()
+    });
+    let two = with(Options {
+        jobs: 2,
+        ..Options::default()
+    });
+    assert!(
+        matches!(one.method, DemandMethod::Exact { .. }),
+        "{:?}",
+        one.method
+    );
+    assert_eq!((&one.demands, &one.method), (&two.demands, &two.method));
+    let why = |options: Options| match with(options).method {
+        DemandMethod::Bound { why } => why,
+        method => panic!("{method:?}"),
+    };
+    let not_all = "the states were not all explored: ";
+    assert_eq!(
+        why(Options {
+            max_states: Some(3),
+            ..Options::default()
+        }),
+        format!("{not_all}more than 3 states")
+    );
+    assert_eq!(
+        why(Options {
+            max_memory: Some(1 << 20),
+            ..Options::default()
+        }),
+        format!("{not_all}more than {} bytes of graph", 1 << 20)
+    );
+    assert_eq!(
+        why(Options {
+            timeout: Some(std::time::Duration::ZERO),
+            ..Options::default()
+        }),
+        format!("{not_all}the time limit")
+    );
+    assert_eq!(
+        why(Options {
+            interrupt: Some(std::sync::Arc::new(true.into())),
+            ..Options::default()
+        }),
+        format!("{not_all}interrupted")
+    );
+    // an atom whose variable leaves its range two steps in
+    let overflow = layer(false, "u").replace(
+        "    modules: [",
+        "    atoms: { \"Overflow\": Atom(locations: [\"s\"], initial: \"s\", vars: [(name: \"y\", ty: Int(0, 5))], transitions: [(from: \"s\", to: \"s\", action: \"y = y + 2\")]) },\n    components: [(name: \"b\", atom: \"Overflow\")],\n    modules: [",
+    );
+    let s = exact_with(
+        &load_str("overflow.ron", &overflow).unwrap(),
+        Options::default(),
+    );
+    assert_eq!(
+        s.method,
+        DemandMethod::Bound {
+            why: format!("{not_all}a range error (b.y = 6 is outside its range Int(0, 5) in the action of b: s -internal-> s); `bip verify` shows it")
+        }
+    );
+}
+
+fn exact_with(system: &System, options: Options) -> bip_verifier::Schedulability {
+    schedulability(system, &options, Assignment::Given, DemandChoice::Exact)
+        .unwrap()
+        .expect("the model has WCETs")
 }

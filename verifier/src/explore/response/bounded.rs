@@ -4,8 +4,9 @@
 //! state found that takes a tick past the bound, or stops with a trigger unanswered, ends
 //! a shortest counterexample.
 
-use super::graph::{response_bit, trigger_bit, Graph, IN_ERROR, TICK};
 use super::run::Run;
+use super::watched::{response_bit, trigger_bit, Flagged, TICK};
+use crate::explore::graph::IN_ERROR;
 use crate::watch::Watch;
 
 /// What the search found.
@@ -59,14 +60,14 @@ impl Observer {
 }
 
 /// Searches property `p`, which must answer within `within` ticks.
-pub(crate) fn search(g: &Graph, p: usize, within: u64, watch: &Watch) -> Found {
+pub(crate) fn search(g: &Flagged, p: usize, within: u64, watch: &Watch) -> Found {
     let obs = Observer {
         within,
         trigger: trigger_bit(p),
         response: response_bit(p),
     };
     let vacuous = !g.state_flags.iter().any(|f| f & obs.trigger != 0)
-        && !g.edge_flags.iter().any(|f| f & obs.trigger != 0);
+        && !g.edge_data.iter().any(|f| f & obs.trigger != 0);
     if vacuous {
         return Found::Holds { vacuous };
     }
@@ -103,7 +104,7 @@ pub(crate) fn search(g: &Graph, p: usize, within: u64, watch: &Watch) -> Found {
             }
             for e in edges {
                 let t = g.targets[e];
-                match obs.next(o, g.edge_flags[e], g.state_flags[t as usize]) {
+                match obs.next(o, g.edge_data[e], g.state_flags[t as usize]) {
                     Next::Late => {
                         let mut run = run_to(g, &parent, width, x, &obs);
                         run.push(g, e);
@@ -127,7 +128,7 @@ pub(crate) fn search(g: &Graph, p: usize, within: u64, watch: &Watch) -> Found {
 
 /// The run to product state `x`, following parents, each step by the first edge that
 /// leads the observer from the parent's value to the child's.
-fn run_to(g: &Graph, parent: &[u32], width: u32, x: u32, obs: &Observer) -> Run {
+fn run_to(g: &Flagged, parent: &[u32], width: u32, x: u32, obs: &Observer) -> Run {
     let mut chain = vec![x];
     let mut cur = x;
     while parent[cur as usize] != cur {
@@ -146,7 +147,7 @@ fn run_to(g: &Graph, parent: &[u32], width: u32, x: u32, obs: &Observer) -> Run 
             .edges(s)
             .find(|&e| {
                 g.targets[e] == t
-                    && matches!(obs.next(o, g.edge_flags[e], g.state_flags[t as usize]), Next::To(v) if v == o2)
+                    && matches!(obs.next(o, g.edge_data[e], g.state_flags[t as usize]), Next::To(v) if v == o2)
             })
             .expect("a parent reaches its child by some edge");
         run.push(g, e);

@@ -10,8 +10,9 @@
 //! components, successors first, and marks each *doomed* if it holds such a cycle or
 //! dead end, or leads to a doomed one; a trigger into a doomed state is a counterexample.
 
-use super::graph::{response_bit, trigger_bit, Graph, IN_ERROR, TICK};
 use super::run::{shortest_path, Run};
+use super::watched::{response_bit, trigger_bit, Flagged, TICK};
+use crate::explore::graph::IN_ERROR;
 use crate::watch::Watch;
 
 /// What the search found.
@@ -27,8 +28,10 @@ pub(crate) enum Found {
 const NONE: u32 = u32::MAX;
 
 struct Waiting<'g> {
-    g: &'g Graph,
+    g: &'g Flagged,
     response: u32,
+    /// The model has a `Time` connector: only runs with infinitely many ticks count.
+    timed: bool,
 }
 
 impl Waiting<'_> {
@@ -37,12 +40,12 @@ impl Waiting<'_> {
     }
 
     fn edge(&self, e: usize) -> bool {
-        self.g.edge_flags[e] & self.response == 0 && self.state(self.g.targets[e])
+        self.g.edge_data[e] & self.response == 0 && self.state(self.g.targets[e])
     }
 
     /// An edge that lets the run count as going on forever on a cycle.
     fn fair(&self, e: usize) -> bool {
-        !self.g.timed || self.g.edge_flags[e] & TICK != 0
+        !self.timed || self.g.edge_data[e] & TICK != 0
     }
 
     fn dead(&self, s: u32) -> bool {
@@ -50,11 +53,12 @@ impl Waiting<'_> {
     }
 }
 
-/// Searches property `p` of the graph.
-pub(crate) fn search(g: &Graph, p: usize, watch: &Watch) -> Found {
+/// Searches property `p` of the graph, of a model with `Time` connectors if `timed`.
+pub(crate) fn search(g: &Flagged, p: usize, timed: bool, watch: &Watch) -> Found {
     let w = Waiting {
         g,
         response: response_bit(p),
+        timed,
     };
     let trigger = trigger_bit(p);
     let Some(scc) = components(&w, watch) else {
@@ -74,9 +78,9 @@ pub(crate) fn search(g: &Graph, p: usize, watch: &Watch) -> Found {
             }
         }
         for e in g.edges(s) {
-            if g.edge_flags[e] & trigger != 0 {
+            if g.edge_data[e] & trigger != 0 {
                 vacuous = false;
-                if g.edge_flags[e] & w.response == 0 && doomed(g.targets[e]) {
+                if g.edge_data[e] & w.response == 0 && doomed(g.targets[e]) {
                     start = Some((s, Some(e)));
                     break 'states;
                 }

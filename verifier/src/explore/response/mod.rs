@@ -1,23 +1,25 @@
 //! The response properties (`Response`, `LeadsTo`, `Replies`, `Terminates`), decided on
 //! the state graph once the exploration is complete (docs/verify.md, "Response and
-//! liveness"): `graph` stores it, `bounded` searches the product with a tick-counting
+//! liveness"): `watched` says what the stored graph (`explore::graph`) keeps for them,
+//! `bounded` searches the product with a tick-counting
 //! observer, `cycles` searches for runs on which the response never comes, `run` holds
 //! the paths both return. A truncated exploration decides none of them.
 
 mod bounded;
 mod cycles;
-mod graph;
 mod run;
+mod watched;
 
 use bip_model::{Happens, OwnedStep, State, Steps, System, Trace, Verdict};
 
 use crate::error::VerifyError;
+use crate::explore::graph;
 use crate::report::PropertyVerdict;
 use crate::visited::Visited;
 use crate::watch::Watch;
 
-use graph::{Graph, Watched, MAX_WATCHED};
 use run::Run;
+use watched::{Flagged, Watched, Watching, MAX_WATCHED};
 
 /// A response property's verdict, with a note when its trigger never happens.
 pub(super) struct Decided {
@@ -74,7 +76,11 @@ pub(super) fn decide(
         })
     };
     watch.rebase();
-    let Some(g) = Graph::build(system, visited, &watched, watch) else {
+    let watching = Watching {
+        system,
+        watched: &watched,
+    };
+    let Some(g) = graph::build(system, visited, &watching, watch) else {
         for &k in &which {
             out[k] = Some(stopped(watch));
         }
@@ -85,7 +91,7 @@ pub(super) fn decide(
         watch.rebase();
         let t = &questions[k];
         let within = t.within;
-        if let Some(f) = &g.failures[p] {
+        if let Some(f) = &g.notes[p] {
             let run = Run {
                 states: vec![f.state],
                 ..Run::default()
@@ -118,7 +124,7 @@ pub(super) fn decide(
                     continue;
                 }
             },
-            None => match cycles::search(&g, p, watch) {
+            None => match cycles::search(&g, p, system.has_time(), watch) {
                 cycles::Found::Holds { vacuous } => Ok(vacuous),
                 cycles::Found::Fails(run) => Err(run),
                 cycles::Found::Stopped => {
@@ -157,7 +163,7 @@ fn inconclusive(reason: String) -> Decided {
 }
 
 /// How the counterexample `run` fails.
-fn reason(g: &Graph, run: &Run, within: Option<u64>) -> String {
+fn reason(g: &Flagged, run: &Run, within: Option<u64>) -> String {
     let n = run.edges.len();
     let steps = |n: usize| format!("{n} step{}", if n == 1 { "" } else { "s" });
     match (run.loop_start, within) {
@@ -182,7 +188,7 @@ fn reason(g: &Graph, run: &Run, within: Option<u64>) -> String {
 }
 
 /// The run from the initial state to the first state of `run`, joined with it.
-fn stem_to(g: &Graph, run: Run) -> Run {
+fn stem_to(g: &Flagged, run: Run) -> Run {
     let mut out = Run {
         states: vec![0],
         ..Run::default()
@@ -202,7 +208,7 @@ fn stem_to(g: &Graph, run: Run) -> Run {
 fn run_trace(
     system: &System,
     visited: &Visited,
-    g: &Graph,
+    g: &Flagged,
     run: &Run,
 ) -> Result<Trace, VerifyError> {
     let layout = &system.layout;

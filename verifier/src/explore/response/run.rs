@@ -3,7 +3,7 @@
 
 use std::collections::VecDeque;
 
-use super::graph::Graph;
+use super::watched::Flagged;
 
 /// A path from the initial state: `states[k + 1]` is reached from `states[k]` by edge
 /// `edges[k]`. A lasso repeats the edges after the first `loop_start` forever (its last
@@ -17,12 +17,12 @@ pub(crate) struct Run {
 
 impl Run {
     /// Follows edge `e` from the last state.
-    pub(crate) fn push(&mut self, g: &Graph, e: usize) {
+    pub(crate) fn push(&mut self, g: &Flagged, e: usize) {
         self.edges.push(e);
         self.states.push(g.targets[e]);
     }
 
-    pub(crate) fn extend(&mut self, g: &Graph, edges: &[usize]) {
+    pub(crate) fn extend(&mut self, g: &Flagged, edges: &[usize]) {
         for &e in edges {
             self.push(g, e);
         }
@@ -36,7 +36,7 @@ impl Run {
 /// The edges of a shortest path from `from` to the first state (in breadth-first order)
 /// that `goal` accepts, following only the edges `follow` accepts; `None` if there is none.
 pub(crate) fn shortest_path(
-    g: &Graph,
+    g: &Flagged,
     from: u32,
     follow: impl Fn(usize) -> bool,
     goal: impl Fn(u32) -> bool,

@@ -1,0 +1,109 @@
+//! What the response properties keep of the stored graph: which steps are ticks, and
+//! where each property's trigger and response happen, on states and on steps, as flag
+//! bits; and the first range error met in evaluating them.
+
+use bip_model::{Happens, Role, State, Step, System};
+
+use crate::explore::graph::{Graph, Keep};
+
+/// A response property's trigger and response.
+pub(crate) struct Watched<'a> {
+    /// What a range error in them is reported in: `property NAME`.
+    pub(crate) context: String,
+    pub(crate) trigger: &'a Happens,
+    pub(crate) response: &'a Happens,
+}
+
+/// Flag bits: on an edge, bit 0 is a tick (on a state, bit 0 is the graph's `IN_ERROR`).
+/// Property `p`'s trigger is bit `1 + 2p`, its response bit `2 + 2p`, on the steps and
+/// states where they happen.
+pub(crate) const TICK: u32 = 1;
+/// The properties one graph can flag.
+pub(crate) const MAX_WATCHED: usize = 15;
+
+pub(crate) fn trigger_bit(p: usize) -> u32 {
+    1 << (1 + 2 * p)
+}
+
+pub(crate) fn response_bit(p: usize) -> u32 {
+    1 << (2 + 2 * p)
+}
+
+/// The first range error met in evaluating a property's trigger or response: in a state
+/// (or on a step out of it), with the message.
+pub(crate) struct EvalFailure {
+    pub(crate) state: u32,
+    pub(crate) message: String,
+}
+
+/// The graph the response properties are decided on: flag bits on its edges, and per
+/// property its first range error.
+pub(crate) type Flagged = Graph<u32, Vec<Option<EvalFailure>>>;
+
+/// The properties watched on a graph of `system`.
+pub(crate) struct Watching<'s, 'a> {
+    pub(crate) system: &'s System,
+    pub(crate) watched: &'s [Watched<'a>],
+}
+
+impl Keep for Watching<'_, '_> {
+    type Edge = u32;
+    type Notes = Vec<Option<EvalFailure>>;
+
+    fn notes(&self) -> Self::Notes {
+        (0..self.watched.len()).map(|_| None).collect()
+    }
+
+    fn state(&self, state: &State, me: u32, failures: &mut Self::Notes) -> u32 {
+        let mut flags = 0u32;
+        for (p, w) in self.watched.iter().enumerate() {
+            for (bit, h) in [(trigger_bit(p), w.trigger), (response_bit(p), w.response)] {
+                match self.system.happens_in(h, state, &w.context) {
+                    Ok(true) => flags |= bit,
+                    Ok(false) => {}
+                    Err(e) => fail(&mut failures[p], me, e.to_string()),
+                }
+            }
+        }
+        flags
+    }
+
+    fn edge(
+        &self,
+        state: &State,
+        step: Step<'_>,
+        next: &State,
+        me: u32,
+        failures: &mut Self::Notes,
+    ) -> u32 {
+        let mut flags = if self.system.role(step.label) == Role::Time {
+            TICK
+        } else {
+            0
+        };
+        for (p, w) in self.watched.iter().enumerate() {
+            for (bit, h) in [(trigger_bit(p), w.trigger), (response_bit(p), w.response)] {
+                match self.system.happens_on(h, state, step, next, &w.context) {
+                    Ok(true) => flags |= bit,
+                    Ok(false) => {}
+                    Err(err) => fail(&mut failures[p], me, err.to_string()),
+                }
+            }
+        }
+        flags
+    }
+
+    fn merge(&self, failures: &mut Self::Notes, later: Self::Notes) {
+        for (mine, theirs) in failures.iter_mut().zip(later) {
+            if mine.is_none() {
+                *mine = theirs;
+            }
+        }
+    }
+}
+
+fn fail(slot: &mut Option<EvalFailure>, state: u32, message: String) {
+    if slot.is_none() {
+        *slot = Some(EvalFailure { state, message });
+    }
+}
