@@ -26,6 +26,7 @@
 mod expand;
 pub(crate) mod graph;
 mod response;
+pub(crate) mod scc;
 mod targets;
 
 use std::sync::atomic::{AtomicBool, AtomicU64};

@@ -16,6 +16,7 @@ use bip_model::{Label, State, Step, System};
 
 use super::tasks::{TaskKind, TaskTable};
 use crate::explore::graph::{Graph, Keep};
+use crate::explore::scc::{self, Components};
 use crate::explore::{on_state_graph, Unanswered};
 use crate::options::Options;
 use crate::report::Stop;
@@ -167,102 +168,9 @@ fn period_starts(graph: &Labelled, tick: u32, of: &[u32]) -> Vec<u32> {
     starts
 }
 
-/// The strongly connected components of the graph's non-tick steps.
-struct Components {
-    /// Each state's component.
-    of: Vec<u32>,
-    /// The states of component `c`: `members[starts[c]..starts[c + 1]]`.
-    starts: Vec<u32>,
-    members: Vec<u32>,
-}
-
-impl Components {
-    fn len(&self) -> usize {
-        self.starts.len() - 1
-    }
-
-    fn members(&self, c: u32) -> &[u32] {
-        &self.members[self.starts[c as usize] as usize..self.starts[c as usize + 1] as usize]
-    }
-}
-
-/// Strongly connected components of the non-tick steps (iterative Tarjan). Components
-/// are numbered in the order they were completed, so every component comes after those
-/// it reaches.
+/// Strongly connected components of the non-tick steps.
 fn condense(graph: &Labelled, tick: u32, watch: &Watch) -> Option<Components> {
-    let n = graph.len();
-    // index, low, scc_of, members, and on_stack
-    if !watch.expect(n as u64 * 17) {
-        return None;
-    }
-    const UNSEEN: u32 = u32::MAX;
-    let mut index = vec![UNSEEN; n];
-    let mut low = vec![0u32; n];
-    let mut on_stack = vec![false; n];
-    let mut stack: Vec<u32> = Vec::new();
-    let mut scc_of = vec![0u32; n];
-    let mut starts: Vec<u32> = vec![0];
-    let mut members: Vec<u32> = Vec::with_capacity(n);
-    let mut counter = 0u32;
-    // (state, next edge to look at)
-    let mut calls: Vec<(u32, usize)> = Vec::new();
-    for root in 0..n as u32 {
-        if index[root as usize] != UNSEEN {
-            continue;
-        }
-        calls.push((root, graph.edges(root).start));
-        index[root as usize] = counter;
-        low[root as usize] = counter;
-        counter += 1;
-        stack.push(root);
-        on_stack[root as usize] = true;
-        while let Some(&(v, edge)) = calls.last() {
-            if edge < graph.edges(v).end {
-                if let Some(top) = calls.last_mut() {
-                    top.1 += 1;
-                }
-                if graph.edge_data[edge] == tick {
-                    continue;
-                }
-                let w = graph.targets[edge];
-                if index[w as usize] == UNSEEN {
-                    index[w as usize] = counter;
-                    low[w as usize] = counter;
-                    counter += 1;
-                    stack.push(w);
-                    on_stack[w as usize] = true;
-                    calls.push((w, graph.edges(w).start));
-                } else if on_stack[w as usize] {
-                    low[v as usize] = low[v as usize].min(index[w as usize]);
-                }
-                continue;
-            }
-            calls.pop();
-            if let Some(&(parent, _)) = calls.last() {
-                low[parent as usize] = low[parent as usize].min(low[v as usize]);
-            }
-            if low[v as usize] == index[v as usize] {
-                let id = starts.len() as u32 - 1;
-                if id.is_multiple_of(COMPONENTS_PER_LOOK) && watch.stopped().is_some() {
-                    return None;
-                }
-                while let Some(w) = stack.pop() {
-                    on_stack[w as usize] = false;
-                    scc_of[w as usize] = id;
-                    members.push(w);
-                    if w == v {
-                        break;
-                    }
-                }
-                starts.push(members.len() as u32);
-            }
-        }
-    }
-    Some(Components {
-        of: scc_of,
-        starts,
-        members,
-    })
+    scc::components(graph, |_| true, |e| graph.edge_data[e] != tick, watch)
 }
 
 /// What a pass found.

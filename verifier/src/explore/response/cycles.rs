@@ -13,6 +13,7 @@
 use super::run::{shortest_path, Run};
 use super::watched::{response_bit, trigger_bit, Flagged, TICK};
 use crate::explore::graph::IN_ERROR;
+use crate::explore::scc::{self, OUTSIDE};
 use crate::watch::Watch;
 
 /// What the search found.
@@ -24,8 +25,6 @@ pub(crate) enum Found {
     Fails(Run),
     Stopped,
 }
-
-const NONE: u32 = u32::MAX;
 
 struct Waiting<'g> {
     g: &'g Flagged,
@@ -64,7 +63,8 @@ pub(crate) fn search(g: &Flagged, p: usize, timed: bool, watch: &Watch) -> Found
     let Some(scc) = components(&w, watch) else {
         return Found::Stopped;
     };
-    let doomed = |s: u32| scc.comp[s as usize] != NONE && scc.doomed[scc.comp[s as usize] as usize];
+    let doomed =
+        |s: u32| scc.comp[s as usize] != OUTSIDE && scc.doomed[scc.comp[s as usize] as usize];
     // the first trigger, in the exploration's order, from which the response can be avoided
     let mut vacuous = true;
     let mut start = None;
@@ -127,99 +127,42 @@ pub(crate) fn search(g: &Flagged, p: usize, timed: bool, watch: &Watch) -> Found
     Found::Fails(run)
 }
 
+/// The components of the waiting part, each marked fair (it holds a cycle that lets
+/// time pass) and doomed (it holds a fair cycle or a dead end, or leads to a doomed one).
 struct Components {
-    /// Each waiting state's component (`NONE` outside the waiting part).
+    /// Each state's component (`OUTSIDE` the waiting part).
     comp: Vec<u32>,
     fair: Vec<bool>,
     doomed: Vec<bool>,
 }
 
-/// Tarjan's algorithm, iterative, over the waiting part; components are numbered as they
-/// complete, so a component's successors are numbered before it.
+/// The waiting part's components, marked in their numbering order, which puts a
+/// component's successors before it.
 fn components(w: &Waiting<'_>, watch: &Watch) -> Option<Components> {
     let g = w.g;
-    let n = g.len();
-    let mut index = vec![NONE; n];
-    let mut low = vec![0u32; n];
-    let mut out = Components {
-        comp: vec![NONE; n],
-        fair: Vec::new(),
-        doomed: Vec::new(),
-    };
-    let mut stack: Vec<u32> = Vec::new();
-    let mut calls: Vec<(u32, usize)> = Vec::new();
-    let mut members: Vec<u32> = Vec::new();
-    let mut counter = 0u32;
-    let mut work = 0u64;
-    for root in 0..n as u32 {
-        if !w.state(root) || index[root as usize] != NONE {
-            continue;
+    let scc = scc::components(g, |s| w.state(s), |e| w.edge(e), watch)?;
+    let mut fair = Vec::with_capacity(scc.len());
+    let mut doomed = Vec::with_capacity(scc.len());
+    for c in 0..scc.len() as u32 {
+        let mut is_fair = false;
+        let mut is_doomed = false;
+        for &x in scc.members(c) {
+            is_doomed |= w.dead(x);
+            for e in g.edges(x).filter(|&e| w.edge(e)) {
+                let d = scc.of[g.targets[e] as usize];
+                if d == c {
+                    is_fair |= w.fair(e);
+                } else {
+                    is_doomed |= doomed[d as usize];
+                }
+            }
         }
-        index[root as usize] = counter;
-        low[root as usize] = counter;
-        counter += 1;
-        stack.push(root);
-        calls.push((root, g.edges(root).start));
-        while let Some(&mut (v, ref mut pos)) = calls.last_mut() {
-            work += 1;
-            if work.is_multiple_of(4096) && watch.stopped().is_some() {
-                return None;
-            }
-            let end = g.edges(v).end;
-            if *pos < end {
-                let e = *pos;
-                *pos += 1;
-                if !w.edge(e) {
-                    continue;
-                }
-                let t = g.targets[e];
-                if index[t as usize] == NONE {
-                    index[t as usize] = counter;
-                    low[t as usize] = counter;
-                    counter += 1;
-                    stack.push(t);
-                    calls.push((t, g.edges(t).start));
-                } else if out.comp[t as usize] == NONE {
-                    low[v as usize] = low[v as usize].min(index[t as usize]);
-                }
-                continue;
-            }
-            calls.pop();
-            if let Some(&(u, _)) = calls.last() {
-                low[u as usize] = low[u as usize].min(low[v as usize]);
-            }
-            if low[v as usize] != index[v as usize] {
-                continue;
-            }
-            let c = out.fair.len() as u32;
-            members.clear();
-            loop {
-                let x = stack.pop().expect("v is on the stack");
-                out.comp[x as usize] = c;
-                members.push(x);
-                if x == v {
-                    break;
-                }
-            }
-            let mut fair = false;
-            let mut doomed = false;
-            for &x in &members {
-                doomed |= w.dead(x);
-                for e in g.edges(x) {
-                    if !w.edge(e) {
-                        continue;
-                    }
-                    let d = out.comp[g.targets[e] as usize];
-                    if d == c {
-                        fair |= w.fair(e);
-                    } else {
-                        doomed |= out.doomed[d as usize];
-                    }
-                }
-            }
-            out.fair.push(fair);
-            out.doomed.push(doomed || fair);
-        }
+        fair.push(is_fair);
+        doomed.push(is_doomed || is_fair);
     }
-    Some(out)
+    Some(Components {
+        comp: scc.of,
+        fair,
+        doomed,
+    })
 }
