@@ -7,7 +7,7 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use bip_model::genom::map::{DataType, ModuleMap, ServiceMap};
+use bip_model::genom::map::ModuleMap;
 
 /// One codel of a module object, as the object numbers it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -92,25 +92,7 @@ pub struct ServiceTypes {
 
 /// The first difference between `types` and the data types of `module`, in words.
 pub(crate) fn types_difference(types: &ModuleTypes, module: &ModuleMap) -> Option<String> {
-    let written = |ty: &Option<DataType>| ty.as_ref().map_or(String::new(), DataType::written);
-    let ids: Vec<(&str, String)> = module
-        .ids
-        .iter()
-        .map(|f| (f.name.as_str(), f.ty().written()))
-        .collect();
-    let ports: Vec<(&str, String)> = module
-        .ports
-        .iter()
-        .map(|p| (p.name.as_str(), written(&p.ty)))
-        .collect();
-    let services = |f: fn(&ServiceMap) -> &Option<DataType>| -> Vec<(&str, String)> {
-        module
-            .services
-            .iter()
-            .map(|s| (s.name.as_str(), written(f(s))))
-            .collect()
-    };
-    let (args, outputs) = (services(|s| &s.args), services(|s| &s.output));
+    let model = module.written_types();
     let theirs = |xs: &[Typed]| -> Vec<(&'static str, &'static str)> {
         xs.iter().map(|x| (x.name, x.ty)).collect()
     };
@@ -118,13 +100,14 @@ pub(crate) fn types_difference(types: &ModuleTypes, module: &ModuleMap) -> Optio
         |f: fn(&ServiceTypes) -> &'static str| -> Vec<(&'static str, &'static str)> {
             types.services.iter().map(|s| (s.name, f(s))).collect()
         };
-    compare("ids field", &theirs(types.ids), &ids)
-        .or_else(|| compare("port", &theirs(types.ports), &ports))
+    compare("ids field", &theirs(types.ids), &model.ids)
+        .or_else(|| compare("port", &theirs(types.ports), &model.ports))
         .or_else(|| {
-            compare("service", &their_services(|s| s.args), &args).map(|d| d + " (arguments)")
+            compare("service", &their_services(|s| s.args), &model.args).map(|d| d + " (arguments)")
         })
         .or_else(|| {
-            compare("service", &their_services(|s| s.output), &outputs).map(|d| d + " (output)")
+            compare("service", &their_services(|s| s.output), &model.outputs)
+                .map(|d| d + " (output)")
         })
 }
 

@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use bip_model::genom::map::{CodelMap, DataType, ModuleMap, ServiceMap};
+use bip_model::genom::map::{CodelMap, ModuleMap, ServiceMap};
 
 /// `CODELS`: `codels` as `bind` numbers them.
 pub(crate) fn codels<'a>(
@@ -31,15 +31,15 @@ pub(crate) fn codels<'a>(
 
 /// `TYPES`: the module's ids, ports and services with their types written in full.
 pub(crate) fn types(out: &mut String, m: &ModuleMap) {
-    let written = |ty: &Option<DataType>| ty.as_ref().map_or(String::new(), DataType::written);
+    let model = m.written_types();
     let _ = writeln!(
         out,
         "    /// The data types of module `{}` the typed code here assumes: the engine refuses\n    /// to build if its model declares others.\n    pub const TYPES: bip_engine::ModuleTypes = bip_engine::ModuleTypes {{",
         m.name
     );
-    let typed = |out: &mut String, field: &str, xs: Vec<(&str, String)>| {
+    let typed = |out: &mut String, field: &str, xs: &[(&str, String)]| {
         let _ = write!(out, "        {field}: &[");
-        for (name, ty) in &xs {
+        for (name, ty) in xs {
             let _ = write!(
                 out,
                 "\n            bip_engine::Typed {{\n                name: {name:?},\n                ty: {ty:?},\n            }},"
@@ -51,26 +51,13 @@ pub(crate) fn types(out: &mut String, m: &ModuleMap) {
             "\n        ],\n"
         });
     };
-    let ids = m
-        .ids
-        .iter()
-        .map(|f| (f.name.as_str(), f.ty().written()))
-        .collect();
-    typed(out, "ids", ids);
-    let ports = m
-        .ports
-        .iter()
-        .map(|p| (p.name.as_str(), written(&p.ty)))
-        .collect();
-    typed(out, "ports", ports);
+    typed(out, "ids", &model.ids);
+    typed(out, "ports", &model.ports);
     out.push_str("        services: &[");
-    for s in &m.services {
+    for ((name, args), (_, output)) in model.args.iter().zip(&model.outputs) {
         let _ = write!(
             out,
-            "\n            bip_engine::ServiceTypes {{\n                name: {:?},\n                args: {:?},\n                output: {:?},\n            }},",
-            s.name,
-            written(&s.args),
-            written(&s.output)
+            "\n            bip_engine::ServiceTypes {{\n                name: {name:?},\n                args: {args:?},\n                output: {output:?},\n            }},"
         );
     }
     out.push_str(if m.services.is_empty() {

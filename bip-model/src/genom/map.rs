@@ -205,6 +205,46 @@ impl DataType {
     }
 }
 
+/// A module's data types, each written in full ([`DataType::written`]; `""` where the
+/// model declares none), by name in the model's order: what generated bindings record of
+/// the model they were made from, and what the engine checks them against.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WrittenTypes<'m> {
+    /// Its ids fields: `Bool` or `Int(lo, hi)`.
+    pub ids: Vec<(&'m str, String)>,
+    pub ports: Vec<(&'m str, String)>,
+    /// Its services' arguments.
+    pub args: Vec<(&'m str, String)>,
+    /// Its services' outputs.
+    pub outputs: Vec<(&'m str, String)>,
+}
+
+impl ModuleMap {
+    pub fn written_types(&self) -> WrittenTypes<'_> {
+        let written = |ty: &Option<DataType>| ty.as_ref().map_or(String::new(), DataType::written);
+        let services = |f: fn(&ServiceMap) -> &Option<DataType>| {
+            self.services
+                .iter()
+                .map(|s| (s.name.as_str(), written(f(s))))
+                .collect()
+        };
+        WrittenTypes {
+            ids: self
+                .ids
+                .iter()
+                .map(|f| (f.name.as_str(), f.ty().written()))
+                .collect(),
+            ports: self
+                .ports
+                .iter()
+                .map(|p| (p.name.as_str(), written(&p.ty)))
+                .collect(),
+            args: services(|s| &s.args),
+            outputs: services(|s| &s.output),
+        }
+    }
+}
+
 impl core::fmt::Display for DataType {
     /// As the model writes it: `Bool`, `Int(0, 3)`, `Float`, `Record Pose`,
     /// `Rust("rover::Odometry")`.
