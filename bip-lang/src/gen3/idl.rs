@@ -12,6 +12,23 @@ use super::lexer::Tok;
 use crate::diag::ModelError;
 use crate::source::{Span, Text};
 
+/// IDL's basic types of several words, as the parser joins them.
+pub(super) const MANY_WORD_BASIC: &[&str] = &[
+    "short",
+    "long",
+    "long long",
+    "unsigned short",
+    "unsigned long",
+    "unsigned long long",
+    "long double",
+];
+
+/// IDL's basic types of one word.
+pub(super) const ONE_WORD_BASIC: &[&str] = &[
+    "boolean", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64", "octet",
+    "char", "wchar", "float", "double", "any",
+];
+
 /// The IDL declarations read so far: constants by name (plain and scoped), and the scope
 /// being read.
 #[derive(Default)]
@@ -247,16 +264,7 @@ impl Idl {
         Ok(match word.as_str() {
             "unsigned" | "short" | "long" => {
                 let s = simple(c, &["unsigned", "short", "long", "int", "double"]);
-                let ok = [
-                    "short",
-                    "long",
-                    "long long",
-                    "unsigned short",
-                    "unsigned long",
-                    "unsigned long long",
-                    "long double",
-                ];
-                if !ok.contains(&s.as_str()) {
+                if !MANY_WORD_BASIC.contains(&s.as_str()) {
                     return Err(ModelError::new(
                         format!("`{s}` is not an IDL type"),
                         Span::new(t.span.start, c.last_span().end),
@@ -264,8 +272,7 @@ impl Idl {
                 }
                 s
             }
-            "float" | "double" | "char" | "wchar" | "boolean" | "octet" | "any" | "int8"
-            | "uint8" | "int16" | "uint16" | "int32" | "uint32" | "int64" | "uint64" => {
+            w if ONE_WORD_BASIC.contains(&w) => {
                 c.next();
                 word
             }

@@ -8,6 +8,7 @@
 use std::collections::HashMap;
 
 use super::ast::{Component, Dir, Kind, Service, Spec, TypeDecl};
+use super::idl::{MANY_WORD_BASIC, ONE_WORD_BASIC};
 use crate::compile::check_name;
 use crate::diag::Errors;
 use crate::genom::syntax::{DataTypeDef, FieldDef};
@@ -34,31 +35,6 @@ enum Idl<'t> {
     Named(&'t str),
 }
 
-const BASIC: &[&str] = &[
-    "boolean",
-    "short",
-    "long",
-    "long long",
-    "unsigned short",
-    "unsigned long",
-    "unsigned long long",
-    "int8",
-    "uint8",
-    "int16",
-    "uint16",
-    "int32",
-    "uint32",
-    "int64",
-    "uint64",
-    "octet",
-    "char",
-    "wchar",
-    "float",
-    "double",
-    "long double",
-    "any",
-];
-
 fn parse(text: &str) -> Idl<'_> {
     let text = text.trim();
     if text.ends_with(']') {
@@ -72,7 +48,7 @@ fn parse(text: &str) -> Idl<'_> {
         dims.reverse();
         return Idl::Array(Box::new(parse(base)), dims);
     }
-    if BASIC.contains(&text) {
+    if MANY_WORD_BASIC.contains(&text) || ONE_WORD_BASIC.contains(&text) {
         return Idl::Basic(text);
     }
     let word = text.split(['<', ' ']).next().unwrap_or(text);
