@@ -78,6 +78,11 @@ pub fn run(args: &Args) -> u8 {
     // the first line says where, for a reader that asked for port 0
     println!("bip explore: http://{address}/ (Ctrl-C to stop)");
     let _ = std::io::stdout().flush();
-    http::serve(listener, session, args.listen.is_loopback());
-    exit::OK
+    match http::serve(listener, session, args.listen.is_loopback()) {
+        Ok(()) => exit::OK,
+        Err(e) => {
+            eprintln!("error: cannot serve on {address}: {e}");
+            exit::ERROR
+        }
+    }
 }

@@ -336,6 +336,13 @@ fn explore_answers_bad_requests_with_a_4xx_and_a_message() {
         .0,
         413
     );
+    // a client that connects and sends nothing does not hold the server up
+    let idle = TcpStream::connect(a).expect("connects");
+    assert_eq!(
+        raw(a, b"GET /api/state HTTP/1.1\r\nHost: localhost\r\n\r\n").0,
+        200
+    );
+    drop(idle);
     // nothing above changed the session, and the server still answers
     let view = ok(a, "GET", "/api/state", Value::Null);
     assert_eq!(view["position"], 0);

@@ -7,6 +7,7 @@
 mod check;
 mod codegen;
 mod common;
+mod docs;
 mod engine;
 mod explore;
 mod export;
