@@ -490,12 +490,15 @@ impl<'a> Exporter<'a> {
                 }
             }
             above[g as usize] = terms;
-            higher[g as usize] = terms.saturating_add(u64::from(graph.interactions(g).len() as u32));
+            higher[g as usize] =
+                terms.saturating_add(u64::from(graph.interactions(g).len() as u32));
         }
         for &g in graph.order() {
             if high_side[g as usize] {
-                let mut any: Vec<String> =
-                    graph.interactions(g).map(|h| format!("enabled_{h}")).collect();
+                let mut any: Vec<String> = graph
+                    .interactions(g)
+                    .map(|h| format!("enabled_{h}"))
+                    .collect();
                 if !graph.below(g).is_empty() {
                     any.push(format!("above_{g}"));
                 }
@@ -506,8 +509,10 @@ impl<'a> Exporter<'a> {
             }
             let mut any = Vec::new();
             for &p in graph.below(g) {
-                let highs: Vec<String> =
-                    graph.high_groups(p).map(|z| format!("higher_{z}")).collect();
+                let highs: Vec<String> = graph
+                    .high_groups(p)
+                    .map(|z| format!("higher_{z}"))
+                    .collect();
                 let highs = format!("({})", highs.join(" || "));
                 any.push(match &sys.priorities[p as usize].when {
                     Some(w) => format!("({} && {highs})", self.expr(w, 0, &mut Vec::new())?),

@@ -137,6 +137,39 @@ impl Watch {
         self.stopped().is_none()
     }
 
+    /// Makes room in `v` for `additional` more elements, as pushing them would (doubling
+    /// its capacity), once the growth is known to fit: false, with the memory stop raised,
+    /// if the new allocation would pass the memory limit or the allocator refuses it, so
+    /// that a big allocation ends the run as inconclusive instead of aborting it.
+    pub fn reserve<T>(&self, v: &mut Vec<T>, additional: usize) -> bool {
+        if v.capacity() - v.len() >= additional {
+            return true;
+        }
+        let capacity = v.capacity().saturating_mul(2).max(v.len() + additional);
+        let bytes = (capacity * std::mem::size_of::<T>()) as u64;
+        if let Some(limit) = self.max_memory {
+            let resident = memory::resident_bytes().unwrap_or(0);
+            let expected =
+                self.base.load(Ordering::Relaxed) + self.expected.load(Ordering::Relaxed);
+            if resident.max(expected).saturating_add(bytes) > limit {
+                self.raise(Stop::MaxMemory { limit });
+                return false;
+            }
+        }
+        if v.try_reserve_exact(capacity - v.len()).is_err() {
+            self.out_of_memory();
+            return false;
+        }
+        true
+    }
+
+    /// Stops the run because the allocator refused memory: at the memory limit, or, with
+    /// none set, at the memory resident now.
+    pub fn out_of_memory(&self) {
+        let limit = self.max_memory.or_else(memory::resident_bytes).unwrap_or(0);
+        self.raise(Stop::MaxMemory { limit });
+    }
+
     /// Forgets the announced bytes (they are resident now, or freed) and takes the
     /// resident memory as the new base.
     pub fn rebase(&self) {
