@@ -1,7 +1,28 @@
 //! What the process may use and what it uses, read from Linux's `/proc` and cgroup files.
 //! Elsewhere these answer `None` and the explorer relies on its own accounting.
 
+use std::cell::Cell;
 use std::fs;
+
+thread_local! {
+    /// Whether the allocations of this thread may fail now without ending the process.
+    static FALLIBLE: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Runs `f`, whose allocations may be refused and are handled (a `try_reserve`): a global
+/// allocator that ends the process on a refused allocation (the `bip` binary's) lets
+/// these return their error ([`allocation_may_fail`]).
+pub fn fallibly<T>(f: impl FnOnce() -> T) -> T {
+    FALLIBLE.with(|c| c.set(true));
+    let out = f();
+    FALLIBLE.with(|c| c.set(false));
+    out
+}
+
+/// True inside [`fallibly`] on this thread.
+pub fn allocation_may_fail() -> bool {
+    FALLIBLE.with(Cell::get)
+}
 
 /// The memory a run may use when the user sets no limit: 3/4 of the smallest of what is
 /// available now (the system's available memory), what the cgroup still allows (v2's

@@ -11,6 +11,8 @@
 //! The explorer reads the set from every worker at once (`&Visited`) and inserts shard by
 //! shard in parallel (`&mut Shard`), so no locks are needed.
 
+use crate::memory::fallibly;
+
 /// Number of shards; a power of two.
 pub const SHARDS: usize = 1 << SHARD_BITS;
 const SHARD_BITS: u32 = 8;
@@ -173,7 +175,11 @@ impl Shard {
             self.grow()?;
             i = self.probe(hash, bytes, tag);
         }
-        if self.arena.try_reserve(bytes.len()).is_err() || self.parents.try_reserve(1).is_err() {
+        let room = fallibly(|| {
+            self.arena.try_reserve(bytes.len())?;
+            self.parents.try_reserve(1)
+        });
+        if room.is_err() {
             return Err(Refused::NoMemory);
         }
         self.table[i] = (tag << LOCAL_BITS) | (local + 1);
@@ -201,9 +207,7 @@ impl Shard {
         let size = self.table.len() * 2;
         let mask = size - 1;
         let mut table = Vec::new();
-        table
-            .try_reserve_exact(size)
-            .map_err(|_| Refused::NoMemory)?;
+        fallibly(|| table.try_reserve_exact(size)).map_err(|_| Refused::NoMemory)?;
         table.resize(size, 0u32);
         for local in 0..self.len() {
             let h = hash(self.state(local));

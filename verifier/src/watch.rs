@@ -156,7 +156,7 @@ impl Watch {
                 return false;
             }
         }
-        if v.try_reserve_exact(capacity - v.len()).is_err() {
+        if memory::fallibly(|| v.try_reserve_exact(capacity - v.len())).is_err() {
             self.out_of_memory();
             return false;
         }
