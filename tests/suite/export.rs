@@ -155,7 +155,12 @@ fn priority_chain(n: usize, extra: &str) -> String {
         .map(|i| format!("(name: \"a{i}\", ports: [\"c[{i}].p\"])"))
         .collect();
     let priorities: Vec<String> = (0..n - 1)
-        .map(|i| format!("(low: \"a{i}\", high: \"a{}\", when: \"c[{i}].x != 1\")", i + 1))
+        .map(|i| {
+            format!(
+                "(low: \"a{i}\", high: \"a{}\", when: \"c[{i}].x != 1\")",
+                i + 1
+            )
+        })
         .collect();
     format!(
         "System(name: \"chain\",
