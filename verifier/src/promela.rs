@@ -43,9 +43,9 @@ use bip_model::{PropertyKind, Role, System, Target};
 pub const MAX_QUANTIFIER_TERMS: u64 = 1_000_000;
 
 /// Bound on the terms of the condition under which one interaction is suppressed by
-/// priorities, once SPIN's preprocessor has expanded the `above_G` macros in it (a
-/// priority graph with many paths between two groups expands each path).
-const MAX_SUPPRESSION_TERMS: u64 = 1_000_000;
+/// priorities, once SPIN's preprocessor has expanded the `above_G` macros in it (where
+/// `when`s lie above, a priority graph with many paths between two groups expands each).
+const MAX_SUPPRESSION_TERMS: u64 = 100_000;
 
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum ExportError {
@@ -459,14 +459,16 @@ impl<'a> Exporter<'a> {
         })
     }
 
-    /// The macros of the priorities: per group of interactions with priorities above it,
-    /// `above_G`, true where a priority leads up from it, its `when` holding, to a group
-    /// with an enabled interaction or to one whose `above_` macro holds; per group on a
-    /// priority's high side, `higher_G`, true where one of its interactions is enabled or
-    /// its `above_` macro holds. By induction on the (acyclic) graph, `above_G` holds
-    /// exactly where a path of priorities whose `when`s hold leads up from `G` to an
-    /// enabled interaction: the closure of docs/model.md, never listed. Returns, per group,
-    /// how many terms its `above_` macro expands into (saturating).
+    /// The macros of the priorities. Per group of interactions on a priority's high side,
+    /// `group_G`: one of its interactions is enabled. Per group with priorities above it,
+    /// `above_G`: a path of priorities whose `when`s hold leads up from it to an enabled
+    /// interaction (the closure of docs/model.md, never listed). Where no `when` lies
+    /// above the group, that is some group it reaches enabled: `above_G` lists those
+    /// groups once each (SPIN's preprocessor would expand a nested form once per path,
+    /// and a GenoM layer's priorities have many). Otherwise `above_G` is, per priority
+    /// above it, its `when` and some group of its high side enabled or with its own
+    /// `above_` holding; by induction on the (acyclic) graph this is the closure. Returns,
+    /// per group, how many terms its `above_` macro expands into (saturating).
     fn priority_macros(&self, out: &mut String) -> Result<Vec<u64>, ExportError> {
         let sys = self.sys;
         let graph = sys.priority_graph();
@@ -477,49 +479,73 @@ impl<'a> Exporter<'a> {
                 high_side[z as usize] = true;
             }
         }
-        // expanded sizes, highest groups first (the compiler rejects cycles, so every
-        // group is in the order)
-        let mut above = vec![0u64; groups];
-        let mut higher = vec![0u64; groups];
-        for &g in graph.order() {
-            let mut terms = 0u64;
-            for &p in graph.below(g) {
-                terms = terms.saturating_add(u64::from(sys.priorities[p as usize].when.is_some()));
-                for z in graph.high_groups(p) {
-                    terms = terms.saturating_add(higher[z as usize]);
-                }
-            }
-            above[g as usize] = terms;
-            higher[g as usize] =
-                terms.saturating_add(u64::from(graph.interactions(g).len() as u32));
-        }
         for &g in graph.order() {
             if high_side[g as usize] {
-                let mut any: Vec<String> = graph
+                let any: Vec<String> = graph
                     .interactions(g)
                     .map(|h| format!("enabled_{h}"))
                     .collect();
-                if !graph.below(g).is_empty() {
-                    any.push(format!("above_{g}"));
-                }
-                let _ = writeln!(out, "#define higher_{g} ({})", any.join(" || "));
+                let _ = writeln!(out, "#define group_{g} ({})", any.join(" || "));
             }
-            if graph.below(g).is_empty() {
+        }
+        // highest groups first (the compiler rejects cycles, so every group is in the
+        // order): whether a `when` lies above, and the expanded sizes
+        let size = |z: u32| graph.interactions(z).len() as u64;
+        let mut plain = vec![true; groups];
+        let mut above = vec![0u64; groups];
+        let mut reached = vec![u32::MAX; groups];
+        for &g in graph.order() {
+            let below = graph.below(g);
+            if below.is_empty() {
                 continue;
             }
+            plain[g as usize] = below.iter().all(|&p| {
+                sys.priorities[p as usize].when.is_none()
+                    && graph.high_groups(p).all(|z| plain[z as usize])
+            });
             let mut any = Vec::new();
-            for &p in graph.below(g) {
-                let highs: Vec<String> = graph
-                    .high_groups(p)
-                    .map(|z| format!("higher_{z}"))
-                    .collect();
-                let highs = format!("({})", highs.join(" || "));
-                any.push(match &sys.priorities[p as usize].when {
-                    Some(w) => format!("({} && {highs})", self.expr(w, 0, &mut Vec::new())?),
-                    None => highs,
-                });
+            let mut terms = 0u64;
+            if plain[g as usize] {
+                // the groups reached, each once
+                let mut stack = vec![g];
+                while let Some(x) = stack.pop() {
+                    for &p in graph.below(x) {
+                        for z in graph.high_groups(p) {
+                            if reached[z as usize] != g {
+                                reached[z as usize] = g;
+                                stack.push(z);
+                                any.push(format!("group_{z}"));
+                                terms = terms.saturating_add(size(z));
+                            }
+                        }
+                    }
+                }
+            } else {
+                for &p in below {
+                    let mut highs = Vec::new();
+                    for z in graph.high_groups(p) {
+                        terms = terms.saturating_add(size(z));
+                        if graph.below(z).is_empty() {
+                            highs.push(format!("group_{z}"));
+                        } else {
+                            terms = terms.saturating_add(above[z as usize]);
+                            highs.push(format!("group_{z} || above_{z}"));
+                        }
+                    }
+                    let highs = format!("({})", highs.join(" || "));
+                    any.push(match &sys.priorities[p as usize].when {
+                        Some(w) => {
+                            terms = terms.saturating_add(1);
+                            format!("({} && {highs})", self.expr(w, 0, &mut Vec::new())?)
+                        }
+                        None => highs,
+                    });
+                }
             }
-            let _ = writeln!(out, "#define above_{g} ({})", any.join(" || "));
+            above[g as usize] = terms;
+            if terms <= MAX_SUPPRESSION_TERMS {
+                let _ = writeln!(out, "#define above_{g} ({})", any.join(" || "));
+            }
         }
         Ok(above)
     }

@@ -276,6 +276,19 @@ mod tests {
     }
 
     #[test]
+    fn a_growth_past_the_memory_limit_is_refused_before_it_is_made() {
+        let resident = memory::resident_bytes().unwrap_or(0);
+        let w = Watch::new(&Options::default(), Some(resident + (64 << 20)));
+        let mut v: Vec<u8> = Vec::new();
+        assert!(w.reserve(&mut v, 1 << 10));
+        assert!(v.capacity() >= 1 << 10);
+        assert_eq!(w.stopped(), None);
+        assert!(!w.reserve(&mut v, 128 << 20));
+        assert!(v.capacity() < 128 << 20, "nothing was allocated");
+        assert!(matches!(w.stopped(), Some(Stop::MaxMemory { .. })));
+    }
+
+    #[test]
     fn the_watchdog_stops_a_run_at_its_time_limit() {
         let options = Options {
             timeout: Some(Duration::from_millis(50)),
