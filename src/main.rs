@@ -15,6 +15,7 @@ mod graph;
 mod import;
 mod interrupt;
 mod load;
+mod memory_guard;
 mod names;
 mod replay;
 mod report;
@@ -28,6 +29,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+
+#[global_allocator]
+static ALLOCATOR: memory_guard::Allocator = memory_guard::Allocator;
 
 #[derive(Parser)]
 #[command(
@@ -102,6 +106,7 @@ fn main() -> ExitCode {
     startup::restore_sigpipe();
     let cli = Cli::parse();
     startup::init_logging(cli.verbose);
+    memory_guard::start();
     let code = match cli.command {
         Command::Check { files } => check::run(&files),
         Command::Expand { file } => expand::run(&file),

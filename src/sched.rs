@@ -12,7 +12,7 @@ use bip_sched::{
 use bip_verifier::{schedulability, DemandChoice, DemandMethod, Options, Schedulability};
 
 use crate::verify::{parse_memory, parse_seconds, Format};
-use crate::{exit, load};
+use crate::{exit, load, memory_guard};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum AssignArg {
@@ -64,9 +64,11 @@ pub struct Args {
 const MAX_DRAWN_JOBS: u64 = 20_000;
 
 pub fn run(args: &Args) -> u8 {
+    memory_guard::guard(args.max_memory, "loading the model", exit::ERROR);
     let Some(system) = load::system(&args.file) else {
         return exit::ERROR;
     };
+    memory_guard::release();
     let options = Options {
         max_states: args.max_states,
         max_memory: args.max_memory,

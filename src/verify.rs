@@ -13,7 +13,7 @@ use bip_verifier::{
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::{exit, interrupt, load};
+use crate::{exit, interrupt, load, memory_guard};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Format {
@@ -128,10 +128,13 @@ pub(crate) fn parse_seconds(s: &str) -> Result<Duration, String> {
 }
 
 pub fn run(args: &Args) -> u8 {
+    memory_guard::guard(args.max_memory, "loading the model", exit::INCONCLUSIVE);
     let loaded = match args.format {
         Format::Text => load::system(&args.file),
         Format::Json => load::system_or_json(&args.file),
     };
+    // the verifier watches its own memory from here (a report, inconclusive)
+    memory_guard::release();
     let Some(system) = loaded else {
         return exit::ERROR;
     };

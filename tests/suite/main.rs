@@ -1,6 +1,8 @@
 //! The `bip` command end to end (`check`, `codegen`, `engine`, `explore`, `genom`, `genom3`, `graph`, `response`, `sched`, `trace`, `verify`: the binary
 //! run as a user runs it, with SPIN as a cross-check where it is installed; `limits`: every
-//! limit and Ctrl-C on wide models, in capped child processes), the architecture's layering
+//! limit and Ctrl-C on wide models, in capped child processes; `memory_bounds`: the default
+//! memory limit under `ulimit -v`, loading past the limit in every command, and the
+//! symbolic method's time limit in long actions and wide invariant computations), the architecture's layering
 //! read from the sources (`layering`), and wide models within memory and time bounds
 //! (`wide_models`), in one binary.
 
@@ -16,6 +18,7 @@ mod genom3;
 mod graph;
 mod layering;
 mod limits;
+mod memory_bounds;
 mod response;
 mod sched;
 mod trace;

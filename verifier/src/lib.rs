@@ -30,7 +30,9 @@ mod watch;
 use bip_model::System;
 
 pub use error::VerifyError;
-pub use memory::{parse_size, resident_bytes};
+pub use memory::{
+    allocation_may_fail, default_limit as default_memory_limit, parse_size, resident_bytes,
+};
 pub use options::{Options, SymbolicOptions};
 pub use progress::Progress;
 pub use promela::{to_promela, ExportError};

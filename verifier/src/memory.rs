@@ -1,19 +1,65 @@
 //! What the process may use and what it uses, read from Linux's `/proc` and cgroup files.
 //! Elsewhere these answer `None` and the explorer relies on its own accounting.
 
+use std::cell::Cell;
 use std::fs;
 
-/// The memory a run may use when the user sets no limit: 3/4 of what is available now (the
-/// smaller of the system's available memory and the cgroup's remaining allowance), so that
-/// the run ends as inconclusive before the operating system would have to kill it.
+thread_local! {
+    /// Whether the allocations of this thread may fail now without ending the process.
+    static FALLIBLE: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Runs `f`, whose allocations may be refused and are handled (a `try_reserve`): a global
+/// allocator that ends the process on a refused allocation (the `bip` binary's) lets
+/// these return their error ([`allocation_may_fail`]).
+pub fn fallibly<T>(f: impl FnOnce() -> T) -> T {
+    FALLIBLE.with(|c| c.set(true));
+    let out = f();
+    FALLIBLE.with(|c| c.set(false));
+    out
+}
+
+/// True inside [`fallibly`] on this thread.
+pub fn allocation_may_fail() -> bool {
+    FALLIBLE.with(Cell::get)
+}
+
+/// The memory a run may use when the user sets no limit: 3/4 of the smallest of what is
+/// available now (the system's available memory), what the cgroup still allows (v2's
+/// `memory.max`, v1's `memory.limit_in_bytes`, less what the cgroup uses) and what the
+/// address-space limit (`ulimit -v`) still allows, so that the run ends as inconclusive
+/// before the operating system would have to kill it or an allocation would fail.
 pub fn default_limit() -> Option<u64> {
     let available = meminfo_kib("MemAvailable:").map(|k| k * 1024);
-    let cgroup = cgroup_allowance();
-    let base = match (available, cgroup) {
-        (Some(a), Some(c)) => a.min(c),
-        (a, c) => a.or(c)?,
-    };
+    let base = [available, cgroup_allowance(), address_space_allowance()]
+        .into_iter()
+        .flatten()
+        .min()?;
     Some(base / 4 * 3)
+}
+
+/// Address space that each thread may reserve beyond what it uses: its stack and glibc's
+/// malloc arena (64 MiB reserved per arena, one per thread up to eight per core).
+const THREAD_RESERVE: u64 = 72 << 20;
+
+/// What the address-space limit (RLIMIT_AS, `ulimit -v`) leaves for the run's data: the
+/// limit less what the process maps now (its libraries, z3 among them, and its heap) and a
+/// reserve for each thread the run may start (the workers, the watchdog, the main thread).
+/// The limit counts virtual memory, which grows before the resident memory the watch
+/// measures does.
+fn address_space_allowance() -> Option<u64> {
+    let limits = fs::read_to_string("/proc/self/limits").ok()?;
+    let line = limits
+        .lines()
+        .find_map(|l| l.strip_prefix("Max address space"))?;
+    // "unlimited" does not parse: no limit
+    let soft: u64 = line.split_whitespace().next()?.parse().ok()?;
+    let mapped = status_kib("VmSize:")? * 1024;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64 + 2;
+    Some(
+        soft.saturating_sub(mapped)
+            .saturating_sub(threads * THREAD_RESERVE),
+    )
 }
 
 /// Resident memory of this process now.
@@ -25,10 +71,14 @@ pub fn resident_bytes() -> Option<u64> {
 
 /// Peak resident memory of this process.
 pub fn peak_resident_bytes() -> Option<u64> {
+    Some(status_kib("VmHWM:")? * 1024)
+}
+
+/// A figure of `/proc/self/status`, in KiB.
+fn status_kib(key: &str) -> Option<u64> {
     let status = fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+    let line = status.lines().find(|l| l.starts_with(key))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 fn page_size() -> u64 {
@@ -43,21 +93,45 @@ fn meminfo_kib(key: &str) -> Option<u64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
-/// `memory.max - memory.current` of this process's cgroup (v2), if it has a limit.
+/// What this process's cgroup still allows, if it has a limit: `memory.max -
+/// memory.current` (cgroup v2), or `memory.limit_in_bytes - memory.usage_in_bytes` (v1).
 fn cgroup_allowance() -> Option<u64> {
     let cgroup = fs::read_to_string("/proc/self/cgroup").ok()?;
-    let path = cgroup.lines().find_map(|l| l.strip_prefix("0::"))?;
-    let dir = format!("/sys/fs/cgroup{}", path.trim_end());
-    let max: u64 = fs::read_to_string(format!("{dir}/memory.max"))
-        .ok()?
-        .trim()
-        .parse()
-        .ok()?;
-    let current: u64 = fs::read_to_string(format!("{dir}/memory.current"))
-        .ok()
-        .and_then(|s| s.trim().parse().ok())
-        .unwrap_or(0);
-    Some(max.saturating_sub(current))
+    let v2 = || {
+        let path = cgroup.lines().find_map(|l| l.strip_prefix("0::"))?;
+        let dir = format!("/sys/fs/cgroup{}", path.trim_end());
+        allowance(&dir, "memory.max", "memory.current")
+    };
+    let v1 = || {
+        // `N:memory:/path`, or the controller among others (`N:cpu,memory:/path`)
+        let path = cgroup.lines().find_map(|l| {
+            let mut parts = l.splitn(3, ':');
+            let _ = parts.next()?;
+            let controllers = parts.next()?;
+            let path = parts.next()?;
+            controllers
+                .split(',')
+                .any(|c| c == "memory")
+                .then_some(path)
+        })?;
+        let dir = format!("/sys/fs/cgroup/memory{}", path.trim_end());
+        allowance(&dir, "memory.limit_in_bytes", "memory.usage_in_bytes")
+    };
+    v2().or_else(v1)
+}
+
+/// `limit - usage` from two files of a cgroup directory; `None` without a limit (v2
+/// writes `max`, v1 a number near 2^63).
+fn allowance(dir: &str, limit: &str, usage: &str) -> Option<u64> {
+    let read = |f: &str| -> Option<u64> {
+        fs::read_to_string(format!("{dir}/{f}"))
+            .ok()?
+            .trim()
+            .parse()
+            .ok()
+    };
+    let max = read(limit).filter(|&m| m < 1 << 62)?;
+    Some(max.saturating_sub(read(usage).unwrap_or(0)))
 }
 
 /// Parses a size as the command line takes it: `1000000`, `512K`, `300M`, `4G`, `1T`

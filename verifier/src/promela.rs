@@ -5,7 +5,10 @@
 //! checks: each participant that must join has an enabled transition on its port (its
 //! location and transition guard), the connector guard holds, and no higher-priority
 //! interaction is enabled where a priority applies (the higher ones' enabledness is one
-//! macro each, `enabled_N`). Inside, each participant's transition is chosen among its
+//! macro each, `enabled_N`; whether some interaction above a group of interactions is
+//! enabled, under the `when`s on the way, is one macro per group, `above_G`, written with
+//! those of the groups above it, so the text grows with the priorities declared, not with
+//! their closure). Inside, each participant's transition is chosen among its
 //! enabled ones, every choice in the state before the step (into `hidden` variables, not
 //! part of SPIN's state); a broadcast receiver that can take none does not join. Then the
 //! actions run in bip's order (connector action, each participant's action in port order,
@@ -29,7 +32,7 @@
 //! [`MAX_QUANTIFIER_TERMS`] terms.
 
 use std::cell::Cell;
-use std::collections::{BTreeSet, HashSet};
+use std::collections::HashSet;
 use std::fmt::Write as _;
 
 use bip_model::eval::Expr;
@@ -39,8 +42,10 @@ use bip_model::{PropertyKind, Role, System, Target};
 /// Bound on the quantifier terms of one export, all quantifiers together.
 pub const MAX_QUANTIFIER_TERMS: u64 = 1_000_000;
 
-/// Bound on the conditions under which one interaction is suppressed by priorities.
-const MAX_SUPPRESSIONS: usize = 100_000;
+/// Bound on the terms of the condition under which one interaction is suppressed by
+/// priorities, once SPIN's preprocessor has expanded the `above_G` macros in it (where
+/// `when`s lie above, a priority graph with many paths between two groups expands each).
+const MAX_SUPPRESSION_TERMS: u64 = 100_000;
 
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum ExportError {
@@ -137,7 +142,8 @@ impl<'a> Exporter<'a> {
             .max()
             .unwrap_or(0);
         if widest > 0 {
-            let ty = promela_type(0, most).unwrap_or("int");
+            // SPIN hides no `bit` variable: a byte at least
+            let ty = promela_type(0, most.max(2)).unwrap_or("int");
             let chosen: Vec<String> = (0..widest).map(|k| format!("chosen_{k}")).collect();
             let _ = writeln!(out, "hidden {ty} {};", chosen.join(", "));
         }
@@ -165,11 +171,12 @@ impl<'a> Exporter<'a> {
                 );
             }
         }
+        let above = self.priority_macros(&mut out)?;
         let mut guards = Vec::new();
         let mut statements = Vec::new();
         self.internal_steps(&mut guards, &mut statements)?;
         for i in 0..sys.interactions.len() as u32 {
-            self.interaction_step(i, &mut guards, &mut statements)?;
+            self.interaction_step(i, &above, &mut guards, &mut statements)?;
         }
         for (k, g) in guards.iter().enumerate() {
             let _ = writeln!(out, "#define step_{k} {g}");
@@ -307,6 +314,7 @@ impl<'a> Exporter<'a> {
     fn interaction_step(
         &self,
         i: u32,
+        above: &[u64],
         guards: &mut Vec<String>,
         statements: &mut Vec<String>,
     ) -> Result<(), ExportError> {
@@ -336,8 +344,8 @@ impl<'a> Exporter<'a> {
             return Ok(()); // a participant without a transition on its port: never enabled
         }
         let mut guard = vec![self.interaction_enabled(i)?];
-        if let Some(s) = self.suppressed(i)? {
-            guard.push(format!("!({s})"));
+        if let Some(s) = self.suppressed(i, above)? {
+            guard.push(format!("!{s}"));
         }
         let k = guards.len();
         guards.push(format!("({})", guard.join(" && ")));
@@ -451,58 +459,115 @@ impl<'a> Exporter<'a> {
         })
     }
 
-    /// The condition under which interaction `i` is suppressed by priorities, if any can
-    /// suppress it: for each group of interactions a path of priorities leads up to from
-    /// its group, with the `when`s along the path, an enabled interaction of that group
-    /// and those `when`s (the higher interactions' `enabled_` macros).
-    fn suppressed(&self, i: u32) -> Result<Option<String>, ExportError> {
+    /// The macros of the priorities. Per group of interactions on a priority's high side,
+    /// `group_G`: one of its interactions is enabled. Per group with priorities above it,
+    /// `above_G`: a path of priorities whose `when`s hold leads up from it to an enabled
+    /// interaction (the closure of docs/model.md, never listed). Where no `when` lies
+    /// above the group, that is some group it reaches enabled: `above_G` lists those
+    /// groups once each (SPIN's preprocessor would expand a nested form once per path,
+    /// and a GenoM layer's priorities have many). Otherwise `above_G` is, per priority
+    /// above it, its `when` and some group of its high side enabled or with its own
+    /// `above_` holding; by induction on the (acyclic) graph this is the closure. Returns,
+    /// per group, how many terms its `above_` macro expands into (saturating).
+    fn priority_macros(&self, out: &mut String) -> Result<Vec<u64>, ExportError> {
         let sys = self.sys;
         let graph = sys.priority_graph();
+        let groups = graph.groups() as usize;
+        let mut high_side = vec![false; groups];
+        for p in 0..sys.priorities.len() as u32 {
+            for z in graph.high_groups(p) {
+                high_side[z as usize] = true;
+            }
+        }
+        for &g in graph.order() {
+            if high_side[g as usize] {
+                let any: Vec<String> = graph
+                    .interactions(g)
+                    .map(|h| format!("enabled_{h}"))
+                    .collect();
+                let _ = writeln!(out, "#define group_{g} ({})", any.join(" || "));
+            }
+        }
+        // highest groups first (the compiler rejects cycles, so every group is in the
+        // order): whether a `when` lies above, and the expanded sizes
+        let size = |z: u32| graph.interactions(z).len() as u64;
+        let mut plain = vec![true; groups];
+        let mut above = vec![0u64; groups];
+        let mut reached = vec![u32::MAX; groups];
+        for &g in graph.order() {
+            let below = graph.below(g);
+            if below.is_empty() {
+                continue;
+            }
+            plain[g as usize] = below.iter().all(|&p| {
+                sys.priorities[p as usize].when.is_none()
+                    && graph.high_groups(p).all(|z| plain[z as usize])
+            });
+            let mut any = Vec::new();
+            let mut terms = 0u64;
+            if plain[g as usize] {
+                // the groups reached, each once
+                let mut stack = vec![g];
+                while let Some(x) = stack.pop() {
+                    for &p in graph.below(x) {
+                        for z in graph.high_groups(p) {
+                            if reached[z as usize] != g {
+                                reached[z as usize] = g;
+                                stack.push(z);
+                                any.push(format!("group_{z}"));
+                                terms = terms.saturating_add(size(z));
+                            }
+                        }
+                    }
+                }
+            } else {
+                for &p in below {
+                    let mut highs = Vec::new();
+                    for z in graph.high_groups(p) {
+                        terms = terms.saturating_add(size(z));
+                        if graph.below(z).is_empty() {
+                            highs.push(format!("group_{z}"));
+                        } else {
+                            terms = terms.saturating_add(above[z as usize]);
+                            highs.push(format!("group_{z} || above_{z}"));
+                        }
+                    }
+                    let highs = format!("({})", highs.join(" || "));
+                    any.push(match &sys.priorities[p as usize].when {
+                        Some(w) => {
+                            terms = terms.saturating_add(1);
+                            format!("({} && {highs})", self.expr(w, 0, &mut Vec::new())?)
+                        }
+                        None => highs,
+                    });
+                }
+            }
+            above[g as usize] = terms;
+            if terms <= MAX_SUPPRESSION_TERMS {
+                let _ = writeln!(out, "#define above_{g} ({})", any.join(" || "));
+            }
+        }
+        Ok(above)
+    }
+
+    /// The condition under which interaction `i` is suppressed by priorities, if any can
+    /// suppress it: its group's `above_` macro. `above` holds the macros' expanded sizes.
+    fn suppressed(&self, i: u32, above: &[u64]) -> Result<Option<String>, ExportError> {
+        let graph = self.sys.priority_graph();
         let Some(g) = graph.group_of(i) else {
             return Ok(None);
         };
-        let mut seen: BTreeSet<(u32, Vec<u32>)> = BTreeSet::new();
-        let mut stack = vec![(g, Vec::new())];
-        while let Some((x, whens)) = stack.pop() {
-            for &p in graph.below(x) {
-                let mut whens = whens.clone();
-                if sys.priorities[p as usize].when.is_some() && !whens.contains(&p) {
-                    whens.push(p);
-                    whens.sort_unstable();
-                }
-                for z in graph.high_groups(p) {
-                    if seen.insert((z, whens.clone())) {
-                        if seen.len() > MAX_SUPPRESSIONS {
-                            return Err(ExportError::Unsupported(format!(
-                                "the priorities above {} close into more than \
-                                 {MAX_SUPPRESSIONS} conditions",
-                                sys.interactions[i as usize].name
-                            )));
-                        }
-                        stack.push((z, whens.clone()));
-                    }
-                }
-            }
+        if graph.below(g).is_empty() {
+            return Ok(None);
         }
-        let mut any = Vec::new();
-        for (z, whens) in &seen {
-            let mut highs = Vec::new();
-            for h in graph.interactions(*z) {
-                highs.push(format!("enabled_{h}"));
-            }
-            let mut conj = vec![format!("({})", highs.join(" || "))];
-            for &p in whens {
-                if let Some(w) = &sys.priorities[p as usize].when {
-                    conj.push(self.expr(w, 0, &mut Vec::new())?);
-                }
-            }
-            any.push(format!("({})", conj.join(" && ")));
+        if above[g as usize] > MAX_SUPPRESSION_TERMS {
+            return Err(ExportError::Unsupported(format!(
+                "the priorities above {} expand into more than {MAX_SUPPRESSION_TERMS} \
+                 terms (a path of priorities is written out for each way up)",
+                self.sys.interactions[i as usize].name
+            )));
         }
-        Ok(if any.is_empty() {
-            None
-        } else {
-            Some(any.join(" || "))
-        })
+        Ok(Some(format!("above_{g}")))
     }
 
     /// A participant's transition's action, as statements.

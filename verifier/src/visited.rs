@@ -11,6 +11,8 @@
 //! The explorer reads the set from every worker at once (`&Visited`) and inserts shard by
 //! shard in parallel (`&mut Shard`), so no locks are needed.
 
+use crate::memory::fallibly;
+
 /// Number of shards; a power of two.
 pub const SHARDS: usize = 1 << SHARD_BITS;
 const SHARD_BITS: u32 = 8;
@@ -50,9 +52,15 @@ impl StateId {
     }
 }
 
-/// A shard ran out of indices: the model has more states than the set can number.
+/// Why a state could not be stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ShardFull;
+pub enum Refused {
+    /// A shard ran out of indices: the model has more states than the set can number.
+    ShardFull,
+    /// The allocator refused the growth of a shard (the address-space limit, or the
+    /// memory): the run stops at its memory limit rather than aborting.
+    NoMemory,
+}
 
 /// 64-bit hash of a packed state. Its top bits pick the shard, the next 8 the tag, the
 /// low bits the table slot; the final mix makes all of them depend on every input bit.
@@ -151,7 +159,7 @@ impl Shard {
         hash: u64,
         bytes: &[u8],
         parent: StateId,
-    ) -> Result<Option<u32>, ShardFull> {
+    ) -> Result<Option<u32>, Refused> {
         let tag = tag_of(hash);
         let mut i = self.probe(hash, bytes, tag);
         if self.table[i] != 0 {
@@ -159,13 +167,20 @@ impl Shard {
         }
         let local = self.len();
         if local >= SHARD_CAPACITY {
-            return Err(ShardFull);
+            return Err(Refused::ShardFull);
         }
         // grow only for a state that is really new, so that the table's size depends on
         // the states stored and not on how many duplicates were offered
         if (self.parents.len() + 1) * 4 > self.table.len() * 3 {
-            self.grow();
+            self.grow()?;
             i = self.probe(hash, bytes, tag);
+        }
+        let room = fallibly(|| {
+            self.arena.try_reserve(bytes.len())?;
+            self.parents.try_reserve(1)
+        });
+        if room.is_err() {
+            return Err(Refused::NoMemory);
         }
         self.table[i] = (tag << LOCAL_BITS) | (local + 1);
         self.arena.extend_from_slice(bytes);
@@ -188,10 +203,12 @@ impl Shard {
 
     /// Doubles the table and re-enters every state (hashes are recomputed from the arena,
     /// which is cheaper than storing them).
-    fn grow(&mut self) {
+    fn grow(&mut self) -> Result<(), Refused> {
         let size = self.table.len() * 2;
         let mask = size - 1;
-        let mut table = vec![0u32; size];
+        let mut table = Vec::new();
+        fallibly(|| table.try_reserve_exact(size)).map_err(|_| Refused::NoMemory)?;
+        table.resize(size, 0u32);
         for local in 0..self.len() {
             let h = hash(self.state(local));
             let mut i = h as usize & mask;
@@ -201,6 +218,7 @@ impl Shard {
             table[i] = (tag_of(h) << LOCAL_BITS) | (local + 1);
         }
         self.table = table;
+        Ok(())
     }
 
     /// Bytes allocated by this shard.
@@ -271,7 +289,7 @@ impl Visited {
         self.shards[s].find(hash, bytes).map(|l| StateId::new(s, l))
     }
 
-    pub fn insert(&mut self, bytes: &[u8], parent: StateId) -> Result<Option<StateId>, ShardFull> {
+    pub fn insert(&mut self, bytes: &[u8], parent: StateId) -> Result<Option<StateId>, Refused> {
         let h = hash(bytes);
         let s = shard_of(h);
         Ok(self.shards[s]

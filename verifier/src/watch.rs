@@ -137,6 +137,39 @@ impl Watch {
         self.stopped().is_none()
     }
 
+    /// Makes room in `v` for `additional` more elements, as pushing them would (doubling
+    /// its capacity), once the growth is known to fit: false, with the memory stop raised,
+    /// if the new allocation would pass the memory limit or the allocator refuses it, so
+    /// that a big allocation ends the run as inconclusive instead of aborting it.
+    pub fn reserve<T>(&self, v: &mut Vec<T>, additional: usize) -> bool {
+        if v.capacity() - v.len() >= additional {
+            return true;
+        }
+        let capacity = v.capacity().saturating_mul(2).max(v.len() + additional);
+        let bytes = (capacity * std::mem::size_of::<T>()) as u64;
+        if let Some(limit) = self.max_memory {
+            let resident = memory::resident_bytes().unwrap_or(0);
+            let expected =
+                self.base.load(Ordering::Relaxed) + self.expected.load(Ordering::Relaxed);
+            if resident.max(expected).saturating_add(bytes) > limit {
+                self.raise(Stop::MaxMemory { limit });
+                return false;
+            }
+        }
+        if memory::fallibly(|| v.try_reserve_exact(capacity - v.len())).is_err() {
+            self.out_of_memory();
+            return false;
+        }
+        true
+    }
+
+    /// Stops the run because the allocator refused memory: at the memory limit, or, with
+    /// none set, at the memory resident now.
+    pub fn out_of_memory(&self) {
+        let limit = self.max_memory.or_else(memory::resident_bytes).unwrap_or(0);
+        self.raise(Stop::MaxMemory { limit });
+    }
+
     /// Forgets the announced bytes (they are resident now, or freed) and takes the
     /// resident memory as the new base.
     pub fn rebase(&self) {
@@ -239,6 +272,19 @@ mod tests {
         let w = Watch::new(&Options::default(), Some(u64::MAX / 2));
         assert!(w.expect(1 << 20));
         assert!(!w.expect(u64::MAX / 2));
+        assert!(matches!(w.stopped(), Some(Stop::MaxMemory { .. })));
+    }
+
+    #[test]
+    fn a_growth_past_the_memory_limit_is_refused_before_it_is_made() {
+        let resident = memory::resident_bytes().unwrap_or(0);
+        let w = Watch::new(&Options::default(), Some(resident + (64 << 20)));
+        let mut v: Vec<u8> = Vec::new();
+        assert!(w.reserve(&mut v, 1 << 10));
+        assert!(v.capacity() >= 1 << 10);
+        assert_eq!(w.stopped(), None);
+        assert!(!w.reserve(&mut v, 128 << 20));
+        assert!(v.capacity() < 128 << 20, "nothing was allocated");
         assert!(matches!(w.stopped(), Some(Stop::MaxMemory { .. })));
     }
 

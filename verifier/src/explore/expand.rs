@@ -169,6 +169,10 @@ impl Ctx<'_, '_> {
                 layout.encode_changed(state, current, next, packed);
                 let h = hash(packed);
                 if self.visited.find(h, packed).is_none() {
+                    if !self.watch.reserve(&mut out.raw, rec) {
+                        out.cut = true;
+                        break;
+                    }
                     out.raw.extend_from_slice(&h.to_le_bytes());
                     out.raw.extend_from_slice(&id.to_bits().to_le_bytes());
                     out.raw.extend_from_slice(packed);
@@ -177,7 +181,8 @@ impl Ctx<'_, '_> {
         }
         self.must_stop(out, &mut announced, rec, true);
         // a stopped run inserts nothing: sorting a wide batch's records would cost time
-        if self.watch.stopped().is_none() {
+        out.sorted.clear();
+        if self.watch.stopped().is_none() && self.watch.reserve(&mut out.sorted, out.raw.len()) {
             out.sort_by_shard(rec);
         }
     }

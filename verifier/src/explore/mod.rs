@@ -41,7 +41,7 @@ use crate::memory;
 use crate::options::Options;
 use crate::progress::Progress;
 use crate::report::{Report, Stop};
-use crate::visited::{Chunk, ShardFull, StateId, Visited};
+use crate::visited::{Chunk, Refused, StateId, Visited};
 use crate::watch::Watch;
 
 use expand::{read_hash, read_parent, REC_HEADER};
@@ -312,7 +312,7 @@ impl<'a> Explorer<'a> {
                 }
                 let inserted = self.insert();
                 self.insert_time += t1.elapsed();
-                if let Err(ShardFull) = inserted {
+                if let Err(Refused::ShardFull) = inserted {
                     stopped = Some(Stop::TooManyStates);
                     break 'levels;
                 }
@@ -436,7 +436,7 @@ impl<'a> Explorer<'a> {
     /// Phase 2: stores the new states, shards in parallel, chunks in order within a shard.
     /// A shard stops early if the run must stop (what it stored is consistent: states
     /// with their parents).
-    fn insert(&mut self) -> Result<(), ShardFull> {
+    fn insert(&mut self) -> Result<(), Refused> {
         let rec = REC_HEADER + self.visited.width();
         let outs = &self.outs;
         let watch = self.watch;
@@ -452,7 +452,13 @@ impl<'a> Explorer<'a> {
                             return Ok(());
                         }
                         let parent = StateId::from_bits(read_parent(r));
-                        shard.insert(read_hash(r), &r[REC_HEADER..], parent)?;
+                        match shard.insert(read_hash(r), &r[REC_HEADER..], parent) {
+                            Err(Refused::NoMemory) => {
+                                watch.out_of_memory();
+                                return Ok(());
+                            }
+                            stored => stored?,
+                        };
                     }
                 }
                 Ok(())

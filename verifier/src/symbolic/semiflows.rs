@@ -18,7 +18,7 @@
 //! A work budget bounds the elimination; the rows that vanished by then are semiflows
 //! all the same.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use z3::ast::{Bool, Int};
 
@@ -35,6 +35,8 @@ pub struct Semiflow {
 
 /// Entries the elimination may touch before it stops.
 const WORK_BUDGET: u64 = 200_000_000;
+/// Rows read between two polls of the stop.
+const POLL_ROWS: usize = 1024;
 /// Coefficients beyond this abandon their row (they would only give unwieldy invariants).
 const MAX_COEFF: i128 = 1 << 40;
 
@@ -194,13 +196,19 @@ pub fn compute(net: &Net, stop: &dyn Fn() -> bool) -> Vec<Semiflow> {
             row.y = y.into_iter().map(|(k, v)| (k, v / g)).collect();
         }
     }
+    // one row per place: the semiflows of a wide net are many, so repeats are found by
+    // hashing, and the stop is polled here too
     let mut out: Vec<Semiflow> = Vec::new();
-    for row in &rows {
+    let mut seen: HashSet<Semiflow> = HashSet::new();
+    for (r, row) in rows.iter().enumerate() {
+        if r % POLL_ROWS == 0 && stop() {
+            break;
+        }
         if !row.active || !row.c.is_empty() {
             continue;
         }
         if let Some(s) = normalise(net, &row.y) {
-            if !out.contains(&s) {
+            if seen.insert(s.clone()) {
                 out.push(s);
             }
         }

@@ -2,6 +2,8 @@
 //! the condition that the choice is an enabled step and the condition that firing it
 //! fails.
 
+use std::collections::HashMap;
+
 use bip_model::{Assign, Label, Role, System, Target};
 
 use z3::ast::Bool;
@@ -13,20 +15,25 @@ use crate::symbolic::term::{
 
 use super::{sym_eq, Enabling, Encoding, Frame, SlotKind};
 
-/// A frame seen through assignments made so far (an action in progress).
+/// A frame seen through assignments made so far (an action in progress): per slot
+/// written, its last value and the position of its last assignment, found in constant time
+/// (an action may be long).
 struct Overlay<'a> {
     base: &'a dyn Slots,
-    written: Vec<(u32, Sym)>,
+    written: HashMap<u32, (usize, Sym)>,
 }
 
 impl Slots for Overlay<'_> {
     fn slot(&self, slot: u32) -> Sym {
-        match self.written.iter().rev().find(|(s, _)| *s == slot) {
+        match self.written.get(&slot) {
             Some((_, v)) => v.clone(),
             None => self.base.slot(slot),
         }
     }
 }
+
+/// Assignments of one action run between two polls of the run's limits.
+const POLL_ASSIGNMENTS: usize = 256;
 
 /// Which steps a step encoding may choose.
 #[derive(Clone, Debug)]
@@ -179,7 +186,7 @@ impl Encoding<'_> {
             let mut ports: Vec<Option<u32>> = Vec::new();
             let mut pre = Overlay {
                 base: f,
-                written: Vec::new(),
+                written: HashMap::new(),
             };
             for &(i, pk) in &self.inters_of[c] {
                 let Some(k) = label_of_inter[i as usize] else {
@@ -199,7 +206,7 @@ impl Encoding<'_> {
                 for (slot, val) in &conn_writes[i as usize] {
                     if sys.component_of_slot(*slot) as usize == c {
                         let old = pre.slot(*slot);
-                        pre.written.push((*slot, choose_sym(&s, val, &old)));
+                        pre.written.insert(*slot, (0, choose_sym(&s, val, &old)));
                     }
                 }
             }
@@ -290,11 +297,14 @@ impl Encoding<'_> {
     ) -> (Vec<(u32, Sym)>, Option<Bool>) {
         let mut ov = Overlay {
             base: view,
-            written: Vec::new(),
+            written: HashMap::new(),
         };
         let mut err: Option<Bool> = None;
         let mut ok = tt();
-        for a in action {
+        for (k, a) in action.iter().enumerate() {
+            if k % POLL_ASSIGNMENTS == POLL_ASSIGNMENTS - 1 {
+                self.poll();
+            }
             let slot = match a.target {
                 Target::Local(n) => base + n,
                 Target::Slot(s) => s,
@@ -320,16 +330,19 @@ impl Encoding<'_> {
                     s
                 }
             };
-            ov.written.push((slot, stored));
+            ov.written.insert(slot, (k, stored));
         }
-        let mut finals: Vec<(u32, Sym)> = Vec::new();
-        for (slot, v) in ov.written.into_iter().rev() {
-            if !finals.iter().any(|(s, _)| *s == slot) {
-                finals.push((slot, v));
-            }
-        }
-        finals.reverse();
-        (finals, err)
+        // in the order of each slot's last assignment
+        let mut finals: Vec<(usize, u32, Sym)> = ov
+            .written
+            .into_iter()
+            .map(|(slot, (k, v))| (k, slot, v))
+            .collect();
+        finals.sort_unstable_by_key(|&(k, _, _)| k);
+        (
+            finals.into_iter().map(|(_, slot, v)| (slot, v)).collect(),
+            err,
+        )
     }
 
     /// `T(f, g)`: `g` is the successor of `f` by the step chosen by `v` among `filter`, and
