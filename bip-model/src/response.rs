@@ -217,8 +217,7 @@ impl System {
         // around the cycle, the wait must go on at every step, and time pass
         let mut waiting = watch.waiting.is_some();
         let mut ticked = !self.has_time();
-        for k in start..path.len() {
-            let (s, after) = &path[k];
+        for (k, (s, after)) in path.iter().enumerate().skip(start) {
             let h = self.happenings_on(spec, state_at(k), s.as_step(), after, context)?;
             if h.response {
                 return Ok(false);
