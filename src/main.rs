@@ -24,6 +24,7 @@ mod simulate;
 mod startup;
 mod trace;
 mod verify;
+mod why;
 
 use std::path::PathBuf;
 use std::process::ExitCode;

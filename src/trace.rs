@@ -301,17 +301,7 @@ fn held(system: &System, trace: &Trace, user: &view::UserTrace) -> Vec<usize> {
 fn end_note(system: &System, trace: &Trace) -> Option<Note> {
     match &trace.verdict {
         Verdict::Deadlock => {
-            let mut why = String::new();
-            crate::verify::write_why_stuck(&mut why, system, trace);
-            // its lines as the verify report indents them, without the heading
-            let mut lines: Vec<String> = why
-                .lines()
-                .filter(|l| !l.trim().is_empty() && l.trim() != "why:")
-                .map(|l| {
-                    let l = l.strip_prefix("    ").unwrap_or(l);
-                    l.strip_prefix("  why: ").unwrap_or(l).to_string()
-                })
-                .collect();
+            let mut lines = why_lines(system, trace);
             if lines.is_empty() {
                 lines.push(
                     "no step of the system itself can be taken, now or after time passes".into(),
@@ -326,7 +316,7 @@ fn end_note(system: &System, trace: &Trace) -> Option<Note> {
         }
         Verdict::Violation(p) => Some(Note {
             title: format!("{p} fails after the last step"),
-            lines: property_text(system, p),
+            lines: [property_text(system, p), why_lines(system, trace)].concat(),
             mark: Mark::Failing,
             lifelines: Vec::new(),
         }),
@@ -344,6 +334,14 @@ fn end_note(system: &System, trace: &Trace) -> Option<Note> {
         }),
         Verdict::None => None,
     }
+}
+
+/// Why the trace ends as it does (`crate::why`), indented by depth.
+fn why_lines(system: &System, trace: &Trace) -> Vec<String> {
+    crate::why::why(system, trace)
+        .into_iter()
+        .map(|(depth, line)| format!("{}{line}", "  ".repeat(depth)))
+        .collect()
 }
 
 /// The property as written.

@@ -460,8 +460,8 @@ fn text_report(
                 trace.steps.len() + 1
             );
         }
-        if p.kind == CheckKind::DeadlockFree && p.verdict.fails() {
-            write_why_stuck(&mut s, system, trace);
+        if p.verdict.fails() {
+            crate::why::write_why(&mut s, system, trace);
         }
         if let Some((_, path)) = saved.iter().find(|(n, _)| *n == p.name) {
             let _ = writeln!(s, "  saved as {}", path.display());
@@ -555,48 +555,15 @@ fn write_figures(s: &mut String, report: &Report) {
     );
 }
 
-/// Under a GenoM deadlock: the codels that are ready but held back, and by what.
-pub(crate) fn write_why_stuck(s: &mut String, system: &System, trace: &bip_model::Trace) {
-    let Some(genom) = &system.genom else {
-        return;
-    };
-    let last = match trace.replay(system) {
-        Ok(path) => path
-            .last()
-            .map_or_else(|| system.initial_state(), |(_, st)| st.clone()),
-        Err(_) => return,
-    };
-    match genom.stuck(system, &last) {
-        Ok(stuck) if !stuck.is_empty() => {
-            let _ = writeln!(s, "  why:");
-            for st in stuck {
-                let _ = writeln!(s, "    {st} but held by");
-                for c in &st.held_by {
-                    let _ = writeln!(s, "      {c}");
-                }
-            }
-        }
-        Ok(_) => {}
-        Err(e) => {
-            let _ = writeln!(s, "  why: cannot tell ({e})");
-        }
-    }
-}
-
-/// Why a GenoM model deadlocks (the codels ready but held, and by what), as the text
-/// report shows it, one line each; empty for other properties and models.
+/// Why a failing trace of a GenoM model ends as it does (`crate::why`), one line each;
+/// empty for other properties and models.
 fn why_lines(system: &System, p: &bip_verifier::PropertyResult) -> Vec<String> {
-    let (CheckKind::DeadlockFree, PropertyVerdict::Fails { trace: Some(t), .. }) =
-        (p.kind, &p.verdict)
-    else {
+    let PropertyVerdict::Fails { trace: Some(t), .. } = &p.verdict else {
         return Vec::new();
     };
-    let mut text = String::new();
-    write_why_stuck(&mut text, system, t);
-    text.lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty() && *l != "why:")
-        .map(|l| l.strip_prefix("why: ").unwrap_or(l).to_string())
+    crate::why::why(system, t)
+        .into_iter()
+        .map(|(_, line)| line)
         .collect()
 }
 

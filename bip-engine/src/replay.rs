@@ -7,12 +7,12 @@
 use crate::prelude::*;
 
 use bip_model::{
-    Liveness, LivenessChecker, OwnedStep, PropertyKind, State, Steps, System, Trace, Verdict,
+    Liveness, LivenessChecker, OwnedStep, PropertyKind, Role, State, Steps, System, Trace, Verdict,
 };
 
 use crate::codel::DefaultCodels;
 use crate::engine::{Engine, Stepped};
-use crate::error::{BuildError, StepAsError};
+use crate::error::{BuildError, EngineError, StepAsError};
 
 /// What the replay of one step did.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -55,7 +55,8 @@ pub enum End {
         property: String,
         loop_start: Option<usize>,
     },
-    /// A step from the last state has a range error.
+    /// A step from the last state, or a property there (a response property's trigger or
+    /// response: in it or on a step out of it), has a range error.
     RangeError { message: String },
     /// The verdict does not show at the end of the trace.
     NotConfirmed { verdict: String, why: String },
@@ -106,6 +107,30 @@ pub fn replay(system: System, trace: &Trace) -> Result<Replay, BuildError> {
                     name,
                     "the engine's step leads elsewhere".into(),
                 ));
+            }
+            // the last step was committed, but a bounded response property cannot be
+            // evaluated in the state it leads to, which stops the engine: that is the
+            // trace's range error
+            Err(StepAsError::Engine(EngineError::Range(e)))
+                if k + 1 == path.len()
+                    && matches!(trace.verdict, Verdict::RangeError(_))
+                    && engine.inspect().state() == state =>
+            {
+                let stepped = if engine.inspect().system().role(step.label) == Role::Time {
+                    Stepped::Tick
+                } else {
+                    Stepped::Other
+                };
+                steps.push(ReplayedStep { name, stepped });
+                return Ok(Replay {
+                    steps,
+                    refused: None,
+                    end: Some(End::RangeError {
+                        message: e.to_string(),
+                    }),
+                    late,
+                    engine,
+                });
             }
             Err(e) => {
                 let message = match e {
@@ -296,7 +321,54 @@ fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End
                     };
                 }
             }
-            not("no step from the last state has a range error")
+            match property_range_error(system, path, &steps) {
+                Some(message) => End::RangeError { message },
+                None => not("no step from the last state nor property there has a range error"),
+            }
         }
     }
+}
+
+/// A property that cannot be evaluated at the end of `path` (whose last state has the
+/// enabled `steps`): an invariant or reachability there, a response property's trigger or
+/// response there or on a step out of it (`System::first_range_error` placing it there).
+fn property_range_error(
+    system: &System,
+    path: &[(OwnedStep, State)],
+    steps: &Steps,
+) -> Option<String> {
+    let init = system.initial_state();
+    let last = path.last().map_or(&init, |(_, s)| s);
+    let mut longer = path.to_vec();
+    for p in &system.properties {
+        match &p.kind {
+            PropertyKind::Invariant(e) | PropertyKind::Reachable(e) => {
+                if let Err(e) = system.holds(e, last, &p.name) {
+                    return Some(e.to_string());
+                }
+            }
+            PropertyKind::Response { .. } => {
+                let spec = p.kind.response_spec()?;
+                let context = format!("property {}", p.name);
+                // met at the last state: in it, or on a step out of it
+                let mut ways = vec![None];
+                ways.extend(steps.iter().filter_map(|s| {
+                    let mut next = last.clone();
+                    system.fire(last, s, &mut next).ok()?;
+                    Some(Some((s.to_owned(), next)))
+                }));
+                for way in ways {
+                    longer.truncate(path.len());
+                    longer.extend(way);
+                    if let Some((k, e)) = system.first_range_error(spec, &longer, &context) {
+                        if k == path.len() {
+                            return Some(e.to_string());
+                        }
+                    }
+                }
+            }
+            PropertyKind::DeadlockFree { .. } => {}
+        }
+    }
+    None
 }

@@ -71,7 +71,7 @@ pub use model::{
 pub use ordered_map::OrderedMap;
 pub use plan_effects::PlanEffects;
 pub use priority_graph::{PriorityGraph, MAX_INCIDENCES};
-pub use response::{ResponseSpec, ResponseWatch};
+pub use response::{Happenings, ResponseSpec, ResponseWatch};
 pub use rng::Rng;
 pub use state::{State, StateLayout};
 pub use state_cache::{CacheStats, StateCache};

@@ -85,7 +85,104 @@ pub struct ResponseSpec<'a> {
     pub within: Option<u64>,
 }
 
+/// Whether a property's trigger and response happen at one point of a run: in the run's
+/// first state, or on a step, which counts with the state it leads to (a step into a state
+/// where a state condition holds is where that condition happens).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Happenings {
+    pub trigger: bool,
+    pub response: bool,
+}
+
+impl Happenings {
+    /// Whether a trigger waits after this point, if one waited before it: the response
+    /// counts before the trigger, so a point that is both answers itself (and answers
+    /// whatever waited); a trigger while one waits changes nothing. This is the one rule
+    /// every method applies: the verifier's bounded observer and cycle search, its
+    /// symbolic encoding, the engine's monitor and replay.
+    pub fn waits_after(self, waited: bool) -> bool {
+        !self.response && (waited || self.trigger)
+    }
+
+    /// A trigger starts a new wait here.
+    pub fn starts_wait(self, waited: bool) -> bool {
+        !waited && self.waits_after(waited)
+    }
+}
+
 impl System {
+    /// Where `spec`'s trigger and response happen in the run's first state `init`. Both
+    /// are evaluated, whatever the first says: a range error in either is the property's.
+    pub fn happenings_in(
+        &self,
+        spec: ResponseSpec<'_>,
+        init: &State,
+        context: &str,
+    ) -> Result<Happenings, RangeError> {
+        let trigger = self.happens_in(spec.trigger, init, context)?;
+        let response = self.happens_in(spec.response, init, context)?;
+        Ok(Happenings { trigger, response })
+    }
+
+    /// Where `spec`'s trigger and response happen on the step from `before` to `after`,
+    /// counting the state it leads to. All four (each on the step and in `after`) are
+    /// evaluated: a range error in any is the property's.
+    pub fn happenings_on(
+        &self,
+        spec: ResponseSpec<'_>,
+        before: &State,
+        step: Step<'_>,
+        after: &State,
+        context: &str,
+    ) -> Result<Happenings, RangeError> {
+        let on = self.happens_on_step(spec, before, step, after, context)?;
+        let into = self.happenings_in(spec, after, context)?;
+        Ok(Happenings {
+            trigger: on.trigger || into.trigger,
+            response: on.response || into.response,
+        })
+    }
+
+    /// Where `spec`'s step patterns happen on the step alone (state conditions never do).
+    fn happens_on_step(
+        &self,
+        spec: ResponseSpec<'_>,
+        before: &State,
+        step: Step<'_>,
+        after: &State,
+        context: &str,
+    ) -> Result<Happenings, RangeError> {
+        let trigger = self.happens_on(spec.trigger, before, step, after, context)?;
+        let response = self.happens_on(spec.response, before, step, after, context)?;
+        Ok(Happenings { trigger, response })
+    }
+
+    /// The first range error in evaluating `spec` along `path` (steps from the initial
+    /// state, each with the state it leads to), and the number of steps to the state where
+    /// it is met: a state where the trigger or response cannot be evaluated, or the state
+    /// a step starts from on which they cannot be (the place the explicit method reports).
+    pub fn first_range_error(
+        &self,
+        spec: ResponseSpec<'_>,
+        path: &[(OwnedStep, State)],
+        context: &str,
+    ) -> Option<(usize, RangeError)> {
+        let init = self.initial_state();
+        let state_at = |k: usize| if k == 0 { &init } else { &path[k - 1].1 };
+        for k in 0..=path.len() {
+            if let Err(e) = self.happenings_in(spec, state_at(k), context) {
+                return Some((k, e));
+            }
+            if let Some((s, after)) = path.get(k) {
+                if let Err(e) = self.happens_on_step(spec, state_at(k), s.as_step(), after, context)
+                {
+                    return Some((k, e));
+                }
+            }
+        }
+        None
+    }
+
     /// True if `path` (steps from the initial state, each with the state it leads to; a
     /// lasso if `loop_start` is given) shows that `spec` fails: for a lasso, a trigger
     /// waits when the cycle starts or comes on it, and the cycle has no response and, in a
@@ -100,21 +197,6 @@ impl System {
     ) -> Result<bool, RangeError> {
         let init = self.initial_state();
         let state_at = |k: usize| if k == 0 { &init } else { &path[k - 1].1 };
-        let trig = |k: usize| -> Result<bool, RangeError> {
-            self.happens_in(spec.trigger, state_at(k), context)
-        };
-        let resp = |k: usize| -> Result<bool, RangeError> {
-            self.happens_in(spec.response, state_at(k), context)
-        };
-        let step_trig = |k: usize| -> Result<bool, RangeError> {
-            let (s, after) = &path[k];
-            self.happens_on(spec.trigger, state_at(k), s.as_step(), after, context)
-        };
-        let step_resp = |k: usize| -> Result<bool, RangeError> {
-            let (s, after) = &path[k];
-            self.happens_on(spec.response, state_at(k), s.as_step(), after, context)
-        };
-        let tick = |k: usize| self.role(path[k].0.label) == Role::Time;
         let mut watch = ResponseWatch::start(self, spec, &init, context)?;
         let end = loop_start.unwrap_or(path.len());
         for k in 0..end {
@@ -123,26 +205,27 @@ impl System {
                 return Ok(loop_start.is_none() && k + 1 == path.len());
             }
         }
-        let waiting = watch.waiting;
         let Some(start) = loop_start else {
             let mut steps = crate::steps::Steps::new();
             let last = state_at(path.len());
             self.enabled_steps(last, &mut steps)?;
-            return Ok(waiting.is_some() && steps.is_empty());
+            return Ok(watch.waiting.is_some() && steps.is_empty());
         };
         if start >= path.len() || path[path.len() - 1].1 != *state_at(start) {
             return Ok(false);
         }
-        let mut triggered = waiting.is_some();
+        // around the cycle, the wait must go on at every step, and time pass
+        let mut waiting = watch.waiting.is_some();
         let mut ticked = !self.has_time();
-        for k in start..path.len() {
-            if step_resp(k)? || resp(k + 1)? {
+        for (k, (s, after)) in path.iter().enumerate().skip(start) {
+            let h = self.happenings_on(spec, state_at(k), s.as_step(), after, context)?;
+            if h.response {
                 return Ok(false);
             }
-            triggered |= step_trig(k)? || trig(k + 1)?;
-            ticked |= tick(k);
+            waiting = h.waits_after(waiting);
+            ticked |= self.role(s.label) == Role::Time;
         }
-        Ok(triggered && ticked && !resp(start)?)
+        Ok(waiting && ticked)
     }
 }
 
@@ -162,10 +245,10 @@ impl ResponseWatch {
         init: &State,
         context: &str,
     ) -> Result<Self, RangeError> {
-        let waiting = (system.happens_in(spec.trigger, init, context)?
-            && !system.happens_in(spec.response, init, context)?)
-        .then_some(0);
-        Ok(ResponseWatch { waiting })
+        let h = system.happenings_in(spec, init, context)?;
+        Ok(ResponseWatch {
+            waiting: h.waits_after(false).then_some(0),
+        })
     }
 
     /// Watches one step; true if it is a tick that passes the bound of a trigger still
@@ -179,6 +262,7 @@ impl ResponseWatch {
         after: &State,
         context: &str,
     ) -> Result<bool, RangeError> {
+        let h = system.happenings_on(spec, before, step, after, context)?;
         if let Some(c) = self.waiting {
             if system.role(step.label) == Role::Time {
                 if spec.within == Some(c) {
@@ -187,14 +271,9 @@ impl ResponseWatch {
                 self.waiting = Some(c + 1);
             }
         }
-        if system.happens_on(spec.response, before, step, after, context)?
-            || system.happens_in(spec.response, after, context)?
-        {
+        if !h.waits_after(self.waiting.is_some()) {
             self.waiting = None;
-        } else if self.waiting.is_none()
-            && (system.happens_on(spec.trigger, before, step, after, context)?
-                || system.happens_in(spec.trigger, after, context)?)
-        {
+        } else if h.starts_wait(self.waiting.is_some()) {
             self.waiting = Some(0);
         }
         Ok(false)

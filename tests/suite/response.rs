@@ -278,3 +278,251 @@ fn the_rover_mission_gets_its_replies_in_time_and_not_without_its_operator() {
         "a new goal interrupts the running one in the cycle: {text}"
     );
 }
+
+/// The satellite with response properties on its downlink, held by the `Guard` on the
+/// ground station's visibility, and its camera, which pauses for its task's period.
+fn held_satellite(dir: &Path) -> String {
+    let text = std::fs::read_to_string(format!(
+        "{}/robots/satellite.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let at = text.rfind("properties: [").unwrap();
+    let text = format!(
+        r#"{}properties: [
+        Replies(name: "sent_in_two", service: "downlink.Transmit", within: 2),
+        Replies(name: "sent", service: "downlink.Transmit"),
+        Replies(name: "imaged_in_one", service: "camera.Image", within: 1),
+    ],
+)
+"#,
+        &text[..at]
+    );
+    let path = dir.join("held.ron");
+    std::fs::write(&path, text).unwrap();
+    path.display().to_string()
+}
+
+/// A response that does not come is explained as a deadlock is, where it fails to come:
+/// the constraint (with its line) that holds the waiting service's codel, at the state
+/// the bound is reached in and where the lasso's cycle starts, or that the codel only
+/// waits for its task's period; in the text report, the JSON report and the chart.
+#[test]
+fn a_late_or_missing_reply_says_what_holds_the_service() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = held_satellite(dir.path());
+    let traces = dir.path().join("traces");
+    let o = bip(&["verify", &model, "--trace-dir", traces.to_str().unwrap()]);
+    let text = out(&o);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    let guard = r#"line 72: Guard(service: "downlink.Transmit", when: "orbit@visible")"#;
+    let why = |name: &str| {
+        let at = text
+            .find(&format!("\n{name} ("))
+            .unwrap_or_else(|| panic!("{text}"));
+        let rest = &text[at..];
+        let end = rest[1..].find("\n\n").map_or(rest.len(), |e| e + 1);
+        rest[..end].to_string()
+    };
+    let sent_in_two = why("sent_in_two");
+    assert!(
+        sent_in_two.contains("  why:\n    when the bound is reached (after step 14):\n      downlink.Transmit codel start is ready but held by\n        ")
+            && sent_in_two.contains(guard),
+        "{sent_in_two}"
+    );
+    let sent = why("sent");
+    assert!(
+        sent.contains("where the cycle starts (after step 14):") && sent.contains(guard),
+        "{sent}"
+    );
+    let imaged = why("imaged_in_one");
+    assert!(
+        imaged.contains(
+            "camera.Image codel expose is ready after 1 tick (its task's period); nothing holds it"
+        ),
+        "{imaged}"
+    );
+    let chart = std::fs::read_to_string(traces.join("sent.svg")).unwrap();
+    assert!(
+        chart.contains("where the cycle starts (after step 14):"),
+        "{chart}"
+    );
+    let o = bip(&["verify", &model, "--format", "json"]);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let props = json["properties"].as_array().unwrap();
+    let sent = props.iter().find(|p| p["name"] == "sent").unwrap();
+    let lines: Vec<&str> = sent["why"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        lines,
+        [
+            "where the cycle starts (after step 14):",
+            "downlink.Transmit codel send is ready after 2 ticks but held by",
+            guard
+        ]
+    );
+}
+
+/// A clock whose `k` goes 0, 1, 2, 0, … on its ticks, with a bounded response whose
+/// response divides by zero on the tick into `k == 0` or one whose trigger divides by zero
+/// where the response holds: both methods fail it with the same trace, and `bip replay`
+/// confirms its range error. (One model each: the engine's monitor stops a replay at the
+/// first range error of any bounded response property.)
+#[test]
+fn a_range_error_in_a_response_property_is_a_counterexample_that_replays() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, trigger, response, steps) in [
+        ("on_step", "fires(never)", "changes(true, 1 / clk.k > 0)", 2),
+        ("in_state", "1 / (clk.k - 1) > 0", "clk.k == 1", 1),
+    ] {
+        let model = dir.path().join(format!("{name}.ron"));
+        std::fs::write(
+            &model,
+            format!(
+                r#"System(
+    name: "cycling",
+    atoms: {{
+        "Clk": Atom(
+            locations: ["on"],
+            initial: "on",
+            ports: ["tick", "never"],
+            vars: [(name: "k", ty: Int(0, 2))],
+            transitions: [
+                (from: "on", port: "tick", to: "on", action: "k = (k + 1) % 3"),
+                (from: "on", port: "never", to: "on", guard: "false"),
+            ],
+        ),
+    }},
+    components: [(name: "clk", atom: "Clk")],
+    connectors: [
+        (name: "tick", ports: ["clk.tick"], role: Time),
+        (name: "never", ports: ["clk.never"]),
+    ],
+    properties: [
+        Response(name: "{name}", trigger: "{trigger}", response: "{response}", within: 0),
+    ],
+)"#
+            ),
+        )
+        .unwrap();
+        let model = model.to_str().unwrap();
+        for method in ["explicit", "symbolic"] {
+            let traces = dir.path().join(format!("{name}-{method}"));
+            let o = bip(&[
+                "verify",
+                model,
+                "--method",
+                method,
+                "--trace-dir",
+                traces.to_str().unwrap(),
+            ]);
+            let text = out(&o);
+            assert_eq!(o.status.code(), Some(1), "{text}");
+            let s = if steps == 1 { "" } else { "s" };
+            assert!(
+                text.contains(&format!(
+                    "{name} (bounded response), counterexample: range error: division by zero in the property {name} after {steps} step{s}"
+                )),
+                "{method}: {text}"
+            );
+            let file = traces.join(format!("{name}.trace.ron"));
+            let o = bip(&["replay", model, file.to_str().unwrap()]);
+            let replayed = out(&o);
+            assert_eq!(o.status.code(), Some(1), "{method} {name}: {replayed}");
+            assert!(
+                replayed.contains(&format!(
+                    "range error from the last state: division by zero in the property {name}"
+                )),
+                "{method} {name}: {replayed}"
+            );
+        }
+    }
+}
+
+/// `text` with a bounded and an unbounded response from a component's location (a state
+/// trigger) to the steps of a connector, which may enter it, chosen by `seed`.
+fn with_entered(sys: &bip_model::System, text: &str, seed: u64) -> String {
+    let n = sys.connectors.len() as u64;
+    if n == 0 {
+        return text.to_string();
+    }
+    let b = &sys.connectors[(seed / 7 % n) as usize].name;
+    let comp = &sys.components[(seed / 11 % sys.components.len() as u64) as usize];
+    let locations = &sys.atoms[comp.atom as usize].locations;
+    let at = format!(
+        "{}@{}",
+        comp.name,
+        locations[(seed / 13 % locations.len() as u64) as usize]
+    );
+    let mut property =
+        format!(r#"LeadsTo(name: "entered_leads", from: "{at}", to: "fires({b})"),"#);
+    if sys.has_time() {
+        property += &format!(
+            r#"Response(name: "entered", trigger: "{at}", response: "fires({b})", within: {}),"#,
+            seed / 31 % 2
+        );
+    }
+    match text.rfind("properties: [") {
+        Some(at) => {
+            let at = at + "properties: [".len();
+            format!("{}{property}{}", &text[..at], &text[at..])
+        }
+        None => text.to_string(),
+    }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 48, ..Default::default() })]
+
+    /// On random systems with response properties (a random condition to another, a
+    /// location to a connector's steps), every counterexample the verifier writes replays
+    /// through the engine (`bip replay`) to its verdict, and a bounded response that
+    /// holds implies its unbounded form.
+    #[test]
+    fn every_response_counterexample_replays_to_its_verdict(seed in proptest::prelude::any::<u64>(), roles in proptest::prelude::any::<bool>()) {
+        use bip_verifier::{verify, Method, Options, PropertyVerdict};
+        use proptest::prelude::*;
+        let opts = bip_random_systems::Options {
+            responses: true,
+            ..bip_random_systems::Options::verifier(roles)
+        };
+        let text = bip_random_systems::generate_with(seed, &opts).to_ron();
+        let sys = bip_lang::load_str("random.ron", &text)
+            .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e.summary())))?;
+        let text = with_entered(&sys, &text, seed);
+        let sys = bip_lang::load_str("random.ron", &text)
+            .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e.summary())))?;
+        let options = Options { jobs: 1, ..Options::default() };
+        let report = verify(&sys, Method::Explicit, &options, &|_| {}).unwrap();
+        prop_assume!(report.stats.complete);
+        let verdict = |name: &str| report.properties.iter().find(|p| p.name == name).map(|p| &p.verdict);
+        for (bounded, unbounded) in [("bounded", "leads"), ("entered", "entered_leads")] {
+            if let (Some(b), Some(u)) = (verdict(bounded), verdict(unbounded)) {
+                prop_assert!(!b.holds() || u.holds(), "{bounded} holds, {unbounded}: {u:?}\n{text}");
+            }
+        }
+        for p in &report.properties {
+            let (true, PropertyVerdict::Fails { trace: Some(t), .. }) = (
+                sys.properties.iter().any(|q| q.name == p.name && q.kind.response_spec().is_some()),
+                &p.verdict,
+            ) else {
+                continue;
+            };
+            let replayed = bip_engine::replay::replay(sys.clone(), t).unwrap();
+            prop_assert!(replayed.refused.is_none(), "{}: refused\n{text}", p.name);
+            let end = replayed.end.unwrap();
+            let confirmed = match (&t.verdict, &end) {
+                (bip_model::Verdict::Violation(_), bip_engine::replay::End::Unanswered { property, loop_start }) => {
+                    property == &p.name && *loop_start == t.loop_start
+                }
+                (bip_model::Verdict::RangeError(_), bip_engine::replay::End::RangeError { .. }) => true,
+                _ => false,
+            };
+            prop_assert!(confirmed, "{}: {:?} replays as {end:?}\n{text}", p.name, t.verdict);
+        }
+    }
+}

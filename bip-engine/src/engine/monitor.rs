@@ -25,6 +25,9 @@ struct Watch {
     /// Index into the system's properties.
     property: usize,
     name: Arc<str>,
+    /// What a range error in the property is reported in: `property NAME`, as the
+    /// verifier says.
+    context: String,
     watch: ResponseWatch,
     /// The oldest waiting trigger was reported late: it is not reported again, and the
     /// watch counts on without a bound until it is answered.
@@ -38,10 +41,12 @@ impl Monitor {
         let mut watches = Vec::new();
         for (k, p) in system.properties.iter().enumerate() {
             let Some(spec) = bounded(p) else { continue };
+            let context = format!("property {}", p.name);
             watches.push(Watch {
                 property: k,
                 name: p.name.as_str().into(),
-                watch: ResponseWatch::start(system, spec, init, &p.name)?,
+                watch: ResponseWatch::start(system, spec, init, &context)?,
+                context,
                 late: false,
                 ticket: None,
             });
@@ -89,7 +94,7 @@ impl Engine {
             let was_waiting = w.watch.waiting.is_some();
             let passed = !w.late
                 && w.watch
-                    .observe(system, spec, before, step, after, &p.name)?;
+                    .observe(system, spec, before, step, after, &w.context)?;
             if passed || w.late {
                 // watched again without the bound: on the tick that passes it, `observe`
                 // left the watch as it was
@@ -98,7 +103,7 @@ impl Engine {
                     ..spec
                 };
                 w.watch
-                    .observe(system, unbounded, before, step, after, &p.name)?;
+                    .observe(system, unbounded, before, step, after, &w.context)?;
             }
             if !was_waiting && w.watch.waiting.is_some() {
                 w.ticket = ticket;

@@ -37,6 +37,26 @@ impl GenomMap {
         system: &System,
         state: &State,
     ) -> Result<Vec<Stuck<'m>>, RangeError> {
+        self.search(system, state, false)
+    }
+
+    /// Every codel whose activity is ready to run it in `state` or once time steps alone
+    /// have passed, at its earliest readiness, held back (`held_by` lists by what) or not
+    /// (`held_by` is empty: it only waits for its task's period, or runs now).
+    pub fn readiness<'m>(
+        &'m self,
+        system: &System,
+        state: &State,
+    ) -> Result<Vec<Stuck<'m>>, RangeError> {
+        self.search(system, state, true)
+    }
+
+    fn search<'m>(
+        &'m self,
+        system: &System,
+        state: &State,
+        free_too: bool,
+    ) -> Result<Vec<Stuck<'m>>, RangeError> {
         let mut out: Vec<Stuck<'m>> = Vec::new();
         let mut seen = HashSet::new();
         seen.insert(state.clone());
@@ -48,7 +68,7 @@ impl GenomMap {
         while !layer.is_empty() {
             let mut following = Vec::new();
             for s in &layer {
-                self.collect_stuck(system, s, ticks, &mut out)?;
+                self.collect_stuck(system, s, ticks, free_too, &mut out)?;
                 system.enabled_steps(s, &mut steps)?;
                 for step in steps.iter() {
                     if system.role(step.label) != Role::Time {
@@ -71,6 +91,7 @@ impl GenomMap {
         system: &System,
         state: &State,
         ticks: u32,
+        free_too: bool,
         out: &mut Vec<Stuck<'m>>,
     ) -> Result<(), RangeError> {
         for m in &self.modules {
@@ -88,7 +109,7 @@ impl GenomMap {
                         continue;
                     }
                     let held_by = codel.held_by(system, state)?;
-                    if !held_by.is_empty() {
+                    if free_too || !held_by.is_empty() {
                         out.push(Stuck {
                             module: &m.name,
                             service: &svc.name,

@@ -13,7 +13,7 @@
 //! `System::shows_unanswered` confirms it on the run the step relation gives; k-induction,
 //! strengthened with the invariants on every frame, proves that none is reachable.
 
-use bip_model::{Happens, Label, ResponseSpec, ResponseWatch, Role, State, System, Trace};
+use bip_model::{Happens, Label, ResponseSpec, ResponseWatch, Role, State, System, Trace, Verdict};
 use z3::ast::{Bool, Int};
 use z3::{Model, Solver};
 
@@ -21,6 +21,7 @@ use super::confirm::path_through;
 use super::encode::{Enabling, Frame, StepFilter, StepVars};
 use super::kinduction::{self, Unrolling};
 use super::prover::{Placed, Prover};
+use super::solver::Answer;
 use super::term::{and, and2, eq_num, err_formula, ff, ite_int, not, num, or};
 
 /// A shortest run that leaves a trigger unanswered is confirmed, with why it fails.
@@ -55,7 +56,8 @@ impl Observer<'_> {
 
     /// What `happens` says of the step `v` (numbering `labels`) from `f` to `g`, and when
     /// its evaluation fails (each part is evaluated only where the step relation's
-    /// `System::happens_on` evaluates it).
+    /// `System::happens_on` evaluates it: patterns in order up to the first that matches,
+    /// and in each, `before` once the connector matches, `after` once `before` holds).
     fn on_step(
         &self,
         p: &Prover<'_>,
@@ -92,15 +94,17 @@ impl Observer<'_> {
                 }
                 None => (Bool::from_bool(true), ff()),
             };
-            errs.push(and2(&on, &before_err));
-            errs.push(and([on.clone(), before.clone(), after_err]));
+            // evaluated only if no earlier pattern matched
+            let reached = not(&or(holds.clone()));
+            errs.push(and([reached.clone(), on.clone(), before_err]));
+            errs.push(and([reached, on.clone(), before.clone(), after_err]));
             holds.push(and([on, before, after]));
         }
         (or(holds), or(errs))
     }
 
     /// The observer after the step `v` from `(f, o)` into `g`, and when evaluating the
-    /// trigger or response on the way fails.
+    /// trigger or response on the step fails (their evaluation in `g` alone is `bad`'s).
     fn after_step(
         &self,
         p: &Prover<'_>,
@@ -120,9 +124,9 @@ impl Observer<'_> {
         let late = and([waiting.clone(), tick.clone(), at_bound]);
         let counted = ite_int(&and2(&waiting, &tick), &(o + 1i64), o);
         let (rs, rs_err) = self.on_step(p, self.spec.response, labels, v, f, g);
-        let (ra, ra_err) = self.in_state(p, self.spec.response, g);
+        let (ra, _) = self.in_state(p, self.spec.response, g);
         let (ts, ts_err) = self.on_step(p, self.spec.trigger, labels, v, f, g);
-        let (ta, ta_err) = self.in_state(p, self.spec.trigger, g);
+        let (ta, _) = self.in_state(p, self.spec.trigger, g);
         let answered = or([rs, ra]);
         let triggered = and2(&eq_num(&counted, 0), &or([ts, ta]));
         let next = ite_int(
@@ -130,7 +134,7 @@ impl Observer<'_> {
             &num(self.late),
             &ite_int(&answered, &num(0), &ite_int(&triggered, &num(1), &counted)),
         );
-        (next, or([rs_err, ra_err, ts_err, ta_err]))
+        (next, or([rs_err, ts_err]))
     }
 
     /// The product frame is bad.
@@ -183,11 +187,8 @@ pub fn bounded(p: &mut Prover<'_>, spec: ResponseSpec<'_>, name: &str) -> Findin
     let init = sys.initial_state();
     let start = match ResponseWatch::start(sys, spec, &init, &context) {
         Ok(w) => w.waiting.map_or(0, |_| 1),
-        Err(e) => {
-            return Finding::Unknown(format!(
-                "range error in the initial state ({e}); `--method explicit` reports it"
-            ))
-        }
+        // the range error ends a trace of no step
+        Err(_) => return confirm(sys, spec, name, &[init], &[]),
     };
     let mut product = Product {
         obs,
@@ -245,7 +246,7 @@ impl Product<'_> {
 
 impl Unrolling for Product<'_> {
     type Frame = Observed;
-    type Seen = Option<(State, Option<i64>)>;
+    type Seen = Option<(State, Option<i64>, Option<bool>)>;
     type Path = (Vec<State>, Vec<Label>);
     type Bad = (Trace, String);
     const CHECKING: &'static str = "bounded model checking of the observer";
@@ -305,9 +306,16 @@ impl Unrolling for Product<'_> {
         self.obs.bad(p, x)
     }
 
-    /// The same state with the same observer.
+    /// The same state with the same observer, reached by a step alike in failing to
+    /// evaluate the property or not: a frame's badness must be a function of what `same`
+    /// compares, or the chain's simple paths would miss a bad frame that repeats a good
+    /// one's state (the step into it being what fails).
     fn same(&self, p: &Prover<'_>, a: &Observed, b: &Observed) -> Bool {
-        and2(&p.enc.frames_equal(&a.frame, &b.frame), &a.obs.eq(&b.obs))
+        and([
+            p.enc.frames_equal(&a.frame, &b.frame),
+            a.obs.eq(&b.obs),
+            a.err_in.iff(&b.err_in),
+        ])
     }
 
     fn read_path(
@@ -332,34 +340,44 @@ impl Unrolling for Product<'_> {
         Some((states?, labels?))
     }
 
-    fn read_chain(
-        &self,
-        p: &Prover<'_>,
-        m: &Model,
-        chain: &[Observed],
-    ) -> Vec<Option<(State, Option<i64>)>> {
+    fn read_chain(&self, p: &Prover<'_>, m: &Model, chain: &[Observed]) -> Vec<Self::Seen> {
         chain
             .iter()
             .map(|x| {
                 let s = p.enc.read_state(m, &x.frame)?;
-                Some((s, m.eval(&x.obs, true).and_then(|o| o.as_i64())))
+                let o = m.eval(&x.obs, true).and_then(|o| o.as_i64());
+                Some((s, o, m.eval(&x.err_in, true).and_then(|e| e.as_bool())))
             })
             .collect()
     }
 
+    /// A bad frame at the path's end, preferring a step into it that fails to evaluate
+    /// the property: that range error is met one state earlier, where the explicit method
+    /// reports it, and so ends the shortest counterexample.
     fn counterexample(
         &mut self,
         p: &mut Prover<'_>,
-        _bmc: &Solver,
-        _path: &[Observed],
-        (states, labels): (Vec<State>, Vec<Label>),
+        bmc: &Solver,
+        path: &[Observed],
+        read: (Vec<State>, Vec<Label>),
     ) -> Finding {
+        let last = path.last().expect("a path has a first frame");
+        bmc.push();
+        bmc.assert(&last.err_in);
+        let earlier = match p.check(bmc, &[]) {
+            Answer::Sat => bmc.get_model().and_then(|m| self.read_path(p, &m, path)),
+            _ => None,
+        };
+        bmc.pop(1);
+        let (states, labels) = earlier.unwrap_or(read);
         confirm(p.sys(), self.obs.spec, self.name, &states, &labels)
     }
 }
 
-/// The run through `states` by steps of `labels`, reported only if the step relation and
-/// `System::shows_unanswered` agree that it leaves a trigger unanswered.
+/// The run through `states` by steps of `labels`, reported only if the step relation
+/// confirms it: it meets a range error in the trigger or response (the trace then ends
+/// where `System::first_range_error` meets it, as the explicit method's does), or
+/// `System::shows_unanswered` agrees that it leaves a trigger unanswered.
 fn confirm(
     sys: &System,
     spec: ResponseSpec<'_>,
@@ -375,7 +393,13 @@ fn confirm(
             ))
         }
     };
-    match sys.shows_unanswered(spec, &path, None, &format!("property {name}")) {
+    let context = format!("property {name}");
+    if let Some((k, e)) = sys.first_range_error(spec, &path, &context) {
+        let message = e.to_string();
+        let trace = Trace::from_path(sys, Verdict::RangeError(message.clone()), &path[..k]);
+        return replayed(sys, trace, format!("range error: {message}"));
+    }
+    match sys.shows_unanswered(spec, &path, None, &context) {
         Ok(true) => {}
         Ok(false) => {
             return Finding::Unknown(
@@ -385,16 +409,11 @@ fn confirm(
         }
         Err(e) => {
             return Finding::Unknown(format!(
-                "range error in the trigger or response ({e}); `--method explicit` reports it with its trace"
+                "internal error: a symbolic counterexample's last state has a range error ({e})"
             ))
         }
     }
-    let trace = Trace::from_path(sys, bip_model::Verdict::Violation(name.to_string()), &path);
-    if let Err(e) = trace.replay(sys) {
-        return Finding::Unknown(format!(
-            "internal error: a symbolic counterexample does not replay ({e})"
-        ));
-    }
+    let trace = Trace::from_path(sys, Verdict::Violation(name.to_string()), &path);
     // worded as the explicit method words it
     let within = spec.within.unwrap_or(0);
     let n = path.len();
@@ -409,6 +428,16 @@ fn confirm(
             if n == 1 { "" } else { "s" }
         )
     };
+    replayed(sys, trace, reason)
+}
+
+/// The counterexample `trace`, failing for `reason`, once it replays.
+fn replayed(sys: &System, trace: Trace, reason: String) -> Finding {
+    if let Err(e) = trace.replay(sys) {
+        return Finding::Unknown(format!(
+            "internal error: a symbolic counterexample does not replay ({e})"
+        ));
+    }
     Finding::Bad((trace, reason))
 }
 

@@ -102,22 +102,17 @@ fn oracle(sys: &System, g: &Naive, spec: ResponseSpec<'_>) -> Answer {
     let dead = |s: usize| g.edges[s].is_empty() && !g.error[s];
     let waiting = |s: usize| !resp[s] && !g.error[s];
     let follow = |s: usize, k: usize| !edge_resp[s][k] && waiting(g.edges[s][k].1);
-    // every trigger, as the state where the wait starts
+    // every trigger, as the state where the wait starts: in the initial state, or on a
+    // step (with the state it leads to), unless the response happens there too
+    let vacuous = !trig.iter().any(|&t| t) && !edge_trig.iter().flatten().any(|&t| t);
     let mut starts = Vec::new();
-    let mut vacuous = true;
+    if trig[0] && waiting(0) {
+        starts.push(0);
+    }
     for s in 0..n {
-        if trig[s] {
-            vacuous = false;
-            if waiting(s) {
-                starts.push(s);
-            }
-        }
         for (k, (_, t)) in g.edges[s].iter().enumerate() {
-            if edge_trig[s][k] {
-                vacuous = false;
-                if !edge_resp[s][k] && waiting(*t) {
-                    starts.push(*t);
-                }
+            if (edge_trig[s][k] || trig[*t]) && !edge_resp[s][k] && waiting(*t) {
+                starts.push(*t);
             }
         }
     }
@@ -201,7 +196,10 @@ fn check_against_oracle(sys: &System, report: &Report) -> Result<(), String> {
                 if !matches!(t.verdict, Verdict::RangeError(_)) {
                     return Err(format!("{}: fails without a range error", p.name));
                 }
-                t.replay(sys).map_err(|e| format!("{}: {e}", p.name))?;
+                let path = t.replay(sys).map_err(|e| format!("{}: {e}", p.name))?;
+                if !ends_in_range_error(sys, spec, &path) {
+                    return Err(format!("{}: the trace ends in no range error", p.name));
+                }
             }
             (PropertyVerdict::Fails { trace: Some(t), .. }, Answer::Fails) => {
                 let path = t.replay(sys).map_err(|e| format!("{}: {e}", p.name))?;
@@ -470,15 +468,21 @@ fn check_symbolic(
                 },
             ) => {
                 let path = ts.replay(sys).map_err(|e| format!("{}: {e}", p.name))?;
-                if ts.loop_start.is_some()
-                    || sys.shows_unanswered(spec, &path, None, "p") != Ok(true)
-                {
+                let shown = match ts.verdict {
+                    Verdict::RangeError(_) => ends_in_range_error(sys, spec, &path),
+                    _ => sys.shows_unanswered(spec, &path, None, "p") == Ok(true),
+                };
+                if ts.loop_start.is_some() || !shown {
                     return Err(format!(
-                        "{}: the symbolic trace shows no late trigger",
+                        "{}: the symbolic trace shows no late trigger nor range error",
                         p.name
                     ));
                 }
-                if ts.steps.len() != te.steps.len() {
+                // both shortest, of their kind: a range error anywhere is the explicit
+                // method's verdict, a shorter late trigger may be the symbolic one's
+                let same_kind =
+                    std::mem::discriminant(&ts.verdict) == std::mem::discriminant(&te.verdict);
+                if same_kind && ts.steps.len() != te.steps.len() {
                     return Err(format!(
                         "{}: symbolic trace of {} steps, explicit of {}",
                         p.name,
@@ -492,6 +496,33 @@ fn check_symbolic(
         }
     }
     Ok((proved, refuted))
+}
+
+/// The trigger or response of `spec` cannot be evaluated in the last state of `path`
+/// or on a step out of it, and could be everywhere before.
+fn ends_in_range_error(sys: &System, spec: ResponseSpec<'_>, path: &[(OwnedStep, State)]) -> bool {
+    let n = path.len();
+    let last = path.last().map_or(sys.initial_state(), |(_, s)| s.clone());
+    let mut steps = Steps::new();
+    if sys.enabled_steps(&last, &mut steps).is_err() {
+        return false;
+    }
+    let mut longer = path.to_vec();
+    let nexts: Vec<(OwnedStep, State)> = steps
+        .iter()
+        .filter_map(|s| {
+            let mut next = last.clone();
+            sys.fire(&last, s, &mut next).ok()?;
+            Some((s.to_owned(), next))
+        })
+        .collect();
+    let at_end = |p: &[(OwnedStep, State)]| matches!(sys.first_range_error(spec, p, "p"), Some((k, _)) if k == n);
+    at_end(path)
+        || nexts.into_iter().any(|step| {
+            longer.truncate(n);
+            longer.push(step);
+            at_end(&longer)
+        })
 }
 
 fn symbolic(sys: &System) -> Report {
@@ -547,6 +578,113 @@ fn the_symbolic_method_decides_bounded_response_on_the_served_client() {
     assert!(!result(&r, "in_two").verdict.holds());
 }
 
+/// A clock whose `k` goes 0, 1, 2, 0, … on its ticks, with a connector that never fires,
+/// and `properties`.
+fn cycling_clock(properties: &str) -> String {
+    format!(
+        r#"System(
+    name: "cycling",
+    atoms: {{
+        "Clk": Atom(
+            locations: ["on"],
+            initial: "on",
+            ports: ["tick", "never"],
+            vars: [(name: "k", ty: Int(0, 2))],
+            transitions: [
+                (from: "on", port: "tick", to: "on", action: "k = (k + 1) % 3"),
+                (from: "on", port: "never", to: "on", guard: "false"),
+            ],
+        ),
+    }},
+    components: [(name: "clk", atom: "Clk")],
+    connectors: [
+        (name: "tick", ports: ["clk.tick"], role: Time),
+        (name: "never", ports: ["clk.never"]),
+    ],
+    properties: [{properties}],
+)"#
+    )
+}
+
+/// A range error in evaluating a response property is a failure with a trace to where it
+/// is met, in both methods: on a step (the tick into `k == 0` divides by zero in the
+/// response, although the trigger never fires: the symbolic method once proved this
+/// property by 3-induction, its simple paths missing the bad step into a repeated state),
+/// and in a state (the trigger divides by zero where the response holds: the symbolic
+/// method once called the counterexample a disagreement).
+#[test]
+fn a_range_error_in_a_response_property_fails_in_every_method() {
+    let (sys, explicit) = verified(&cycling_clock(
+        r#"Response(name: "on_step", trigger: "fires(never)", response: "changes(true, 1 / clk.k > 0)", within: 0),
+    Response(name: "in_state", trigger: "1 / (clk.k - 1) > 0", response: "clk.k == 1", within: 0)"#,
+    ));
+    let symbolic = symbolic(&sys);
+    for (name, steps) in [("on_step", 2), ("in_state", 1)] {
+        for report in [&explicit, &symbolic] {
+            let PropertyVerdict::Fails {
+                reason,
+                trace: Some(t),
+            } = &result(report, name).verdict
+            else {
+                panic!("{name}: {:?}", result(report, name));
+            };
+            assert_eq!(
+                reason,
+                &format!("range error: division by zero in the property {name}")
+            );
+            assert!(matches!(t.verdict, Verdict::RangeError(_)), "{t:?}");
+            assert_eq!(t.steps.len(), steps, "{name}: {t:?}");
+            let spec = sys.properties.iter().find(|p| p.name == name).unwrap();
+            let path = t.replay(&sys).unwrap();
+            assert!(ends_in_range_error(
+                &sys,
+                spec.kind.response_spec().unwrap(),
+                &path
+            ));
+        }
+    }
+}
+
+/// A state trigger entered by a step of the response is answered by that step, for the
+/// bounded and the unbounded properties alike (docs/model.md: a step that is both answers
+/// itself): `x@b` is entered only by `r`. `LeadsTo` once failed here with a lasso that
+/// `bip replay` rejected, while the stronger `Response(within: 0)` held.
+#[test]
+fn a_state_trigger_entered_by_its_response_is_answered_by_every_method() {
+    let text = r#"System(
+    name: "entered",
+    atoms: {
+        "X": Atom(
+            locations: ["a", "b", "c"],
+            initial: "a",
+            ports: ["r", "t"],
+            transitions: [
+                (from: "a", port: "r", to: "b"),
+                (from: "a", port: "t", to: "a"),
+                (from: "b", port: "t", to: "c"),
+                (from: "c", port: "t", to: "c"),
+            ],
+        ),
+    },
+    components: [(name: "x", atom: "X")],
+    connectors: [
+        (name: "r", ports: ["x.r"]),
+        (name: "tick", ports: ["x.t"], role: Time),
+    ],
+    properties: [
+        Response(name: "bounded", trigger: "x@b", response: "fires(r)", within: 0),
+        LeadsTo(name: "leads", from: "x@b", to: "fires(r)"),
+        LeadsTo(name: "left", from: "x@c", to: "fires(r)"),
+    ],
+)"#;
+    let (sys, explicit) = verified(text);
+    assert!(result(&explicit, "bounded").verdict.holds());
+    assert!(result(&explicit, "leads").verdict.holds());
+    // entered by a tick, `x@c` waits forever
+    assert!(result(&explicit, "left").verdict.fails());
+    assert!(result(&symbolic(&sys), "bounded").verdict.holds());
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
 
@@ -562,10 +700,14 @@ proptest! {
         let text = bip_random_systems::generate_with(seed, &opts).to_ron();
         let sys = load_str("random.ron", &text)
             .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e.summary())))?;
+        let text = with_step_response(&sys, &text, seed);
+        let sys = load_str("random.ron", &text)
+            .map_err(|e| TestCaseError::fail(format!("{}\n{text}", e.summary())))?;
         let one = run(&sys, 1);
         prop_assert_eq!(&run(&sys, 3), &one, "{}", text);
         if one.stats.complete {
             check_against_oracle(&sys, &one).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
+            bounded_implies_unbounded(&one).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
         }
     }
 
@@ -593,8 +735,10 @@ proptest! {
     }
 }
 
-/// `text` with one more property: a `Response` from the steps of one connector to those
-/// of another (chosen by `seed`), within 0 or 1 tick, if the model has ticks.
+/// `text` with more properties, if the model has ticks: a `Response` from the steps of one
+/// connector to those of another (chosen by `seed`), within 0 or 1 tick; and from a
+/// component's location (a state trigger, which a step of the response may enter) to
+/// the same steps, bounded and unbounded.
 fn with_step_response(sys: &System, text: &str, seed: u64) -> String {
     let n = sys.connectors.len() as u64;
     if n == 0 || !sys.has_time() {
@@ -603,8 +747,17 @@ fn with_step_response(sys: &System, text: &str, seed: u64) -> String {
     let a = &sys.connectors[(seed % n) as usize].name;
     let b = &sys.connectors[(seed / 7 % n) as usize].name;
     let within = seed / 31 % 2;
+    let comp = &sys.components[(seed / 11 % sys.components.len() as u64) as usize];
+    let locations = &sys.atoms[comp.atom as usize].locations;
+    let at = format!(
+        "{}@{}",
+        comp.name,
+        locations[(seed / 13 % locations.len() as u64) as usize]
+    );
     let property = format!(
-        r#"Response(name: "step_response", trigger: "fires({a})", response: "fires({b})", within: {within}),"#
+        r#"Response(name: "step_response", trigger: "fires({a})", response: "fires({b})", within: {within}),
+    Response(name: "entered", trigger: "{at}", response: "fires({b})", within: {within}),
+    LeadsTo(name: "entered_leads", from: "{at}", to: "fires({b})"),"#
     );
     match text.rfind("properties: [") {
         Some(at) => {
@@ -613,6 +766,26 @@ fn with_step_response(sys: &System, text: &str, seed: u64) -> String {
         }
         None => text.to_string(),
     }
+}
+
+/// A bounded response that holds implies its unbounded form: for each pair of a bounded
+/// property and the `LeadsTo` with the same trigger and response.
+fn bounded_implies_unbounded(report: &Report) -> Result<(), String> {
+    for (bounded, unbounded) in [("bounded", "leads"), ("entered", "entered_leads")] {
+        let (Some(b), Some(u)) = (
+            report.properties.iter().find(|p| p.name == bounded),
+            report.properties.iter().find(|p| p.name == unbounded),
+        ) else {
+            continue;
+        };
+        if b.verdict.holds() && !u.verdict.holds() {
+            return Err(format!(
+                "{bounded} holds but {unbounded} does not: {:?}",
+                u.verdict
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The random comparison above is not vacuous: over its cases, the symbolic method

@@ -5,7 +5,7 @@
 //! a shortest counterexample.
 
 use super::run::Run;
-use super::watched::{response_bit, trigger_bit, Flagged, TICK};
+use super::watched::{at_start, on_edge, trigger_bit, Flagged, TICK};
 use crate::explore::graph::IN_ERROR;
 use crate::watch::Watch;
 
@@ -22,10 +22,10 @@ pub(crate) enum Found {
 
 /// The observer: 0 when no trigger waits, `c + 1` when the oldest waiting trigger came
 /// `c` ticks ago (`c <= within`).
-struct Observer {
+struct Observer<'g> {
+    g: &'g Flagged,
+    p: usize,
     within: u64,
-    trigger: u32,
-    response: u32,
 }
 
 /// What a step does to the observer.
@@ -35,39 +35,37 @@ enum Next {
     Late,
 }
 
-impl Observer {
-    fn initial(&self, flags: u32) -> u32 {
-        u32::from(flags & self.trigger != 0 && flags & self.response == 0)
+impl Observer<'_> {
+    fn initial(&self) -> u32 {
+        u32::from(at_start(self.g, self.p).waits_after(false))
     }
 
-    /// From observer value `o`, along an edge flagged `edge`, into a state flagged `to`.
-    fn next(&self, o: u32, edge: u32, to: u32) -> Next {
+    /// From observer value `o`, along edge `e`.
+    fn next(&self, o: u32, e: usize) -> Next {
         let mut o = o;
-        if o > 0 && edge & TICK != 0 {
+        if o > 0 && self.g.edge_data[e] & TICK != 0 {
             if u64::from(o - 1) == self.within {
                 return Next::Late;
             }
             o += 1;
         }
-        if (edge | to) & self.response != 0 {
-            return Next::To(0);
+        let h = on_edge(self.g, self.p, e);
+        if !h.waits_after(o > 0) {
+            Next::To(0)
+        } else if h.starts_wait(o > 0) {
+            Next::To(1)
+        } else {
+            Next::To(o)
         }
-        if o == 0 && (edge | to) & self.trigger != 0 {
-            o = 1;
-        }
-        Next::To(o)
     }
 }
 
 /// Searches property `p`, which must answer within `within` ticks.
 pub(crate) fn search(g: &Flagged, p: usize, within: u64, watch: &Watch) -> Found {
-    let obs = Observer {
-        within,
-        trigger: trigger_bit(p),
-        response: response_bit(p),
-    };
-    let vacuous = !g.state_flags.iter().any(|f| f & obs.trigger != 0)
-        && !g.edge_data.iter().any(|f| f & obs.trigger != 0);
+    let obs = Observer { g, p, within };
+    let trigger = trigger_bit(p);
+    let vacuous = !g.state_flags.iter().any(|f| f & trigger != 0)
+        && !g.edge_data.iter().any(|f| f & trigger != 0);
     if vacuous {
         return Found::Holds { vacuous };
     }
@@ -86,7 +84,7 @@ pub(crate) fn search(g: &Flagged, p: usize, within: u64, watch: &Watch) -> Found
     let width = width as u32;
     // each reached product state's parent (itself for the initial one)
     let mut parent = vec![u32::MAX; size as usize];
-    let start = obs.initial(g.state_flags[0]);
+    let start = obs.initial();
     parent[start as usize] = start;
     let mut level = vec![start];
     let mut next_level = Vec::new();
@@ -104,7 +102,7 @@ pub(crate) fn search(g: &Flagged, p: usize, within: u64, watch: &Watch) -> Found
             }
             for e in edges {
                 let t = g.targets[e];
-                match obs.next(o, g.edge_data[e], g.state_flags[t as usize]) {
+                match obs.next(o, e) {
                     Next::Late => {
                         let mut run = run_to(g, &parent, width, x, &obs);
                         run.push(g, e);
@@ -145,10 +143,7 @@ fn run_to(g: &Flagged, parent: &[u32], width: u32, x: u32, obs: &Observer) -> Ru
         let (t, o2) = (pair[1] / width, pair[1] % width);
         let e = g
             .edges(s)
-            .find(|&e| {
-                g.targets[e] == t
-                    && matches!(obs.next(o, g.edge_data[e], g.state_flags[t as usize]), Next::To(v) if v == o2)
-            })
+            .find(|&e| g.targets[e] == t && matches!(obs.next(o, e), Next::To(v) if v == o2))
             .expect("a parent reaches its child by some edge");
         run.push(g, e);
     }

@@ -11,7 +11,7 @@
 //! dead end, or leads to a doomed one; a trigger into a doomed state is a counterexample.
 
 use super::run::{shortest_path, Run};
-use super::watched::{response_bit, trigger_bit, Flagged, TICK};
+use super::watched::{at_start, on_edge, response_bit, trigger_bit, Flagged, TICK};
 use crate::explore::graph::IN_ERROR;
 use crate::explore::scc::{self, OUTSIDE};
 use crate::watch::Watch;
@@ -28,6 +28,7 @@ pub(crate) enum Found {
 
 struct Waiting<'g> {
     g: &'g Flagged,
+    p: usize,
     response: u32,
     /// The model has a `Time` connector: only runs with infinitely many ticks count.
     timed: bool,
@@ -38,8 +39,11 @@ impl Waiting<'_> {
         self.g.state_flags[s as usize] & (self.response | IN_ERROR) == 0
     }
 
+    /// The run goes on waiting along edge `e`: it is no response (on the step or in the
+    /// state it leads to) and leads to no state in range error.
     fn edge(&self, e: usize) -> bool {
-        self.g.edge_data[e] & self.response == 0 && self.state(self.g.targets[e])
+        !on_edge(self.g, self.p, e).response
+            && self.g.state_flags[self.g.targets[e] as usize] & IN_ERROR == 0
     }
 
     /// An edge that lets the run count as going on forever on a cycle.
@@ -56,6 +60,7 @@ impl Waiting<'_> {
 pub(crate) fn search(g: &Flagged, p: usize, timed: bool, watch: &Watch) -> Found {
     let w = Waiting {
         g,
+        p,
         response: response_bit(p),
         timed,
     };
@@ -65,25 +70,23 @@ pub(crate) fn search(g: &Flagged, p: usize, timed: bool, watch: &Watch) -> Found
     };
     let doomed =
         |s: u32| scc.comp[s as usize] != OUTSIDE && scc.doomed[scc.comp[s as usize] as usize];
-    // the first trigger, in the exploration's order, from which the response can be avoided
-    let mut vacuous = true;
+    // the first trigger, in the exploration's order, from which the response can be
+    // avoided: a trigger happens in the initial state or on a step (counting the state it
+    // leads to), and starts a wait only if the response does not happen there too
+    let vacuous = !g.state_flags.iter().any(|f| f & trigger != 0)
+        && !g.edge_data.iter().any(|f| f & trigger != 0);
     let mut start = None;
+    if at_start(g, p).waits_after(false) && doomed(0) {
+        start = Some((0, None));
+    }
     'states: for s in 0..g.len() as u32 {
-        let flags = g.state_flags[s as usize];
-        if flags & trigger != 0 {
-            vacuous = false;
-            if doomed(s) {
-                start = Some((s, None));
-                break;
-            }
+        if start.is_some() {
+            break;
         }
         for e in g.edges(s) {
-            if g.edge_data[e] & trigger != 0 {
-                vacuous = false;
-                if g.edge_data[e] & w.response == 0 && doomed(g.targets[e]) {
-                    start = Some((s, Some(e)));
-                    break 'states;
-                }
+            if on_edge(g, p, e).waits_after(false) && doomed(g.targets[e]) {
+                start = Some((s, Some(e)));
+                break 'states;
             }
         }
     }

@@ -2,7 +2,7 @@
 //! where each property's trigger and response happen, on states and on steps, as flag
 //! bits; and the first range error met in evaluating them.
 
-use bip_model::{Happens, Role, State, Step, System};
+use bip_model::{Happenings, Happens, Role, State, Step, System};
 
 use crate::explore::graph::{Graph, Keep};
 
@@ -27,6 +27,24 @@ pub(crate) fn trigger_bit(p: usize) -> u32 {
 
 pub(crate) fn response_bit(p: usize) -> u32 {
     1 << (2 + 2 * p)
+}
+
+/// Where property `p`'s trigger and response happen in the initial state (state 0).
+pub(crate) fn at_start(g: &Flagged, p: usize) -> Happenings {
+    of_bits(g.state_flags[0], p)
+}
+
+/// Where property `p`'s trigger and response happen on edge `e`, counting the state it
+/// leads to (as `System::happenings_on` does).
+pub(crate) fn on_edge(g: &Flagged, p: usize, e: usize) -> Happenings {
+    of_bits(g.edge_data[e] | g.state_flags[g.targets[e] as usize], p)
+}
+
+fn of_bits(bits: u32, p: usize) -> Happenings {
+    Happenings {
+        trigger: bits & trigger_bit(p) != 0,
+        response: bits & response_bit(p) != 0,
+    }
 }
 
 /// The first range error met in evaluating a property's trigger or response: in a state
