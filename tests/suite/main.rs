@@ -1,4 +1,4 @@
-//! The `bip` command end to end (`check`, `codegen`, `engine`, `explore`, `genom`, `genom3`, `graph`, `response`, `sched`, `trace`, `verify`: the binary
+//! The `bip` command end to end (`check`, `codegen`, `engine`, `explore`, `genom`, `genom3`, `graph`, `response`, `sched`, `time_progress`, `trace`, `verify`: the binary
 //! run as a user runs it, with SPIN as a cross-check where it is installed; `limits`: every
 //! limit and Ctrl-C on wide models, in capped child processes), the architecture's layering
 //! read from the sources (`layering`), and wide models within memory and time bounds
@@ -17,6 +17,7 @@ mod layering;
 mod limits;
 mod response;
 mod sched;
+mod time_progress;
 mod trace;
 mod verify;
 mod wide_models;

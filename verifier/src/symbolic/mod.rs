@@ -458,8 +458,14 @@ fn time_progress(p: &mut Prover<'_>, range_proved: bool) -> Outcome {
                 )
             }),
         ),
+        Finding::Bounded { steps } => Outcome::symbolic(
+            PropertyVerdict::Holds { witness: None },
+            Some(format!(
+                "invariants ∧ {steps} steps without a tick unsatisfiable, and no state without a step"
+            )),
+        ),
         Finding::Candidate(state) => Outcome::unknown(format!(
-            "the symbolic method proves time progress only when every state satisfying the invariants reaches a tick within a small search, and this one does not: {} (`--method explicit` decides it)",
+            "the symbolic method proves time progress only when every state satisfying the invariants reaches a tick within a small search or a bounded number of steps, and this one does not: {} (`--method explicit` decides it)",
             p.describe(&state)
         )),
         Finding::Unknown(why) => Outcome::unknown(why),

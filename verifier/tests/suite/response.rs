@@ -680,9 +680,10 @@ fn random_systems_give_the_symbolic_method_response_properties_to_decide() {
         proved += p;
         refuted += r;
     }
-    // random conditions are rarely late: the refutations are mostly the served client's
+    // random conditions are rarely late: the refutations are mostly the served client's;
+    // a bound is proved only where time progress is proved too
     assert!(
-        proved >= 8 && refuted >= 1,
+        proved >= 3 && refuted >= 1,
         "only {proved} proved and {refuted} refuted"
     );
 }
