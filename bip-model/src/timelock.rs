@@ -13,6 +13,10 @@ use crate::state::State;
 use crate::steps::Steps;
 use crate::system::System;
 
+/// The name of the verifier's result on time progress, and of the verdict of its traces
+/// (`Violation("TimeProgress")`): no reachable state from which time can never pass.
+pub const TIME_PROGRESS: &str = "TimeProgress";
+
 /// What holds back one interaction of a `Time` connector in a state.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum TimeHeld {

@@ -119,3 +119,37 @@ fn a_model_without_time_has_no_time_progress_result() {
     ]);
     assert!(!String::from_utf8_lossy(&o.stdout).contains("TimeProgress"));
 }
+
+#[test]
+fn bip_replay_confirms_the_timelock_and_the_lasso_it_makes() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = spinning(dir.path(), true);
+    let traces = dir.path().join("traces");
+    let traces = traces.to_str().unwrap();
+    let o = bip(&[
+        "verify",
+        &model,
+        "-j",
+        "1",
+        "--trace-dir",
+        traces,
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let o = bip(&[
+        "replay",
+        &model,
+        &format!("{traces}/TimeProgress.trace.ron"),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("time stops: after 1 step, the cycle of steps 2-2 repeats forever")
+            && text.contains("result: TimeProgress fails"),
+        "{text}"
+    );
+    let o = bip(&["replay", &model, &format!("{traces}/answered.trace.ron")]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(text.contains("result: answered fails"), "{text}");
+}

@@ -13,7 +13,7 @@ pub const RANGE_ERRORS: &str = "RangeErrors";
 
 /// The name of the result that says time can always pass (docs/model.md, "Time
 /// progress"): from every reachable state, some run fires a step of a `Time` connector.
-pub const TIME_PROGRESS: &str = "TimeProgress";
+pub use bip_model::TIME_PROGRESS;
 
 /// True if a verification of `system` checks [`TIME_PROGRESS`]: it has `Time` connectors.
 /// It is reported after the model's properties, before range errors.
