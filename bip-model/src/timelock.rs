@@ -177,9 +177,11 @@ pub const MAX_TIME_SEARCH: usize = 1_000_000;
 
 impl System {
     /// Whether some run from `state` fires a step of a `Time` connector: a breadth-first
-    /// search through every step, of at most [`MAX_TIME_SEARCH`] states. `Some(false)`:
-    /// `state` is a timelock (no run from it lets time pass; a run that ends in a range
-    /// error does not count as one); `None`: the search reached its bound.
+    /// search through every step, of at most [`MAX_TIME_SEARCH`] states, as the verifier's
+    /// state graph has them (a step in range error has no successor; a state whose steps
+    /// all fail, or cannot be computed, ends its runs in a range error, which is not a
+    /// timelock). `Some(false)`: `state` is a timelock; `None`: the search reached its
+    /// bound.
     pub fn time_can_pass(&self, state: &State) -> Result<Option<bool>, RangeError> {
         let mut seen = HashSet::new();
         seen.insert(state.clone());
@@ -194,11 +196,12 @@ impl System {
             }
             let mut fired = 0;
             for step in steps.iter() {
-                if self.role(step.label) == Role::Time {
-                    return Ok(Some(true));
-                }
+                // a step in range error has no successor, a tick included
                 if self.fire(&s, step, &mut next).is_err() {
                     continue;
+                }
+                if self.role(step.label) == Role::Time {
+                    return Ok(Some(true));
                 }
                 fired += 1;
                 if !seen.contains(&next) {
