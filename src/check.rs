@@ -32,8 +32,8 @@ fn print_summary(path: &std::path::Path, system: &bip_model::System) {
         "  priorities    {} declared, chains of up to {} in their closure",
         s.priorities_declared, s.priority_depth
     );
-    // the list `bip verify` checks, in its order: range errors are always checked, and
-    // deadlock freedom when the model declares nothing
+    // the list `bip verify` checks, in its order: range errors are always checked, time
+    // progress with `Time` connectors, and deadlock freedom when the model declares nothing
     let mut names: Vec<&str> = system.properties.iter().map(|p| p.name.as_str()).collect();
     let declared = if names.is_empty() {
         names.push("DeadlockFree");
@@ -41,14 +41,19 @@ fn print_summary(path: &std::path::Path, system: &bip_model::System) {
     } else {
         "declared"
     };
+    let timed = system.has_time();
+    if timed {
+        names.push(bip_verifier::TIME_PROGRESS);
+    }
     names.push(bip_verifier::RANGE_ERRORS);
     let budgets = bip_verifier::has_time_budgets(system);
     if budgets {
         names.push(bip_verifier::SCHEDULABLE);
     }
     println!(
-        "  properties    {} checked ({declared}, range errors{}): {}",
+        "  properties    {} checked ({declared}{}, range errors{}): {}",
         names.len(),
+        if timed { ", time progress" } else { "" },
         if budgets { ", schedulability" } else { "" },
         names.join(", ")
     );

@@ -155,6 +155,22 @@ pub fn run(args: &Args) -> u8 {
             println!("result: {property} fails");
             exit::FAILED
         }
+        Some(End::Timelock { loop_start }) => {
+            let n = result.steps.len();
+            match loop_start {
+                Some(k) => println!(
+                    "time stops: after {k} step{}, the cycle of steps {}-{n} repeats forever and no run from it lets time pass",
+                    if *k == 1 { "" } else { "s" },
+                    k + 1
+                ),
+                None => println!(
+                    "time stops after {n} step{}: no run from the last state lets time pass",
+                    if n == 1 { "" } else { "s" }
+                ),
+            }
+            println!("result: {} fails", bip_verifier::TIME_PROGRESS);
+            exit::FAILED
+        }
         Some(End::RangeError { message }) => {
             println!("range error from the last state: {message}");
             println!("result: RangeErrors fails");

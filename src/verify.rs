@@ -365,6 +365,7 @@ fn kind_name(kind: CheckKind) -> &'static str {
         CheckKind::Reachable => "reachability",
         CheckKind::Response => "bounded response",
         CheckKind::LeadsTo => "response",
+        CheckKind::TimeProgress => "time progress",
         CheckKind::RangeErrors => "range errors",
         CheckKind::Schedulable => "schedulability",
     }

@@ -55,6 +55,10 @@ pub enum End {
         property: String,
         loop_start: Option<usize>,
     },
+    /// Time cannot pass from the last state (`TimeProgress`'s trace): the trace ends in a
+    /// state with no step, or on a cycle (which starts after `loop_start` steps and
+    /// returns to its first state) that no run from it leaves for a tick.
+    Timelock { loop_start: Option<usize> },
     /// A step from the last state, or a property there (a response property's trigger or
     /// response: in it or on a step out of it), has a range error.
     RangeError { message: String },
@@ -234,6 +238,25 @@ fn unanswered(
     }
 }
 
+/// The end of a timelock's trace: the last state (where a lasso's cycle returns) is one
+/// from which no run fires a tick.
+fn timelock(
+    system: &System,
+    trace: &Trace,
+    path: &[(OwnedStep, State)],
+    last: &State,
+) -> Result<End, String> {
+    trace.check_loop(system, path).map_err(|e| e.message)?;
+    match system.time_can_pass(last) {
+        Ok(Some(false)) => Ok(End::Timelock {
+            loop_start: trace.loop_start,
+        }),
+        Ok(Some(true)) => Err("a run from the last state lets time pass".into()),
+        Ok(None) => Err("the states reachable from the last state are too many to search".into()),
+        Err(e) => Err(format!("range error: {e}")),
+    }
+}
+
 fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End {
     let verdict = &trace.verdict;
     let system = engine.inspect().system();
@@ -283,6 +306,9 @@ fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End
         }
         Verdict::Violation(name) | Verdict::Witness(name) => {
             let Some(p) = system.properties.iter().find(|p| &p.name == name) else {
+                if matches!(verdict, Verdict::Violation(n) if n == bip_model::TIME_PROGRESS) {
+                    return timelock(system, trace, path, state).unwrap_or_else(|why| not(&why));
+                }
                 return not("the model has no such property");
             };
             let expr = match &p.kind {

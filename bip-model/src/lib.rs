@@ -53,6 +53,7 @@ mod step_tables;
 mod steps;
 mod suppression;
 mod system;
+mod timelock;
 pub mod trace;
 mod watches;
 
@@ -77,4 +78,5 @@ pub use state::{State, StateLayout};
 pub use state_cache::{CacheStats, StateCache};
 pub use steps::{Label, OwnedStep, Pick, Step, Steps};
 pub use system::{Summary, System};
+pub use timelock::{TimeHeld, TIME_PROGRESS};
 pub use trace::{Trace, TraceStep, TraceValue, Verdict};

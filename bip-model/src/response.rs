@@ -186,7 +186,8 @@ impl System {
     /// True if `path` (steps from the initial state, each with the state it leads to; a
     /// lasso if `loop_start` is given) shows that `spec` fails: for a lasso, a trigger
     /// waits when the cycle starts or comes on it, and the cycle has no response and, in a
-    /// model with time, a tick; for a finite path, a tick past the bound on the last step,
+    /// model with time, a tick, or its states are timelocked ([`System::time_can_pass`]:
+    /// time cannot pass from them); for a finite path, a tick past the bound on the last step,
     /// or a trigger still waiting in a last state that has no step.
     pub fn shows_unanswered(
         &self,
@@ -224,6 +225,10 @@ impl System {
             }
             waiting = h.waits_after(waiting);
             ticked |= self.role(s.label) == Role::Time;
+        }
+        // a cycle without a tick goes on forever only where time cannot pass at all
+        if waiting && !ticked && self.time_can_pass(state_at(start))? == Some(false) {
+            ticked = true;
         }
         Ok(waiting && ticked)
     }

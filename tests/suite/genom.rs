@@ -51,11 +51,11 @@ fn expand_prints_core_that_checks_with_the_same_sizes() {
         let direct = bip(&["check", model]);
         let without_budgets = summary(&direct)
             .replace(
-                " checked (declared, range errors, schedulability):",
-                " checked (declared, range errors):",
+                " checked (declared, time progress, range errors, schedulability):",
+                " checked (declared, time progress, range errors):",
             )
             .replace(", RangeErrors, Schedulable", ", RangeErrors")
-            .replace("properties    10 checked", "properties    9 checked");
+            .replace("properties    11 checked", "properties    10 checked");
         assert_eq!(summary(&again), without_budgets, "{model}");
         // expanding the expanded model changes nothing
         let twice = bip(&["expand", path.to_str().expect("utf-8")]);
@@ -218,7 +218,7 @@ fn the_rover_verifies() {
         "{stdout}"
     );
     assert!(
-        stdout.contains("result: all 10 properties hold"),
+        stdout.contains("result: all 11 properties hold"),
         "{stdout}"
     );
 }
@@ -228,7 +228,7 @@ fn the_rover_with_its_mistake_deadlocks_with_a_short_trace() {
     let (code, stdout, dir) = verify("robots/rover-deadlock.ron");
     assert_eq!(code, Some(1), "{stdout}");
     assert!(
-        stdout.contains("result: 1 of 9 properties fail"),
+        stdout.contains("result: 1 of 10 properties fail"),
         "{stdout}"
     );
     // the report says which constraint holds the navigation back
@@ -336,7 +336,7 @@ fn the_implicit_deadlock_check_excuses_the_idle_layer_as_a_written_one_does() {
 fn the_satellite_verifies() {
     let (code, stdout, _dir) = verify("robots/satellite.ron");
     assert_eq!(code, Some(0), "{stdout}");
-    assert!(stdout.contains("result: all 6 properties hold"), "{stdout}");
+    assert!(stdout.contains("result: all 7 properties hold"), "{stdout}");
 }
 
 /// SPIN on the exported Promela stores as many states as bip explores, for expanded GenoM

@@ -33,8 +33,8 @@ fn the_gen_rover_verifies_as_its_ron_equivalent() {
     );
     assert_eq!(
         from_gen.len(),
-        5,
-        "four properties and the counts: {from_gen:?}"
+        6,
+        "five properties (time progress too) and the counts: {from_gen:?}"
     );
     assert_eq!(from_gen, written);
     // the engine runs it as read from the .gen files

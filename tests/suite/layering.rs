@@ -49,6 +49,7 @@ const CRATES: &[Layers] = &[
                     "assemble",
                     "deadlock",
                     "response",
+                    "timelock",
                     "trace",
                     "genom",
                 ],

@@ -496,7 +496,7 @@ fn trace_files_have_unique_names() {
 fn counts_and_words_agree() {
     let o = bip(&["check", &robot("rover.ron")]);
     assert!(
-        stdout(&o).contains("properties    10 checked"),
+        stdout(&o).contains("properties    11 checked"),
         "{}",
         stdout(&o)
     );

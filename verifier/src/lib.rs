@@ -36,7 +36,7 @@ pub use memory::{
 pub use options::{Options, SymbolicOptions};
 pub use progress::Progress;
 pub use promela::{to_promela, ExportError};
-pub use properties::RANGE_ERRORS;
+pub use properties::{RANGE_ERRORS, TIME_PROGRESS};
 pub use report::{
     human_bytes, CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop,
     SymbolicStats, VerifyOutcome,

@@ -11,6 +11,16 @@ use crate::report::CheckKind;
 /// The name of the result that reports range errors.
 pub const RANGE_ERRORS: &str = "RangeErrors";
 
+/// The name of the result that says time can always pass (docs/model.md, "Time
+/// progress"): from every reachable state, some run fires a step of a `Time` connector.
+pub use bip_model::TIME_PROGRESS;
+
+/// True if a verification of `system` checks [`TIME_PROGRESS`]: it has `Time` connectors.
+/// It is reported after the model's properties, before range errors.
+pub(crate) fn checks_time_progress(system: &System) -> bool {
+    system.has_time()
+}
+
 /// The model properties a verification checks: the model's, or `DeadlockFree` if it
 /// declares none, meaning what a written one means: in a GenoM layer it excuses the idle
 /// layer ([`GenomMap::idle`](bip_model::GenomMap)). Range errors are checked besides, as

@@ -39,6 +39,9 @@ pub enum CheckKind {
     Response,
     /// Unbounded response: `LeadsTo`, `Replies`, `Terminates`.
     LeadsTo,
+    /// In a model with `Time` connectors, time can always pass: no reachable state is a
+    /// timelock (docs/model.md, "Time progress"); reported before range errors.
+    TimeProgress,
     /// Range errors are always checked (docs/model.md, "Range errors"); reported as a property of their own.
     RangeErrors,
     /// With time budgets: every task's work of a period ends by its deadline

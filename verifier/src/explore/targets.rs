@@ -10,7 +10,8 @@ use bip_model::{
 
 use crate::error::VerifyError;
 use crate::properties::{
-    check_kind, checked_properties, default_terminal, error_step, RANGE_ERRORS,
+    check_kind, checked_properties, checks_time_progress, default_terminal, error_step,
+    RANGE_ERRORS, TIME_PROGRESS,
 };
 use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 use crate::visited::{StateId, Visited};
@@ -31,6 +32,8 @@ pub(super) enum Check<'a> {
         response: &'a Happens,
         within: Option<u64>,
     },
+    /// Decided on the state graph once the exploration is complete (`response::timelock`).
+    TimeProgress,
     RangeErrors,
 }
 
@@ -41,8 +44,8 @@ pub(super) struct Target<'a> {
     pub(super) check: Check<'a>,
 }
 
-/// The properties a run checks: the model's (deadlock freedom if it has none), and range
-/// errors, which are always checked.
+/// The properties a run checks: the model's (deadlock freedom if it has none), time
+/// progress in a model with `Time` connectors, and range errors, which are always checked.
 pub(super) fn targets(system: &System) -> Vec<Target<'_>> {
     let mut out: Vec<Target<'_>> = checked_properties(system)
         .into_iter()
@@ -83,6 +86,14 @@ pub(super) fn targets(system: &System) -> Vec<Target<'_>> {
             }
         })
         .collect();
+    if checks_time_progress(system) {
+        out.push(Target {
+            name: TIME_PROGRESS.into(),
+            kind: CheckKind::TimeProgress,
+            expr: String::new(),
+            check: Check::TimeProgress,
+        });
+    }
     out.push(range_errors());
     out
 }
@@ -149,13 +160,26 @@ impl Explorer<'_> {
                     _ => None,
                 })
                 .unzip();
-            let decided = decide(self.system, &self.visited, &questions, self.watch)?;
-            // a limit reached while the response properties were searched stopped the run
-            // too (every state was explored: `complete` stays true)
-            if !which.is_empty() {
+            let progress = self
+                .targets
+                .iter()
+                .position(|t| matches!(t.check, Check::TimeProgress));
+            let (decided, time_progress) = decide(
+                self.system,
+                &self.visited,
+                &questions,
+                progress.is_some(),
+                self.watch,
+            )?;
+            // a limit reached while the graph was searched stopped the run too (every
+            // state was explored: `complete` stays true)
+            if !which.is_empty() || progress.is_some() {
                 run_stopped = self.watch.stopped().cloned();
             }
             for (k, d) in which.into_iter().zip(decided) {
+                responses[k] = Some(d);
+            }
+            if let (Some(k), Some(d)) = (progress, time_progress) {
                 responses[k] = Some(d);
             }
         }
@@ -236,6 +260,10 @@ impl Explorer<'_> {
             };
         }
         match t.check {
+            // decided on the graph only: never "holds" without it
+            Check::TimeProgress | Check::Response { .. } => PropertyVerdict::Inconclusive {
+                reason: "the state graph was not searched".into(),
+            },
             Check::Reachable(_) => PropertyVerdict::Fails {
                 reason: format!("no reachable state satisfies it ({states} states explored)"),
                 trace: None,

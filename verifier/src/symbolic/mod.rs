@@ -15,6 +15,8 @@
 //!   and k-induction strengthened with the same invariants;
 //! - `response.rs`: bounded response by the same two methods on the product with the
 //!   tick-counting observer (unbounded response is left inconclusive);
+//! - `progress.rs`: time progress by a sufficient condition (a tick in every state
+//!   satisfying the invariants, or found from it);
 //! - `confirm.rs`: symbolic findings turned into traces with the step relation.
 //!
 //! Nothing here says "holds" without a proof: an unknown solver answer, a candidate that is
@@ -33,6 +35,7 @@ mod induction;
 mod invariants;
 mod kinduction;
 mod net;
+mod progress;
 mod prover;
 mod response;
 mod semiflows;
@@ -49,7 +52,9 @@ use crate::error::VerifyError;
 use crate::memory;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::properties::{check_kind, checked_properties, error_step, RANGE_ERRORS};
+use crate::properties::{
+    check_kind, checked_properties, checks_time_progress, error_step, RANGE_ERRORS, TIME_PROGRESS,
+};
 use crate::report::{
     CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, SymbolicStats,
 };
@@ -223,7 +228,12 @@ fn run(
     // range errors first: deadlock freedom with time steps relies on their absence
     let range = decide(&mut p, RANGE_ERRORS, &|p| safety(p, Goal::RangeError));
     let range_proved = range.verdict.holds();
-    let mut properties = Vec::with_capacity(props.len() + 1);
+    // before the properties: a bounded response proved on the runs where time diverges
+    // says nothing where time stops
+    let progress = checks_time_progress(system)
+        .then(|| decide(&mut p, TIME_PROGRESS, &|p| time_progress(p, range_proved)));
+    let time_diverges = progress.as_ref().is_none_or(|o| o.verdict.holds());
+    let mut properties = Vec::with_capacity(props.len() + 2);
     for prop in &props {
         let (kind, outcome) = match &prop.kind {
             ModelKind::DeadlockFree { .. } => (
@@ -244,7 +254,13 @@ fn run(
             ),
             ModelKind::Response { within: Some(_), .. } => (
                 check_kind(&prop.kind),
-                decide(&mut p, &prop.name, &|p| bounded_response(p, prop)),
+                match decide(&mut p, &prop.name, &|p| bounded_response(p, prop)) {
+                    o if o.verdict.holds() && !time_diverges => Outcome::unknown(format!(
+                        "no run on which time diverges misses the bound ({}), but time progress is not proved: where time stops, the response may never come",
+                        o.note.as_deref().unwrap_or("proved")
+                    )),
+                    o => o,
+                },
             ),
             // no proof method for them yet: never a verdict without one
             ModelKind::Response { within: None, .. } => (
@@ -260,6 +276,17 @@ fn run(
             kind,
             expr: prop.text.clone(),
             error_step: outcome.verdict.trace().and_then(|t| error_step(system, t)),
+            verdict: outcome.verdict,
+            method: outcome.method,
+            note: outcome.note,
+        });
+    }
+    if let Some(outcome) = progress {
+        properties.push(PropertyResult {
+            name: TIME_PROGRESS.into(),
+            kind: CheckKind::TimeProgress,
+            expr: String::new(),
+            error_step: None,
             verdict: outcome.verdict,
             method: outcome.method,
             note: outcome.note,
@@ -343,6 +370,17 @@ fn undecided(system: &System, why: &str, watch: &Watch) -> Report {
             error_step: None,
         })
         .collect();
+    if checks_time_progress(system) {
+        properties.push(PropertyResult {
+            name: TIME_PROGRESS.into(),
+            kind: CheckKind::TimeProgress,
+            expr: String::new(),
+            verdict: PropertyVerdict::Inconclusive { reason: why.into() },
+            method: Method::Symbolic,
+            note: None,
+            error_step: None,
+        });
+    }
     properties.push(PropertyResult {
         name: RANGE_ERRORS.into(),
         kind: CheckKind::RangeErrors,
@@ -400,6 +438,34 @@ fn deadlock(p: &mut Prover<'_>, prop: &bip_model::Property, range_proved: bool) 
         },
         Finding::Possible(state) => Outcome::unknown(format!(
             "possible deadlock, not confirmed: a state satisfying every invariant found has no progress step: {}",
+            p.describe(&state)
+        )),
+        Finding::Unknown(why) => Outcome::unknown(why),
+    }
+}
+
+fn time_progress(p: &mut Prover<'_>, range_proved: bool) -> Outcome {
+    use progress::Finding;
+    match progress::time_progress(p, range_proved) {
+        Finding::Proved { cleared } => Outcome::symbolic(
+            PropertyVerdict::Holds { witness: None },
+            Some(if cleared == 0 {
+                "invariants ∧ no tick enabled unsatisfiable".into()
+            } else {
+                format!(
+                    "invariants ∧ no tick enabled unsatisfiable once {cleared} {} found to reach a tick excluded",
+                    if cleared == 1 { "state was" } else { "states were" }
+                )
+            }),
+        ),
+        Finding::Bounded { steps } => Outcome::symbolic(
+            PropertyVerdict::Holds { witness: None },
+            Some(format!(
+                "invariants ∧ {steps} steps without a tick unsatisfiable, and no state without a step"
+            )),
+        ),
+        Finding::Candidate(state) => Outcome::unknown(format!(
+            "the symbolic method proves time progress only when every state satisfying the invariants reaches a tick within a small search or a bounded number of steps, and this one does not: {} (`--method explicit` decides it)",
             p.describe(&state)
         )),
         Finding::Unknown(why) => Outcome::unknown(why),

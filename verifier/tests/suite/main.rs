@@ -7,7 +7,9 @@
 //! - `schedulability`: each task's demand per period against an oracle walking every path
 //!   between two ticks, and the analysis on top;
 //! - `symbolic_known_answers`: the symbolic method on models whose answers are known;
-//! - `symbolic_verdicts`: the symbolic method never contradicts the explicit one.
+//! - `symbolic_verdicts`: the symbolic method never contradicts the explicit one;
+//! - `time_progress`: timelocks against a naive search for a tick from every state, the
+//!   fuzzer's timelocks that made liveness properties hold, and the symbolic method.
 
 mod known_answers;
 mod random_systems;
@@ -15,3 +17,4 @@ mod response;
 mod schedulability;
 mod symbolic_known_answers;
 mod symbolic_verdicts;
+mod time_progress;

@@ -4,8 +4,9 @@
 //!
 //! After a trigger, the run waits: it stays in states where the response does not hold
 //! and takes steps that are not the response. The property fails if, from a trigger, the
-//! waiting part of the graph leads to a cycle that lets time pass (a tick on the cycle;
-//! any cycle in a model without `Time` connectors) or to a state with no step at all.
+//! waiting part of the graph leads to a cycle that goes on forever ([`Forever`]: a tick
+//! on the cycle, or its states timelocked; any cycle in a model without `Time`
+//! connectors) or to a state with no step at all.
 //! One pass of Tarjan's algorithm over the waiting part finds its strongly connected
 //! components, successors first, and marks each *doomed* if it holds such a cycle or
 //! dead end, or leads to a doomed one; a trigger into a doomed state is a counterexample.
@@ -26,12 +27,25 @@ pub(crate) enum Found {
     Stopped,
 }
 
+/// Which cycles count as runs that go on forever.
+#[derive(Clone, Copy)]
+pub(crate) enum Forever<'a> {
+    /// Every cycle: a model without `Time` connectors assumes nothing.
+    Any,
+    /// Runs on which time diverges: a cycle with a tick; and a cycle of timelocked
+    /// states (per state, `timelock`'s answer), where time cannot pass, so that the run
+    /// stays on it for ever.
+    Divergent(&'a [bool]),
+    /// Only cycles of timelocked states (bounded response, whose observer sees the
+    /// cycles with a tick).
+    Timelocked(&'a [bool]),
+}
+
 struct Waiting<'g> {
     g: &'g Flagged,
     p: usize,
     response: u32,
-    /// The model has a `Time` connector: only runs with infinitely many ticks count.
-    timed: bool,
+    forever: Forever<'g>,
 }
 
 impl Waiting<'_> {
@@ -46,9 +60,13 @@ impl Waiting<'_> {
             && self.g.state_flags[self.g.targets[e] as usize] & IN_ERROR == 0
     }
 
-    /// An edge that lets the run count as going on forever on a cycle.
-    fn fair(&self, e: usize) -> bool {
-        !self.timed || self.g.edge_data[e] & TICK != 0
+    /// An edge out of state `s` that lets the run count as going on forever on a cycle.
+    fn fair(&self, s: u32, e: usize) -> bool {
+        match self.forever {
+            Forever::Any => true,
+            Forever::Divergent(locked) => self.g.edge_data[e] & TICK != 0 || locked[s as usize],
+            Forever::Timelocked(locked) => locked[s as usize],
+        }
     }
 
     fn dead(&self, s: u32) -> bool {
@@ -56,13 +74,14 @@ impl Waiting<'_> {
     }
 }
 
-/// Searches property `p` of the graph, of a model with `Time` connectors if `timed`.
-pub(crate) fn search(g: &Flagged, p: usize, timed: bool, watch: &Watch) -> Found {
+/// Searches property `p` of the graph for a run that waits forever, by `forever`'s
+/// cycles, or stops.
+pub(crate) fn search<'g>(g: &'g Flagged, p: usize, forever: Forever<'g>, watch: &Watch) -> Found {
     let w = Waiting {
         g,
         p,
         response: response_bit(p),
-        timed,
+        forever,
     };
     let trigger = trigger_bit(p);
     let Some(scc) = components(&w, watch) else {
@@ -114,13 +133,13 @@ pub(crate) fn search(g: &Flagged, p: usize, timed: bool, watch: &Watch) -> Found
     let c = scc.comp[entry as usize];
     let inside = |e: usize| w.edge(e) && scc.comp[g.targets[e] as usize] == c;
     // to a state with a fair edge inside the component, along it, and back to the entry
-    let has_fair = |t: u32| g.edges(t).any(|e| inside(e) && w.fair(e));
+    let has_fair = |t: u32| g.edges(t).any(|e| inside(e) && w.fair(t, e));
     let to_fair = shortest_path(g, entry, inside, has_fair).expect("the component has a fair edge");
     let loop_start = run.edges.len();
     run.extend(g, &to_fair);
     let fair = g
         .edges(run.last())
-        .find(|&e| inside(e) && w.fair(e))
+        .find(|&e| inside(e) && w.fair(run.last(), e))
         .expect("found by has_fair");
     run.push(g, fair);
     let back = shortest_path(g, run.last(), inside, |t| t == entry)
@@ -130,8 +149,8 @@ pub(crate) fn search(g: &Flagged, p: usize, timed: bool, watch: &Watch) -> Found
     Found::Fails(run)
 }
 
-/// The components of the waiting part, each marked fair (it holds a cycle that lets
-/// time pass) and doomed (it holds a fair cycle or a dead end, or leads to a doomed one).
+/// The components of the waiting part, each marked fair (it holds a cycle that goes on
+/// forever) and doomed (it holds a fair cycle or a dead end, or leads to a doomed one).
 struct Components {
     /// Each state's component (`OUTSIDE` the waiting part).
     comp: Vec<u32>,
@@ -154,7 +173,7 @@ fn components(w: &Waiting<'_>, watch: &Watch) -> Option<Components> {
             for e in g.edges(x).filter(|&e| w.edge(e)) {
                 let d = scc.of[g.targets[e] as usize];
                 if d == c {
-                    is_fair |= w.fair(e);
+                    is_fair |= w.fair(x, e);
                 } else {
                     is_doomed |= doomed[d as usize];
                 }

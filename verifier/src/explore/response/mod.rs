@@ -3,11 +3,14 @@
 //! liveness"): `watched` says what the stored graph (`explore::graph`) keeps for them,
 //! `bounded` searches the product with a tick-counting
 //! observer, `cycles` searches for runs on which the response never comes, `run` holds
-//! the paths both return. A truncated exploration decides none of them.
+//! the paths both return. `timelock` decides time progress on the same graph: the
+//! liveness verdicts assume that time diverges, and its timelocked states are where it
+//! cannot. A truncated exploration decides none of them.
 
 mod bounded;
 mod cycles;
 mod run;
+mod timelock;
 mod watched;
 
 use bip_model::{Happens, OwnedStep, State, Steps, System, Trace, Verdict};
@@ -18,7 +21,9 @@ use crate::report::PropertyVerdict;
 use crate::visited::Visited;
 use crate::watch::Watch;
 
+use cycles::Forever;
 use run::Run;
+use timelock::Timelocks;
 use watched::{Flagged, Watched, Watching, MAX_WATCHED};
 
 /// A response property's verdict, with a note when its trigger never happens.
@@ -35,16 +40,17 @@ pub(super) struct Question<'a> {
     pub(super) within: Option<u64>,
 }
 
-/// The verdicts of the response properties `questions`, in order, from a complete
-/// exploration stored in `visited`.
+/// The verdicts of the response properties `questions`, in order, and of time progress
+/// if `time_progress` asks for it, from a complete exploration stored in `visited`.
 pub(super) fn decide(
     system: &System,
     visited: &Visited,
     questions: &[Question<'_>],
+    time_progress: bool,
     watch: &Watch,
-) -> Result<Vec<Decided>, VerifyError> {
-    if questions.is_empty() {
-        return Ok(Vec::new());
+) -> Result<(Vec<Decided>, Option<Decided>), VerifyError> {
+    if questions.is_empty() && !time_progress {
+        return Ok((Vec::new(), None));
     }
     let mut out: Vec<Option<Decided>> = questions.iter().map(|_| None).collect();
     let mut watched = Vec::new();
@@ -84,8 +90,27 @@ pub(super) fn decide(
         for &k in &which {
             out[k] = Some(stopped(watch));
         }
-        return Ok(done(out));
+        return Ok((done(out), time_progress.then(|| stopped(watch))));
     };
+    // the timelocked states, which the liveness searches need in a model with time
+    let timelocks = if system.has_time() {
+        watch.rebase();
+        let Some(t) = timelock::locked(&g, watch) else {
+            for &k in &which {
+                out[k] = Some(stopped(watch));
+            }
+            return Ok((done(out), time_progress.then(|| stopped(watch))));
+        };
+        Some(t)
+    } else {
+        None
+    };
+    let progress = match (&timelocks, time_progress) {
+        (Some(t), true) => Some(time_progress_verdict(system, visited, &g, t)?),
+        _ => None,
+    };
+    let locked: Option<&[bool]> = timelocks.as_ref().map(|t| t.locked.as_slice());
+    let any_locked = locked.is_some_and(|l| l.iter().any(|&x| x));
     for (p, &k) in which.iter().enumerate() {
         // what the last search announced is freed or resident now
         watch.rebase();
@@ -109,6 +134,19 @@ pub(super) fn decide(
         }
         let found = match within {
             Some(bound) => match bounded::search(&g, p, bound, watch) {
+                // the observer sees ticks: a wait on a cycle of timelocked states, where
+                // no tick ever comes, is for the cycle search
+                bounded::Found::Holds { vacuous: false } if any_locked => {
+                    let forever = Forever::Timelocked(locked.unwrap_or_default());
+                    match cycles::search(&g, p, forever, watch) {
+                        cycles::Found::Holds { vacuous } => Ok(vacuous),
+                        cycles::Found::Fails(run) => Err(run),
+                        cycles::Found::Stopped => {
+                            out[k] = Some(stopped(watch));
+                            continue;
+                        }
+                    }
+                }
                 bounded::Found::Holds { vacuous } => Ok(vacuous),
                 bounded::Found::Fails(run) => Err(run),
                 bounded::Found::TooLarge => {
@@ -124,7 +162,12 @@ pub(super) fn decide(
                     continue;
                 }
             },
-            None => match cycles::search(&g, p, system.has_time(), watch) {
+            None => match cycles::search(
+                &g,
+                p,
+                locked.map_or(Forever::Any, Forever::Divergent),
+                watch,
+            ) {
                 cycles::Found::Holds { vacuous } => Ok(vacuous),
                 cycles::Found::Fails(run) => Err(run),
                 cycles::Found::Stopped => {
@@ -141,7 +184,7 @@ pub(super) fn decide(
             Err(run) => {
                 let mut trace = run_trace(system, visited, &g, &run)?;
                 trace.verdict = Verdict::Violation(t.name.to_string());
-                let reason = reason(&g, &run, within);
+                let reason = reason(&g, &run, within, locked);
                 Decided {
                     verdict: PropertyVerdict::Fails {
                         reason,
@@ -152,7 +195,55 @@ pub(super) fn decide(
             }
         });
     }
-    Ok(done(out))
+    Ok((done(out), progress))
+}
+
+/// The verdict of time progress: fails with a shortest trace to the first timelocked
+/// state, on to where the run is stuck, and why time cannot pass there.
+fn time_progress_verdict(
+    system: &System,
+    visited: &Visited,
+    g: &Flagged,
+    t: &Timelocks,
+) -> Result<Decided, VerifyError> {
+    let Some(run) = timelock::first_timelock(g, t) else {
+        return Ok(Decided {
+            verdict: PropertyVerdict::Holds { witness: None },
+            note: None,
+        });
+    };
+    let mut trace = run_trace(system, visited, g, &run)?;
+    trace.verdict = Verdict::Violation(crate::properties::TIME_PROGRESS.into());
+    let first = run
+        .states
+        .iter()
+        .position(|&s| t.locked[s as usize])
+        .expect("the run reaches a timelocked state");
+    // where the run is stuck for ever: the cycle's first state, or the last
+    let stuck = run.loop_start.unwrap_or(run.edges.len());
+    let mut state = system.initial_state();
+    system
+        .layout
+        .decode(visited.state(g.ids[run.states[stuck] as usize]), &mut state);
+    let steps = |n: usize| format!("{n} step{}", if n == 1 { "" } else { "s" });
+    let how = match run.loop_start {
+        Some(k) => format!(
+            "a cycle of {} without a tick repeats forever",
+            steps(run.edges.len() - k)
+        ),
+        None => "the run stops there".into(),
+    };
+    Ok(Decided {
+        verdict: PropertyVerdict::Fails {
+            reason: format!(
+                "time stops after {}: no run from there lets time pass ({how}); {}",
+                steps(first),
+                timelock::why(system, &state)
+            ),
+            trace: Some(trace),
+        },
+        note: None,
+    })
 }
 
 fn inconclusive(reason: String) -> Decided {
@@ -162,11 +253,16 @@ fn inconclusive(reason: String) -> Decided {
     }
 }
 
-/// How the counterexample `run` fails.
-fn reason(g: &Flagged, run: &Run, within: Option<u64>) -> String {
+/// How the counterexample `run` fails (`locked`: the timelocked states).
+fn reason(g: &Flagged, run: &Run, within: Option<u64>, locked: Option<&[bool]>) -> String {
     let n = run.edges.len();
     let steps = |n: usize| format!("{n} step{}", if n == 1 { "" } else { "s" });
     match (run.loop_start, within) {
+        (Some(k), _) if locked.is_some_and(|l| l[run.states[k] as usize]) => format!(
+            "the response never comes: after {}, a cycle of {} repeats forever without it, and time cannot pass on it (a timelock: TimeProgress fails)",
+            steps(k),
+            steps(n - k)
+        ),
         (Some(k), _) => format!(
             "the response never comes: after {}, a cycle of {} repeats forever without it",
             steps(k),
