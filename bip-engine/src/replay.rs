@@ -95,10 +95,16 @@ pub fn replay(system: System, trace: &Trace) -> Result<Replay, BuildError> {
                 .map(|e| (k + 1, e)),
         );
         match taken {
+            // a step into a state with a range error is taken, and stops the engine: the
+            // trace ends there, with that range error as its verdict
             Ok(stepped) if engine.inspect().state() == state => {
                 steps.push(ReplayedStep { name, stepped })
             }
-            Ok(_) => {
+            Err(StepAsError::TakenThenStopped(_)) if engine.inspect().state() == state => {
+                let stepped = engine.stepped_by(step.label);
+                steps.push(ReplayedStep { name, stepped })
+            }
+            Ok(_) | Err(StepAsError::TakenThenStopped(_)) => {
                 return Ok(refused_at(
                     engine,
                     steps,
@@ -225,7 +231,17 @@ fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End
             let live = system
                 .enabled_steps(state, &mut steps)
                 .and_then(|()| system.liveness(state, &steps, &mut checker));
+            let terminal = system.properties.iter().find_map(|p| match &p.kind {
+                PropertyKind::DeadlockFree { terminal } => terminal.as_ref(),
+                _ => None,
+            });
+            let excused = |t: &bip_model::eval::Expr| {
+                system.holds(t, state, "terminal condition of DeadlockFree")
+            };
             match live {
+                Ok(Liveness::Deadlock) if terminal.is_some_and(|t| excused(t) != Ok(false)) => {
+                    not("the last state is a deadlock the terminal condition excuses (or cannot evaluate)")
+                }
                 Ok(Liveness::Deadlock) => {
                     let held = engine
                         .inspect()
@@ -281,22 +297,11 @@ fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End
                 (Err(e), _) => not(&format!("range error: {e}")),
             }
         }
-        Verdict::RangeError(_) => {
-            let mut steps = Steps::new();
-            if let Err(e) = system.enabled_steps(state, &mut steps) {
-                return End::RangeError {
-                    message: e.to_string(),
-                };
-            }
-            let mut next = state.clone();
-            for s in steps.iter() {
-                if let Err(e) = system.fire(state, s, &mut next) {
-                    return End::RangeError {
-                        message: e.to_string(),
-                    };
-                }
-            }
-            not("no step from the last state has a range error")
-        }
+        Verdict::RangeError(_) => match system.range_error_from(state) {
+            Some(e) => End::RangeError {
+                message: e.to_string(),
+            },
+            None => not("nothing evaluated from the last state has a range error"),
+        },
     }
 }

@@ -335,6 +335,65 @@ impl Trace {
 }
 
 impl System {
+    /// The first range error met from `state`, where the verifier looks for one (a
+    /// `RangeError` verdict at the end of a trace is one of these): a property's state
+    /// condition in it (an invariant, a reachability, a response property's state trigger
+    /// or response), its enabled steps (a guard, a priority's `when`), firing one of them,
+    /// a response property's step pattern on one, or, if it is a deadlock, the terminal
+    /// condition of `DeadlockFree`.
+    pub fn range_error_from(&self, state: &State) -> Option<RangeError> {
+        self.range_error_in(state).err()
+    }
+
+    fn range_error_in(&self, state: &State) -> Result<(), RangeError> {
+        use crate::model::PropertyKind;
+        for p in &self.properties {
+            let context = format!("property {}", p.name);
+            match &p.kind {
+                PropertyKind::Invariant(e) | PropertyKind::Reachable(e) => {
+                    self.holds(e, state, &context)?;
+                }
+                PropertyKind::Response {
+                    trigger, response, ..
+                } => {
+                    self.happens_in(trigger, state, &context)?;
+                    self.happens_in(response, state, &context)?;
+                }
+                PropertyKind::DeadlockFree { .. } => {}
+            }
+        }
+        let mut steps = Steps::new();
+        self.enabled_steps(state, &mut steps)?;
+        let mut next = state.clone();
+        for step in steps.iter() {
+            self.fire(state, step, &mut next)?;
+            for p in &self.properties {
+                if let Some(spec) = p.kind.response_spec() {
+                    let context = format!("property {}", p.name);
+                    self.happens_on(spec.trigger, state, step, &next, &context)?;
+                    self.happens_on(spec.response, state, step, &next, &context)?;
+                }
+            }
+        }
+        let terminal = self.properties.iter().find_map(|p| match &p.kind {
+            PropertyKind::DeadlockFree { terminal } => terminal.as_ref(),
+            _ => None,
+        });
+        if let Some(terminal) = terminal {
+            let mut checker = crate::deadlock::LivenessChecker::default();
+            // a liveness that cannot be told is no range error of this state: the
+            // verifier counts it as unknown
+            if let Ok(crate::deadlock::Liveness::Deadlock) =
+                self.liveness(state, &steps, &mut checker)
+            {
+                self.holds(terminal, state, "terminal condition of DeadlockFree")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl System {
     /// True for a variable the GenoM expansion keeps for its own bookkeeping, which a
     /// trace shows only on request: an activity's `req` (a request is pending) and
     /// `paused` (it waits for its task's next period), as bip-lang's `genom::names` calls

@@ -4,6 +4,7 @@
 //! read from the sources (`layering`), and wide models within memory and time bounds
 //! (`wide_models`), in one binary.
 
+mod agreement;
 mod check;
 mod codegen;
 mod common;
@@ -15,6 +16,7 @@ mod genom3;
 mod graph;
 mod layering;
 mod limits;
+mod replay;
 mod response;
 mod sched;
 mod trace;
