@@ -5,6 +5,7 @@
 
 mod timeline;
 pub(crate) mod view;
+pub(crate) mod why;
 
 use std::path::{Path, PathBuf};
 
@@ -302,7 +303,7 @@ fn end_note(system: &System, trace: &Trace) -> Option<Note> {
     match &trace.verdict {
         Verdict::Deadlock => {
             let mut why = String::new();
-            crate::verify::write_why_stuck(&mut why, system, trace);
+            why::write_why_stuck(&mut why, system, trace);
             // its lines as the verify report indents them, without the heading
             let mut lines: Vec<String> = why
                 .lines()

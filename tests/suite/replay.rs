@@ -229,3 +229,23 @@ fn a_leads_to_whose_state_trigger_holds_at_the_end_replays() {
     let replays = verify_and_replay(&m, dir.path());
     assert!(replays[0].contains("result: back fails"), "{}", replays[0]);
 }
+
+#[test]
+fn a_property_with_a_long_name_keeps_its_verdict_and_saves_its_trace() {
+    let dir = tempfile::tempdir().unwrap();
+    let long = "n".repeat(300);
+    let extra = format!(r#"properties: [Invariant(name: "{long}", expr: "a@l0")],"#);
+    let m = model(dir.path(), "long", 1, "true", "true", &extra);
+    let replays = verify_and_replay(&m, dir.path());
+    assert!(
+        replays[0].contains(&format!("result: {long} fails")),
+        "{}",
+        replays[0]
+    );
+    let names: Vec<String> = std::fs::read_dir(dir.path().join("traces"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names.len(), 2, "the trace and its chart: {names:?}");
+    assert!(names.iter().all(|n| n.len() < 100), "{names:?}");
+}
