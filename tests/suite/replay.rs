@@ -249,3 +249,54 @@ fn a_property_with_a_long_name_keeps_its_verdict_and_saves_its_trace() {
     assert_eq!(names.len(), 2, "the trace and its chart: {names:?}");
     assert!(names.iter().all(|n| n.len() < 100), "{names:?}");
 }
+
+/// An activity and a function with two `Guard`s, `first` then `second`; `m.x` is 0.
+fn guarded(dir: &Path, first: &str, second: &str) -> String {
+    let text = format!(
+        r#"System(
+            name: "guarded",
+            modules: [(
+                name: "m",
+                ids: [(name: "x", ty: Int(0, 3), init: 0)],
+                tasks: [(name: "t", period: 1)],
+                services: [
+                    (name: "Run", kind: Activity, task: "t",
+                     codels: [(state: "start", yields: ["ether"])]),
+                    (name: "Get", kind: Function),
+                ],
+            )],
+            constraints: [
+                Guard(service: "m.Run", when: "{first}"),
+                Guard(service: "m.Run", when: "{second}"),
+                Guard(service: "m.Get", when: "{first}"),
+                Guard(service: "m.Get", when: "{second}"),
+            ],
+        )"#
+    );
+    let path = dir.join("guarded.ron");
+    std::fs::write(&path, text).unwrap();
+    path.display().to_string()
+}
+
+#[test]
+fn guards_are_evaluated_in_one_order_by_verify_and_simulate() {
+    let dir = tempfile::tempdir().unwrap();
+    // `false` refuses first: `1 / m.x` is never evaluated, by the verifier nor the engine
+    let m = guarded(dir.path(), "false", "1 / m.x == 0");
+    let o = bip(&["verify", &m, "-q", "--method", "explicit"]);
+    assert!(out(&o).contains("RangeErrors   holds"), "{}", out(&o));
+    let sim = simulate_and_replay(&m, dir.path(), 0);
+    assert!(sim.contains("refused"), "{sim}");
+    assert!(!sim.contains("RANGE ERROR"), "{sim}");
+    // the other way round, `1 / m.x` is evaluated first: a range error for both
+    let m = guarded(dir.path(), "1 / m.x == 0", "false");
+    let replays = verify_and_replay(&m, dir.path());
+    assert!(
+        replays
+            .iter()
+            .any(|r| r.contains("range error from the last state")),
+        "{replays:?}"
+    );
+    let sim = simulate_and_replay(&m, dir.path(), 1);
+    assert!(sim.contains("RANGE ERROR"), "{sim}");
+}
