@@ -74,7 +74,7 @@ pub use priority_graph::{PriorityGraph, MAX_INCIDENCES};
 pub use response::{ResponseSpec, ResponseWatch};
 pub use rng::Rng;
 pub use state::{State, StateLayout};
-pub use state_cache::{CacheStats, StateCache};
+pub use state_cache::{CacheStats, StateCache, STATE_CACHE_BYTES};
 pub use steps::{Label, OwnedStep, Pick, Step, Steps};
 pub use system::{Summary, System};
 pub use trace::{Trace, TraceStep, TraceValue, Verdict};

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use crate::model::{RangeError, VarType};
 use crate::ordered_map::OrderedMap;
 use crate::state::State;
-use crate::steps::{OwnedStep, Steps};
+use crate::steps::{Label, OwnedStep, Steps};
 use crate::system::System;
 
 /// A trace file reads `Trace(system: "...", steps: [...], verdict: ...)`; the verdict comes
@@ -56,6 +56,16 @@ pub struct TraceStep {
     pub step: String,
     /// What changed: `"phil[0]": "hungry"` for a location, `"buf.count": 3` for a variable.
     pub state: OrderedMap<String, TraceValue>,
+}
+
+impl TraceStep {
+    /// The step `label` from `before` to `after`, as a trace records it.
+    pub fn between(system: &System, label: Label, before: &State, after: &State) -> TraceStep {
+        TraceStep {
+            step: system.label_name(label),
+            state: system.diff(before, after),
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -150,10 +160,7 @@ impl Trace {
         let mut prev = start;
         let mut steps = Vec::with_capacity(path.len());
         for (step, state) in path {
-            steps.push(TraceStep {
-                step: system.label_name(step.label),
-                state: system.diff(prev, state),
-            });
+            steps.push(TraceStep::between(system, step.label, prev, state));
             prev = state;
         }
         Trace {
