@@ -24,7 +24,6 @@ mod simulate;
 mod startup;
 mod trace;
 mod verify;
-mod why;
 
 use std::path::PathBuf;
 use std::process::ExitCode;

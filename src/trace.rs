@@ -5,6 +5,7 @@
 
 mod timeline;
 pub(crate) mod view;
+pub(crate) mod why;
 
 use std::path::{Path, PathBuf};
 
@@ -336,9 +337,9 @@ fn end_note(system: &System, trace: &Trace) -> Option<Note> {
     }
 }
 
-/// Why the trace ends as it does (`crate::why`), indented by depth.
+/// Why the trace ends as it does (`trace::why`), indented by depth.
 fn why_lines(system: &System, trace: &Trace) -> Vec<String> {
-    crate::why::why(system, trace)
+    why::why(system, trace)
         .into_iter()
         .map(|(depth, line)| format!("{}{line}", "  ".repeat(depth)))
         .collect()

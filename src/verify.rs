@@ -284,10 +284,14 @@ fn new_bar() -> ProgressBar {
 }
 
 fn write_outputs(args: &Args, system: &System, report: &Report) -> Result<(), String> {
+    // a trace that cannot be saved (a full disk) is reported after the verdicts, which
+    // are printed all the same
     let mut saved = Vec::new();
+    let mut unsaved = None;
     if let Some(dir) = &args.trace_dir {
-        saved = save_traces(dir, report)?;
-        crate::trace::save_charts(system, report, &saved)?;
+        unsaved = save_traces(dir, report, &mut saved)
+            .and_then(|()| crate::trace::save_charts(system, report, &saved))
+            .err();
     }
     let text = match args.format {
         Format::Text => text_report(args, system, report, &saved),
@@ -302,12 +306,16 @@ fn write_outputs(args: &Args, system: &System, report: &Report) -> Result<(), St
         std::fs::write(path, junit_report(args, system, report))
             .map_err(|e| format!("cannot write the JUnit report {}: {e}", path.display()))?;
     }
-    Ok(())
+    unsaved.map_or(Ok(()), Err)
 }
 
-/// Writes `<property>.trace.ron` for each property with a trace; returns the paths.
-fn save_traces(dir: &Path, report: &Report) -> Result<Vec<(String, PathBuf)>, String> {
-    let mut out = Vec::new();
+/// Writes `<file name>.trace.ron` for each property with a trace, adding each to `saved`
+/// as it goes (the property's name and the path).
+fn save_traces(
+    dir: &Path,
+    report: &Report,
+    saved: &mut Vec<(String, PathBuf)>,
+) -> Result<(), String> {
     let mut taken = std::collections::HashSet::new();
     for p in &report.properties {
         let Some(trace) = p.verdict.trace() else {
@@ -319,14 +327,21 @@ fn save_traces(dir: &Path, report: &Report) -> Result<Vec<(String, PathBuf)>, St
         ));
         std::fs::write(&path, bip_lang::trace_file::to_ron(trace) + "\n")
             .map_err(|e| format!("cannot write the trace {}: {e}", path.display()))?;
-        out.push((p.name.clone(), path));
+        saved.push((p.name.clone(), path));
     }
-    Ok(out)
+    Ok(())
 }
 
-/// A property name as a file name: anything but letters, digits, `-` and `_` becomes `_`.
+/// The longest property name kept whole in a file name: with the hash and the longest
+/// suffix (`.trace.ron`), a file name stays far below the 255 bytes file systems allow.
+const FILE_NAME_KEPT: usize = 64;
+
+/// A property name as a file name: anything but ASCII letters, digits, `-` and `_`
+/// becomes `_`; a name longer than [`FILE_NAME_KEPT`] is cut there and ends in `-` and
+/// the hash of the whole name.
 fn file_name(name: &str) -> String {
-    name.chars()
+    let safe: String = name
+        .chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
                 c
@@ -334,20 +349,41 @@ fn file_name(name: &str) -> String {
                 '_'
             }
         })
-        .collect()
+        .collect();
+    if safe.len() <= FILE_NAME_KEPT {
+        return safe;
+    }
+    format!("{}-{:016x}", &safe[..FILE_NAME_KEPT], name_hash(name))
 }
 
-/// [`file_name`], with `-2`, `-3`, ... added when two names would give the same file
-/// (`p!` and `p?`; also `P` and `p`, on a file system that ignores case).
+/// [`file_name`], told apart from the names already `taken` (case ignored, for file
+/// systems that ignore it): a name that would give a taken file (`p!` and `p?`, `P` and
+/// `p`) ends in `-` and its hash instead; `-2`, `-3`, ... if even that is taken.
 fn unique_file_name(name: &str, taken: &mut std::collections::HashSet<String>) -> String {
     let base = file_name(name);
-    let mut candidate = base.clone();
+    if taken.insert(base.to_lowercase()) {
+        return base;
+    }
+    let hashed = format!(
+        "{}-{:016x}",
+        &base[..base.len().min(FILE_NAME_KEPT)],
+        name_hash(name)
+    );
+    let mut candidate = hashed.clone();
     let mut n = 1;
     while !taken.insert(candidate.to_lowercase()) {
         n += 1;
-        candidate = format!("{base}-{n}");
+        candidate = format!("{hashed}-{n}");
     }
     candidate
+}
+
+/// FNV-1a of the name: the same on every machine and in every version, so a property's
+/// file keeps its name from run to run.
+fn name_hash(name: &str) -> u64 {
+    name.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
 }
 
 fn method_name(method: Method) -> &'static str {
@@ -462,7 +498,7 @@ fn text_report(
             );
         }
         if p.verdict.fails() {
-            crate::why::write_why(&mut s, system, trace);
+            crate::trace::why::write_why(&mut s, system, trace);
         }
         if let Some((_, path)) = saved.iter().find(|(n, _)| *n == p.name) {
             let _ = writeln!(s, "  saved as {}", path.display());
@@ -556,13 +592,13 @@ fn write_figures(s: &mut String, report: &Report) {
     );
 }
 
-/// Why a failing trace of a GenoM model ends as it does (`crate::why`), one line each;
+/// Why a failing trace of a GenoM model ends as it does (`trace::why`), one line each;
 /// empty for other properties and models.
 fn why_lines(system: &System, p: &bip_verifier::PropertyResult) -> Vec<String> {
     let PropertyVerdict::Fails { trace: Some(t), .. } = &p.verdict else {
         return Vec::new();
     };
-    crate::why::why(system, t)
+    crate::trace::why::why(system, t)
         .into_iter()
         .map(|(_, line)| line)
         .collect()
@@ -681,5 +717,27 @@ mod tests {
     fn property_names_become_file_names() {
         assert_eq!(file_name("no/way out"), "no_way_out");
         assert_eq!(file_name("DeadlockFree"), "DeadlockFree");
+    }
+
+    #[test]
+    fn long_and_clashing_names_become_short_distinct_file_names() {
+        let long_a = "a".repeat(300);
+        let long_b = format!("{}b", "a".repeat(299));
+        let mut taken = std::collections::HashSet::new();
+        let a = unique_file_name(&long_a, &mut taken);
+        let b = unique_file_name(&long_b, &mut taken);
+        assert_ne!(a, b);
+        for f in [&a, &b] {
+            assert!(f.len() <= FILE_NAME_KEPT + 17, "{f}");
+            assert!(f.starts_with(&"a".repeat(FILE_NAME_KEPT)), "{f}");
+        }
+        // the same names give the same files, run after run
+        assert_eq!(file_name(&long_a), a);
+        let p = unique_file_name("p!", &mut taken);
+        let q = unique_file_name("p?", &mut taken);
+        let upper = unique_file_name("P_", &mut taken);
+        assert_eq!(p, "p_");
+        assert!(q.starts_with("p_-") && q.len() == 2 + 17, "{q}");
+        assert!(upper.starts_with("P_-") && upper != q, "{upper}");
     }
 }

@@ -24,8 +24,6 @@ pub enum BuildError {
     NoGenomLayer,
     #[error("{0} has more than 64 {1}; the engine reports them in a 64-bit set")]
     TooMany(String, &'static str),
-    #[error("the initial state has a range error: {0}")]
-    Range(RangeError),
     #[error("threads for tasks need the `std` feature")]
     NoThreads,
 }
@@ -88,6 +86,10 @@ pub(crate) enum StepAsError {
     NotAllowed,
     #[error("the codel's outcome leads to another step than the one asked")]
     Diverged,
+    /// The step was taken, and the state it leads to has a range error, which stopped the
+    /// engine.
+    #[error("range error after the step: {0}")]
+    TakenThenStopped(RangeError),
     #[error(transparent)]
     Engine(#[from] EngineError),
 }

@@ -7,7 +7,7 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use bip_model::{Label, OwnedStep, Pick, State, Step, System, Trace, Verdict};
+use bip_model::{Label, Pick, State, Step, System, Trace, TraceStep, Verdict};
 
 /// Steps in the order they were committed, from a start state.
 #[derive(Clone, Debug, Default)]
@@ -116,7 +116,9 @@ impl Recording {
             .start
             .clone()
             .unwrap_or_else(|| system.initial_state());
-        let mut path: Vec<(OwnedStep, State)> = Vec::with_capacity(self.len());
+        // two states at a time, whatever the window's length: a state of a wide model is
+        // big, what a step changed is small
+        let mut trace_steps = Vec::with_capacity(self.len());
         let mut state = start.clone();
         let mut next = state.clone();
         let steps = (0..self.older.steps.len())
@@ -126,12 +128,17 @@ impl Recording {
             if system.fire(&state, step, &mut next).is_err() {
                 break; // the engine never commits a step that fails to fire
             }
+            trace_steps.push(TraceStep::between(system, step.label, &state, &next));
             core::mem::swap(&mut state, &mut next);
-            path.push((step.to_owned(), state.clone()));
         }
         Window {
             skipped: self.skipped,
-            trace: Trace::from_path_at(system, &start, verdict, &path),
+            trace: Trace {
+                system: system.name.clone(),
+                steps: trace_steps,
+                verdict,
+                loop_start: None,
+            },
             start,
         }
     }

@@ -100,10 +100,16 @@ pub fn replay(system: System, trace: &Trace) -> Result<Replay, BuildError> {
                 .map(|e| (k + 1, e)),
         );
         match taken {
+            // a step into a state with a range error is taken, and stops the engine: the
+            // trace ends there, with that range error as its verdict
             Ok(stepped) if engine.inspect().state() == state => {
                 steps.push(ReplayedStep { name, stepped })
             }
-            Ok(_) => {
+            Err(StepAsError::TakenThenStopped(_)) if engine.inspect().state() == state => {
+                let stepped = engine.stepped_by(step.label);
+                steps.push(ReplayedStep { name, stepped })
+            }
+            Ok(_) | Err(StepAsError::TakenThenStopped(_)) => {
                 return Ok(refused_at(
                     engine,
                     steps,
@@ -273,7 +279,17 @@ fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End
             let live = system
                 .enabled_steps(state, &mut steps)
                 .and_then(|()| system.liveness(state, &steps, &mut checker));
+            let terminal = system.properties.iter().find_map(|p| match &p.kind {
+                PropertyKind::DeadlockFree { terminal } => terminal.as_ref(),
+                _ => None,
+            });
+            let excused = |t: &bip_model::eval::Expr| {
+                system.holds(t, state, "terminal condition of DeadlockFree")
+            };
             match live {
+                Ok(Liveness::Deadlock) if terminal.is_some_and(|t| excused(t) != Ok(false)) => {
+                    not("the last state is a deadlock the terminal condition excuses (or cannot evaluate)")
+                }
                 Ok(Liveness::Deadlock) => {
                     let held = engine
                         .inspect()
@@ -332,69 +348,11 @@ fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End
                 (Err(e), _) => not(&format!("range error: {e}")),
             }
         }
-        Verdict::RangeError(_) => {
-            let mut steps = Steps::new();
-            if let Err(e) = system.enabled_steps(state, &mut steps) {
-                return End::RangeError {
-                    message: e.to_string(),
-                };
-            }
-            let mut next = state.clone();
-            for s in steps.iter() {
-                if let Err(e) = system.fire(state, s, &mut next) {
-                    return End::RangeError {
-                        message: e.to_string(),
-                    };
-                }
-            }
-            match property_range_error(system, path, &steps) {
-                Some(message) => End::RangeError { message },
-                None => not("no step from the last state nor property there has a range error"),
-            }
-        }
+        Verdict::RangeError(_) => match system.range_error_from(state) {
+            Some(e) => End::RangeError {
+                message: e.to_string(),
+            },
+            None => not("nothing evaluated from the last state has a range error"),
+        },
     }
-}
-
-/// A property that cannot be evaluated at the end of `path` (whose last state has the
-/// enabled `steps`): an invariant or reachability there, a response property's trigger or
-/// response there or on a step out of it (`System::first_range_error` placing it there).
-fn property_range_error(
-    system: &System,
-    path: &[(OwnedStep, State)],
-    steps: &Steps,
-) -> Option<String> {
-    let init = system.initial_state();
-    let last = path.last().map_or(&init, |(_, s)| s);
-    let mut longer = path.to_vec();
-    for p in &system.properties {
-        match &p.kind {
-            PropertyKind::Invariant(e) | PropertyKind::Reachable(e) => {
-                if let Err(e) = system.holds(e, last, &p.name) {
-                    return Some(e.to_string());
-                }
-            }
-            PropertyKind::Response { .. } => {
-                let spec = p.kind.response_spec()?;
-                let context = format!("property {}", p.name);
-                // met at the last state: in it, or on a step out of it
-                let mut ways = vec![None];
-                ways.extend(steps.iter().filter_map(|s| {
-                    let mut next = last.clone();
-                    system.fire(last, s, &mut next).ok()?;
-                    Some(Some((s.to_owned(), next)))
-                }));
-                for way in ways {
-                    longer.truncate(path.len());
-                    longer.extend(way);
-                    if let Some((k, e)) = system.first_range_error(spec, &longer, &context) {
-                        if k == path.len() {
-                            return Some(e.to_string());
-                        }
-                    }
-                }
-            }
-            PropertyKind::DeadlockFree { .. } => {}
-        }
-    }
-    None
 }

@@ -24,7 +24,7 @@ use bip_model::{
 use crate::budgets::{CodelTime, CodelTimes};
 use crate::codel::DefaultCodels;
 use crate::engine::{Engine, Stats, Stepped};
-use crate::error::BuildError;
+use crate::error::{BuildError, StepAsError};
 use crate::event::Event;
 use crate::policy::Policy;
 use crate::record::Window;
@@ -219,6 +219,9 @@ pub fn simulate_with(
                 }
             } else if let Some(step) = environment_step(&engine, &mut rng) {
                 end = match engine.step_as(step.as_step()) {
+                    Err(StepAsError::TakenThenStopped(error)) => {
+                        Some(SimulationEnd::RangeError(error.to_string()))
+                    }
                     Err(e) => Some(SimulationEnd::RangeError(e.to_string())),
                     Ok(_) => checks.check(&engine),
                 };
@@ -389,6 +392,10 @@ impl Checks {
     /// Every invariant, and deadlock freedom if asked, in the engine's state.
     fn check(&mut self, engine: &Engine) -> Option<SimulationEnd> {
         let view = engine.inspect();
+        if let Some(e) = view.stopped() {
+            // a range error in the initial state: the engine never steps
+            return Some(SimulationEnd::RangeError(e.to_string()));
+        }
         let (system, state) = (view.system(), view.state());
         for p in &system.properties {
             if let PropertyKind::Invariant(e) = &p.kind {
@@ -401,16 +408,18 @@ impl Checks {
         }
         let terminal = self.deadlock_free.as_ref()?;
         view.enabled().copy_to(&mut self.steps);
+        // as the verifier judges a state: a liveness that cannot be told (a range error
+        // after ticks alone) is no finding here; the run goes on and meets it, or not
         match system.liveness(state, &self.steps, &mut self.checker) {
-            Ok(Liveness::Deadlock) => {
-                let excused = match terminal {
-                    Some(t) => system.holds(t, state, "terminal").unwrap_or(false),
-                    None => false,
-                };
-                (!excused).then_some(SimulationEnd::Deadlock)
-            }
-            Ok(_) => None,
-            Err(e) => Some(SimulationEnd::RangeError(e.to_string())),
+            Ok(Liveness::Deadlock) => match terminal {
+                Some(t) => match system.holds(t, state, "terminal condition of DeadlockFree") {
+                    Ok(true) => None,
+                    Ok(false) => Some(SimulationEnd::Deadlock),
+                    Err(e) => Some(SimulationEnd::RangeError(e.to_string())),
+                },
+                None => Some(SimulationEnd::Deadlock),
+            },
+            Ok(_) | Err(_) => None,
         }
     }
 }

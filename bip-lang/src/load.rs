@@ -13,7 +13,7 @@ use crate::syntax::{ron_options, SystemDef};
 use bip_model::System;
 
 /// The parts of a model's GenoM layer, as `ron` names them in errors: their fields are
-/// described in docs/genom.md.
+/// described in docs/model.md's section on the GenoM layer.
 const GENOM_PARTS: &[&str] = &[
     "ModuleDef",
     "TaskDef",
@@ -60,11 +60,16 @@ fn parse_shared(name: &str, text: &Arc<String>) -> Result<SystemDef, LoadError> 
         if let ron::Error::NoSuchStructField { outer, .. }
         | ron::Error::MissingStructField { outer, .. } = &e.code
         {
-            let page = match outer {
-                Some(o) if GENOM_PARTS.contains(&o.as_str()) => "docs/genom.md",
+            // model.md holds the field tables of every part, the GenoM layer's included
+            let section = match outer {
+                Some(o) if GENOM_PARTS.contains(&o.as_str()) => {
+                    "docs/model.md, \"The GenoM layer\""
+                }
                 _ => "docs/model.md",
             };
-            err = err.with_help(format!("see {page} for the fields of each part of a model"));
+            err = err.with_help(format!(
+                "see {section} for the fields of each part of a model"
+            ));
         }
         LoadError::model(name, text, vec![err])
     })?;

@@ -117,13 +117,27 @@ impl Gate {
     /// A gate at `system`'s initial state, whose cache remembers up to `cache_states`
     /// states (0: none).
     pub fn new(system: System, cache_states: usize) -> Result<Gate, RangeError> {
+        match Gate::at_initial(system, cache_states) {
+            (gate, None) => Ok(gate),
+            (_, Some(e)) => Err(e),
+        }
+    }
+
+    /// Like [`Gate::new`], but a range error in the initial state's enabled steps still
+    /// gives the gate, in the initial state with no enabled steps known (as a failed
+    /// [`Gate::set_state`] leaves it), and the error beside it: for a runtime that reports
+    /// that error as its first finding, as the verifier does.
+    pub fn at_initial(system: System, cache_states: usize) -> (Gate, Option<RangeError>) {
         let state = system.initial_state();
-        let enabled = EnabledSet::new(&system, &state)?;
+        let mut enabled = EnabledSet::unevaluated(&system);
+        let error = enabled.reset(&system, &state).err();
         let plans = system.fire_plans();
         let effects = enabled.plan_effects(&system, &plans);
         let mut cache = StateCache::new(&system, cache_states);
-        cache.enter(&enabled, &state);
-        Ok(Gate {
+        if error.is_none() {
+            cache.enter(&enabled, &state);
+        }
+        let gate = Gate {
             scratch: state.clone(),
             state,
             stale: Last::Nothing,
@@ -133,7 +147,8 @@ impl Gate {
             effects,
             cache,
             system,
-        })
+        };
+        (gate, error)
     }
 
     #[inline]

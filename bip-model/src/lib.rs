@@ -75,7 +75,7 @@ pub use priority_graph::{PriorityGraph, MAX_INCIDENCES};
 pub use response::{Happenings, ResponseSpec, ResponseWatch};
 pub use rng::Rng;
 pub use state::{State, StateLayout};
-pub use state_cache::{CacheStats, StateCache};
+pub use state_cache::{CacheStats, StateCache, STATE_CACHE_BYTES};
 pub use steps::{Label, OwnedStep, Pick, Step, Steps};
 pub use system::{Summary, System};
 pub use timelock::{TimeHeld, TIME_PROGRESS};

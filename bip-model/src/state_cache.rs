@@ -37,6 +37,21 @@ use crate::incremental::{EnabledSet, Evaluation};
 use crate::state::State;
 use crate::system::System;
 
+/// The most bytes the states a cache remembers may take, with their evaluations: a state
+/// of a wide model is big (100,000 dining philosophers: 200,000 slots and 300,000
+/// interactions, some 6 MiB a state), and a cache of a thousand of them would not fit in
+/// memory; a state of the rover's size (1.5 KiB) is far from it.
+pub const STATE_CACHE_BYTES: usize = 64 << 20;
+
+/// What remembering one state of `system` costs: its slots, its hash and index entry, its
+/// evaluation (per interaction what was found, and three bit sets).
+fn state_bytes(system: &System) -> usize {
+    let interactions = system.interactions.len();
+    let found = interactions * core::mem::size_of::<crate::found::Found>();
+    let bits = 3 * interactions.div_ceil(64) * 8;
+    system.slot_count() * 8 + 8 + 5 + found + bits
+}
+
 /// The states a run went through and the plans between them (see the module
 /// documentation). Use one cache with one [`EnabledSet`], as
 /// [`StateCache::take_known`], [`StateCache::leave`] and [`StateCache::arrive`] say.
@@ -104,11 +119,12 @@ pub struct CacheStats {
 }
 
 impl StateCache {
-    /// A cache of `system`'s states that remembers at most `capacity` of them (0: none; it
-    /// then only counts the steps as misses).
+    /// A cache of `system`'s states that remembers at most `capacity` of them, and no
+    /// more than fit in [`STATE_CACHE_BYTES`] (0: none; it then only counts the steps as
+    /// misses).
     pub fn new(system: &System, capacity: usize) -> StateCache {
         StateCache {
-            capacity,
+            capacity: capacity.min(STATE_CACHE_BYTES / state_bytes(system)),
             width: system.slot_count(),
             slots: Vec::new(),
             evaluations: Vec::new(),

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use crate::model::{RangeError, VarType};
 use crate::ordered_map::OrderedMap;
 use crate::state::State;
-use crate::steps::{OwnedStep, Steps};
+use crate::steps::{Label, OwnedStep, Steps};
 use crate::system::System;
 
 /// A trace file reads `Trace(system: "...", steps: [...], verdict: ...)`; the verdict comes
@@ -56,6 +56,16 @@ pub struct TraceStep {
     pub step: String,
     /// What changed: `"phil[0]": "hungry"` for a location, `"buf.count": 3` for a variable.
     pub state: OrderedMap<String, TraceValue>,
+}
+
+impl TraceStep {
+    /// The step `label` from `before` to `after`, as a trace records it.
+    pub fn between(system: &System, label: Label, before: &State, after: &State) -> TraceStep {
+        TraceStep {
+            step: system.label_name(label),
+            state: system.diff(before, after),
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -150,10 +160,7 @@ impl Trace {
         let mut prev = start;
         let mut steps = Vec::with_capacity(path.len());
         for (step, state) in path {
-            steps.push(TraceStep {
-                step: system.label_name(step.label),
-                state: system.diff(prev, state),
-            });
+            steps.push(TraceStep::between(system, step.label, prev, state));
             prev = state;
         }
         Trace {
@@ -331,6 +338,65 @@ impl Trace {
             notes: None,
             header: true,
         }
+    }
+}
+
+impl System {
+    /// The first range error met from `state`, where the verifier looks for one (a
+    /// `RangeError` verdict at the end of a trace is one of these): a property's state
+    /// condition in it (an invariant, a reachability, a response property's state trigger
+    /// or response), its enabled steps (a guard, a priority's `when`), firing one of them,
+    /// a response property's step pattern on one, or, if it is a deadlock, the terminal
+    /// condition of `DeadlockFree`.
+    pub fn range_error_from(&self, state: &State) -> Option<RangeError> {
+        self.range_error_in(state).err()
+    }
+
+    fn range_error_in(&self, state: &State) -> Result<(), RangeError> {
+        use crate::model::PropertyKind;
+        for p in &self.properties {
+            let context = format!("property {}", p.name);
+            match &p.kind {
+                PropertyKind::Invariant(e) | PropertyKind::Reachable(e) => {
+                    self.holds(e, state, &context)?;
+                }
+                PropertyKind::Response {
+                    trigger, response, ..
+                } => {
+                    self.happens_in(trigger, state, &context)?;
+                    self.happens_in(response, state, &context)?;
+                }
+                PropertyKind::DeadlockFree { .. } => {}
+            }
+        }
+        let mut steps = Steps::new();
+        self.enabled_steps(state, &mut steps)?;
+        let mut next = state.clone();
+        for step in steps.iter() {
+            self.fire(state, step, &mut next)?;
+            for p in &self.properties {
+                if let Some(spec) = p.kind.response_spec() {
+                    let context = format!("property {}", p.name);
+                    self.happens_on(spec.trigger, state, step, &next, &context)?;
+                    self.happens_on(spec.response, state, step, &next, &context)?;
+                }
+            }
+        }
+        let terminal = self.properties.iter().find_map(|p| match &p.kind {
+            PropertyKind::DeadlockFree { terminal } => terminal.as_ref(),
+            _ => None,
+        });
+        if let Some(terminal) = terminal {
+            let mut checker = crate::deadlock::LivenessChecker::default();
+            // a liveness that cannot be told is no range error of this state: the
+            // verifier counts it as unknown
+            if let Ok(crate::deadlock::Liveness::Deadlock) =
+                self.liveness(state, &steps, &mut checker)
+            {
+                self.holds(terminal, state, "terminal condition of DeadlockFree")?;
+            }
+        }
+        Ok(())
     }
 }
 

@@ -144,6 +144,24 @@ const CRATES: &[Layers] = &[
         ],
     },
     Layers {
+        src: "src",
+        layers: &[
+            (
+                "basics",
+                &["exit", "startup", "interrupt", "names", "report", "load"],
+            ),
+            // the commands whose views other commands reuse
+            ("views", &["trace", "graph"]),
+            (
+                "commands",
+                &[
+                    "check", "codegen", "expand", "explore", "export", "import", "replay", "sched",
+                    "simulate", "verify",
+                ],
+            ),
+        ],
+    },
+    Layers {
         src: "bip-lang/src",
         layers: &[
             ("positions", &["source", "source_map", "excerpt", "diag"]),

@@ -6,6 +6,7 @@
 //! read from the sources (`layering`), and wide models within memory and time bounds
 //! (`wide_models`), in one binary.
 
+mod agreement;
 mod check;
 mod codegen;
 mod common;
@@ -19,6 +20,7 @@ mod graph;
 mod layering;
 mod limits;
 mod memory_bounds;
+mod replay;
 mod response;
 mod sched;
 mod time_progress;

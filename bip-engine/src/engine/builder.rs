@@ -252,9 +252,16 @@ impl EngineBuilder {
                     .collect(),
             )
         });
-        let gate = Gate::new(system, self.state_cache).map_err(BuildError::Range)?;
-        let monitor =
-            super::monitor::Monitor::new(gate.system(), gate.state()).map_err(BuildError::Range)?;
+        // a range error in the initial state is the run's first finding, as in a step: the
+        // engine is built, stopped by it
+        let (gate, mut stopped) = Gate::at_initial(system, self.state_cache);
+        let monitor = match super::monitor::Monitor::new(gate.system(), gate.state()) {
+            Ok(m) => m,
+            Err(e) => {
+                stopped.get_or_insert(e);
+                super::monitor::Monitor::none()
+            }
+        };
         let pool = gate.enabled().pool();
         let plan_moves = gate
             .plans()
@@ -348,7 +355,7 @@ impl EngineBuilder {
             recording: self.record,
             stats: Stats::default(),
             budgets,
-            stopped: None,
+            stopped,
             monitor,
             #[cfg(feature = "std")]
             remote: None,

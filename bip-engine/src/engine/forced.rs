@@ -10,13 +10,28 @@ use super::replies::Cause;
 use super::{Engine, Stepped};
 use crate::bind::InterKind;
 use crate::error::{EngineError, StepAsError};
+use crate::event::{CodelId, Ticket};
 
 impl Engine {
     /// Takes exactly `step`, if the model allows it now: a codel step runs the codel,
     /// whose outcome must lead to this very step (a default codel does what the step
     /// says); a request step is a request from the engine; a time step is a tick. For
     /// replaying a trace through the engine.
+    ///
+    /// A step taken into a state with a range error (a guard, a `when`, a watched property
+    /// that cannot be evaluated there) stops the engine after it:
+    /// [`StepAsError::TakenThenStopped`].
     pub(crate) fn step_as(&mut self, step: Step<'_>) -> Result<Stepped, StepAsError> {
+        let before = self.stats.steps;
+        match self.take_as(step) {
+            Err(StepAsError::Engine(EngineError::Range(error))) if self.stats.steps > before => {
+                Err(StepAsError::TakenThenStopped(error))
+            }
+            taken => taken,
+        }
+    }
+
+    fn take_as(&mut self, step: Step<'_>) -> Result<Stepped, StepAsError> {
         if let Some(e) = &self.stopped {
             return Err(EngineError::Stopped(e.clone()).into());
         }
@@ -57,6 +72,26 @@ impl Engine {
                 self.commit(Cause::Other)?;
                 Ok(Stepped::Other)
             }
+        }
+    }
+
+    /// What a step with `label` that was just committed was, to the engine (for a step
+    /// [`StepAsError::TakenThenStopped`] took).
+    pub(crate) fn stepped_by(&self, label: Label) -> Stepped {
+        let Label::Interaction(i) = label else {
+            return Stepped::Other;
+        };
+        match self.t.kind[i as usize] {
+            InterKind::Codel { codel, fail } => Stepped::Codel {
+                codel: CodelId(codel),
+                failed: fail,
+            },
+            InterKind::Request { .. } => Stepped::Request {
+                ticket: Ticket(self.requests.next_ticket),
+                accepted: true,
+            },
+            InterKind::Time => Stepped::Tick,
+            InterKind::Progress | InterKind::Environment => Stepped::Other,
         }
     }
 

@@ -6,6 +6,8 @@ use alloc::sync::Arc;
 #[allow(unused_imports)]
 use crate::prelude::*;
 
+use bip_model::genom::Condition;
+
 use super::Engine;
 use crate::error::EngineError;
 use crate::event::{CodelId, Event, Reasons};
@@ -101,15 +103,7 @@ impl Engine {
             let Some(c) = a.codel_at.get(loc as usize).copied().flatten() else {
                 continue;
             };
-            let mut mask = 0u64;
-            for (k, h) in self.t.codels[c as usize].map.holds.iter().enumerate() {
-                if !h
-                    .holds(self.gate.system(), self.gate.state())
-                    .map_err(EngineError::Range)?
-                {
-                    mask |= 1 << k;
-                }
-            }
+            let mask = self.failing(&self.t.codels[c as usize].map.holds)?;
             let paused = slots[a.paused_slot as usize] != 0;
             out.push((CodelId(c), paused, Reasons(mask)));
         }
@@ -136,15 +130,17 @@ impl Engine {
         {
             return Ok(None); // it can run; it may only wait for its turn
         }
+        Ok(Some((c, Reasons(self.failing(&cm.holds)?))))
+    }
+
+    /// The conditions of a request or a codel that fail now, as bits, evaluated as the
+    /// step relation evaluates its guard (`bip_model::genom::failing`).
+    pub(super) fn failing(&self, conds: &[Condition]) -> Result<u64, EngineError> {
         let mut mask = 0u64;
-        for (k, h) in cm.holds.iter().enumerate() {
-            if !h
-                .holds(self.gate.system(), self.gate.state())
-                .map_err(EngineError::Range)?
-            {
-                mask |= 1 << k;
-            }
-        }
-        Ok(Some((c, Reasons(mask))))
+        bip_model::genom::failing(conds, self.gate.system(), self.gate.state(), |k| {
+            mask |= 1 << k
+        })
+        .map_err(EngineError::Range)?;
+        Ok(mask)
     }
 }

@@ -43,6 +43,12 @@ impl<'a> Inspect<'a> {
         self.engine.gate.enabled()
     }
 
+    /// The range error that stopped the engine, if one did: in a step, or in the initial
+    /// state (then the engine is stopped before its first step).
+    pub fn stopped(self) -> Option<&'a bip_model::RangeError> {
+        self.engine.stopped.as_ref()
+    }
+
     /// Counters since the engine started.
     pub fn stats(self) -> Stats {
         self.engine.stats

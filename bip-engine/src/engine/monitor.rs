@@ -54,6 +54,13 @@ impl Monitor {
         Ok(Monitor { watches })
     }
 
+    /// Watching nothing: for an engine stopped before its first step.
+    pub(super) fn none() -> Monitor {
+        Monitor {
+            watches: Vec::new(),
+        }
+    }
+
     pub(super) fn is_empty(&self) -> bool {
         self.watches.is_empty()
     }

@@ -74,19 +74,7 @@ impl Engine {
                 accepted: true,
             });
         }
-        let mut mask = 0u64;
-        for (k, c) in self.t.services[service as usize]
-            .refusals
-            .iter()
-            .enumerate()
-        {
-            if !c
-                .holds(self.gate.system(), self.gate.state())
-                .map_err(EngineError::Range)?
-            {
-                mask |= 1 << k;
-            }
-        }
+        let mask = self.failing(&self.t.services[service as usize].refusals)?;
         let refusal = if mask == 0 {
             Refusal::NotEnabled
         } else {

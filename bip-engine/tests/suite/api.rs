@@ -666,3 +666,31 @@ fn types_assumed_for_another_model_are_refused() {
         Some("the model has no module `n`".to_string())
     );
 }
+
+/// A model whose initial state has a range error (a guard divides by zero) is built: the
+/// engine is stopped from the start, says by what, and its first step says so, as a step
+/// into such a state stops it (the verifier reports the same error, `RangeErrors`).
+#[test]
+fn a_range_error_in_the_initial_state_stops_the_engine_before_its_first_step() {
+    let system = bip_engine::load_str(
+        "initial.ron",
+        r#"System(
+            name: "initial",
+            atoms: { "A": Atom(locations: ["l0"], initial: "l0", ports: ["p"],
+                vars: [(name: "x", ty: Int(0, 3), init: 0)],
+                transitions: [(from: "l0", port: "p", to: "l0", guard: "1 / x > 0")]) },
+            components: [(name: "a", atom: "A")],
+            connectors: [(name: "p", ports: ["a.p"])],
+        )"#,
+    )
+    .expect("loads");
+    let mut e = Engine::builder(system).build().expect("builds, stopped");
+    let stopped = e.inspect().stopped().expect("stopped").to_string();
+    assert!(stopped.contains("division by zero"), "{stopped}");
+    let err = e.step().expect_err("stopped");
+    assert!(
+        err.to_string().contains("stopped after a range error"),
+        "{err}"
+    );
+    assert_eq!(e.inspect().stats().steps, 0);
+}

@@ -233,6 +233,10 @@ pub(crate) fn check(def: &SystemDef, errors: &mut Errors) -> Budgets {
 
 /// A duration in microseconds: `"2ms"`, `"1.5 ms"`, `"150us"`, `"1s"`, or a number (or
 /// constant expression) of microseconds; positive.
+/// The shortest duration a number without a unit may give: below it, a unit is required,
+/// since `4` (microseconds) is most likely a slip for `"4ms"`.
+pub(crate) const BARE_MICROSECONDS: u64 = 100;
+
 pub(crate) fn duration(
     errors: &mut Errors,
     consts: &Constants,
@@ -251,10 +255,23 @@ pub(crate) fn duration(
         ConstValue::Int(v) => u64::try_from(*v).map_err(|_| format!("{v} µs is negative")),
         ConstValue::Bool(_) => Err("a duration is a number, not a boolean".into()),
     };
+    let bare = !matches!(&c.value, ConstValue::Expr(text) if with_unit(text).is_some());
     match us {
         Ok(0) => errors.push(
             ModelError::new(format!("{what} of zero"), c.span)
                 .with_help("a duration is positive: `\"2ms\"`, `\"150us\"`, or microseconds"),
+        ),
+        // `wcet: 4` is 4 µs, rarely meant: no codel or period is that short, while 4 ms
+        // is a common budget
+        Ok(us) if bare && us < BARE_MICROSECONDS => errors.push(
+            ModelError::new(
+                format!("{what} of {us} µs, written without a unit"),
+                c.span,
+            )
+            .with_label("a number without a unit is microseconds")
+            .with_help(format!(
+                "write the unit: `\"{us}ms\"` if milliseconds were meant, `\"{us}us\"` if microseconds"
+            )),
         ),
         Ok(us) => return Some(us),
         Err(why) => errors.push(

@@ -41,14 +41,28 @@ pub(super) fn check(
     budgets::cpus(def, errors);
     let mut timing = Timing::default();
     // A period in microseconds, once the tick's length is known.
-    let tick_us = def
+    let tick_ms = def
         .tick_ms
         .as_ref()
         .and_then(|t| consts.int(t).ok())
         .and_then(|ms| u64::try_from(ms).ok())
-        .and_then(|ms| ms.checked_mul(1000))
-        .filter(|&us| us > 0);
+        .filter(|&ms| ms > 0);
+    let tick_us = tick_ms.and_then(|ms| ms.checked_mul(1000));
+    if let (Some(ms), None, Some(t)) = (tick_ms, tick_us, &def.tick_ms) {
+        errors.push(
+            ModelError::new(
+                format!("`tick_ms` of {ms} ms overflows: in microseconds it exceeds 64 bits"),
+                t.span,
+            )
+            .with_help("a tick is a few milliseconds: `tick_ms: 100` is a tenth of a second"),
+        );
+    }
+    // a `tick_ms` given but unusable is reported where it is (above, or by the compiler
+    // if it is not a positive integer), not again at every budget
     let needs_tick = |errors: &mut Errors, span: Span| {
+        if def.tick_ms.is_some() {
+            return;
+        }
         errors.push(
             ModelError::new("a time budget needs the model's `tick_ms`", span)
                 .with_label("compared with a period in ticks")

@@ -194,6 +194,13 @@ fn service_reference_errors() {
             "module `ndd` has no service `Inti`",
             "Inti",
         ),
+        // a service of another module: `after` names this module's services alone
+        (
+            r#"after: ["Init"]"#,
+            r#"after: ["sick.Scan"]"#,
+            "`after` names services of the same module, by their names alone",
+            "sick.Scan",
+        ),
         (
             r#"interrupts: ["Scan"]"#,
             r#"interrupts: ["Stop"]"#,

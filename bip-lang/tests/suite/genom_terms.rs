@@ -105,7 +105,7 @@ fn an_unknown_genom_field_points_to_the_genom_page() {
     assert!(e.message.contains("knd"), "{}", e.message);
     assert_eq!(
         e.help.as_deref(),
-        Some("see docs/genom.md for the fields of each part of a model")
+        Some("see docs/model.md, \"The GenoM layer\" for the fields of each part of a model")
     );
     assert_eq!(err.positions()[0].0, position(&text, "knd").0);
     // a field of the core still points to the model page

@@ -84,6 +84,23 @@ fn bad_time_budgets() {
         "a time budget needs the model's `tick_ms`",
         "8ms",
     );
+    // a `tick_ms` given, but too long to count in microseconds
+    assert_error(
+        &bad(r#"    tick_ms: 10,"#, "    tick_ms: 9223372036854775807,"),
+        "`tick_ms` of 9223372036854775807 ms overflows",
+        "9223372036854775807",
+    );
+    // a number without a unit is microseconds: below 100, a unit is required
+    assert_error(
+        &bad(r#"wcet: 250"#, r#"wcet: 4"#),
+        "a WCET of 4 µs, written without a unit",
+        "4",
+    );
+    assert_error(
+        &bad(r#"deadline: "8ms""#, r#"deadline: 8"#),
+        "a deadline of 8 µs, written without a unit",
+        "8",
+    );
     assert_error(
         &bad(r#"cpu: "io")"#, r#"cpu: "main")"#),
         "some tasks on this CPU have a priority, and this one has none",
@@ -252,4 +269,24 @@ fn atoms_and_module_tasks_share_the_cpus() {
         "atom `Watch` may work 6 ms per period, more than its period (5 ms)",
         "6ms",
     );
+}
+
+#[test]
+fn a_short_duration_with_its_unit_and_a_long_bare_one_are_fine() {
+    for (from, to) in [
+        (r#"wcet: 250"#, r#"wcet: "4us""#),
+        (r#"wcet: 250"#, r#"wcet: 100"#),
+    ] {
+        let text = bad(from, to);
+        if let Err(e) = load_str("timed.ron", &text) {
+            panic!("{to}: {}", e.summary());
+        }
+    }
+}
+
+#[test]
+fn a_common_cycle_too_long_is_reported_at_the_period_that_makes_it() {
+    // 1031 and 1033 are each fine; together (both prime) they pass 2^20 ticks
+    let text = bad("period: 1,", "period: 1031,").replacen("period: 5,", "period: 1033,", 1);
+    assert_error(&text, "common cycle longer than", "1033");
 }

@@ -6,6 +6,7 @@ mod conditions;
 pub mod map;
 mod stuck;
 
+pub use conditions::failing;
 pub use map::{
     AgeMap, CodelMap, Condition, ConstraintRef, GenomMap, IdsField, IdsWrite, ModuleMap, PortMap,
     Reason, ServiceKind, ServiceMap, TaskMap, YieldMap,

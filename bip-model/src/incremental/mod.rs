@@ -109,6 +109,14 @@ pub struct EnabledSet {
 impl EnabledSet {
     /// The enabled steps of `state`, evaluated in full.
     pub fn new(system: &System, state: &State) -> Result<EnabledSet, RangeError> {
+        let mut set = EnabledSet::unevaluated(system);
+        set.reset(system, state)?;
+        Ok(set)
+    }
+
+    /// The set's tables for `system`, with no state evaluated yet (as a failed
+    /// [`EnabledSet::reset`] leaves it): [`EnabledSet::is_valid`] is false.
+    pub(crate) fn unevaluated(system: &System) -> EnabledSet {
         let n_inter = system.interactions.len();
         let n_comp = system.components.len();
         let words = n_inter.div_ceil(64);
@@ -189,7 +197,7 @@ impl EnabledSet {
             })
             .collect();
         let any_internal = has_internal.iter().any(|&h| h);
-        let mut set = EnabledSet {
+        EnabledSet {
             slot_comp,
             any_internal,
             has_internal,
@@ -210,9 +218,7 @@ impl EnabledSet {
             dirty: Vec::with_capacity(n_inter),
             last_key: LastKey::NONE,
             valid: false,
-        };
-        set.reset(system, state)?;
-        Ok(set)
+        }
     }
 
     /// Re-evaluates everything for `state` (after an error, or to jump to another state).

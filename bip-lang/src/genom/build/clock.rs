@@ -23,33 +23,38 @@ fn gcd(a: i64, b: i64) -> i64 {
 const MAX_PHASE: i64 = 1 << 20;
 
 impl<'a, 'd> Builder<'a, 'd> {
-    /// The least common multiple of the periods of tasks that have activities.
-    fn phase_len(&self) -> i64 {
+    /// The least common multiple of the periods of tasks that have activities; past
+    /// [`MAX_PHASE`], the period of the task that took it there.
+    fn phase_len(&self) -> (i64, Option<Span>) {
         let mut l = 1i64;
         for m in &self.layer.modules {
             for s in m.services.iter().filter(|s| s.is_activity()) {
                 if let Some(t) = s.task {
                     let p = m.tasks[t].1;
                     l = (l / gcd(l, p)).saturating_mul(p).min(MAX_PHASE + 1);
+                    if l > MAX_PHASE {
+                        let span = m
+                            .def
+                            .tasks
+                            .get(t)
+                            .map_or(m.def.name.span, |t| t.period.span);
+                        return (l, Some(span));
+                    }
                 }
             }
         }
-        l
+        (l, None)
     }
 
     pub(super) fn clock(&mut self) {
-        let l = self.phase_len();
-        if l > MAX_PHASE {
-            let span = self
-                .layer
-                .modules
-                .first()
-                .map_or(Span::NONE, |m| m.def.name.span);
+        let (l, too_long) = self.phase_len();
+        if let Some(span) = too_long {
             self.errors.push(
                 ModelError::new(
                     format!("the task periods have a common cycle longer than {MAX_PHASE} ticks"),
                     span,
                 )
+                .with_label("with the periods before it, this period makes the cycle too long")
                 .with_help("use periods with a small least common multiple"),
             );
         }
@@ -80,7 +85,7 @@ impl<'a, 'd> Builder<'a, 'd> {
     }
 
     pub(super) fn tick(&mut self) {
-        let l = self.phase_len();
+        let (l, _) = self.phase_len();
         let mut ports = vec![port(CLOCK, "tick")];
         let mut action = Vec::new();
         if l > 1 {

@@ -159,6 +159,29 @@ fn service<'d>(
     }
     let lookup = |errors: &mut Errors, t: &Text, what: &str| -> Option<usize> {
         let found = index.get(t.as_str()).copied();
+        if let (None, Some((module, service))) = (found, t.split_once('.')) {
+            // `after: ["loc.Track"]`: a name of another module, or this one's written in full
+            let same = if module == m.name.as_str() {
+                format!("write `{service}`")
+            } else {
+                format!("`{service}` of module `{module}` cannot be named here")
+            };
+            errors.push(
+                ModelError::new(
+                    format!("`{what}` names services of the same module, by their names alone"),
+                    t.span,
+                )
+                .with_label("a module's name, then a service's")
+                .with_help(format!(
+                    "{same}; {}",
+                    one_of(
+                        &format!("the services of `{}` are", m.name),
+                        m.services.iter().map(|s| s.name.as_str()),
+                    )
+                )),
+            );
+            return None;
+        }
         if found.is_none() {
             errors.push(
                 ModelError::new(format!("module `{}` has no service `{t}`", m.name), t.span)
