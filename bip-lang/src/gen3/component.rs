@@ -71,6 +71,7 @@ fn component(
         return Ok(comp);
     }
     c.expect_punct("{")?;
+    idl.component = Some(comp.name.value.clone());
     let decls_before = idl.decls.len();
     while !c.at_punct("}") {
         if c.at_end() {
@@ -80,6 +81,7 @@ fn component(
     }
     c.expect_punct("}")?;
     c.expect_punct(";")?;
+    idl.component = None;
     for d in idl.decls.drain(decls_before..) {
         if d.kind == "exception" {
             comp.exceptions.push(d);
@@ -117,17 +119,22 @@ fn export(
             };
             *slot = Some(s);
         }
-        "require" | "codels-require" => {
+        "require" | "requires" | "codels-require" | "codels-requires" => {
             c.next();
             let list = c.list(Cursor::expect_strings)?;
-            if word == "require" {
+            if word.starts_with("require") {
                 comp.require.extend(list);
             } else {
                 comp.codels_require.extend(list);
             }
         }
-        "provides" | "uses" => {
+        "provide" | "provides" | "use" | "uses" | "extend" | "extends" => {
             c.next();
+            let how = match word.as_str() {
+                "use" | "uses" => Merge::Uses,
+                "extend" | "extends" => Merge::Extends,
+                _ => Merge::Provides,
+            };
             for name in c.list(|c| c.scoped_name("an interface's name"))? {
                 let Some(interface) = interfaces.iter().find(|i| i.name.value == name.value) else {
                     let known: Vec<&str> = interfaces.iter().map(|i| i.name.as_str()).collect();
@@ -142,11 +149,10 @@ fn export(
                     )
                     .with_help(help));
                 };
-                if word == "provides" {
-                    provide(comp, interface);
-                    comp.provides.push(name);
-                } else {
-                    comp.uses.push(name);
+                merge(comp, interface, how)?;
+                match how {
+                    Merge::Uses => comp.uses.push(name),
+                    _ => comp.provides.push(name),
                 }
             }
         }
@@ -156,7 +162,7 @@ fn export(
         }
         "ids" => {
             c.next();
-            let members = idl.members(c, 0)?;
+            let members = idl.ids_members(c)?;
             comp.ids.extend(members);
         }
         "task" => {
@@ -171,7 +177,15 @@ fn export(
         }
         "attribute" | "function" | "activity" => {
             c.next();
-            comp.services.push(service(c, idl, &word)?);
+            let s = service(c, idl, &word)?;
+            match comp
+                .services
+                .iter_mut()
+                .find(|o| o.name.value == s.name.value)
+            {
+                Some(first) => refine(first, s)?,
+                None => comp.services.push(s),
+            }
             return Ok(());
         }
         w if DECLARATION_WORDS.contains(&w) => {
@@ -184,19 +198,173 @@ fn export(
     Ok(())
 }
 
-/// The objects of a provided interface, in the component where `provides` is written:
-/// its ids members, ports, services, exceptions and types.
-fn provide(comp: &mut Component, interface: &Component) {
+/// How a component takes in an interface's objects.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Merge {
+    /// `provides` (and an interface's `extends`): every object as it is.
+    Provides,
+    Extends,
+    /// `uses`: its ports with their direction reversed, its services as remote ones
+    /// (which the model does not hold), its other objects as they are.
+    Uses,
+}
+
+/// The objects of an interface, in the component where `provides`, `uses` or `extends` is
+/// written: its ids members, ports, services, exceptions and types. A service the
+/// component already has is refined by the interface's, as a declaration written again.
+fn merge(comp: &mut Component, interface: &Component, how: Merge) -> Result<(), ModelError> {
     comp.ids.extend(interface.ids.iter().cloned());
-    comp.ports.extend(interface.ports.iter().cloned());
-    comp.services.extend(interface.services.iter().cloned());
+    comp.ports.extend(interface.ports.iter().map(|p| {
+        let mut p = p.clone();
+        if how == Merge::Uses {
+            p.dir = match p.dir {
+                PortDir::In => PortDir::Out,
+                PortDir::Out => PortDir::In,
+            };
+        }
+        p
+    }));
+    if how == Merge::Uses {
+        comp.remotes
+            .extend(interface.services.iter().map(|s| s.name.clone()));
+    } else {
+        for s in &interface.services {
+            match comp
+                .services
+                .iter_mut()
+                .find(|o| o.name.value == s.name.value)
+            {
+                Some(first) => refine(first, s.clone())?,
+                None => comp.services.push(s.clone()),
+            }
+        }
+    }
     comp.exceptions.extend(interface.exceptions.iter().cloned());
     comp.types.extend(interface.types.iter().cloned());
     comp.provides.extend(interface.provides.iter().cloned());
+    comp.remotes.extend(interface.remotes.iter().cloned());
+    Ok(())
 }
 
-/// `50 ms`, `1 s`, `500 us`, `0.1` (seconds): a duration in whole microseconds.
+/// A service declared again (in the component that provides it, or twice in one
+/// component), as GenoM3 reopens it: the same kind and the same parameters (direction,
+/// type as written, name) in the same order; its documentation is appended, its `throw`
+/// and `interrupts` lists joined, its locals and codels (one per function name) added;
+/// any other property (`task`, `after`, `before`, `validate`) given twice is an error.
+fn refine(first: &mut Service, again: Service) -> Result<(), ModelError> {
+    let declared_here = |e: ModelError| {
+        e.with_note(
+            first.name.span,
+            format!("`{}` is first declared here", first.name),
+        )
+    };
+    if first.kind != again.kind {
+        return Err(declared_here(ModelError::new(
+            format!(
+                "{} `{}` conflicts with its first declaration, a {}",
+                again.kind.word(),
+                again.name,
+                first.kind.word()
+            ),
+            again.name.span,
+        )));
+    }
+    for k in 0..first.params.len().max(again.params.len()) {
+        let (a, b) = (first.params.get(k), again.params.get(k));
+        let what = match (a, b) {
+            (Some(a), Some(b))
+                if a.dir == b.dir && a.ty == b.ty && a.name.value == b.name.value =>
+            {
+                continue
+            }
+            (Some(a), Some(b)) => (
+                b.name.span,
+                format!(
+                    "parameter `{}` differs from its first declaration `{}`",
+                    b.name, a.name
+                ),
+            ),
+            (None, Some(b)) => (
+                b.name.span,
+                format!("parameter `{}` is not in the first declaration", b.name),
+            ),
+            (Some(a), None) => (
+                again.name.span,
+                format!("parameter `{}` of the first declaration is missing", a.name),
+            ),
+            (None, None) => continue,
+        };
+        return Err(declared_here(
+            ModelError::new(what.1, what.0)
+                .with_help("a service declared again repeats its parameters: the same directions, types and names, in order"),
+        ));
+    }
+    let once = |a: &Option<Text>, b: &Option<Text>, what: &str| match (a, b) {
+        (Some(_), Some(b)) => Err(declared_here(ModelError::new(
+            format!("duplicate `{what}` of `{}`", first.name),
+            b.span,
+        ))),
+        _ => Ok(()),
+    };
+    once(&first.task, &again.task, "task")?;
+    let first_of = |l: &[Text]| l.first().cloned();
+    once(&first_of(&first.after), &first_of(&again.after), "after")?;
+    once(&first_of(&first.before), &first_of(&again.before), "before")?;
+    once(
+        &first.validate.as_ref().map(|v| v.function.clone()),
+        &again.validate.as_ref().map(|v| v.function.clone()),
+        "validate",
+    )?;
+    for codel in again.codels.iter().chain(&again.simple) {
+        let f = &codel.function;
+        if first
+            .codels
+            .iter()
+            .chain(&first.simple)
+            .any(|o| o.function.value == f.value)
+        {
+            return Err(declared_here(ModelError::new(
+                format!("duplicate codel `{f}` of `{}`", first.name),
+                f.span,
+            )));
+        }
+    }
+    let join = |a: &mut Vec<Text>, b: Vec<Text>| {
+        for t in b {
+            if !a.iter().any(|x| x.value == t.value) {
+                a.push(t);
+            }
+        }
+    };
+    first.doc.extend(again.doc);
+    first.task = first.task.take().or(again.task);
+    join(&mut first.interrupts, again.interrupts);
+    join(&mut first.throws, again.throws);
+    first.after.extend(again.after);
+    first.before.extend(again.before);
+    first.validate = first.validate.take().or(again.validate);
+    for l in again.locals {
+        if !first.locals.iter().any(|x| x.name.value == l.name.value) {
+            first.locals.push(l);
+        }
+    }
+    first.codels.extend(again.codels);
+    first.simple.extend(again.simple);
+    Ok(())
+}
+
+/// `50 ms`, `1 s`, `500 us`, `0.1` (seconds): a duration in whole microseconds, positive
+/// (a period, a clock rate, a WCET).
 fn duration(c: &mut Cursor, idl: &Idl) -> Result<(u64, Span), ModelError> {
+    some_duration(c, idl, true)
+}
+
+/// A duration that may be zero (a task's `delay`).
+fn any_duration(c: &mut Cursor, idl: &Idl) -> Result<(u64, Span), ModelError> {
+    some_duration(c, idl, false)
+}
+
+fn some_duration(c: &mut Cursor, idl: &Idl, positive: bool) -> Result<(u64, Span), ModelError> {
     let (v, span) = idl.expression(c)?;
     let scale = if c.eat_ident("ms").is_some() {
         1e3
@@ -211,9 +379,11 @@ fn duration(c: &mut Cursor, idl: &Idl) -> Result<(u64, Span), ModelError> {
         Value::Int(i) => (i as f64) * scale,
         Value::Float(f) => f * scale,
     };
-    if !(us.is_finite() && us > 0.0 && us.fract() == 0.0 && us <= 1e15) {
+    let least = if positive { 1.0 } else { 0.0 };
+    if !(us.is_finite() && us >= least && us.fract() == 0.0 && us <= 1e15) {
+        let what = if positive { "positive" } else { "zero or more" };
         return Err(ModelError::new(
-            "a duration is positive and a whole number of microseconds",
+            format!("a duration is {what} and a whole number of microseconds"),
             span,
         ));
     }
@@ -242,7 +412,7 @@ fn task(c: &mut Cursor, idl: &mut Idl) -> Result<Task, ModelError> {
                 }
                 "delay" => {
                     c.next();
-                    t.delay = Some(duration(c, idl)?);
+                    t.delay = Some(any_duration(c, idl)?);
                 }
                 "priority" => {
                     c.next();
@@ -272,7 +442,7 @@ fn task(c: &mut Cursor, idl: &mut Idl) -> Result<Task, ModelError> {
                     t.throws.extend(c.list(|c| c.scoped_name("an exception"))?);
                 }
                 "codel" | "async" => {
-                    let codel = codel(c, true)?;
+                    let codel = codel(c, idl, true)?;
                     t.codels.push(codel);
                     continue;
                 }
@@ -386,7 +556,9 @@ fn service(c: &mut Cursor, idl: &mut Idl, word: &str) -> Result<Service, ModelEr
                 }
                 "validate" => {
                     c.next();
-                    s.validate = Some(simple_codel(c, false)?);
+                    let mut v = simple_codel(c, false)?;
+                    v.wcet = wcet(c, idl)?;
+                    s.validate = Some(v);
                 }
                 "local" => {
                     c.next();
@@ -398,7 +570,7 @@ fn service(c: &mut Cursor, idl: &mut Idl, word: &str) -> Result<Service, ModelEr
                     s.throws.extend(c.list(|c| c.scoped_name("an exception"))?);
                 }
                 "codel" | "async" => {
-                    let codel = codel(c, kind == Kind::Activity)?;
+                    let codel = codel(c, idl, kind == Kind::Activity)?;
                     if codel.states.is_empty() {
                         s.simple.push(codel);
                     } else {
@@ -511,7 +683,7 @@ fn variable(c: &mut Cursor) -> Result<(Vec<String>, Text), ModelError> {
 
 /// `[async] codel <states> f(params) yield events;` or `[async] codel f(params);`. With
 /// `fsm` false, states are not allowed.
-fn codel(c: &mut Cursor, fsm: bool) -> Result<Codel, ModelError> {
+fn codel(c: &mut Cursor, idl: &Idl, fsm: bool) -> Result<Codel, ModelError> {
     let asynchronous = c.eat_ident("async").is_some();
     let kw = c.here();
     if c.eat_ident("codel").is_none() {
@@ -532,18 +704,30 @@ fn codel(c: &mut Cursor, fsm: bool) -> Result<Codel, ModelError> {
     let mut codel = simple_codel(c, asynchronous)?;
     codel.states = states;
     if !codel.states.is_empty() {
-        if c.eat_ident("yield").is_none() {
+        if c.eat_ident("yield")
+            .or_else(|| c.eat_ident("yields"))
+            .is_none()
+        {
             return Err(c.expected("`yield` and the codel's next states"));
         }
         codel.yields = c.list(event)?;
-    } else if fsm && c.at_ident("yield") {
+    } else if fsm && (c.at_ident("yield") || c.at_ident("yields")) {
         return Err(ModelError::new(
             "a codel that yields needs its states: `codel<state> f() yield …`",
             c.here(),
         ));
     }
+    codel.wcet = wcet(c, idl)?;
     c.expect_punct(";")?;
     Ok(codel)
+}
+
+/// The timed dialect's `wcet 10 ms` after a codel: its worst-case execution time.
+fn wcet(c: &mut Cursor, idl: &Idl) -> Result<Option<(u64, Span)>, ModelError> {
+    if c.eat_ident("wcet").is_none() {
+        return Ok(None);
+    }
+    duration(c, idl).map(Some)
 }
 
 /// `s` or `pause::s`, as one name.
@@ -576,6 +760,7 @@ fn simple_codel(c: &mut Cursor, asynchronous: bool) -> Result<Codel, ModelError>
         params,
         yields: Vec::new(),
         asynchronous,
+        wcet: None,
     })
 }
 

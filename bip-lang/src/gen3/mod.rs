@@ -20,6 +20,7 @@ pub mod entries;
 mod idl;
 mod lexer;
 mod mapping;
+mod params;
 mod preprocess;
 mod types;
 
