@@ -348,12 +348,8 @@ impl Idl {
                 }
                 format!("{word} {}", name.value)
             }
-            // `ids::s`: a type the ids declares
-            "ids" if c.peek_at(1).is_some_and(|t| t.is_punct("::")) => self.type_name(c)?,
-            "void" | "object" | "interface" | "component" | "port" | "task" | "attribute"
-            | "function" | "activity" | "ids" | "codel" => {
-                return Err(c.expected("a type"));
-            }
+            // IDL keywords; GenoM's own (`task`, `port`, `ids`...) may name types
+            "void" | "object" => return Err(c.expected("a type")),
             _ => self.type_name(c)?,
         })
     }
