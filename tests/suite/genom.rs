@@ -125,12 +125,12 @@ fn bad_genom_input_gets_positions_and_exit_2() {
     expand_bad(
         "ether",
         (
-            r#"(state: "scan",  yields: ["pause::scan", "ether"]"#,
-            r#"(state: "scan",  yields: ["pause::scan"]"#,
+            r#"(state: "stop",  yields: ["ether"], wcet: "2ms")"#,
+            r#"(state: "stop",  yields: ["pause::stop"], wcet: "2ms")"#,
         ),
         &[
-            "no path from `start` to `ether` in activity `Scan`",
-            "ether.ron:",
+            "no path from `stop` to `ether` in activity `GoTo`",
+            "ether.ron:75:",
         ],
     );
     expand_bad(

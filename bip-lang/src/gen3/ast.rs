@@ -46,9 +46,12 @@ pub struct Component {
     pub clock_rate: Option<(u64, Span)>,
     /// The interfaces it provides (their objects are in it, where `provides` is written).
     pub provides: Vec<Text>,
-    /// The interfaces it uses (information: their ports are in ports of the component and
-    /// their services remote ones, which the model does not hold).
+    /// The interfaces it uses: their ports are the component's with the direction
+    /// reversed, their services its remote ones (`remotes`).
     pub uses: Vec<Text>,
+    /// The services of the interfaces it uses, which its codels may call (information:
+    /// the model does not hold remote calls).
+    pub remotes: Vec<Text>,
     pub ids: Vec<Member>,
     pub tasks: Vec<Task>,
     pub ports: Vec<Port>,
@@ -63,7 +66,7 @@ pub struct Task {
     pub doc: Vec<Text>,
     /// In microseconds; `None` for a task without a period.
     pub period: Option<(u64, Span)>,
-    /// In microseconds.
+    /// In microseconds; zero or more.
     pub delay: Option<(u64, Span)>,
     /// GenoM's priority, 0 the most urgent.
     pub priority: Option<(i128, Span)>,
@@ -181,4 +184,6 @@ pub struct Codel {
     /// As written: `s`, `pause::s`, `ether`.
     pub yields: Vec<Text>,
     pub asynchronous: bool,
+    /// The timed dialect's `wcet`, in microseconds.
+    pub wcet: Option<(u64, Span)>,
 }

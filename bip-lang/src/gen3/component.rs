@@ -9,6 +9,7 @@ use super::ast::{
 use super::consts::Value;
 use super::cursor::Cursor;
 use super::idl::{Idl, DECLARATION_WORDS};
+use super::interfaces::{merge, refine, Merge};
 use super::lexer::Tok;
 use crate::diag::ModelError;
 use crate::source::{Span, Text};
@@ -71,6 +72,7 @@ fn component(
         return Ok(comp);
     }
     c.expect_punct("{")?;
+    idl.component = Some(comp.name.value.clone());
     let decls_before = idl.decls.len();
     while !c.at_punct("}") {
         if c.at_end() {
@@ -80,6 +82,7 @@ fn component(
     }
     c.expect_punct("}")?;
     c.expect_punct(";")?;
+    idl.component = None;
     for d in idl.decls.drain(decls_before..) {
         if d.kind == "exception" {
             comp.exceptions.push(d);
@@ -117,17 +120,22 @@ fn export(
             };
             *slot = Some(s);
         }
-        "require" | "codels-require" => {
+        "require" | "requires" | "codels-require" | "codels-requires" => {
             c.next();
             let list = c.list(Cursor::expect_strings)?;
-            if word == "require" {
+            if word.starts_with("require") {
                 comp.require.extend(list);
             } else {
                 comp.codels_require.extend(list);
             }
         }
-        "provides" | "uses" => {
+        "provide" | "provides" | "use" | "uses" | "extend" | "extends" => {
             c.next();
+            let how = match word.as_str() {
+                "use" | "uses" => Merge::Uses,
+                "extend" | "extends" => Merge::Extends,
+                _ => Merge::Provides,
+            };
             for name in c.list(|c| c.scoped_name("an interface's name"))? {
                 let Some(interface) = interfaces.iter().find(|i| i.name.value == name.value) else {
                     let known: Vec<&str> = interfaces.iter().map(|i| i.name.as_str()).collect();
@@ -142,11 +150,10 @@ fn export(
                     )
                     .with_help(help));
                 };
-                if word == "provides" {
-                    provide(comp, interface);
-                    comp.provides.push(name);
-                } else {
-                    comp.uses.push(name);
+                merge(comp, interface, how)?;
+                match how {
+                    Merge::Uses => comp.uses.push(name),
+                    _ => comp.provides.push(name),
                 }
             }
         }
@@ -156,7 +163,7 @@ fn export(
         }
         "ids" => {
             c.next();
-            let members = idl.members(c, 0)?;
+            let members = idl.ids_members(c)?;
             comp.ids.extend(members);
         }
         "task" => {
@@ -171,7 +178,15 @@ fn export(
         }
         "attribute" | "function" | "activity" => {
             c.next();
-            comp.services.push(service(c, idl, &word)?);
+            let s = service(c, idl, &word)?;
+            match comp
+                .services
+                .iter_mut()
+                .find(|o| o.name.value == s.name.value)
+            {
+                Some(first) => refine(first, s)?,
+                None => comp.services.push(s),
+            }
             return Ok(());
         }
         w if DECLARATION_WORDS.contains(&w) => {
@@ -184,19 +199,18 @@ fn export(
     Ok(())
 }
 
-/// The objects of a provided interface, in the component where `provides` is written:
-/// its ids members, ports, services, exceptions and types.
-fn provide(comp: &mut Component, interface: &Component) {
-    comp.ids.extend(interface.ids.iter().cloned());
-    comp.ports.extend(interface.ports.iter().cloned());
-    comp.services.extend(interface.services.iter().cloned());
-    comp.exceptions.extend(interface.exceptions.iter().cloned());
-    comp.types.extend(interface.types.iter().cloned());
-    comp.provides.extend(interface.provides.iter().cloned());
+/// `50 ms`, `1 s`, `500 us`, `0.1` (seconds): a duration in whole microseconds, positive
+/// (a period, a clock rate, a WCET).
+fn duration(c: &mut Cursor, idl: &Idl) -> Result<(u64, Span), ModelError> {
+    some_duration(c, idl, true)
 }
 
-/// `50 ms`, `1 s`, `500 us`, `0.1` (seconds): a duration in whole microseconds.
-fn duration(c: &mut Cursor, idl: &Idl) -> Result<(u64, Span), ModelError> {
+/// A duration that may be zero (a task's `delay`).
+fn any_duration(c: &mut Cursor, idl: &Idl) -> Result<(u64, Span), ModelError> {
+    some_duration(c, idl, false)
+}
+
+fn some_duration(c: &mut Cursor, idl: &Idl, positive: bool) -> Result<(u64, Span), ModelError> {
     let (v, span) = idl.expression(c)?;
     let scale = if c.eat_ident("ms").is_some() {
         1e3
@@ -211,9 +225,11 @@ fn duration(c: &mut Cursor, idl: &Idl) -> Result<(u64, Span), ModelError> {
         Value::Int(i) => (i as f64) * scale,
         Value::Float(f) => f * scale,
     };
-    if !(us.is_finite() && us > 0.0 && us.fract() == 0.0 && us <= 1e15) {
+    let least = if positive { 1.0 } else { 0.0 };
+    if !(us.is_finite() && us >= least && us.fract() == 0.0 && us <= 1e15) {
+        let what = if positive { "positive" } else { "zero or more" };
         return Err(ModelError::new(
-            "a duration is positive and a whole number of microseconds",
+            format!("a duration is {what} and a whole number of microseconds"),
             span,
         ));
     }
@@ -242,7 +258,7 @@ fn task(c: &mut Cursor, idl: &mut Idl) -> Result<Task, ModelError> {
                 }
                 "delay" => {
                     c.next();
-                    t.delay = Some(duration(c, idl)?);
+                    t.delay = Some(any_duration(c, idl)?);
                 }
                 "priority" => {
                     c.next();
@@ -272,7 +288,7 @@ fn task(c: &mut Cursor, idl: &mut Idl) -> Result<Task, ModelError> {
                     t.throws.extend(c.list(|c| c.scoped_name("an exception"))?);
                 }
                 "codel" | "async" => {
-                    let codel = codel(c, true)?;
+                    let codel = codel(c, idl, true)?;
                     t.codels.push(codel);
                     continue;
                 }
@@ -386,7 +402,9 @@ fn service(c: &mut Cursor, idl: &mut Idl, word: &str) -> Result<Service, ModelEr
                 }
                 "validate" => {
                     c.next();
-                    s.validate = Some(simple_codel(c, false)?);
+                    let mut v = simple_codel(c, false)?;
+                    v.wcet = wcet(c, idl)?;
+                    s.validate = Some(v);
                 }
                 "local" => {
                     c.next();
@@ -398,7 +416,7 @@ fn service(c: &mut Cursor, idl: &mut Idl, word: &str) -> Result<Service, ModelEr
                     s.throws.extend(c.list(|c| c.scoped_name("an exception"))?);
                 }
                 "codel" | "async" => {
-                    let codel = codel(c, kind == Kind::Activity)?;
+                    let codel = codel(c, idl, kind == Kind::Activity)?;
                     if codel.states.is_empty() {
                         s.simple.push(codel);
                     } else {
@@ -511,7 +529,7 @@ fn variable(c: &mut Cursor) -> Result<(Vec<String>, Text), ModelError> {
 
 /// `[async] codel <states> f(params) yield events;` or `[async] codel f(params);`. With
 /// `fsm` false, states are not allowed.
-fn codel(c: &mut Cursor, fsm: bool) -> Result<Codel, ModelError> {
+fn codel(c: &mut Cursor, idl: &Idl, fsm: bool) -> Result<Codel, ModelError> {
     let asynchronous = c.eat_ident("async").is_some();
     let kw = c.here();
     if c.eat_ident("codel").is_none() {
@@ -532,18 +550,30 @@ fn codel(c: &mut Cursor, fsm: bool) -> Result<Codel, ModelError> {
     let mut codel = simple_codel(c, asynchronous)?;
     codel.states = states;
     if !codel.states.is_empty() {
-        if c.eat_ident("yield").is_none() {
+        if c.eat_ident("yield")
+            .or_else(|| c.eat_ident("yields"))
+            .is_none()
+        {
             return Err(c.expected("`yield` and the codel's next states"));
         }
         codel.yields = c.list(event)?;
-    } else if fsm && c.at_ident("yield") {
+    } else if fsm && (c.at_ident("yield") || c.at_ident("yields")) {
         return Err(ModelError::new(
             "a codel that yields needs its states: `codel<state> f() yield …`",
             c.here(),
         ));
     }
+    codel.wcet = wcet(c, idl)?;
     c.expect_punct(";")?;
     Ok(codel)
+}
+
+/// The timed dialect's `wcet 10 ms` after a codel: its worst-case execution time.
+fn wcet(c: &mut Cursor, idl: &Idl) -> Result<Option<(u64, Span)>, ModelError> {
+    if c.eat_ident("wcet").is_none() {
+        return Ok(None);
+    }
+    duration(c, idl).map(Some)
 }
 
 /// `s` or `pause::s`, as one name.
@@ -576,6 +606,7 @@ fn simple_codel(c: &mut Cursor, asynchronous: bool) -> Result<Codel, ModelError>
         params,
         yields: Vec::new(),
         asynchronous,
+        wcet: None,
     })
 }
 

@@ -36,7 +36,12 @@ pub struct Idl {
     consts: HashMap<String, Value>,
     scope: Vec<String>,
     pub decls: Vec<TypeDecl>,
+    /// The component being read, for `c::ids::s` within component `c` to name `ids::s`.
+    pub component: Option<String>,
 }
+
+/// The scope of the types an `ids` declares inline (GenoM3's `c::ids::s`).
+const IDS_SCOPE: &str = "ids";
 
 /// Words that start an IDL declaration.
 pub const DECLARATION_WORDS: &[&str] = &[
@@ -213,6 +218,26 @@ impl Idl {
         Ok(out)
     }
 
+    /// The members of a component's `ids`, whose inline types are declared in its `ids`
+    /// scope (`ids { struct s { … } a; }` declares `ids::s`).
+    pub fn ids_members(&mut self, c: &mut Cursor) -> Result<Vec<Member>, ModelError> {
+        self.scope.push(IDS_SCOPE.to_string());
+        let members = self.members(c, 0);
+        self.scope.pop();
+        members
+    }
+
+    /// A scoped type name; `c::ids::s` within component `c` is `ids::s`.
+    fn type_name(&self, c: &mut Cursor) -> Result<String, ModelError> {
+        let name = c.scoped_name("a type")?.value;
+        let own = self.component.as_ref().and_then(|comp| {
+            let plain = name.strip_prefix("::").unwrap_or(&name);
+            let rest = plain.strip_prefix(comp.as_str())?.strip_prefix("::")?;
+            rest.starts_with("ids::").then(|| rest.to_string())
+        });
+        Ok(own.unwrap_or(name))
+    }
+
     /// `T a, b[3];`
     pub fn member(&mut self, c: &mut Cursor, depth: usize) -> Result<Vec<Member>, ModelError> {
         let ty = self.type_spec(c, depth)?;
@@ -249,7 +274,7 @@ impl Idl {
         };
         let Some(word) = t.ident().map(str::to_string) else {
             if t.is_punct("::") {
-                return Ok(c.scoped_name("a type")?.value);
+                return self.type_name(c);
             }
             return Err(c.expected("a type"));
         };
@@ -323,11 +348,9 @@ impl Idl {
                 }
                 format!("{word} {}", name.value)
             }
-            "void" | "object" | "interface" | "component" | "port" | "task" | "attribute"
-            | "function" | "activity" | "ids" | "codel" => {
-                return Err(c.expected("a type"));
-            }
-            _ => c.scoped_name("a type")?.value,
+            // IDL keywords; GenoM's own (`task`, `port`, `ids`...) may name types
+            "void" | "object" => return Err(c.expected("a type")),
+            _ => self.type_name(c)?,
         })
     }
 

@@ -1,6 +1,7 @@
 //! The tokens of a `.gen` file: C-style comments, identifiers (with GenoM's hyphenated
-//! keywords `codels-require`, `clock-rate` and `real-time`), numbers, strings, characters
-//! and punctuation. Each token knows whether a line starts before it, for the
+//! keywords `codels-require(s)`, `clock-rate` and `real-time`), numbers, strings,
+//! characters and punctuation, with the digraphs and operator words GenoM3's lexer reads
+//! as punctuation (`<%` is `{`, `bitand` is `&`). Each token knows whether a line starts before it, for the
 //! preprocessor's directives, and carries its span at the file's base in the model's
 //! offsets.
 
@@ -61,12 +62,35 @@ const PUNCT: &[&str] = &[
     ",", "<", ">", "=", "+", "-", "*", "/", "%", "^", "&", "|", "~", "!", ".", "#", "?",
 ];
 
-/// Keywords written with a hyphen: the word before it, and what follows.
+/// Keywords written with a hyphen: the word before it, and what follows (the longer
+/// spelling first).
 const HYPHENATED: &[(&str, &str)] = &[
+    ("codels", "-requires"),
     ("codels", "-require"),
     ("clock", "-rate"),
     ("real", "-time"),
 ];
+
+/// Digraphs and the words GenoM3's lexer reads as punctuation, always (they are not names).
+const ALTERNATIVE: &[(&str, &str)] = &[
+    ("<%", "{"),
+    ("%>", "}"),
+    ("<:", "["),
+    (":>", "]"),
+    ("xor", "^"),
+    ("bitand", "&"),
+    ("bitor", "|"),
+    ("compl", "~"),
+    ("not", "!"),
+];
+
+/// The punctuation `word` stands for, if it is one of [`ALTERNATIVE`].
+fn alternative(word: &str) -> Option<&'static str> {
+    ALTERNATIVE
+        .iter()
+        .find(|(w, _)| *w == word)
+        .map(|(_, p)| *p)
+}
 
 /// The tokens of `text`, a file placed at `base`.
 pub fn tokenize(text: &str, base: usize) -> Result<Vec<Token>, ModelError> {
@@ -138,10 +162,14 @@ pub fn tokenize(text: &str, base: usize) -> Result<Vec<Token>, ModelError> {
                     let after = b.get(end);
                     if !after.is_some_and(|c| c.is_ascii_alphanumeric() || *c == b'_') {
                         i = end;
+                        break;
                     }
                 }
             }
-            Tok::Ident(text[start..i].to_string())
+            match alternative(&text[start..i]) {
+                Some(p) => Tok::Punct(p),
+                None => Tok::Ident(text[start..i].to_string()),
+            }
         } else if c.is_ascii_digit() || (c == b'.' && b.get(i + 1).is_some_and(u8::is_ascii_digit))
         {
             let (end, tok) =
@@ -158,6 +186,12 @@ pub fn tokenize(text: &str, base: usize) -> Result<Vec<Token>, ModelError> {
                 .ok_or_else(|| ModelError::new("unterminated character", span(start, start + 1)))?;
             i = end;
             Tok::Char(s.chars().next().unwrap_or('\0'))
+        } else if let Some((d, p)) = ALTERNATIVE.iter().find(|(d, _)| {
+            // `<::a` is `<` and `::a`, as in C++
+            text[i..].starts_with(*d) && !(*d == "<:" && text[i + 2..].starts_with(':'))
+        }) {
+            i += d.len();
+            Tok::Punct(p)
         } else if let Some(p) = PUNCT.iter().find(|p| text[i..].starts_with(**p)) {
             i += p.len();
             Tok::Punct(p)

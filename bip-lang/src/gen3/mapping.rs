@@ -1,17 +1,19 @@
 //! From a GenoM3 component to a module of bip's GenoM layer (docs/genom.md, "GenoM3
 //! files"): what is modelled (tasks and their periods, out ports, services, their
 //! interrupts, `after`, codel state machines with their yields, exceptions, the ports each
-//! codel writes, the data types of ports and activities' parameters) and what is refused because it would change the behaviour without being
-//! modelled (a task without a period that an activity runs in, `delay`, `before`). The rest is kept in the
-//! component as information.
+//! codel writes, the data types of ports and activities' parameters, `before`, task
+//! `delay`s and codel WCETs) and what is refused because it would change the behaviour
+//! without being modelled (a task without a period that an activity runs in). The rest is
+//! kept in the component as information.
 
 use std::collections::HashSet;
 
-use super::ast::{Codel, Component, Kind, Port, PortDir, Service, Source, Spec};
+use super::ast::{Codel, Component, Kind, Port, PortDir, Service, Source, Spec, Task};
+use super::params;
 use super::types::Types;
 use crate::diag::{Errors, ModelError};
 use crate::genom::syntax::{CodelDef, ModuleDef, PortDef, ServiceDef, ServiceKind, TaskDef};
-use crate::source::{ConstValue, Spanned, Text};
+use crate::source::{ConstExpr, ConstValue, Spanned, Text};
 
 /// The modules of a file's components; `tick_us` is the model's tick in microseconds.
 pub fn modules(spec: &Spec, tick_us: u64) -> Result<Vec<ModuleDef>, Vec<ModelError>> {
@@ -40,6 +42,41 @@ pub fn modules(spec: &Spec, tick_us: u64) -> Result<Vec<ModuleDef>, Vec<ModelErr
     }
 }
 
+/// A task's `delay` in ticks: below its period (as GenoM3 requires), a whole number of
+/// ticks.
+fn delay(t: &Task, period: u64, tick_us: u64, errors: &mut Errors) -> Option<ConstExpr> {
+    let (d, span) = t.delay?;
+    if d >= period {
+        errors.push(
+            ModelError::new(
+                format!("the delay of task `{}` is not less than its period", t.name),
+                span,
+            )
+            .with_help("a delay offsets the task's period boundaries: it is below the period"),
+        );
+        return None;
+    }
+    if d % tick_us != 0 {
+        errors.push(
+            ModelError::new(
+                format!(
+                    "the delay of task `{}` ({d} µs) is not a whole number of ticks of {tick_us} µs",
+                    t.name
+                ),
+                span,
+            )
+            .with_help("choose the model's `tick_ms` to divide every period and delay"),
+        );
+        return None;
+    }
+    let ticks = i64::try_from(d / tick_us).unwrap_or(i64::MAX);
+    Some(Spanned {
+        value: ConstValue::Int(ticks),
+        span,
+        verbatim: false,
+    })
+}
+
 fn doc(lines: &[Text]) -> Option<Text> {
     let first = lines.first()?;
     let text: Vec<&str> = lines.iter().map(|t| t.value.as_str()).collect();
@@ -57,13 +94,11 @@ fn module(
         .tasks
         .iter()
         .filter_map(|t| {
-            if let Some((d, span)) = t.delay {
-                if d > 0 {
-                    errors.push(
-                        ModelError::new(format!("task `{}`: `delay` is not supported", t.name), span)
-                            .with_help("bip releases every task at each multiple of its period from tick 0"),
-                    );
-                }
+            if let (None, Some((_, span))) = (t.period, t.delay) {
+                errors.push(
+                    ModelError::new(format!("task `{}` has a delay and no period", t.name), span)
+                        .with_help("a delay offsets the period boundaries: give the task a `period`"),
+                );
             }
             let Some((period, span)) = t.period else {
                 // a task no activity runs in only runs its own state machine, which is
@@ -102,6 +137,7 @@ fn module(
                     span,
                     verbatim: false,
                 },
+                delay: delay(t, period, tick_us, errors),
                 priority: None,
                 cpu: None,
                 deadline: None,
@@ -119,6 +155,7 @@ fn module(
             ty: types.data_type(&p.ty, "", p.name.span),
         })
         .collect();
+    params::check(c, errors);
     let services = c
         .services
         .iter()
@@ -141,13 +178,10 @@ fn service(
     types: &Types,
     errors: &mut Errors,
 ) -> ServiceDef {
-    if let Some(b) = s.before.first() {
+    if s.name.value == ALL {
         errors.push(
-            ModelError::new(
-                format!("{} `{}`: `before` is not supported", s.kind.word(), s.name),
-                b.span,
-            )
-            .with_help("write the order with `after` on the other service"),
+            ModelError::new("`all` is a reserved service name", s.name.span)
+                .with_help("`interrupts all` names every service of the component"),
         );
     }
     for t in &s.throws {
@@ -178,12 +212,17 @@ fn service(
         .flat_map(|codel| {
             let writes = writes(c, s, codel);
             let throws = throws.clone();
+            let wcet = codel.wcet.map(|(us, span)| Spanned {
+                value: ConstValue::Int(i64::try_from(us).unwrap_or(i64::MAX)),
+                span,
+                verbatim: false,
+            });
             codel.states.iter().map(move |state| CodelDef {
                 state: state.clone(),
                 yields: codel.yields.clone(),
                 throws: throws.clone(),
                 writes: writes.clone(),
-                wcet: None,
+                wcet: wcet.clone(),
             })
         })
         .collect();
@@ -192,12 +231,40 @@ fn service(
         kind,
         doc: doc(&s.doc),
         task: s.task.clone(),
-        interrupts: s.interrupts.clone(),
-        after: s.after.clone(),
+        interrupts: all(c, s, &s.interrupts, true),
+        after: all(c, s, &s.after, false),
+        before: all(c, s, &s.before, false),
         codels,
         args: types.payload(c, s, false),
         output: types.payload(c, s, true),
     }
+}
+
+/// GenoM3's name for every service of the component in `interrupts`, `after`, `before`.
+const ALL: &str = "all";
+
+/// A list of services with `all` replaced by the services it names: for `interrupts`
+/// every activity of the component, `s` itself included (functions and attributes end
+/// at once and cannot be interrupted); for `after` and `before` every other service.
+fn all(c: &Component, s: &Service, list: &[Text], interrupts: bool) -> Vec<Text> {
+    let mut out: Vec<Text> = Vec::new();
+    for t in list {
+        if t.value != ALL {
+            out.push(t.clone()); // a name written twice is reported by the module checks
+            continue;
+        }
+        for o in &c.services {
+            let named = if interrupts {
+                o.kind == Kind::Activity
+            } else {
+                o.name.value != s.name.value
+            };
+            if named && !out.iter().any(|x| x.value == o.name.value) {
+                out.push(Text::new(o.name.value.clone(), t.span));
+            }
+        }
+    }
+    out
 }
 
 /// The out ports a codel writes: its `out` and `inout` parameters that name one (`port out

@@ -8,7 +8,8 @@
 //! One concern per file: `lexer` (tokens), `preprocess` (`#include`, `#define`, `#if`),
 //! `cursor` (reading tokens, and what was expected instead), `consts` (constant
 //! expressions), `idl` (types and IDL declarations), `component` (GenoM's declarations),
-//! `ast` (what is read), `mapping` (to modules), `types` (IDL types as data types), `entries` (the `Gen(...)` entries of a
+//! `interfaces` (`provides`, `uses`, `extends`, and services refined), `ast` (what is
+//! read), `mapping` (to modules), `params` (codel parameters resolved), `types` (IDL types as data types), `entries` (the `Gen(...)` entries of a
 //! model's `modules`). Every error names the construct, with the file, line and column
 //! of its place in the `.gen` file.
 
@@ -18,8 +19,10 @@ mod consts;
 mod cursor;
 pub mod entries;
 mod idl;
+mod interfaces;
 mod lexer;
 mod mapping;
+mod params;
 mod preprocess;
 mod types;
 
@@ -156,7 +159,7 @@ fn model_tick_us(def: &SystemDef, at: Span) -> Result<u64, ModelError> {
 
 /// The model that holds a `.gen` file's components as modules (what `bip import` prints),
 /// with the tick its periods need: its `clock-rate`, or the greatest common divisor of its
-/// periods, in whole milliseconds.
+/// periods and delays, in whole milliseconds.
 pub fn import(spec: &Spec, shown: &str) -> Result<SystemDef, Vec<ModelError>> {
     let Some(first) = spec.components.first() else {
         return Err(vec![ModelError::new(
@@ -175,7 +178,7 @@ pub fn import(spec: &Spec, shown: &str) -> Result<SystemDef, Vec<ModelError>> {
     })
 }
 
-/// The tick for a file on its own: `clock-rate`, or the gcd of the periods.
+/// The tick for a file on its own: `clock-rate`, or the gcd of the periods and delays.
 fn import_tick_us(spec: &Spec) -> Result<u64, ModelError> {
     let gcd = |mut a: u64, mut b: u64| {
         while b != 0 {
@@ -189,7 +192,13 @@ fn import_tick_us(spec: &Spec) -> Result<u64, ModelError> {
             tick = Some(rate);
             break;
         }
-        for (p, span) in c.tasks.iter().filter_map(|t| t.period) {
+        // the periods and the delays (a delay of zero divides any tick)
+        let times = c
+            .tasks
+            .iter()
+            .flat_map(|t| [t.period, t.delay.filter(|d| d.0 > 0)])
+            .flatten();
+        for (p, span) in times {
             tick = Some(tick.map_or((p, span), |(t, s)| (gcd(t, p), s)));
         }
     }

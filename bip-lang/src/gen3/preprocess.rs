@@ -19,8 +19,11 @@ use crate::source_map::SourceMap;
 
 /// `#include` nesting bound (an include cycle without guards meets it).
 const MAX_INCLUDE_DEPTH: usize = 32;
-/// Macro expansion nesting bound.
+/// Macro expansion nesting bound: a macro's replacement within another's, and a macro
+/// call in another's argument (`F(F(F(1)))`), counted together.
 const MAX_MACRO_DEPTH: usize = 64;
+/// `#if` nesting bound.
+const MAX_IF_DEPTH: usize = 256;
 /// Tokens the expansion may write, its arguments and replacements counted: a bound on what
 /// macros may multiply.
 const MAX_TOKENS: usize = 1_000_000;
@@ -48,6 +51,7 @@ pub fn preprocess(
         macros: HashMap::new(),
         out: Vec::new(),
         depth: 0,
+        arguments: 0,
         written: 0,
     };
     p.file(path, shown, at)?;
@@ -61,8 +65,10 @@ struct Macro {
 }
 
 struct Cond {
-    /// This group's tokens are kept.
+    /// This group's tokens are kept (the groups around it included).
     active: bool,
+    /// The groups around it are kept.
+    outer: bool,
     /// A group of this `#if` chain was kept (or the chain is inside a skipped group).
     taken: bool,
     seen_else: bool,
@@ -74,6 +80,8 @@ struct Preprocessor<'a> {
     macros: HashMap<String, Macro>,
     out: Vec<Token>,
     depth: usize,
+    /// Macro arguments being expanded within each other.
+    arguments: usize,
     /// Tokens written so far, to the output, an argument or a replacement.
     written: usize,
 }
@@ -102,7 +110,7 @@ impl Preprocessor<'_> {
         let mut i = 0;
         while i < toks.len() {
             let t = &toks[i];
-            let active = conds.iter().all(|c| c.active);
+            let active = conds.last().is_none_or(|c| c.active);
             if t.is_punct("#") && t.line_start {
                 self.expand(&std::mem::take(&mut run), &mut Vec::new())?;
                 let mut j = i + 1;
@@ -148,6 +156,12 @@ impl Preprocessor<'_> {
         };
         match word {
             "if" | "ifdef" | "ifndef" => {
+                if conds.len() >= MAX_IF_DEPTH {
+                    return Err(ModelError::new(
+                        format!("`#if` nested more than {MAX_IF_DEPTH} deep"),
+                        span,
+                    ));
+                }
                 let value = if active {
                     self.condition(word, args, span)?
                 } else {
@@ -155,14 +169,13 @@ impl Preprocessor<'_> {
                 };
                 conds.push(Cond {
                     active: value,
+                    outer: active,
                     taken: value || !active,
                     seen_else: false,
                     span,
                 });
             }
             "elif" | "else" => {
-                let parent_active =
-                    conds.len() < 2 || conds[..conds.len() - 1].iter().all(|c| c.active);
                 let Some(top) = conds.last_mut() else {
                     return Err(ModelError::new(format!("`#{word}` without `#if`"), span));
                 };
@@ -171,6 +184,7 @@ impl Preprocessor<'_> {
                         .with_note(top.span, "in this `#if`"));
                 }
                 let taken = top.taken;
+                let parent_active = top.outer;
                 top.seen_else = word == "else";
                 let value = if taken || !parent_active {
                     false
@@ -407,8 +421,11 @@ impl Preprocessor<'_> {
                 self.out.push(t.clone());
                 continue;
             }
-            if active.len() >= MAX_MACRO_DEPTH {
-                return Err(ModelError::new("macros nested too deeply", t.span));
+            if active.len() + self.arguments >= MAX_MACRO_DEPTH {
+                return Err(ModelError::new(
+                    format!("macros nested more than {MAX_MACRO_DEPTH} deep"),
+                    t.span,
+                ));
             }
             let (params, body) = (m.params.clone(), m.body.clone());
             // an expanded token of the body is shown where the macro is used
@@ -441,10 +458,15 @@ impl Preprocessor<'_> {
                         ));
                     }
                     // each argument is expanded on its own, then put in place
+                    self.count(args.iter().map(Vec::len).sum(), t.span)?;
                     let mut values = Vec::with_capacity(args.len());
-                    for a in &args {
+                    self.arguments += 1;
+                    let expanded: Result<(), ModelError> = args.iter().try_for_each(|a| {
                         values.push(self.expanded(a, active)?);
-                    }
+                        Ok(())
+                    });
+                    self.arguments -= 1;
+                    expanded?;
                     let mut out = Vec::new();
                     for b in &body {
                         match b.ident().and_then(|n| params.iter().position(|p| p == n)) {

@@ -32,6 +32,10 @@ pub struct TaskDef {
     pub name: Text,
     /// In ticks; at least 1.
     pub period: ConstExpr,
+    /// The offset of the task's period boundaries, in ticks, below the period: they fall
+    /// on the ticks `delay + k * period` after the start (GenoM3's `delay`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delay: Option<ConstExpr>,
     /// Larger is more urgent; given on every task of a CPU or on none, which then takes
     /// rate-monotonic priorities (docs/model.md, "Time budgets").
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -102,6 +106,11 @@ pub struct ServiceDef {
     /// request for this one is accepted.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub after: Vec<Text>,
+    /// Services of the same module that wait for this one: a request for any of them is
+    /// accepted only once this one has completed successfully (each lists this one in its
+    /// `after`, in effect).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub before: Vec<Text>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub codels: Vec<CodelDef>,
     /// The type of a request's arguments (docs/model.md, "Data types").

@@ -615,3 +615,86 @@ fn writes_naming_ids_are_checked() {
     assert!(bad(r#""y""#, r#"(name: "write_S_start", kind: Function)"#)
         .contains("cannot be named `write_S_start`"));
 }
+
+/// A task's period boundaries are the ticks `delay + k * period`: for every period and
+/// delay of a small range, a paused codel runs exactly where the reference says (the
+/// clock's phase `n` counts ticks modulo the period here), and at least once.
+#[test]
+fn delay_offsets_the_period_boundaries() {
+    for period in 1..=4i64 {
+        for delay in 0..period {
+            let modules = CHAIN.replace("period: 3", &format!("period: {period}, delay: {delay}"));
+            let sys = load(&model(
+                &format!("delay_{period}_{delay}"),
+                &modules,
+                "properties: [DeadlockFree]",
+            ));
+            let ex = explore(&sys);
+            assert!(ex.deadlocks.is_empty());
+            let boundary = if period == 1 {
+                "true".to_string()
+            } else {
+                format!("clock.n == {delay}")
+            };
+            for step in ["m_S_start", "m_S_b"] {
+                assert!(
+                    before_each(&ex, &sys, step, &boundary),
+                    "period {period}, delay {delay}: `{step}` runs off its boundaries"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_delay_is_below_the_period() {
+    let modules = CHAIN.replace("period: 3", "period: 3, delay: 3");
+    let e = load_str(
+        "test.ron",
+        &model("late", &modules, "properties: [DeadlockFree]"),
+    )
+    .expect_err("a delay of a whole period");
+    assert!(
+        e.summary().contains("task `t` has delay 3"),
+        "{}",
+        e.summary()
+    );
+}
+
+/// `before` is `after` seen from the other side: the two spellings expand to the same
+/// core, and the request waits for the completion.
+#[test]
+fn before_is_the_dual_of_after() {
+    let with = |init: &str, go: &str| {
+        model(
+            "order",
+            &format!(
+                r#"(name: "m", tasks: [(name: "t", period: 1)], services: [
+                    (name: "Init", kind: Function{init}),
+                    (name: "Go", kind: Activity, task: "t"{go}, codels: [
+                        (state: "start", yields: ["pause::main"]),
+                        (state: "main",  yields: ["pause::main", "ether"]),
+                    ]),
+                ])"#
+            ),
+            r#"properties: [DeadlockFree, Invariant(name: "init_first", expr: "active(m.Go) => m.done_Init")]"#,
+        )
+    };
+    let after = with("", r#", after: ["Init"]"#);
+    let before = with(r#", before: ["Go"]"#, "");
+    let expand = |text: &str| {
+        let def = crate::expand_str("test.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()));
+        def.to_ron().expect("prints")
+    };
+    assert_eq!(expand(&before), expand(&after));
+    let sys = load(&before);
+    let ex = explore(&sys);
+    assert!(ex.violations.is_empty() && ex.deadlocks.is_empty());
+    assert!(ex.any(&sys, "active(m.Go)"));
+    let e = load_str("test.ron", &with(r#", before: ["Init"]"#, "")).expect_err("before itself");
+    assert!(
+        e.summary().contains("cannot come before itself"),
+        "{}",
+        e.summary()
+    );
+}

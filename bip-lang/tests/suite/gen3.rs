@@ -580,7 +580,7 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         ("component c { task t { speed 3; }; };", "expected a task property", 1, 24),
         ("component c { task t { scheduling fast; }; };", "expected `real-time`, found `fast`", 1, 35),
         ("component c { task t; activity a() { task t; codel<start> s() yield ether; }; };", "task `t` has no period", 1, 20),
-        ("component c { task t { period 10 ms; delay 5 ms; }; };", "task `t`: `delay` is not supported", 1, 44),
+        ("component c { task t { period 10 ms; delay 10 ms; }; };", "the delay of task `t` is not less than its period", 1, 44),
         // port
         ("component c { port sideways double p; };", "expected `in` or `out`, found `sideways`", 1, 20),
         ("component c { port out double; };", "expected the port's name, found `;`", 1, 30),
@@ -595,7 +595,7 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         ("component c { activity a() { colour red; }; };", "expected a service property", 1, 30),
         ("component c { activity a() { local x; }; };", "expected a name, found `;`", 1, 37),
         ("component c { task t { period 1 s; }; activity a() { task t; throw e_none; codel<start> s() yield ether; }; };", "exception `e_none` is not declared", 1, 68),
-        ("component c { function f() { before g; }; function g(); };", "function `f`: `before` is not supported", 1, 37),
+        ("component c { function f() { before h; }; function g(); };", "module `c` has no service `h`", 1, 37),
         ("component c { attribute a(in x = {); };", "expected a constant, found `)`", 1, 35),
         // what bip's checks of a module find, in the .gen file
         ("component c { task t { period 1 s; }; activity a() { task t; codel<start> s() yield nowhere; }; };", "codel `start` yields to `nowhere`", 1, 85),
@@ -604,7 +604,7 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         ("interface i { task t { period 1 s; }; };", "interface `i` declares a task", 1, 20),
         ("component c { provides i; };", "interface `i` is not declared", 1, 24),
         ("interface j; component c { uses j, i; };", "interface `i` is not declared", 1, 36),
-        ("interface i { function f(); }; component c { provides i; function f(); };", "duplicate service of module `c` `f`", 1, 67),
+        ("interface i { function f(); }; component c { provides i; activity f(); };", "activity `f` conflicts with its first declaration, a function", 1, 67),
         // unsupported GenoM3 constructs
         ("template t { };", "`template` is not supported", 1, 1),
         ("", "declares no component", 0, 0),

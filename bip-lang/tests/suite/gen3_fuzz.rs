@@ -1,5 +1,5 @@
 //! The `.gen` parser on mutated example components: the repository's `.gen` files (and
-//! the IDL file they include) with random token and byte edits, through the preprocessor,
+//! the IDL file they include, and the constructs fixture) with random token and byte edits, through the preprocessor,
 //! the parser, the mapping and the module checks (`import_gen_file`). Every input must
 //! import or give diagnostics whose positions lie in one of its files and that print; none
 //! may panic or run past a time bound.
@@ -25,16 +25,24 @@ const CI_CASES: u32 = 300;
 const MEMORY_KIB: u64 = 4_000_000;
 const CASE_SECS: u64 = 60;
 
-/// The example files, by name.
+/// The example files, by name: the rover's components and their IDL, and the fixture of
+/// the constructs the rover does not use (interfaces provided, used and refined, `before`,
+/// `delay`, `wcet`, ...).
 fn seeds() -> Vec<(String, String)> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots/genom3");
-    ["loco.gen", "loc.gen", "nav.gen", "idl/rover.idl"]
-        .iter()
-        .map(|f| {
-            let text = std::fs::read_to_string(dir.join(f)).expect("an example .gen file");
-            (f.to_string(), text)
-        })
-        .collect()
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    [
+        ("../robots/genom3", "loco.gen"),
+        ("../robots/genom3", "loc.gen"),
+        ("../robots/genom3", "nav.gen"),
+        ("../robots/genom3", "idl/rover.idl"),
+        ("tests/gen3", "constructs.gen"),
+    ]
+    .iter()
+    .map(|(dir, f)| {
+        let text = std::fs::read_to_string(root.join(dir).join(f)).expect("an example .gen file");
+        (f.to_string(), text)
+    })
+    .collect()
 }
 
 /// Imports `nav.gen` with one file of the set replaced by `text`.

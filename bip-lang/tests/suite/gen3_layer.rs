@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::gen3::TempDir;
+use bip_lang::gen3::ast::PortDir;
 use bip_lang::source_map::SourceMap;
 use bip_lang::{expand_str, import_gen_file, load_file, load_str};
 
@@ -179,13 +180,18 @@ component loc {
     let names =
         |v: &[bip_lang::source::Text]| v.iter().map(|t| t.value.clone()).collect::<Vec<_>>();
     assert_eq!(names(&c.provides), ["pose_estimator"]);
-    assert_eq!(names(&c.uses), ["clock"], "kept as information");
-    // the provided objects are in the component where `provides` is written
-    let ports: Vec<&str> = c.ports.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names(&c.uses), ["clock"]);
+    assert_eq!(names(&c.remotes), ["Now"], "a used service is a remote one");
+    // the objects of an interface are in the component where `provides` or `uses` is
+    // written; a used interface's out port is an in port of the component
+    let ports: Vec<(&str, PortDir)> = c.ports.iter().map(|p| (p.name.as_str(), p.dir)).collect();
     assert_eq!(
         ports,
-        ["speed", "frame"],
-        "the used interface's ports are not its own"
+        [
+            ("ticks", PortDir::In),
+            ("speed", PortDir::Out),
+            ("frame", PortDir::Out)
+        ],
     );
     assert_eq!(c.ids[0].name.value, "quality");
     let m = &bip_lang::gen3::modules(&s, 10_000).unwrap_or_else(|e| panic!("{e:?}"))[0];

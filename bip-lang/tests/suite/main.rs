@@ -8,6 +8,7 @@ mod data_types;
 mod diagnostics;
 mod fuzz;
 mod gen3;
+mod gen3_constructs;
 mod gen3_fuzz;
 mod gen3_layer;
 mod gen3_types;

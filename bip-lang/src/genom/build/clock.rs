@@ -1,7 +1,7 @@
 //! The clock: one atom whose `tick` port is the trigger of the tick broadcast, with the
 //! phase of the tasks' common cycle when their periods differ; and the tick connector,
 //! whose action ages the ports that constraints read and clears each activity's `paused`
-//! at its task's period. Both depend on the same least common multiple of the periods.
+//! at its task's period boundaries (every period, offset by the task's `delay`). Both depend on the same least common multiple of the periods.
 
 use super::{connector, port, text, tr, var, Builder};
 use crate::diag::ModelError;
@@ -105,10 +105,12 @@ impl<'a, 'd> Builder<'a, 'd> {
                 if p == 1 {
                     action.push(assign(paused, boolean(false)));
                 } else {
+                    // the boundaries are the ticks `delay + k * p` (the phase is the
+                    // tick's number, modulo the common cycle, once incremented)
                     let off_period = binary(
                         BinOp::Ne,
                         binary(BinOp::Rem, member(CLOCK, PHASE), int(p)),
-                        int(0),
+                        int(m.delays[task]),
                     );
                     action.push(assign(paused.clone(), and(paused, off_period)));
                 }

@@ -26,11 +26,17 @@ impl<'a, 'd> Builder<'a, 'd> {
             .iter()
             .flat_map(|m| m.services.iter().map(|s| s.request.as_str()))
             .collect();
-        let open = !requests.is_empty()
-            && connectors
+        // a layer without services has no requests and nothing to do but let time pass:
+        // it is idle for good, and excused, unless components of the model's own are
+        // there to make progress
+        let open = if requests.is_empty() {
+            self.def.components.is_empty()
+        } else {
+            connectors
                 .iter()
                 .filter(|c| requests.contains(c.name.as_str()))
-                .all(|c| c.role == Role::Environment);
+                .all(|c| c.role == Role::Environment)
+        };
         // with no activity at all, nothing is ever outstanding
         let idle = open.then(|| {
             let activities = self

@@ -1,11 +1,12 @@
 //! An activity's codel automaton: its codels, their yields, writes, ids and exceptions,
-//! the places it runs from, and the checks on its graph (`start` and `stop` reach
-//! `ether`, every codel is reached, no loop without a pause).
+//! the places it runs from, and the checks on its graph (`stop` reaches `ether`, every
+//! codel is reached), GenoM3's. An activity that cannot end from `start` (a service that
+//! runs until interrupted) and a loop of plain yields (which runs while time cannot pass)
+//! are accepted, as GenoM3 accepts them: the verifier shows where they lead.
 
 use super::{Codel, Service, Yield, ACTIVITY_PORTS, ETHER, MAX_IDS_VALUES, PAUSE};
 use crate::compile::{check_name, one_of, unique};
 use crate::diag::{Errors, ModelError};
-use crate::source::Span;
 use crate::syntax::ServiceDef;
 
 /// Checks an activity's codel automaton and fills in its codels and locations.
@@ -196,18 +197,17 @@ pub(super) fn codels<'d>(
     paths(errors, s, out);
 }
 
-/// The checks on the codel graph: `start` → `ether` and `stop` → `ether`, every codel
-/// reached, and no loop without a pause (which would stop time).
+/// The checks on the codel graph: `stop` → `ether` (an interrupted activity must end) and
+/// every codel reached from `start` or `stop`.
 fn paths(errors: &mut Errors, s: &ServiceDef, out: &Service<'_>) {
     let n = out.codels.len();
-    let next = |k: usize, with_pause: bool| -> Vec<usize> {
+    let next = |k: usize| -> Vec<usize> {
         out.codels[k]
             .yields
             .iter()
             .filter_map(|y| match *y {
-                Yield::Go(t) => Some(t),
-                Yield::Pause(t) if with_pause => Some(t),
-                _ => None,
+                Yield::Go(t) | Yield::Pause(t) => Some(t),
+                Yield::Ether => None,
             })
             .collect()
     };
@@ -216,7 +216,7 @@ fn paths(errors: &mut Errors, s: &ServiceDef, out: &Service<'_>) {
         let mut stack = vec![from];
         seen[from] = true;
         while let Some(k) = stack.pop() {
-            for t in next(k, true) {
+            for t in next(k) {
                 if !seen[t] {
                     seen[t] = true;
                     stack.push(t);
@@ -231,7 +231,7 @@ fn paths(errors: &mut Errors, s: &ServiceDef, out: &Service<'_>) {
     for root in ["start", "stop"] {
         let Some(k) = out.codel(root) else { continue };
         let seen = reach(k);
-        if !ends(&seen) {
+        if root == "stop" && !ends(&seen) {
             errors.push(
                 ModelError::new(
                     format!("no path from `{root}` to `ether` in activity `{}`", s.name),
@@ -259,59 +259,4 @@ fn paths(errors: &mut Errors, s: &ServiceDef, out: &Service<'_>) {
             );
         }
     }
-    // a cycle of yields without `pause::` would run forever within one instant
-    let mut colour = vec![0u8; n]; // 0 new, 1 on the stack, 2 done
-    for root in 0..n {
-        if colour[root] != 0 {
-            continue;
-        }
-        let mut stack: Vec<(usize, usize)> = vec![(root, 0)];
-        colour[root] = 1;
-        while let Some(top) = stack.last_mut() {
-            let (k, i) = *top;
-            let succ = next(k, false);
-            if i < succ.len() {
-                top.1 += 1;
-                let t = succ[i];
-                if colour[t] == 1 {
-                    let from = stack.iter().position(|&(x, _)| x == t).unwrap_or(0);
-                    let mut names: Vec<&str> = stack[from..]
-                        .iter()
-                        .map(|&(x, _)| out.codels[x].state)
-                        .collect();
-                    names.push(out.codels[t].state);
-                    let span = yield_span(out, k, t).unwrap_or(out.codels[k].def.state.span);
-                    errors.push(
-                        ModelError::new(
-                            format!("the codels {} loop without a pause", names.join(" → ")),
-                            span,
-                        )
-                        .with_label("this yield closes the loop")
-                        .with_help(format!(
-                            "time cannot pass while a codel can run; yield `pause::{}` to wait for the next period",
-                            out.codels[t].state
-                        )),
-                    );
-                    return;
-                }
-                if colour[t] == 0 {
-                    colour[t] = 1;
-                    stack.push((t, 0));
-                }
-            } else {
-                colour[k] = 2;
-                stack.pop();
-            }
-        }
-    }
-}
-
-/// The span of codel `from`'s plain yield to codel `to`.
-fn yield_span(out: &Service<'_>, from: usize, to: usize) -> Option<Span> {
-    let c = &out.codels[from];
-    c.def
-        .yields
-        .iter()
-        .find(|y| y.as_str() == out.codels[to].state)
-        .map(|y| y.span)
 }

@@ -64,6 +64,8 @@ pub struct Module<'d> {
     pub name: &'d str,
     /// Task names and periods (in ticks, at least 1).
     pub tasks: Vec<(&'d str, i64)>,
+    /// Each task's `delay` in ticks (0 if not given), below its period.
+    pub delays: Vec<i64>,
     pub ports: Vec<&'d str>,
     /// The declared type of each port's data.
     pub port_types: Vec<Option<DataType>>,

@@ -9,7 +9,7 @@ use super::types::data_type;
 use super::{Module, Service, MODULE_PORTS};
 use crate::compile::{check_name, one_of, unique, Constants};
 use crate::diag::{Errors, ModelError};
-use crate::syntax::{ModuleDef, ServiceDef, ServiceKind, Text, TypeDef};
+use crate::syntax::{ModuleDef, ServiceDef, ServiceKind, TaskDef, Text, TypeDef};
 
 pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleDef) -> Module<'d> {
     let what = |kind: &str| format!("{kind} of module `{}`", m.name);
@@ -17,6 +17,7 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
     unique(errors, m.ports.iter().map(|p| &p.name), &what("port"));
     unique(errors, m.services.iter().map(|s| &s.name), &what("service"));
     let mut tasks = Vec::new();
+    let mut delays = Vec::new();
     for t in &m.tasks {
         check_name(errors, &t.name, "task");
         let period = match consts.int(&t.period) {
@@ -35,6 +36,7 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
             }
         };
         tasks.push((t.name.as_str(), period));
+        delays.push(delay(errors, consts, t, period));
     }
     for p in &m.ports {
         check_name(errors, &p.name, "port");
@@ -63,6 +65,7 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
         .iter()
         .map(|s| service(errors, m, &tasks, &ports, &ids, &index, s))
         .collect();
+    before(errors, m, &index, &mut services);
     let port_types = m
         .ports
         .iter()
@@ -91,10 +94,71 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
         def: m,
         name: m.name.as_str(),
         tasks,
+        delays,
         ports,
         port_types,
         ids,
         services,
+    }
+}
+
+/// A task's `delay`: the offset of its period boundaries, from 0 to one less than its
+/// period (0 if not given).
+fn delay(errors: &mut Errors, consts: &Constants, t: &TaskDef, period: i64) -> i64 {
+    let Some(written) = &t.delay else { return 0 };
+    match consts.int(written) {
+        Ok(d) if (0..period).contains(&d) => d,
+        Ok(d) => {
+            errors.push(
+                ModelError::new(format!("task `{}` has delay {d}", t.name), written.span)
+                    .with_label(format!("a delay is from 0 to {} ticks", period - 1))
+                    .with_help(
+                        "a delay offsets the task's period boundaries: it is below the period",
+                    ),
+            );
+            0
+        }
+        Err(e) => {
+            errors.push(e);
+            0
+        }
+    }
+}
+
+/// `before`: each service it lists waits for this one, as if it listed this one in its
+/// `after` (the checks and the expansion of `after` then serve both).
+fn before(
+    errors: &mut Errors,
+    m: &ModuleDef,
+    index: &HashMap<&str, usize>,
+    services: &mut [Service<'_>],
+) {
+    for (k, s) in m.services.iter().enumerate() {
+        if index.get(s.name.as_str()) != Some(&k) {
+            continue; // a duplicate, reported
+        }
+        unique(errors, s.before.iter(), "service in `before`");
+        for t in &s.before {
+            let Some(&w) = index.get(t.as_str()) else {
+                errors.push(
+                    ModelError::new(format!("module `{}` has no service `{t}`", m.name), t.span)
+                        .with_label("unknown service in `before`")
+                        .with_help(one_of(
+                            "its services are",
+                            m.services.iter().map(|s| s.name.as_str()),
+                        )),
+                );
+                continue;
+            };
+            if w == k {
+                errors.push(
+                    ModelError::new(format!("`{t}` cannot come before itself"), t.span)
+                        .with_help("`before` lists services that wait for this one to complete"),
+                );
+            } else if !services[w].after.contains(&k) {
+                services[w].after.push(k);
+            }
+        }
     }
 }
 
