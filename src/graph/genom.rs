@@ -223,7 +223,9 @@ fn connector_edges(
     for module in &map.modules {
         for service in &module.services {
             let name = format!("{}.{}", module.name, service.name);
-            owner.insert(service.request, name.clone());
+            if let Some(r) = service.request {
+                owner.insert(r, name.clone());
+            }
             for codel in &service.codels {
                 owner.insert(codel.run, name.clone());
                 owner.insert(codel.fail, name.clone());

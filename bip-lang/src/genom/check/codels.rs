@@ -46,7 +46,8 @@ pub(super) fn codels<'d>(
             }
         }
     }
-    if state_index("start").is_none() {
+    // a task's machine may have only a `stop` codel (GenoM3 runs it at shutdown)
+    if state_index("start").is_none() && !s.machine {
         errors.push(
             ModelError::new(
                 format!("activity `{}` has no `start` codel", s.name),
@@ -196,8 +197,8 @@ pub(super) fn codels<'d>(
     paths(errors, s, out);
 }
 
-/// The checks on the codel graph: `start` → `ether` and `stop` → `ether`, every codel
-/// reached, and no loop without a pause (which would stop time).
+/// The checks on the codel graph: `start` → `ether` (not for a task's machine) and `stop`
+/// → `ether`, every codel reached, and no loop without a pause (which would stop time).
 fn paths(errors: &mut Errors, s: &ServiceDef, out: &Service<'_>) {
     let n = out.codels.len();
     let next = |k: usize, with_pause: bool| -> Vec<usize> {
@@ -231,10 +232,20 @@ fn paths(errors: &mut Errors, s: &ServiceDef, out: &Service<'_>) {
     for root in ["start", "stop"] {
         let Some(k) = out.codel(root) else { continue };
         let seen = reach(k);
-        if !ends(&seen) {
+        // a task's machine may run for as long as the component does
+        let must_end = root == "stop" || !s.machine;
+        if must_end && !ends(&seen) {
             errors.push(
                 ModelError::new(
-                    format!("no path from `{root}` to `ether` in activity `{}`", s.name),
+                    format!(
+                        "no path from `{root}` to `ether` in {} `{}`",
+                        if s.machine {
+                            "the machine of task"
+                        } else {
+                            "activity"
+                        },
+                        s.name
+                    ),
                     out.codels[k].def.state.span,
                 )
                 .with_label("the activity could never end from here")

@@ -15,7 +15,12 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
     let what = |kind: &str| format!("{kind} of module `{}`", m.name);
     unique(errors, m.tasks.iter().map(|t| &t.name), &what("task"));
     unique(errors, m.ports.iter().map(|p| &p.name), &what("port"));
-    unique(errors, m.services.iter().map(|s| &s.name), &what("service"));
+    unique(
+        errors,
+        m.services.iter().filter(|s| !s.machine).map(|s| &s.name),
+        &what("service"),
+    );
+    machine_names(errors, m);
     let mut tasks = Vec::new();
     for t in &m.tasks {
         check_name(errors, &t.name, "task");
@@ -98,6 +103,29 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
     }
 }
 
+/// A task's machine is named like its task, in expressions, constraints and the engine's
+/// map alike: no service of the module may take that name.
+fn machine_names(errors: &mut Errors, m: &ModuleDef) {
+    for t in m.services.iter().filter(|s| s.machine) {
+        if let Some(s) = m.services.iter().find(|s| !s.machine && s.name == t.name) {
+            errors.push(
+                ModelError::new(
+                    format!(
+                        "task `{}` runs a machine, and module `{}` has a service of that name",
+                        t.name, m.name
+                    ),
+                    t.name.span,
+                )
+                .with_note(s.name.span, "the service")
+                .with_help(format!(
+                    "a task's machine is named `{}.{}` like a service (docs/genom.md, \"Task machines\"): rename the task or the service",
+                    m.name, t.name
+                )),
+            );
+        }
+    }
+}
+
 /// The types of a service's arguments and output. A function or attribute has no codel
 /// to read arguments or give an output, so it may declare neither.
 fn service_types(errors: &mut Errors, consts: &Constants, s: &mut Service<'_>) {
@@ -159,6 +187,14 @@ fn service<'d>(
     }
     let lookup = |errors: &mut Errors, t: &Text, what: &str| -> Option<usize> {
         let found = index.get(t.as_str()).copied();
+        if found.is_some_and(|k| m.services[k].machine) {
+            errors.push(
+                ModelError::new(format!("`{t}` is the machine of task `{t}`"), t.span)
+                    .with_label(format!("in `{what}`"))
+                    .with_help("a task's machine runs from the component's start; no service interrupts it or waits for it"),
+            );
+            return None;
+        }
         if found.is_none() {
             errors.push(
                 ModelError::new(format!("module `{}` has no service `{t}`", m.name), t.span)
@@ -211,6 +247,7 @@ fn service<'d>(
         stop: None,
         args: None,
         output: None,
+        machine: s.machine,
     };
     if !activity {
         if let Some(t) = &s.task {
