@@ -17,4 +17,5 @@ mod genom_terms;
 mod response;
 mod robustness;
 mod support;
+mod task_machines;
 mod timing;
