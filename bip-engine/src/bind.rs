@@ -105,7 +105,8 @@ pub(crate) struct ServiceTable {
     /// The activity's task.
     #[cfg_attr(not(feature = "std"), allow(dead_code))]
     pub task: Option<String>,
-    pub request: u32,
+    /// `None` for a task's machine, which nothing requests.
+    pub request: Option<u32>,
     pub owned: bool,
     pub refusals: Vec<Condition>,
     /// What its requests' arguments may be.
@@ -250,11 +251,9 @@ impl Tables {
                         "refusal conditions",
                     ));
                 }
-                kind[s.request as usize] = if s.owned_by_model {
-                    kind[s.request as usize]
-                } else {
-                    InterKind::Request { service: sid }
-                };
+                if let Some(r) = s.request.filter(|_| !s.owned_by_model) {
+                    kind[r as usize] = InterKind::Request { service: sid };
+                }
                 let period_ticks = s
                     .task
                     .and_then(|k| m.tasks.get(k))

@@ -45,6 +45,10 @@ pub enum RequestError {
     UnknownService(String, String),
     #[error("requests for {0}.{1} come from a component of the model, not from outside")]
     OwnedByModel(String, String),
+    #[error(
+        "{0}.{1} is the machine of task {1}: it starts with the component, nothing requests it"
+    )]
+    TaskMachine(String, String),
     #[error("{service} is a function or attribute: no codel reads arguments, yet a `{given}` was given (send `()`)")]
     NoArguments {
         service: String,

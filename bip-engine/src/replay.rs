@@ -207,7 +207,7 @@ fn reasons_for(engine: &Engine, name: &str) -> Vec<String> {
     let mut out = Vec::new();
     for m in &map.modules {
         for s in &m.services {
-            if s.request == i {
+            if s.request == Some(i) {
                 if let Ok(failed) = s.refused_by(system, state) {
                     out.extend(failed.iter().map(|c| c.to_string()));
                 }

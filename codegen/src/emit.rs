@@ -105,6 +105,7 @@ fn module(
     let requests: Vec<(&ServiceMap, RequestNames)> = m
         .services
         .iter()
+        .filter(|s| s.request.is_some()) // a task's machine: nothing requests it
         .map(|s| (s, RequestNames::of(s)))
         .collect();
     for (s, n) in &requests {

@@ -398,10 +398,12 @@ mod tests {
                     graph.add_edge(NodeIndex::new(a), NodeIndex::new(z), ());
                 }
             }
-            assert!(toposort(&graph, None).is_ok(), "{edges:?} reversed {back:?}");
-            let original = DiGraph::<(), ()>::from_edges(
-                edges.iter().map(|e| (e.from as u32, e.to as u32)),
+            assert!(
+                toposort(&graph, None).is_ok(),
+                "{edges:?} reversed {back:?}"
             );
+            let original =
+                DiGraph::<(), ()>::from_edges(edges.iter().map(|e| (e.from as u32, e.to as u32)));
             for (e, &b) in edges.iter().zip(&back) {
                 let closes = petgraph::algo::has_path_connecting(
                     &original,

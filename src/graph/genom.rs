@@ -29,8 +29,17 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
         let m = module.name.as_str();
         let mut node = Node::new(format!("module {m}"), m, "module").fill("#f7f7f2");
         for task in &module.tasks {
+            let machine = if task.has_machine() {
+                ", runs a machine"
+            } else {
+                ""
+            };
             node.row(
-                format!("task {}, period {}", task.name.as_str(), task.period.value),
+                format!(
+                    "task {}, period {}{machine}",
+                    task.name.as_str(),
+                    task.period.value
+                ),
                 "task",
             );
         }
@@ -223,7 +232,9 @@ fn connector_edges(
     for module in &map.modules {
         for service in &module.services {
             let name = format!("{}.{}", module.name, service.name);
-            owner.insert(service.request, name.clone());
+            if let Some(r) = service.request {
+                owner.insert(r, name.clone());
+            }
             for codel in &service.codels {
                 owner.insert(codel.run, name.clone());
                 owner.insert(codel.fail, name.clone());

@@ -52,7 +52,7 @@ pub fn timeline(system: &System, trace: &Trace) -> Result<Timeline, String> {
                     continue;
                 };
                 let fail = service.codels.iter().any(|c| c.fail == i);
-                let event = if i == service.request {
+                let event = if Some(i) == service.request {
                     Some(("request", format!("request {}", lane.name)))
                 } else if before.is_some() && now.is_none() {
                     Some(if fail {

@@ -164,12 +164,14 @@ fn roles(map: &GenomMap) -> BTreeMap<u32, Role<'_>> {
     for module in &map.modules {
         for s in &module.services {
             let service = format!("{}.{}", module.name, s.name);
-            out.insert(
-                s.request,
-                Role::Request {
-                    service: service.clone(),
-                },
-            );
+            if let Some(r) = s.request {
+                out.insert(
+                    r,
+                    Role::Request {
+                        service: service.clone(),
+                    },
+                );
+            }
             for codel in &s.codels {
                 out.insert(
                     codel.run,

@@ -61,7 +61,9 @@ pub(crate) fn why(system: &System, trace: &Trace) -> Vec<Line> {
     // the services whose accepted requests are the trigger
     for m in &genom.modules {
         for svc in m.services.iter() {
-            let request = system.interactions[svc.request as usize].connector;
+            // a task's machine is never requested
+            let Some(request) = svc.request else { continue };
+            let request = system.interactions[request as usize].connector;
             let is_watched = matches!(watched, Some(Happens::Step(patterns))
                 if patterns.iter().any(|p| p.connectors.contains(&request)));
             if !is_watched

@@ -220,3 +220,26 @@ fn periodic_atoms_are_scheduled_and_verified() {
     assert!(line(&text).contains("FAILS"), "{text}");
     assert!(text.contains(miss), "{text}");
 }
+
+/// A task's machine runs in its task: its codels' WCETs count in the task's demand (here
+/// `init`, `control` and `emergency` in one period, 100 + 400 + 200 µs, more than any
+/// period's work of `Calibrate`, 500 µs, which the `Exclusive` keeps apart), and a simulated
+/// run executes them with no request sent for it.
+#[test]
+fn a_task_machine_counts_in_its_tasks_demand() {
+    let out = bip(&["sched", "robots/tests/task-machine.ron"]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("flight.main    2 ms  700 µs"), "{text}");
+    let out = bip(&[
+        "simulate",
+        "robots/tests/task-machine.ron",
+        "--steps",
+        "40",
+        "--seed",
+        "1",
+    ]);
+    let text = stdout(&out);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("flight.main.control"), "{text}");
+}

@@ -46,6 +46,9 @@ impl Engine {
         if self.t.services[s].owned {
             return Err(RequestError::OwnedByModel(module.into(), service.into()));
         }
+        if self.t.services[s].request.is_none() {
+            return Err(RequestError::TaskMachine(module.into(), service.into()));
+        }
         Ok(s as u32)
     }
 
@@ -65,8 +68,9 @@ impl Engine {
         service: u32,
         args: Option<Box<dyn Any + Send>>,
     ) -> Result<Stepped, EngineError> {
-        let i = self.t.services[service as usize].request;
-        if self.gate.enabled().is_enabled(i) {
+        // `request_target` queues no request for a task's machine, which has none
+        let request = self.t.services[service as usize].request;
+        if let Some(i) = request.filter(|&i| self.gate.enabled().is_enabled(i)) {
             self.take_step_of(i);
             self.accept_request(ticket, service, args)?;
             return Ok(Stepped::Request {

@@ -358,3 +358,25 @@ fn a_function_named_by_a_constraint_is_refused_with_the_constraint() {
     );
     states_of(e.inspect().system(), &e.record());
 }
+
+/// A task's machine starts with the engine and runs its codels with no request; a request
+/// for it is an error, not a reply.
+#[test]
+fn a_task_machine_runs_unrequested_and_cannot_be_requested() {
+    let mut e = Engine::builder(load("tests/task-machine.ron"))
+        .default_codels(DefaultCodels::FirstYield)
+        .build()
+        .expect("builds");
+    assert!(matches!(
+        e.request("flight", "main", ()),
+        Err(RequestError::TaskMachine(..))
+    ));
+    e.run_until(Until::Ticks(6)).expect("runs");
+    // start at the first boundary (tick 2), init (its first yield, `pause::init`) at the
+    // second (tick 4); the codels after tick 6 are past `Ticks(6)`
+    let s = e.inspect();
+    assert_eq!(s.stats().requests_accepted, 0);
+    assert_eq!(s.stats().codels, 2, "{:?}", s.stats());
+    let machine = s.system().component_index("flight_main").expect("machine");
+    assert_eq!(s.system().location_name(s.state(), machine), "init");
+}

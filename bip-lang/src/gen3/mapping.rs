@@ -142,6 +142,7 @@ fn module(
                 cpu: None,
                 deadline: None,
                 doc: doc(&t.doc),
+                codels: codel_defs(c, None, &t.codels, &throws(&t.throws, exceptions, errors)),
             })
         })
         .collect();
@@ -184,48 +185,13 @@ fn service(
                 .with_help("`interrupts all` names every service of the component"),
         );
     }
-    for t in &s.throws {
-        let last = t.value.rsplit("::").next().unwrap_or(&t.value);
-        if !exceptions.contains(&t.value) && !exceptions.contains(last) {
-            errors.push(
-                ModelError::new(format!("exception `{}` is not declared", t.value), t.span)
-                    .with_help("declare it in the component: `exception name;`"),
-            );
-        }
-    }
+    let throws = throws(&s.throws, exceptions, errors);
     let kind = match s.kind {
         Kind::Attribute => ServiceKind::Attribute,
         Kind::Function => ServiceKind::Function,
         Kind::Activity => ServiceKind::Activity,
     };
-    let throws: Vec<Text> = s
-        .throws
-        .iter()
-        .map(|t| Text {
-            value: t.value.rsplit("::").next().unwrap_or(&t.value).to_string(),
-            ..t.clone()
-        })
-        .collect();
-    let codels = s
-        .codels
-        .iter()
-        .flat_map(|codel| {
-            let writes = writes(c, s, codel);
-            let throws = throws.clone();
-            let wcet = codel.wcet.map(|(us, span)| Spanned {
-                value: ConstValue::Int(i64::try_from(us).unwrap_or(i64::MAX)),
-                span,
-                verbatim: false,
-            });
-            codel.states.iter().map(move |state| CodelDef {
-                state: state.clone(),
-                yields: codel.yields.clone(),
-                throws: throws.clone(),
-                writes: writes.clone(),
-                wcet: wcet.clone(),
-            })
-        })
-        .collect();
+    let codels = codel_defs(c, Some(s), &s.codels, &throws);
     ServiceDef {
         name: s.name.clone(),
         kind,
@@ -237,6 +203,7 @@ fn service(
         codels,
         args: types.payload(c, s, false),
         output: types.payload(c, s, true),
+        machine: false,
     }
 }
 
@@ -267,18 +234,68 @@ fn all(c: &Component, s: &Service, list: &[Text], interrupts: bool) -> Vec<Text>
     out
 }
 
+/// The exceptions a service or a task throws (each checked declared), by their last name.
+fn throws(throws: &[Text], exceptions: &HashSet<String>, errors: &mut Errors) -> Vec<Text> {
+    for t in throws {
+        let last = t.value.rsplit("::").next().unwrap_or(&t.value);
+        if !exceptions.contains(&t.value) && !exceptions.contains(last) {
+            errors.push(
+                ModelError::new(format!("exception `{}` is not declared", t.value), t.span)
+                    .with_help("declare it in the component: `exception name;`"),
+            );
+        }
+    }
+    throws
+        .iter()
+        .map(|t| Text {
+            value: t.value.rsplit("::").next().unwrap_or(&t.value).to_string(),
+            ..t.clone()
+        })
+        .collect()
+}
+
+/// The codel states of a service (`s`) or of a task's machine (`None`): one per state in
+/// each codel's `<…>`, with its yields, the exceptions thrown and the ports it writes.
+fn codel_defs(
+    c: &Component,
+    s: Option<&Service>,
+    codels: &[Codel],
+    throws: &[Text],
+) -> Vec<CodelDef> {
+    codels
+        .iter()
+        .flat_map(|codel| {
+            let writes = writes(c, s, codel);
+            let wcet = codel.wcet.map(|(us, span)| Spanned {
+                value: ConstValue::Int(i64::try_from(us).unwrap_or(i64::MAX)),
+                span,
+                verbatim: false,
+            });
+            codel.states.iter().map(move |state| CodelDef {
+                state: state.clone(),
+                yields: codel.yields.clone(),
+                throws: throws.to_vec(),
+                writes: writes.clone(),
+                wcet: wcet.clone(),
+            })
+        })
+        .collect()
+}
+
 /// The out ports a codel writes: its `out` and `inout` parameters that name one (`port out
-/// p`, or a plain `out p` that is not a service parameter, a local or an ids member).
-fn writes(c: &Component, s: &Service, codel: &Codel) -> Vec<Text> {
+/// p`, or a plain `out p` that is not a parameter or local of its service `s`, nor an ids
+/// member).
+fn writes(c: &Component, s: Option<&Service>, codel: &Codel) -> Vec<Text> {
     let out_port = |name: &str| -> Option<&Port> {
         c.ports
             .iter()
             .find(|p| p.dir == PortDir::Out && p.name.value == name)
     };
     let shadowed = |name: &str| {
-        s.params.iter().any(|p| p.name.value == name)
-            || s.locals.iter().any(|l| l.name.value == name)
-            || c.ids.iter().any(|m| m.name.value == name)
+        s.is_some_and(|s| {
+            s.params.iter().any(|p| p.name.value == name)
+                || s.locals.iter().any(|l| l.name.value == name)
+        }) || c.ids.iter().any(|m| m.name.value == name)
     };
     let mut out: Vec<Text> = Vec::new();
     for p in &codel.params {

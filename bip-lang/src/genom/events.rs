@@ -67,6 +67,24 @@ pub(super) fn terminates(layer: &Layer<'_>, r: ServiceRef, span: Span) -> (Expr,
     )
 }
 
+/// A task's machine has no request and no reply.
+fn not_machine(m: &str, s: &Service<'_>, span: Span) -> Result<(), ModelError> {
+    if s.machine {
+        return Err(ModelError::new(
+            format!(
+                "`{m}.{}` is the machine of task `{}`: nothing requests it",
+                s.name, s.name
+            ),
+            span,
+        )
+        .with_help(format!(
+            "name its codels instead: `yield({m}.{}.start)`",
+            s.name
+        )));
+    }
+    Ok(())
+}
+
 fn one_event(layer: &Layer<'_>, e: &Expr) -> Result<Expr, ModelError> {
     let ExprKind::Call(f, args) = &e.kind else {
         unreachable!("one_event is called on events")
@@ -85,6 +103,7 @@ fn one_event(layer: &Layer<'_>, e: &Expr) -> Result<Expr, ModelError> {
                 return Err(wrong_args());
             };
             let (m, s) = service(layer, arg).ok_or_else(wrong_args)??;
+            not_machine(m, s, arg.span)?;
             fires(&request_connector(m, s.name))
         }
         "reply" => {
@@ -92,6 +111,7 @@ fn one_event(layer: &Layer<'_>, e: &Expr) -> Result<Expr, ModelError> {
                 return Err(wrong_args());
             };
             let (m, s) = service(layer, arg).ok_or_else(wrong_args)??;
+            not_machine(m, s, arg.span)?;
             if s.is_activity() {
                 // an instance ends (from a codel state to `ether`), or a pending request
                 // ends without running (interrupted, aborted, or a start that yields `ether`)

@@ -5,7 +5,7 @@ use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 use super::build::{Expansion, UserExpr, UserTexts};
-use super::{build, check, events, rewrite, timing};
+use super::{build, check, events, machines, rewrite, timing};
 use crate::compile::{compile_core, written_text, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::expr::{Assign, Expr};
@@ -22,6 +22,8 @@ pub fn expand(def: &SystemDef) -> Result<Expansion, Vec<ModelError>> {
 /// [`expand`], knowing the text of the file `def` was read from (reports then give the
 /// constraints' lines).
 pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion, Vec<ModelError>> {
+    let with_machines = machines::as_activities(def);
+    let def = &*with_machines;
     let (consts, mut const_errors) = Constants::new(def);
     let layer = check::check(def, &consts, text).map_err(|mut e| {
         const_errors.append(&mut e);
@@ -87,7 +89,12 @@ pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion
                 let replies = matches!(p, PropertyDef::Replies { .. });
                 if let Some(r) = check::service_ref(&mut errors, &layer, service) {
                     let s = &layer.modules[r.module].services[r.service];
-                    if replies {
+                    if s.machine {
+                        errors.push(
+                            ModelError::new(format!("`{service}` is a task's machine"), service.span)
+                                .with_help("nothing requests a task's machine, so it has no reply and no request to terminate; write a `Response` on its codels: `yield(m.t.s)`"),
+                        );
+                    } else if replies {
                         let (t, r) = events::replies(&layer, r, service.span);
                         user.responses.insert(k, (built(t), built(r)));
                     } else if s.is_activity() {

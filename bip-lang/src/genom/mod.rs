@@ -5,6 +5,7 @@
 //! - `syntax`: the file format of modules and constraints;
 //! - `check`: validation with positions (modules, codel automata and constraints, a file
 //!   each);
+//! - `machines`: a task's own state machine, made an activity of its module;
 //! - `names`: the generated names;
 //! - `rewrite`: the rewriting of GenoM names in users' expressions into generated ones;
 //! - `tree`: the expressions the expansion generates, as syntax trees;
@@ -21,6 +22,7 @@ mod build;
 mod check;
 mod events;
 mod expansion;
+mod machines;
 mod names;
 mod recipe;
 mod rewrite;

@@ -35,7 +35,8 @@ pub(crate) struct RecipeService {
     pub kind: ServiceKind,
     pub task: Option<usize>,
     pub component: Option<String>,
-    pub request: String,
+    /// The request connector; `None` for a task's machine, which nothing requests.
+    pub request: Option<String>,
     pub owned_by_model: bool,
     pub refusals: Vec<RecipeCondition>,
     pub interrupts: Vec<String>,
@@ -253,7 +254,7 @@ impl Recipe {
                     kind: s.kind,
                     task: s.task,
                     component: comp,
-                    request: interaction(&s.request)?,
+                    request: s.request.as_deref().map(interaction).transpose()?,
                     owned_by_model: s.owned_by_model,
                     refusals,
                     interrupts: s.interrupts.clone(),

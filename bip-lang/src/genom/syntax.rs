@@ -49,6 +49,18 @@ pub struct TaskDef {
     pub deadline: Option<ConstExpr>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub doc: Option<Text>,
+    /// The task's own state machine (GenoM3's permanent activity): codels like an
+    /// activity's, started with the component, without any request (docs/genom.md,
+    /// "Task machines").
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub codels: Vec<CodelDef>,
+}
+
+impl TaskDef {
+    /// True if the task runs a state machine of its own.
+    pub fn has_machine(&self) -> bool {
+        !self.codels.is_empty()
+    }
 }
 
 /// An out port (poster). Its age is tracked when some expression or constraint reads it.
@@ -119,6 +131,10 @@ pub struct ServiceDef {
     /// The type of the service's output.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output: Option<DataTypeDef>,
+    /// Not written in a file: set by the expansion on the activity that stands for a
+    /// task's machine (`genom::machines`).
+    #[serde(skip)]
+    pub machine: bool,
 }
 
 /// One codel state of an activity: the codel it runs and where it may go next.

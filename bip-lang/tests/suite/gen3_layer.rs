@@ -208,3 +208,55 @@ component loc {
     load_str("imported.ron", &def.to_ron().expect("prints"))
         .unwrap_or_else(|e| panic!("{}", e.summary()));
 }
+
+/// A task's own codels (its state machine) become the task's `codels`, with the ports they
+/// write and the task's `throw`; the machine then runs without any request.
+#[test]
+fn a_gen_task_machine_becomes_the_tasks_codels() {
+    let dir = TempDir::new();
+    dir.write(
+        "flight.gen",
+        r#"component flight {
+  exception e_sensor;
+  port out double rotors;
+  task main {
+    period 2 ms;
+    codel<start> fl_start() yield pause::init;
+    codel<init> fl_init() yield pause::init, control;
+    codel<control> fl_control(port out rotors) yield pause::control, emergency;
+    codel<emergency> fl_emergency() yield pause::emergency, pause::control;
+    codel<stop> fl_stop() yield ether;
+    throw e_sensor;
+  };
+};
+"#,
+    );
+    let model = dir.write(
+        "m.ron",
+        r#"System(name: "m", tick_ms: 1, modules: [Gen("flight.gen")],
+        properties: [Reachable(name: "controls", expr: "flight.main@control")])"#,
+    );
+    let sys = load_file(&model).unwrap_or_else(|e| panic!("{}", e.summary()));
+    let map = sys.genom.as_ref().expect("a map");
+    let main = map.service("flight", "main").expect("the machine");
+    assert_eq!(main.request, None);
+    let states: Vec<&str> = main.codels.iter().map(|c| c.state.as_str()).collect();
+    assert_eq!(states, ["start", "init", "control", "emergency", "stop"]);
+    let control = map.codel("flight", "main", "control").expect("control");
+    assert_eq!(control.writes, ["rotors"]);
+    assert_eq!(control.throws, ["e_sensor"]);
+    let def = import_gen_file(&dir.0.join("flight.gen"), &[])
+        .unwrap_or_else(|e| panic!("{}", e.summary()));
+    let task = &def.modules[0].tasks[0];
+    let states: Vec<&str> = task.codels.iter().map(|c| c.state.as_str()).collect();
+    assert_eq!(states, ["start", "init", "control", "emergency", "stop"]);
+    // the printed model loads, with the machine on its task
+    let printed = def.to_ron().expect("prints");
+    assert!(printed.contains("codels"), "{printed}");
+    let again = load_str("imported.ron", &printed).unwrap_or_else(|e| panic!("{}", e.summary()));
+    assert!(again
+        .genom
+        .as_ref()
+        .and_then(|g| g.service("flight", "main"))
+        .is_some());
+}

@@ -375,7 +375,7 @@ fn the_engine_map_names_every_codel_and_yield() {
         2
     );
     assert_eq!(
-        sys.interactions[goto.request as usize].name,
+        sys.interactions[goto.request.expect("GoTo has a request") as usize].name,
         "ndd_GoTo_request"
     );
     let comp = goto.component.expect("an activity has a component");

@@ -32,6 +32,9 @@ struct Layer {
     activities: Vec<Activity>,
     /// 0: none; 1: Exclusive(A0, A1); 2: AtMost(1, all); 3: Requires(A0, [A1]).
     constraint: u8,
+    /// Whether task `fast` runs a machine of its own (`start`, then `run` each period
+    /// until it yields `ether`), before the activities in each instant.
+    machine: bool,
 }
 
 fn activity() -> impl Strategy<Value = Activity> {
@@ -68,10 +71,16 @@ fn activity() -> impl Strategy<Value = Activity> {
 }
 
 fn layer() -> impl Strategy<Value = Layer> {
-    (prop::collection::vec(activity(), 2..=3), 0u8..4).prop_map(|(activities, constraint)| Layer {
-        activities,
-        constraint,
-    })
+    (
+        prop::collection::vec(activity(), 2..=3),
+        0u8..4,
+        any::<bool>(),
+    )
+        .prop_map(|(activities, constraint, machine)| Layer {
+            activities,
+            constraint,
+            machine,
+        })
 }
 
 fn state_name(k: usize) -> String {
@@ -155,9 +164,14 @@ fn model(l: &Layer) -> String {
         3 => r#"Requires(service: "m.A0", active: ["m.A1"])"#.to_string(),
         _ => String::new(),
     };
+    let machine = if l.machine {
+        r#", codels: [(state: "start", yields: ["pause::run"]), (state: "run", yields: ["pause::run", "ether"])]"#
+    } else {
+        ""
+    };
     format!(
         r#"System(name: "random", modules: [(name: "m",
-            tasks: [(name: "fast", period: 1), (name: "slow", period: 2)],
+            tasks: [(name: "fast", period: 1{machine}), (name: "slow", period: 2)],
             services: [{}])],
         constraints: [{constraint}],
         properties: [DeadlockFree])"#,
@@ -205,8 +219,19 @@ proptest! {
             .map(|i| sys.component_index(&format!("m_A{i}")).expect("an activity component"))
             .collect();
         let active = |s: &State, i: usize| sys.location_name(s, comps[i]) != "ether";
+        let machine = sys.component_index("m_fast");
+        prop_assert_eq!(machine.is_some(), l.machine);
+        // nothing requests the machine; it runs (its `start` codel fires) in some run
+        prop_assert!(sys.interaction_index("m_fast_request").is_none());
+        if l.machine {
+            let start = sys.interaction_index("m_fast_start").expect("the machine's start");
+            prop_assert!(
+                transitions.iter().any(|(_, st, _)| st.label == Label::Interaction(start)),
+                "the machine never starts\n{}", text
+            );
+        }
         for s in &states {
-            for &c in &comps {
+            for &c in comps.iter().chain(&machine) {
                 let idle = sys.location_name(s, c) == "ether";
                 let req = var(&sys, s, c, "req").expect("req");
                 let paused = var(&sys, s, c, "paused").expect("paused");

@@ -18,4 +18,5 @@ mod genom_terms;
 mod response;
 mod robustness;
 mod support;
+mod task_machines;
 mod timing;

@@ -117,8 +117,9 @@ pub struct ServiceMap {
     pub task: Option<usize>,
     /// The activity's component; `None` for functions and attributes.
     pub component: Option<u32>,
-    /// The interaction that accepts a request.
-    pub request: u32,
+    /// The interaction that accepts a request; `None` for a task's machine (docs/genom.md,
+    /// "Task machines"), which starts with the component and which nothing requests.
+    pub request: Option<u32>,
     /// True if a component of the model sends the requests (a user connector took the
     /// request connector over with a role other than `Environment`): the engine must
     /// not send them itself.
@@ -386,12 +387,12 @@ impl core::fmt::Display for Condition {
 
 impl GenomMap {
     /// The services a client of the layer may request, as `(module, service)`: all but
-    /// those whose requests a component of the model sends.
+    /// those whose requests a component of the model sends, and tasks' machines.
     pub fn requestable(&self) -> impl Iterator<Item = (&str, &str)> + '_ {
         self.modules.iter().flat_map(|m| {
             m.services
                 .iter()
-                .filter(|s| !s.owned_by_model)
+                .filter(|s| !s.owned_by_model && s.request.is_some())
                 .map(move |s| (m.name.as_str(), s.name.as_str()))
         })
     }

@@ -217,3 +217,21 @@ fn a_build_script_rewrites_the_bindings_only_when_they_change() {
     let err = write_rust_bindings(&model, &out).expect_err("a bad model");
     assert!(err.to_string().contains("one.ron:1:"), "{err}");
 }
+
+/// A task's machine gets its codels in the module's trait, like an activity's, and no
+/// request: nothing requests it.
+#[test]
+fn a_task_machine_has_codel_methods_and_no_request() {
+    let text = rust_bindings(&load(include_str!(
+        "../../../robots/tests/task-machine.ron"
+    )))
+    .expect("generates");
+    for want in [
+        "fn main_start(&mut self, ctx: MainStartCtx<'_, '_>) -> MainStart;",
+        "fn main_control(&mut self, ctx: MainControlCtx<'_, '_>) -> MainControl;",
+        "pub fn request_calibrate(",
+    ] {
+        assert!(text.contains(want), "missing `{want}` in\n{text}");
+    }
+    assert!(!text.contains("request_main"), "{text}");
+}

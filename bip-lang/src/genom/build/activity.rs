@@ -27,9 +27,13 @@ impl<'a, 'd> Builder<'a, 'd> {
         let locs: Vec<&str> = s.locations.iter().map(|&k| s.codels[k].state).collect();
         let mut locations = vec![text(ETHER)];
         locations.extend(locs.iter().map(|l| text(*l)));
+        // a task's machine starts pending, released at its task's first period boundary
+        // like a requested activity (docs/genom.md, "Task machines")
+        let machine = s.machine;
+        let starts = i64::from(machine && s.codel("start").is_some());
         let mut vars = vec![
-            var(REQ, TypeDef::Bool, Some(0)),
-            var(PAUSED, TypeDef::Bool, Some(0)),
+            var(REQ, TypeDef::Bool, Some(starts)),
+            var(PAUSED, TypeDef::Bool, Some(starts)),
         ];
         if has_stop {
             vars.push(var(STOPPING, TypeDef::Bool, Some(0)));
@@ -38,16 +42,19 @@ impl<'a, 'd> Builder<'a, 'd> {
         if tracked {
             vars.push(var(DONE, TypeDef::Bool, Some(0)));
         }
-        let mut ports = vec![text("request")];
+        let mut ports = Vec::new();
         let mut t = Vec::new();
         // requests
-        t.push(tr(
-            ETHER,
-            "request",
-            ETHER,
-            Some(not(name(REQ))),
-            vec![set(REQ, true), set(PAUSED, true)],
-        ));
+        if !machine {
+            ports.push(text("request"));
+            t.push(tr(
+                ETHER,
+                "request",
+                ETHER,
+                Some(not(name(REQ))),
+                vec![set(REQ, true), set(PAUSED, true)],
+            ));
+        }
         if self_int {
             t.push(tr(ETHER, "request", ETHER, Some(name(REQ)), Vec::new()));
             for l in &locs {
@@ -121,25 +128,28 @@ impl<'a, 'd> Builder<'a, 'd> {
             }
         }
         // abort, for components of the model (a supervisor, a safety rule): enabled only
-        // when there is something to abort, so that it never fires for nothing
-        ports.push(text("abort"));
-        t.push(tr(
-            ETHER,
-            "abort",
-            ETHER,
-            Some(name(REQ)),
-            vec![set(REQ, false), set(PAUSED, false)],
-        ));
-        for l in &locs {
-            stop_or_end(&mut t, "abort", l);
-            if has_stop {
-                t.push(tr(
-                    l,
-                    "abort",
-                    l,
-                    Some(and(name(STOPPING), name(REQ))),
-                    vec![set(REQ, false)],
-                ));
+        // when there is something to abort, so that it never fires for nothing; nothing
+        // aborts a task's machine
+        if !machine {
+            ports.push(text("abort"));
+            t.push(tr(
+                ETHER,
+                "abort",
+                ETHER,
+                Some(name(REQ)),
+                vec![set(REQ, false), set(PAUSED, false)],
+            ));
+            for l in &locs {
+                stop_or_end(&mut t, "abort", l);
+                if has_stop {
+                    t.push(tr(
+                        l,
+                        "abort",
+                        l,
+                        Some(and(name(STOPPING), name(REQ))),
+                        vec![set(REQ, false)],
+                    ));
+                }
             }
         }
         // time: the tick connector's action clears `paused` at the task's period
@@ -208,9 +218,15 @@ impl<'a, 'd> Builder<'a, 'd> {
             transitions: t,
             task: None,
         };
-        let what = format!("activity `{m}.{}`", s.name);
+        let what = if machine {
+            format!("the machine of task `{m}.{}`", s.name)
+        } else {
+            format!("activity `{m}.{}`", s.name)
+        };
         let comp = self.comp(r);
-        self.activity_components.insert(comp.clone());
+        if !machine {
+            self.activity_components.insert(comp.clone());
+        }
         self.add_atom(
             activity_atom(m, s.name),
             atom,

@@ -218,7 +218,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             .modules
             .iter_mut()
             .flat_map(|m| m.services.iter_mut())
-            .find(|s| s.request == connector)
+            .find(|s| s.request.as_deref() == Some(connector))
     }
 
     /// A user connector that does not extend a generated one may not use generated ports:

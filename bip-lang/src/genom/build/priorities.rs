@@ -17,7 +17,7 @@ impl<'a, 'd> Builder<'a, 'd> {
         let mut requests: Vec<String> = Vec::new();
         for m in &self.recipe.modules {
             for s in &m.services {
-                requests.push(s.request.clone());
+                requests.extend(s.request.clone());
                 if s.component.is_some() {
                     let mut level = Vec::new();
                     for c in &s.codels {

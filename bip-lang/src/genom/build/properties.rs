@@ -24,7 +24,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             .recipe
             .modules
             .iter()
-            .flat_map(|m| m.services.iter().map(|s| s.request.as_str()))
+            .flat_map(|m| m.services.iter().filter_map(|s| s.request.as_deref()))
             .collect();
         // a layer without services has no requests and nothing to do but let time pass:
         // it is idle for good, and excused, unless components of the model's own are

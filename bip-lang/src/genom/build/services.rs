@@ -83,75 +83,16 @@ impl<'a, 'd> Builder<'a, 'd> {
         let s = self.service(r);
         let m = self.module_name(r);
         let (start_conds, run_conds) = self.conditions(r, user);
-        // the request
-        let mut ports = Vec::new();
-        let mut refusals = Vec::new();
-        if s.is_activity() {
-            let comp = self.comp(r);
-            ports.push(port(&comp, "request"));
-            if !s.interrupts_itself(r.service) {
-                refusals.push(Cond {
-                    reason: Reason::AlreadyRequested,
-                    expr: and(at(&comp, ETHER), not(member(&comp, REQ))),
-                });
-            }
-        } else {
-            ports.push(port(&module_component(m), s.name));
-        }
-        for &x in s.interrupts.iter().filter(|&&x| x != r.service) {
-            let target = ServiceRef {
-                module: r.module,
-                service: x,
-            };
-            ports.push(port(&self.comp(target), "interrupt"));
-        }
-        for &a in &s.after {
-            let target = ServiceRef {
-                module: r.module,
-                service: a,
-            };
-            let t = self.service(target);
-            let flag = if t.is_activity() {
-                member(&self.comp(target), DONE)
-            } else {
-                member(&module_component(m), &done_var(t.name))
-            };
-            refusals.push(Cond {
-                reason: Reason::After {
-                    service: format!("{m}.{}", t.name),
-                },
-                expr: flag,
-            });
-        }
-        if !s.is_activity() {
-            refusals.extend(run_conds.iter().cloned());
-        }
-        // the request port's own guards say "already requested"; the others guard the
-        // connector
-        let guard = all(refusals
-            .iter()
-            .filter(|c| c.reason != Reason::AlreadyRequested)
-            .map(|c| c.expr.clone()));
-        let name = request_connector(m, s.name);
-        self.claim(
-            &name,
-            s.def.name.span,
-            format!("requests of `{m}.{}`", s.name),
-        );
-        self.connectors.push((
-            connector(&name, ports, Role::Environment),
-            guard,
-            Vec::new(),
-        ));
-        let refusals = refusals.into_iter().map(RecipeCondition::from).collect();
+        // the request (a task's machine has none: it starts with the component)
+        let request = (!s.machine).then(|| self.request_connector(r, &run_conds));
         let mut service = RecipeService {
             name: s.name.to_string(),
             kind: s.kind,
             task: s.task,
             component: s.is_activity().then(|| self.comp(r)),
-            request: name,
+            request: request.as_ref().map(|(name, _)| name.clone()),
             owned_by_model: false,
-            refusals,
+            refusals: request.map(|(_, refusals)| refusals).unwrap_or_default(),
             codels: Vec::new(),
             args: s.args.clone(),
             output: s.output.clone(),
@@ -259,5 +200,79 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
         let recipe_module = self.recipe_module(r.module);
         recipe_module.services.push(service);
+    }
+
+    /// The request connector of service `r` (with the interrupts it sends and the `after`
+    /// it waits for), and the conditions that refuse a request.
+    fn request_connector(
+        &mut self,
+        r: ServiceRef,
+        run_conds: &[Cond],
+    ) -> (String, Vec<RecipeCondition>) {
+        let s = self.service(r);
+        let m = self.module_name(r);
+        let mut ports = Vec::new();
+        let mut refusals = Vec::new();
+        if s.is_activity() {
+            let comp = self.comp(r);
+            ports.push(port(&comp, "request"));
+            if !s.interrupts_itself(r.service) {
+                refusals.push(Cond {
+                    reason: Reason::AlreadyRequested,
+                    expr: and(at(&comp, ETHER), not(member(&comp, REQ))),
+                });
+            }
+        } else {
+            ports.push(port(&module_component(m), s.name));
+        }
+        for &x in s.interrupts.iter().filter(|&&x| x != r.service) {
+            let target = ServiceRef {
+                module: r.module,
+                service: x,
+            };
+            ports.push(port(&self.comp(target), "interrupt"));
+        }
+        for &a in &s.after {
+            let target = ServiceRef {
+                module: r.module,
+                service: a,
+            };
+            let t = self.service(target);
+            let flag = if t.is_activity() {
+                member(&self.comp(target), DONE)
+            } else {
+                member(&module_component(m), &done_var(t.name))
+            };
+            refusals.push(Cond {
+                reason: Reason::After {
+                    service: format!("{m}.{}", t.name),
+                },
+                expr: flag,
+            });
+        }
+        if !s.is_activity() {
+            refusals.extend(run_conds.iter().cloned());
+        }
+        // the request port's own guards say "already requested"; the others guard the
+        // connector
+        let guard = all(refusals
+            .iter()
+            .filter(|c| c.reason != Reason::AlreadyRequested)
+            .map(|c| c.expr.clone()));
+        let name = request_connector(m, s.name);
+        self.claim(
+            &name,
+            s.def.name.span,
+            format!("requests of `{m}.{}`", s.name),
+        );
+        self.connectors.push((
+            connector(&name, ports, Role::Environment),
+            guard,
+            Vec::new(),
+        ));
+        (
+            name,
+            refusals.into_iter().map(RecipeCondition::from).collect(),
+        )
     }
 }

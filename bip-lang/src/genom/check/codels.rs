@@ -47,7 +47,8 @@ pub(super) fn codels<'d>(
             }
         }
     }
-    if state_index("start").is_none() {
+    // a task's machine may have only a `stop` codel (GenoM3 runs it at shutdown)
+    if state_index("start").is_none() && !s.machine {
         errors.push(
             ModelError::new(
                 format!("activity `{}` has no `start` codel", s.name),
@@ -234,7 +235,15 @@ fn paths(errors: &mut Errors, s: &ServiceDef, out: &Service<'_>) {
         if root == "stop" && !ends(&seen) {
             errors.push(
                 ModelError::new(
-                    format!("no path from `{root}` to `ether` in activity `{}`", s.name),
+                    format!(
+                        "no path from `{root}` to `ether` in {} `{}`",
+                        if s.machine {
+                            "the machine of task"
+                        } else {
+                            "activity"
+                        },
+                        s.name
+                    ),
                     out.codels[k].def.state.span,
                 )
                 .with_label("the activity could never end from here")

@@ -95,6 +95,9 @@ pub struct Service<'d> {
     pub output: Option<DataType>,
     /// Index of the `stop` codel, if declared.
     pub stop: Option<usize>,
+    /// True for the activity that stands for a task's own state machine
+    /// (`genom::machines`): it starts with the component and nothing requests it.
+    pub machine: bool,
 }
 
 impl Service<'_> {

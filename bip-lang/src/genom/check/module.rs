@@ -15,7 +15,12 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
     let what = |kind: &str| format!("{kind} of module `{}`", m.name);
     unique(errors, m.tasks.iter().map(|t| &t.name), &what("task"));
     unique(errors, m.ports.iter().map(|p| &p.name), &what("port"));
-    unique(errors, m.services.iter().map(|s| &s.name), &what("service"));
+    unique(
+        errors,
+        m.services.iter().filter(|s| !s.machine).map(|s| &s.name),
+        &what("service"),
+    );
+    machine_names(errors, m);
     let mut tasks = Vec::new();
     let mut delays = Vec::new();
     for t in &m.tasks {
@@ -150,7 +155,13 @@ fn before(
                 );
                 continue;
             };
-            if w == k {
+            if m.services[w].machine {
+                errors.push(
+                    ModelError::new(format!("`{t}` is the machine of task `{t}`"), t.span)
+                        .with_label("in `before`")
+                        .with_help("a task's machine runs from the component's start; no service waits for it"),
+                );
+            } else if w == k {
                 errors.push(
                     ModelError::new(format!("`{t}` cannot come before itself"), t.span)
                         .with_help("`before` lists services that wait for this one to complete"),
@@ -158,6 +169,29 @@ fn before(
             } else if !services[w].after.contains(&k) {
                 services[w].after.push(k);
             }
+        }
+    }
+}
+
+/// A task's machine is named like its task, in expressions, constraints and the engine's
+/// map alike: no service of the module may take that name.
+fn machine_names(errors: &mut Errors, m: &ModuleDef) {
+    for t in m.services.iter().filter(|s| s.machine) {
+        if let Some(s) = m.services.iter().find(|s| !s.machine && s.name == t.name) {
+            errors.push(
+                ModelError::new(
+                    format!(
+                        "task `{}` runs a machine, and module `{}` has a service of that name",
+                        t.name, m.name
+                    ),
+                    t.name.span,
+                )
+                .with_note(s.name.span, "the service")
+                .with_help(format!(
+                    "a task's machine is named `{}.{}` like a service (docs/genom.md, \"Task machines\"): rename the task or the service",
+                    m.name, t.name
+                )),
+            );
         }
     }
 }
@@ -223,6 +257,14 @@ fn service<'d>(
     }
     let lookup = |errors: &mut Errors, t: &Text, what: &str| -> Option<usize> {
         let found = index.get(t.as_str()).copied();
+        if found.is_some_and(|k| m.services[k].machine) {
+            errors.push(
+                ModelError::new(format!("`{t}` is the machine of task `{t}`"), t.span)
+                    .with_label(format!("in `{what}`"))
+                    .with_help("a task's machine runs from the component's start; no service interrupts it or waits for it"),
+            );
+            return None;
+        }
         if let (None, Some((module, service))) = (found, t.split_once('.')) {
             // `after: ["loc.Track"]`: a name of another module, or this one's written in full
             let same = if module == m.name.as_str() {
@@ -298,6 +340,7 @@ fn service<'d>(
         stop: None,
         args: None,
         output: None,
+        machine: s.machine,
     };
     if !activity {
         if let Some(t) = &s.task {
