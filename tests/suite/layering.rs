@@ -148,7 +148,15 @@ const CRATES: &[Layers] = &[
         layers: &[
             (
                 "basics",
-                &["exit", "startup", "interrupt", "names", "report", "load"],
+                &[
+                    "exit",
+                    "startup",
+                    "interrupt",
+                    "memory_guard",
+                    "names",
+                    "report",
+                    "load",
+                ],
             ),
             // the commands whose views other commands reuse
             ("views", &["trace", "graph"]),

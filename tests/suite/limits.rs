@@ -299,8 +299,8 @@ fn ctrl_c_ends_the_run_like_a_limit(method: &str, progress: &str) {
         .descendants()
         .filter(|n| n.has_tag_name("testcase"))
         .count();
-    // the rover's 8 properties, range errors, and its schedulability
-    assert_eq!(cases, 10, "{xml}");
+    // the rover's 8 properties, time progress, range errors, and its schedulability
+    assert_eq!(cases, 11, "{xml}");
     assert!(xml.contains("interrupted"), "{xml}");
     assert!(traces.is_dir());
 }
