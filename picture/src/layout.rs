@@ -373,17 +373,21 @@ fn positions(
 mod tests {
     use super::*;
 
-    /// On graphs drawn at random (parallel edges and self-loops included), reversing the
-    /// back edges leaves no cycle, and an edge is reversed only if it closes one.
-    #[test]
-    fn reversing_the_back_edges_leaves_a_dag() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |bound: usize| {
+    /// Numbers below a bound, from a xorshift generator seeded with `seed`.
+    fn xorshift(mut seed: u64) -> impl FnMut(usize) -> usize {
+        move |bound| {
             seed ^= seed << 13;
             seed ^= seed >> 7;
             seed ^= seed << 17;
             (seed % bound as u64) as usize
-        };
+        }
+    }
+
+    /// On graphs drawn at random (parallel edges and self-loops included), reversing the
+    /// back edges leaves no cycle, and an edge is reversed only if it closes one.
+    #[test]
+    fn reversing_the_back_edges_leaves_a_dag() {
+        let mut next = xorshift(0x2545_f491_4f6c_dd1d);
         for _ in 0..500 {
             let n = 1 + next(8);
             let edges: Vec<LayoutEdge> = (0..next(16)).map(|_| edge(next(n), next(n))).collect();
@@ -477,13 +481,7 @@ mod tests {
 
     #[test]
     fn crossings_are_the_pairs_of_edges_whose_ends_are_in_opposite_orders() {
-        let mut rng = 12345u64;
-        let mut next = |n: usize| {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng % n as u64) as usize
-        };
+        let mut next = xorshift(12345);
         for _ in 0..50 {
             let (a, b) = (1 + next(6), 1 + next(6));
             let rows = vec![(0..a).collect::<Vec<_>>(), (a..a + b).collect()];
