@@ -59,6 +59,14 @@ impl System {
             &parts.priorities,
             parts.interactions.len(),
             MAX_PAIRS,
+            |i| {
+                crate::priority_masks::evaluation_cannot_fail(
+                    &parts.atoms,
+                    &parts.components,
+                    &parts.interactions,
+                    i,
+                )
+            },
         );
         let mut system = System {
             name: parts.name,

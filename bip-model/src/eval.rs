@@ -34,6 +34,28 @@ pub enum Expr {
     Quant(Box<Quant>),
 }
 
+impl Expr {
+    /// True if evaluating the expression can never be a range error, whatever the state:
+    /// it reads values and compares them, with no arithmetic (which may overflow or divide
+    /// by zero) and no index computed from the state (which may be out of bounds).
+    pub fn cannot_fail(&self) -> bool {
+        match self {
+            Expr::Const(_) | Expr::Slot(_) | Expr::Local(_) | Expr::At(..) | Expr::Bound(_) => true,
+            Expr::Not(e) => e.cannot_fail(),
+            Expr::Binary(op, a, b) => {
+                !matches!(
+                    op,
+                    BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div | BinOp::Rem
+                ) && a.cannot_fail()
+                    && b.cannot_fail()
+            }
+            Expr::Cond(c, a, b) => c.cannot_fail() && a.cannot_fail() && b.cannot_fail(),
+            Expr::Quant(q) => q.kind != QuantKind::Sum && q.body.cannot_fail(),
+            Expr::Neg(_) | Expr::Chain(..) | Expr::Indexed(_) => false,
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Indexed {
     pub index: Expr,

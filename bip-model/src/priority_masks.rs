@@ -19,7 +19,8 @@ use crate::prelude::*;
 use alloc::collections::BTreeMap;
 use alloc::sync::Arc;
 
-use crate::model::Priority;
+use crate::eval::Expr;
+use crate::model::{Atom, Component, Interaction, Priority};
 use crate::priority_graph::PriorityGraph;
 
 /// The most `(word, bits)` pairs the masks of one system may hold (16 MiB).
@@ -44,8 +45,9 @@ pub(crate) struct PriorityMasks {
     pub(crate) with_when: Arc<[u32]>,
     /// Interactions whose suppression is searched per state.
     pub(crate) searched: Vec<u64>,
-    /// Interactions that no priority names as higher and that are not searched: while
-    /// suppressed they cannot change what any other interaction is allowed.
+    /// Interactions that no priority names as higher, that are not searched and whose
+    /// evaluation cannot fail: while suppressed they cannot change what any other
+    /// interaction is allowed, nor be a range error.
     pub(crate) lazy: Vec<u64>,
     pub(crate) any_searched: bool,
 }
@@ -147,6 +149,7 @@ impl PriorityMasks {
         priorities: &[Priority],
         n_inter: usize,
         max_pairs: usize,
+        cannot_fail: impl Fn(u32) -> bool,
     ) -> PriorityMasks {
         let words = n_inter.div_ceil(64);
         let groups = graph.groups() as usize;
@@ -226,7 +229,13 @@ impl PriorityMasks {
         }
         let mut lazy = vec![0u64; words];
         for i in 0..n_inter as u32 {
-            set_bit(&mut lazy, i, !bit(&is_high, i) && !bit(&searched, i));
+            // one whose evaluation may fail is evaluated in every state, as the step
+            // relation evaluates it: its range error is the state's, suppressed or not
+            set_bit(
+                &mut lazy,
+                i,
+                !bit(&is_high, i) && !bit(&searched, i) && cannot_fail(i),
+            );
         }
         PriorityMasks {
             highs_of: highs_of.into(),
@@ -276,4 +285,23 @@ impl PriorityMasks {
             .iter()
             .any(|&(w, m)| enabled[w as usize] & m != 0)
     }
+}
+
+/// True if evaluating interaction `i` in a state (its guard, and the guards of its ports'
+/// transitions) can never be a range error.
+pub(crate) fn evaluation_cannot_fail(
+    atoms: &[Atom],
+    components: &[Component],
+    interactions: &[Interaction],
+    i: u32,
+) -> bool {
+    let interaction = &interactions[i as usize];
+    interaction.guard.as_ref().is_none_or(Expr::cannot_fail)
+        && interaction.ports.iter().all(|p| {
+            let atom = &atoms[components[p.component as usize].atom as usize];
+            atom.transitions
+                .iter()
+                .filter(|t| t.port == Some(p.port))
+                .all(|t| t.guard.as_ref().is_none_or(Expr::cannot_fail))
+        })
 }

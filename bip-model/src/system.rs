@@ -263,6 +263,14 @@ impl System {
             &self.priorities,
             self.interactions.len(),
             0,
+            |i| {
+                crate::priority_masks::evaluation_cannot_fail(
+                    &self.atoms,
+                    &self.components,
+                    &self.interactions,
+                    i,
+                )
+            },
         );
     }
 }
