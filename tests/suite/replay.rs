@@ -108,34 +108,32 @@ fn simulate_and_replay(model: &str, dir: &Path, code: i32) -> String {
     out(&o)
 }
 
-#[test]
-fn a_range_error_in_a_guard_of_the_last_state_replays() {
-    let dir = tempfile::tempdir().unwrap();
-    let m = model(dir.path(), "guard", 1, "true", "1 / x > 0", "");
-    let replays = verify_and_replay(&m, dir.path());
+/// Verify's first trace of `model` replays to a range error from its last state, and
+/// simulate finds it too (exit 1, a finding about the model), saying `simulated`.
+fn range_error_found_alike(model: &str, dir: &Path, simulated: &str) {
+    let replays = verify_and_replay(model, dir);
     assert!(
         replays[0].contains("range error from the last state"),
         "{}",
         replays[0]
     );
     assert!(!replays[0].contains("NOT ALLOWED"), "{}", replays[0]);
-    let sim = simulate_and_replay(&m, dir.path(), 1);
-    assert!(sim.contains("RANGE ERROR after step 1"), "{sim}");
+    let sim = simulate_and_replay(model, dir, 1);
+    assert!(sim.contains(simulated), "{sim}");
+}
+
+#[test]
+fn a_range_error_in_a_guard_of_the_last_state_replays() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = model(dir.path(), "guard", 1, "true", "1 / x > 0", "");
+    range_error_found_alike(&m, dir.path(), "RANGE ERROR after step 1");
 }
 
 #[test]
 fn a_range_error_in_the_initial_state_replays_and_simulates_as_a_finding() {
     let dir = tempfile::tempdir().unwrap();
     let m = model(dir.path(), "initial", 0, "1 / x > 0", "true", "");
-    let replays = verify_and_replay(&m, dir.path());
-    assert!(
-        replays[0].contains("range error from the last state"),
-        "{}",
-        replays[0]
-    );
-    // a finding about the model, as verify's: exit 1, not a usage error
-    let sim = simulate_and_replay(&m, dir.path(), 1);
-    assert!(sim.contains("RANGE ERROR after step 0"), "{sim}");
+    range_error_found_alike(&m, dir.path(), "RANGE ERROR after step 0");
 }
 
 #[test]
@@ -205,14 +203,7 @@ fn a_terminal_condition_that_cannot_be_evaluated_at_the_end_replays() {
         "false",
         r#"properties: [DeadlockFree(terminal: "1 / a.x > 0")],"#,
     );
-    let replays = verify_and_replay(&m, dir.path());
-    assert!(
-        replays[0].contains("range error from the last state"),
-        "{}",
-        replays[0]
-    );
-    let sim = simulate_and_replay(&m, dir.path(), 1);
-    assert!(sim.contains("RANGE ERROR"), "{sim}");
+    range_error_found_alike(&m, dir.path(), "RANGE ERROR");
 }
 
 #[test]
