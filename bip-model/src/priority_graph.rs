@@ -13,6 +13,10 @@
 //! the file declares, however many groups a side spans. [`crate::System`] decides
 //! suppression from it: with the masks of `priority_masks` where they fit, and by a search
 //! per state for the rest (`suppression`).
+//!
+//! The order is Kahn's algorithm written here on these range sides, not petgraph's
+//! `toposort` on a graph with an edge per incidence: on 2,999 priorities with 2 million
+//! incidences (`bip check`, release), that took 0.35 s and 59 MB against 0.12 s and 23 MB.
 
 #[allow(unused_imports)]
 use crate::prelude::*;

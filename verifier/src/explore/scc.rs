@@ -4,6 +4,13 @@
 //! reaches: a pass in numbering order sees a component's successors first. Used by the
 //! response properties (the states where a trigger waits) and by the exact demands (the
 //! steps other than the tick).
+//!
+//! Written here rather than taken from petgraph, which the rest of the workspace uses for
+//! its graphs: petgraph's `tarjan_scc` recurses once per state (a chain of 100,000 states
+//! overflows an 8 MiB stack), and its `kosaraju_scc` needs the reverse edges, which the
+//! stored graph does not keep, and a vector per component (a chain of 10^7 states took
+//! 5.7 s and 825 MB with petgraph's own graph, against 16 bytes a state here). Neither
+//! can stop at a limit halfway.
 
 use super::graph::Graph;
 use crate::watch::Watch;

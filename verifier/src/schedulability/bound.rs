@@ -7,6 +7,8 @@
 
 use bip_model::genom::map::{CodelMap, ServiceMap};
 use bip_model::GenomMap;
+use petgraph::algo::toposort;
+use petgraph::graph::{DiGraph, NodeIndex};
 
 /// The bound for task `task` of module `module`, in microseconds; `None` if a chain can
 /// loop without pausing (the activity could run forever in one period).
@@ -31,38 +33,27 @@ fn longest_chain(service: &ServiceMap) -> Option<u64> {
             }
         }
     }
-    let mut memo: Vec<Walk> = vec![Walk::New; codels.len()];
-    entries
-        .into_iter()
-        .try_fold(0u64, |best, e| Some(best.max(chain(codels, e, &mut memo)?)))
-}
-
-#[derive(Clone, Copy)]
-enum Walk {
-    New,
-    OnPath,
-    Done(u64),
-}
-
-/// The costliest chain from codel `at` (depth-first; the automata are small).
-fn chain(codels: &[CodelMap], at: usize, memo: &mut [Walk]) -> Option<u64> {
-    match memo[at] {
-        Walk::Done(cost) => return Some(cost),
-        Walk::OnPath => return None,
-        Walk::New => {}
+    // the yields that go on in the same period; a cycle among them has no bound
+    let mut graph: DiGraph<(), (), u32> = DiGraph::with_capacity(codels.len(), codels.len());
+    for _ in codels {
+        graph.add_node(());
     }
-    memo[at] = Walk::OnPath;
-    let mut next = 0u64;
-    for y in &codels[at].yields {
-        let target = y.target.as_str();
-        if target == "ether" || target.starts_with("pause::") {
-            continue;
-        }
-        if let Some(i) = codels.iter().position(|c| c.state == target) {
-            next = next.max(chain(codels, i, memo)?);
+    for (k, c) in codels.iter().enumerate() {
+        for y in &c.yields {
+            if let Some(t) = index(&y.target) {
+                graph.update_edge(NodeIndex::new(k), NodeIndex::new(t), ());
+            }
         }
     }
-    let cost = codels[at].wcet_us.unwrap_or(0).saturating_add(next);
-    memo[at] = Walk::Done(cost);
-    Some(cost)
+    let order = toposort(&graph, None).ok()?;
+    // the costliest chain from each codel, its successors' first
+    let mut cost = vec![0u64; codels.len()];
+    for &k in order.iter().rev() {
+        let next = graph.neighbors(k).map(|t| cost[t.index()]).max();
+        cost[k.index()] = codels[k.index()]
+            .wcet_us
+            .unwrap_or(0)
+            .saturating_add(next.unwrap_or(0));
+    }
+    Some(entries.into_iter().map(|e| cost[e]).max().unwrap_or(0))
 }

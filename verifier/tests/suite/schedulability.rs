@@ -407,3 +407,24 @@ fn exact_with(system: &System, options: Options) -> bip_verifier::Schedulability
         .unwrap()
         .expect("the model has WCETs")
 }
+
+#[test]
+fn a_loop_of_plain_yields_has_no_demand_bound() {
+    // `main` and `check` yield to each other without pausing: one period can run them
+    // forever, and both methods say so; the other task keeps its bound
+    let looping = r#"System(name: "looping", tick_ms: 10,
+    modules: [(name: "m", tasks: [(name: "t", period: 1), (name: "u", period: 1)],
+        services: [
+            (name: "A", kind: Activity, task: "t", codels: [
+                (state: "start", yields: ["main"], wcet: "1ms"),
+                (state: "main", yields: ["check", "ether"], wcet: "2ms"),
+                (state: "check", yields: ["main"], wcet: 500)]),
+            (name: "B", kind: Activity, task: "u", codels: [
+                (state: "start", yields: ["pause::start", "ether"], wcet: 300)]),
+        ])],
+)"#;
+    let system = load_str("looping.ron", looping).unwrap();
+    let (bound, _) = demands(&system, DemandChoice::Bound);
+    assert_eq!(bound, vec![None, Some(300)]);
+    assert_eq!(oracle(&system), vec![None, Some(300)]);
+}

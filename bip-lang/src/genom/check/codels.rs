@@ -8,6 +8,8 @@ use super::{Codel, Service, Yield, ACTIVITY_PORTS, ETHER, MAX_IDS_VALUES, PAUSE}
 use crate::compile::{check_name, one_of, unique};
 use crate::diag::{Errors, ModelError};
 use crate::syntax::ServiceDef;
+use petgraph::graph::{DiGraph, NodeIndex};
+use petgraph::visit::Dfs;
 
 /// Checks an activity's codel automaton and fills in its codels and locations.
 pub(super) fn codels<'d>(
@@ -202,37 +204,34 @@ pub(super) fn codels<'d>(
 /// every codel reached from `start` or `stop`.
 fn paths(errors: &mut Errors, s: &ServiceDef, out: &Service<'_>) {
     let n = out.codels.len();
-    let next = |k: usize| -> Vec<usize> {
-        out.codels[k]
-            .yields
-            .iter()
-            .filter_map(|y| match *y {
-                Yield::Go(t) | Yield::Pause(t) => Some(t),
-                Yield::Ether => None,
-            })
-            .collect()
-    };
+    // the codels, then `ether`
+    let ether = NodeIndex::new(n);
+    let mut graph: DiGraph<(), (), u32> = DiGraph::with_capacity(n + 1, n);
+    for _ in 0..=n {
+        graph.add_node(());
+    }
+    for (k, c) in out.codels.iter().enumerate() {
+        for y in &c.yields {
+            let target = match *y {
+                Yield::Go(t) | Yield::Pause(t) => NodeIndex::new(t),
+                Yield::Ether => ether,
+            };
+            graph.update_edge(NodeIndex::new(k), target, ());
+        }
+    }
     let reach = |from: usize| -> Vec<bool> {
-        let mut seen = vec![false; n];
-        let mut stack = vec![from];
-        seen[from] = true;
-        while let Some(k) = stack.pop() {
-            for t in next(k) {
-                if !seen[t] {
-                    seen[t] = true;
-                    stack.push(t);
-                }
-            }
+        let mut seen = vec![false; n + 1];
+        let mut dfs = Dfs::new(&graph, NodeIndex::new(from));
+        while let Some(k) = dfs.next(&graph) {
+            seen[k.index()] = true;
         }
         seen
     };
-    let ends =
-        |seen: &[bool]| (0..n).any(|k| seen[k] && out.codels[k].yields.contains(&Yield::Ether));
     let mut reached = vec![false; n];
     for root in ["start", "stop"] {
         let Some(k) = out.codel(root) else { continue };
         let seen = reach(k);
-        if root == "stop" && !ends(&seen) {
+        if root == "stop" && !seen[ether.index()] {
             errors.push(
                 ModelError::new(
                     format!(
