@@ -5,7 +5,7 @@
 //! the task's activities of their longest chains, as if all ran their worst chain in the
 //! same period: never below the demand the model can reach.
 
-use bip_model::genom::map::{CodelMap, ServiceMap};
+use bip_model::genom::map::ServiceMap;
 use bip_model::GenomMap;
 use petgraph::algo::toposort;
 use petgraph::graph::{DiGraph, NodeIndex};
