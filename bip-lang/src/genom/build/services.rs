@@ -1,5 +1,6 @@
 //! A service's connectors and its part of the engine's map: the request (with the
-//! interrupts it sends and the `after` it waits for), and for each codel its run and its
+//! interrupts it sends and the `after` it waits for), an activity's interrupts sent again
+//! while it is pending, and for each codel its run and its
 //! error path, guarded by the constraints that apply to it. The same conditions go to the
 //! recipe, each with its reason, so that the engine says why a request is refused or a
 //! codel held.
