@@ -38,7 +38,8 @@ pub struct Args {
     /// What to draw (default: genom for a model with modules, else core).
     #[arg(long, value_enum)]
     pub level: Option<Level>,
-    /// Draw the codel automaton of one activity, written `module.Service`.
+    /// Draw the codel automaton of one activity, written `module.Service`, or of a task's
+    /// machine, `module.task`.
     #[arg(long, value_name = "MODULE.SERVICE", conflicts_with = "level")]
     pub activity: Option<String>,
     #[arg(long, value_enum, default_value = "svg")]

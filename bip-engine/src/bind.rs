@@ -186,6 +186,10 @@ pub(crate) struct Tables {
     pub progress_mask: Vec<u64>,
     /// The modules' tasks, in order: each one's period in ticks and declared deadline.
     pub tasks: Vec<(u64, Option<u64>)>,
+    /// Per interaction, the service whose pending request sends its interrupts again
+    /// through it ([`bip_model::genom::map::ServiceMap::interrupt`]): what it ends was
+    /// interrupted by that service.
+    pub interrupts_of: Vec<Option<u32>>,
 }
 
 impl Tables {
@@ -213,6 +217,7 @@ impl Tables {
             has_internal: system.summary().internal_transitions > 0,
             time: Vec::new(),
             progress_mask: Vec::new(),
+            interrupts_of: vec![None; system.interactions.len()],
             tasks: Vec::new(),
         };
         let Some(map) = &system.genom else {
@@ -253,6 +258,9 @@ impl Tables {
                 }
                 if let Some(r) = s.request.filter(|_| !s.owned_by_model) {
                     kind[r as usize] = InterKind::Request { service: sid };
+                }
+                if let Some(i) = s.interrupt {
+                    t.interrupts_of[i as usize] = Some(sid);
                 }
                 let period_ticks = s
                     .task

@@ -1,35 +1,48 @@
 //! One activity's codel automaton, as written: `ether` (idle), its codel states, each
 //! yield (a plain yield runs on in the same cycle, `pause::` waits for the task's next
 //! period, `ether` ends the activity), each exception, and the stop path an interrupt
-//! takes.
+//! takes. A task's machine (`module.task`) is drawn the same way: it starts at its task's
+//! first period without a request, and nothing interrupts it.
 
-use bip_lang::genom::syntax::{ModuleDef, ServiceDef, ServiceKind};
+use bip_lang::genom::syntax::{CodelDef, ServiceKind};
 use bip_lang::syntax::SystemDef;
 use bip_picture::{Direction, Edge, End, Graph, Line, Node, Shape};
 
 const ETHER: &str = "ether";
 const STOP: &str = "stop";
 
-/// The automaton of activity `name` (`module.Service`), or why there is none.
+/// What `--activity` draws: an activity, or a task's machine.
+struct Automaton<'a> {
+    module: &'a str,
+    name: &'a str,
+    task: &'a str,
+    codels: &'a [CodelDef],
+    machine: bool,
+}
+
+/// The automaton of activity `name` (`module.Service`) or of a task's machine
+/// (`module.task`), or why there is none.
 pub fn graph(def: &SystemDef, name: &str) -> Result<Graph, String> {
-    let (module, service) = find(def, name)?;
-    let task = service.task.as_ref().map_or("", |t| t.as_str());
-    let mut g = Graph::new(
-        format!("{}.{}", module.name.as_str(), service.name.as_str()),
+    let a = find(def, name)?;
+    let what = if a.machine {
         format!(
-            "activity {}.{}: its codels (task {task})",
-            module.name.as_str(),
-            service.name.as_str()
-        ),
-        Direction::TopDown,
-    );
+            "the machine of task {}.{}: its codels, from the start",
+            a.module, a.name
+        )
+    } else {
+        format!(
+            "activity {}.{}: its codels (task {})",
+            a.module, a.name, a.task
+        )
+    };
+    let mut g = Graph::new(format!("{}.{}", a.module, a.name), what, Direction::TopDown);
     let ether = g.add(
         Node::new(ETHER, ETHER, "ether")
             .shape(Shape::DoubleCircle)
             .fill("#eeeeee"),
     );
     let mut states = Vec::new();
-    for codel in &service.codels {
+    for codel in a.codels {
         let mut node = Node::new(
             format!("codel {}", codel.state.as_str()),
             codel.state.as_str(),
@@ -44,6 +57,10 @@ pub fn graph(def: &SystemDef, name: &str) -> Result<Graph, String> {
         if let Some(wcet) = &codel.wcet {
             notes.push(format!("wcet {}", wcet.value));
         }
+        if a.machine && codel.state.as_str() == STOP {
+            // GenoM3 runs it when the component shuts down, which the model does not hold
+            notes.push("at shutdown: never in the model".to_string());
+        }
         if !notes.is_empty() {
             node = node.subtitle(notes.join("; "));
         }
@@ -51,14 +68,19 @@ pub fn graph(def: &SystemDef, name: &str) -> Result<Graph, String> {
     }
     let index = |s: &str| states.iter().find(|(n, _)| *n == s).map(|&(_, k)| k);
     if let Some(start) = index("start") {
+        let label = if a.machine {
+            "at the first period"
+        } else {
+            "request, at a period"
+        };
         g.connect(
             Edge::new(End::node(ether), End::node(start), "request")
-                .label("request, at a period")
+                .label(label)
                 .colour("#1d5e8c"),
         );
     }
     let mut error = None;
-    for codel in &service.codels {
+    for codel in a.codels {
         let Some(from) = index(codel.state.as_str()) else {
             continue;
         };
@@ -111,7 +133,8 @@ pub fn graph(def: &SystemDef, name: &str) -> Result<Graph, String> {
         .filter(|(s, _)| *s != STOP)
         .map(|&(_, k)| k)
         .collect();
-    if !running.is_empty() {
+    // nothing interrupts or aborts a task's machine
+    if !running.is_empty() && !a.machine {
         let interrupt =
             g.add(Node::new("interrupt", "interrupt, abort", "interrupt").shape(Shape::Point));
         let (to, label) = match index(STOP) {
@@ -128,32 +151,47 @@ pub fn graph(def: &SystemDef, name: &str) -> Result<Graph, String> {
     Ok(g)
 }
 
-fn find<'a>(def: &'a SystemDef, name: &str) -> Result<(&'a ModuleDef, &'a ServiceDef), String> {
-    let activities: Vec<String> = def
-        .modules
-        .iter()
-        .flat_map(|m| {
-            m.services
-                .iter()
-                .filter(|s| s.kind == ServiceKind::Activity)
-                .map(move |s| format!("{}.{}", m.name.as_str(), s.name.as_str()))
-        })
-        .collect();
-    let found = name.split_once('.').and_then(|(m, s)| {
-        let module = def.modules.iter().find(|d| d.name.as_str() == m)?;
-        let service = module
+fn find<'a>(def: &'a SystemDef, name: &str) -> Result<Automaton<'a>, String> {
+    let mut known: Vec<String> = Vec::new();
+    let mut found = None;
+    for m in &def.modules {
+        let module = m.name.as_str();
+        for t in m.tasks.iter().filter(|t| t.has_machine()) {
+            known.push(format!("{module}.{} (a task's machine)", t.name.as_str()));
+            if format!("{module}.{}", t.name.as_str()) == name {
+                found = Some(Automaton {
+                    module,
+                    name: t.name.as_str(),
+                    task: t.name.as_str(),
+                    codels: &t.codels,
+                    machine: true,
+                });
+            }
+        }
+        for s in m
             .services
             .iter()
-            .find(|d| d.name.as_str() == s && d.kind == ServiceKind::Activity)?;
-        Some((module, service))
-    });
+            .filter(|s| s.kind == ServiceKind::Activity)
+        {
+            known.push(format!("{module}.{}", s.name.as_str()));
+            if format!("{module}.{}", s.name.as_str()) == name {
+                found = Some(Automaton {
+                    module,
+                    name: s.name.as_str(),
+                    task: s.task.as_ref().map_or("", |t| t.as_str()),
+                    codels: &s.codels,
+                    machine: false,
+                });
+            }
+        }
+    }
     found.ok_or_else(|| {
-        if activities.is_empty() {
+        if known.is_empty() {
             format!("the model has no activity `{name}`: it has no activities")
         } else {
             format!(
                 "the model has no activity `{name}`\n  help: its activities are {}",
-                activities.join(", ")
+                known.join(", ")
             )
         }
     })

@@ -211,10 +211,10 @@ fn pairwise(
 }
 
 /// The model's own connectors. One that extends a generated connector (a codel's, a
-/// request's, the tick) is an edge from its service (or the clock) to each component of
-/// the model's own it adds; another is a dot joining its components and the activities
-/// whose ports it takes (`abort`, …). What its guard and action read is drawn too: a
-/// port's age, an activity's being active.
+/// request's, a pending request's interrupts, the tick) is an edge from its service (or
+/// the clock) to each component of the model's own it adds; another is a dot joining its
+/// components and the activities whose ports it takes (`abort`, …). What its guard and
+/// action read is drawn too: a port's age, an activity's being active.
 fn connector_edges(
     g: &mut Graph,
     def: &SystemDef,
@@ -232,8 +232,8 @@ fn connector_edges(
     for module in &map.modules {
         for service in &module.services {
             let name = format!("{}.{}", module.name, service.name);
-            if let Some(r) = service.request {
-                owner.insert(r, name.clone());
+            for i in service.request.iter().chain(&service.interrupt) {
+                owner.insert(*i, name.clone());
             }
             for codel in &service.codels {
                 owner.insert(codel.run, name.clone());

@@ -339,6 +339,33 @@ fn the_satellite_verifies() {
     assert!(stdout.contains("result: all 7 properties hold"), "{stdout}");
 }
 
+/// An activity requested before the one it interrupts is not starved (docs/genom.md,
+/// "Interrupts"): the verifier proves its replies, and the engine runs the model.
+#[test]
+fn interrupts_are_sent_again_while_the_interrupter_waits() {
+    let model = "robots/tests/interrupts.ron";
+    let (code, stdout, _dir) = verify(model);
+    assert_eq!(code, Some(0), "{stdout}");
+    for property in [
+        "Replies(gripper.Open)",
+        "Replies(hand.Open)",
+        "open_waits_for_a_stop",
+    ] {
+        let line = stdout
+            .lines()
+            .find(|l| l.trim_start().starts_with(property))
+            .unwrap_or("");
+        assert!(line.contains("holds"), "{property}: {stdout}");
+    }
+    let out = bip(&["simulate", model, "--steps", "300", "--seed", "3"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+}
+
 /// SPIN on the exported Promela stores as many states as bip explores, for expanded GenoM
 /// models (an independent check of the expansion's step relation through the exporter).
 #[test]

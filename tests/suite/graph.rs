@@ -147,6 +147,45 @@ fn an_activity_shows_its_codels_yields_exceptions_and_stop_path() {
 }
 
 #[test]
+fn a_task_machine_is_drawn_from_the_start_without_interrupts() {
+    let machine = "robots/tests/task-machine.ron";
+    let (texts, classes) = svg_parts(&graph(&[machine, "--activity", "flight.main"]));
+    for label in [
+        "ether",
+        "start",
+        "init",
+        "control",
+        "emergency",
+        "stop",
+        "at the first period",
+        "pause::control",
+        "at shutdown: never in the model",
+    ] {
+        assert!(texts.iter().any(|t| t == label), "{label}: {texts:?}");
+    }
+    assert!(!texts.iter().any(|t| t.contains("request")), "{texts:?}");
+    assert!(
+        !texts.iter().any(|t| t.contains("interrupt")),
+        "nothing interrupts a machine: {texts:?}"
+    );
+    assert_eq!(count(&classes, "node codel"), 5);
+    // the activity of the same task is drawn as before
+    let (texts, _) = svg_parts(&graph(&[machine, "--activity", "flight.Calibrate"]));
+    assert!(
+        texts.iter().any(|t| t == "request, at a period"),
+        "{texts:?}"
+    );
+    // a wrong name lists the machines too
+    let out = bip(&["graph", machine, "--activity", "flight.mai"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("its activities are flight.main (a task's machine), flight.Calibrate"),
+        "{err}"
+    );
+}
+
+#[test]
 fn the_rover_is_drawn_at_every_level_and_for_every_activity() {
     let (texts, _) = svg_parts(&graph(&["robots/rover.ron"]));
     for module in [

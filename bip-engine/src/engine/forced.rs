@@ -69,7 +69,7 @@ impl Engine {
                 Ok(Stepped::Tick)
             }
             InterKind::Progress | InterKind::Environment => {
-                self.commit(Cause::Other)?;
+                self.commit(self.progress_cause(step.label))?;
                 Ok(Stepped::Other)
             }
         }

@@ -10,6 +10,7 @@ use crate::prelude::*;
 use super::Engine;
 use crate::bind::PortKind;
 use crate::event::{Event, Fault, FaultKind, Outcome, Output, Reply, Ticket};
+use bip_model::Label;
 
 /// Why a step is committed, for replies.
 pub(super) enum Cause {
@@ -22,10 +23,24 @@ pub(super) enum Cause {
         /// The outcome of a failed codel (exception or fault).
         error: Option<Outcome>,
     },
+    /// A pending request of `service` sends its interrupts again.
+    Interrupts {
+        service: u32,
+    },
     Other,
 }
 
 impl Engine {
+    /// Why a progress step of `label` is committed: a pending request's interrupts, or
+    /// another step of the model.
+    pub(super) fn progress_cause(&self, label: Label) -> Cause {
+        match label {
+            Label::Interaction(i) => self.t.interrupts_of[i as usize]
+                .map_or(Cause::Other, |service| Cause::Interrupts { service }),
+            Label::Internal { .. } => Cause::Other,
+        }
+    }
+
     /// Follows the activities' life cycles through the step's picks to reply to the
     /// requests they serve (docs/genom.md, section 2, the activity atom).
     pub(super) fn track(&mut self, cause: Cause) {
@@ -36,6 +51,7 @@ impl Engine {
                 args,
             } => (ticket, args, Some(service), None),
             Cause::Codel { error, .. } => (None, None, None, error),
+            Cause::Interrupts { service } => (None, None, Some(service), None),
             Cause::Other => (None, None, None, None),
         };
         for k in 0..self.chosen.picks(self.gate.enabled()).len() {

@@ -94,7 +94,7 @@ impl Engine {
                 }),
                 Candidate::Step(label, k) => {
                     self.choose_kth(label, k);
-                    self.commit(Cause::Other)?;
+                    self.commit(self.progress_cause(label))?;
                     Ok(Stepped::Other)
                 }
             };

@@ -380,3 +380,40 @@ fn a_task_machine_runs_unrequested_and_cannot_be_requested() {
     let machine = s.system().component_index("flight_main").expect("machine");
     assert_eq!(s.system().location_name(s.state(), machine), "init");
 }
+
+#[test]
+fn a_pending_request_interrupts_what_is_requested_after_it() {
+    // robots/tests/interrupts.ron: `Open` interrupts `Grasp`, which holds until interrupted
+    let mut e = Engine::builder(load("tests/interrupts.ron"))
+        .default_codels(DefaultCodels::FirstYield)
+        .record(1_000)
+        .build()
+        .expect("builds");
+    let open = e.request("gripper", "Open", ()).expect("queued");
+    let grasp = e.request("gripper", "Grasp", ()).expect("queued");
+    e.run_until(Until::Ticks(6)).expect("runs");
+    let got = replies(&mut e);
+    // `Grasp` is accepted while `Open` waits for its period, and interrupted by it
+    assert!(got.contains(&(grasp, Reply::Accepted)), "{got:?}");
+    assert!(
+        got.iter().any(|(t, r)| *t == grasp
+            && matches!(r, Reply::Done { outcome: Outcome::Interrupted { by: Some(s) }, .. }
+                if s.to_string() == "gripper.Open")),
+        "{got:?}"
+    );
+    assert!(!got.contains(&(grasp, Reply::Started)), "{got:?}");
+    // `Open` is not starved: it runs and ends
+    assert!(got.contains(&(open, Reply::Started)), "{got:?}");
+    assert!(
+        got.contains(&(open, Reply::done(Outcome::Ether))),
+        "{got:?}"
+    );
+    // every recorded state keeps the model's invariants (`Open` waits only for a stop)
+    let states = states_of(e.inspect().system(), &e.record());
+    assert_invariants(e.inspect().system(), &states);
+    // the recording replays through an engine, the interrupts as a step of the model
+    let r = bip_engine::replay::replay(load("tests/interrupts.ron"), &e.record()).expect("builds");
+    assert!(r.refused.is_none(), "{:?}", r.refused);
+    assert_eq!(r.steps.len(), e.record().steps.len());
+    assert!(r.steps.iter().any(|s| s.stepped == Stepped::Other));
+}

@@ -36,6 +36,14 @@ pub fn request_connector(m: &str, s: &str) -> String {
     format!("{m}_{s}_request")
 }
 
+/// The connector by which a pending request of activity `m.s` interrupts again the
+/// activities it interrupts that were requested since its own request (docs/genom.md,
+/// "Interrupts"). No codel state may be named `interrupt`, so no codel connector of
+/// `m.s` has this name.
+pub fn interrupt_connector(m: &str, s: &str) -> String {
+    format!("{m}_{s}_interrupt")
+}
+
 /// The connector that runs codel `state` of activity `m.s`.
 pub fn codel_connector(m: &str, s: &str, state: &str) -> String {
     format!("{m}_{s}_{state}")

@@ -37,6 +37,9 @@ pub(crate) struct RecipeService {
     pub component: Option<String>,
     /// The request connector; `None` for a task's machine, which nothing requests.
     pub request: Option<String>,
+    /// The connector by which a pending request interrupts again (`None` if the service
+    /// interrupts no other activity).
+    pub interrupt: Option<String>,
     pub owned_by_model: bool,
     pub refusals: Vec<RecipeCondition>,
     pub interrupts: Vec<String>,
@@ -255,6 +258,7 @@ impl Recipe {
                     task: s.task,
                     component: comp,
                     request: s.request.as_deref().map(interaction).transpose()?,
+                    interrupt: s.interrupt.as_deref().map(interaction).transpose()?,
                     owned_by_model: s.owned_by_model,
                     refusals,
                     interrupts: s.interrupts.clone(),

@@ -1,6 +1,6 @@
 //! bip-lang's integration tests, in one binary: every kind of bad input with its message and
 //! position (`diagnostics`, `genom`, `genom_terms`, `timing`), and the GenoM expansion on
-//! random layers (`genom_random`); GenoM3 files (`gen3`, in a model `gen3_layer`, their
+//! random layers (`genom_random`), interrupts against a naive interpreter (`interrupts`); GenoM3 files (`gen3`, in a model `gen3_layer`, their
 //! IDL types `gen3_types`, mutated `gen3_fuzz`); reproducers of crashes and hangs
 //! (`robustness`) and mutated example models through the loader (`fuzz`).
 
@@ -15,6 +15,7 @@ mod gen3_types;
 mod genom;
 mod genom_random;
 mod genom_terms;
+mod interrupts;
 mod response;
 mod robustness;
 mod support;

@@ -120,6 +120,10 @@ pub struct ServiceMap {
     /// The interaction that accepts a request; `None` for a task's machine (docs/genom.md,
     /// "Task machines"), which starts with the component and which nothing requests.
     pub request: Option<u32>,
+    /// The interaction by which a pending request interrupts again the activities it
+    /// interrupts that were requested since (docs/genom.md, "Interrupts"); `None` if the
+    /// service interrupts no other activity.
+    pub interrupt: Option<u32>,
     /// True if a component of the model sends the requests (a user connector took the
     /// request connector over with a role other than `Environment`): the engine must
     /// not send them itself.

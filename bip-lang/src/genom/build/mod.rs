@@ -1,14 +1,16 @@
 //! The expansion of a checked GenoM layer into BIP core (docs/genom.md): one atom per
-//! module and per activity, one clock, a request connector per service, a codel connector
-//! per codel state (and one per codel that may throw), one tick, the priorities that make
-//! codels urgent and run them in declaration order, and the constraints as guards.
+//! module and per activity, one clock, a request connector per service, an interrupt
+//! connector per activity that interrupts another, a codel connector per codel state (and
+//! one per codel that may throw), one tick, the priorities that make codels urgent and run
+//! them in declaration order, and the constraints as guards.
 //!
 //! This file holds the builder, what it collects and the helpers every part uses; each
 //! part of the expansion is a file of its own:
 //! - `clock.rs`: the clock atom and the tick connector (the tasks' common cycle);
 //! - `module.rs`: a module's atom (functions, ages, ids written by codels);
 //! - `activity.rs`: an activity's atom (requests, interrupts, abort, codels);
-//! - `services.rs`: a service's request and codel connectors, with their conditions;
+//! - `services.rs`: a service's request, interrupt and codel connectors, with their
+//!   conditions;
 //! - `finish.rs`: the core model assembled, user connectors joining generated ones;
 //! - `priorities.rs`, `properties.rs`: the generated priorities, and the properties.
 

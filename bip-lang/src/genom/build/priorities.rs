@@ -19,7 +19,9 @@ impl<'a, 'd> Builder<'a, 'd> {
             for s in &m.services {
                 requests.extend(s.request.clone());
                 if s.component.is_some() {
-                    let mut level = Vec::new();
+                    // a pending request's interrupts are urgent too: they come before the
+                    // tick that could start what they interrupt
+                    let mut level: Vec<String> = s.interrupt.iter().cloned().collect();
                     for c in &s.codels {
                         level.push(c.run.clone());
                         level.push(c.fail.clone());

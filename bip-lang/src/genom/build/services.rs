@@ -1,5 +1,6 @@
 //! A service's connectors and its part of the engine's map: the request (with the
-//! interrupts it sends and the `after` it waits for), and for each codel its run and its
+//! interrupts it sends and the `after` it waits for), an activity's interrupts sent again
+//! while it is pending, and for each codel its run and its
 //! error path, guarded by the constraints that apply to it. The same conditions go to the
 //! recipe, each with its reason, so that the engine says why a request is refused or a
 //! codel held.
@@ -85,12 +86,14 @@ impl<'a, 'd> Builder<'a, 'd> {
         let (start_conds, run_conds) = self.conditions(r, user);
         // the request (a task's machine has none: it starts with the component)
         let request = (!s.machine).then(|| self.request_connector(r, &run_conds));
+        let interrupt = self.interrupt_connector(r);
         let mut service = RecipeService {
             name: s.name.to_string(),
             kind: s.kind,
             task: s.task,
             component: s.is_activity().then(|| self.comp(r)),
             request: request.as_ref().map(|(name, _)| name.clone()),
+            interrupt,
             owned_by_model: false,
             refusals: request.map(|(_, refusals)| refusals).unwrap_or_default(),
             codels: Vec::new(),
@@ -200,6 +203,60 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
         let recipe_module = self.recipe_module(r.module);
         recipe_module.services.push(service);
+    }
+
+    /// The connector by which pending activity `r` interrupts again the activities it
+    /// interrupts (other than itself) once one of them has been requested since its own
+    /// request: GenoM3's control task sends a waiting activity's interrupts again until it
+    /// starts (docs/genom.md, "Interrupts"). `None` if `r` interrupts no other activity.
+    fn interrupt_connector(&mut self, r: ServiceRef) -> Option<String> {
+        let s = self.service(r);
+        if !s.is_activity() || s.machine {
+            return None;
+        }
+        let m = self.module_name(r);
+        let victims: Vec<ServiceRef> = s
+            .interrupts
+            .iter()
+            .filter(|&&x| x != r.service)
+            .map(|&x| ServiceRef {
+                module: r.module,
+                service: x,
+            })
+            .collect();
+        // a victim to interrupt: requested, or running outside its stop path (the request
+        // of `r` left every victim at rest or stopping)
+        let to_interrupt = chain(
+            BinOp::Or,
+            victims.iter().map(|&x| {
+                let c = self.comp(x);
+                let running = not(at(&c, ETHER));
+                let running = if self.service(x).stop.is_some() {
+                    and(running, not(member(&c, STOPPING)))
+                } else {
+                    running
+                };
+                or(member(&c, REQ), running)
+            }),
+        )?;
+        let comp = self.comp(r);
+        let pending = and(at(&comp, ETHER), member(&comp, REQ));
+        let ports = victims
+            .iter()
+            .map(|&x| port(&self.comp(x), "interrupt"))
+            .collect();
+        let name = interrupt_connector(m, s.name);
+        self.claim(
+            &name,
+            s.def.name.span,
+            format!("the interrupts of pending `{m}.{}`", s.name),
+        );
+        self.connectors.push((
+            connector(&name, ports, Role::Progress),
+            Some(and(pending, to_interrupt)),
+            Vec::new(),
+        ));
+        Some(name)
     }
 
     /// The request connector of service `r` (with the interrupts it sends and the `after`
