@@ -628,6 +628,8 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         // what bip's checks of a module find, in the .gen file
         ("component c { task t { period 1 s; }; activity a() { task t; codel<start> s() yield nowhere; }; };", "codel `start` yields to `nowhere`", 1, 85),
         ("component c { activity a() { task missing; codel<start> s() yield ether; }; };", "module `c` has no task `missing`", 1, 35),
+        // an aperiodic task: its activity's codel states may not take the wake port's name
+        ("component c { task t; activity a() { task t; codel<start> s() yield pause::wake; codel<wake> w() yield ether; }; };", "a codel state cannot be named `wake`", 1, 88),
         // interfaces
         ("interface i { task t { period 1 s; }; };", "interface `i` declares a task", 1, 20),
         ("component c { provides i; };", "interface `i` is not declared", 1, 24),
