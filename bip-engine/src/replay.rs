@@ -59,6 +59,10 @@ pub enum End {
     /// state with no step, or on a cycle (which starts after `loop_start` steps and
     /// returns to its first state) that no run from it leaves for a tick.
     Timelock { loop_start: Option<usize> },
+    /// Time cannot pass on the trace's cycle, which starts after `loop_start` steps and
+    /// returns to its first state (`TimeProgress`'s trace of a busy loop): no state on it
+    /// has a step of a `Time` connector, though a run may leave it.
+    BusyLoop { loop_start: usize },
     /// A step from the last state, or a property there (a response property's trigger or
     /// response: in it or on a step out of it), has a range error.
     RangeError { message: String },
@@ -257,10 +261,32 @@ fn timelock(
         Ok(Some(false)) => Ok(End::Timelock {
             loop_start: trace.loop_start,
         }),
-        Ok(Some(true)) => Err("a run from the last state lets time pass".into()),
+        Ok(Some(true)) => busy_loop(system, trace, path),
         Ok(None) => Err("the states reachable from the last state are too many to search".into()),
         Err(e) => Err(format!("range error: {e}")),
     }
+}
+
+/// A trace of `TimeProgress` whose last state lets time pass in some run: confirmed if it
+/// is a lasso none of whose cycle's states has a step of a `Time` connector.
+fn busy_loop(system: &System, trace: &Trace, path: &[(OwnedStep, State)]) -> Result<End, String> {
+    let Some(k) = trace.loop_start else {
+        return Err("a run from the last state lets time pass".into());
+    };
+    let mut steps = Steps::new();
+    // the cycle's states: after step k (its first), ..., after the last (its first again)
+    for (_, state) in &path[k..] {
+        system
+            .enabled_steps(state, &mut steps)
+            .map_err(|e| format!("range error: {e}"))?;
+        if steps.iter().any(|s| system.role(s.label) == Role::Time) {
+            return Err(
+                "a state on the trace's cycle lets time pass, and so does a run from the last state"
+                    .into(),
+            );
+        }
+    }
+    Ok(End::BusyLoop { loop_start: k })
 }
 
 fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End {
