@@ -226,15 +226,21 @@ fn bad_aperiodic_tasks_are_errors_at_their_place() {
 /// (kind, target), kind 0 go, 1 pause, 2 ether.
 type Codels = Vec<Vec<(u8, usize)>>;
 
-/// Module `m`: task `t` without a period, maybe with a machine, and activity `A` in it;
-/// task `p` with a period and activity `B` in it; function `Poke`.
+/// Module `m`: task `t` without a period, maybe with a machine, and activity `A` in it,
+/// with maybe a `stop` codel (1: it yields `ether`; 2: `pause::stop` too); task `p` with
+/// a period and activity `B` in it; function `Poke`, and function `Halt` that interrupts
+/// `A`.
 #[derive(Clone, Debug)]
 struct Layer {
     machine: Option<Codels>,
     a: Codels,
+    a_stop: u8,
     b: Codels,
     period: i64,
 }
+
+/// The location of a `stop` codel, among the codel states' indices.
+const STOP: usize = usize::MAX;
 
 fn codels() -> impl Strategy<Value = Codels> {
     (1usize..=3)
@@ -265,27 +271,42 @@ fn codels() -> impl Strategy<Value = Codels> {
 }
 
 fn layer() -> impl Strategy<Value = Layer> {
-    (prop::option::of(codels()), codels(), codels(), 1i64..=3).prop_map(
-        |(machine, a, b, period)| Layer {
+    (
+        prop::option::of(codels()),
+        codels(),
+        0u8..3,
+        codels(),
+        1i64..=3,
+    )
+        .prop_map(|(machine, a, a_stop, b, period)| Layer {
             machine,
             a,
+            a_stop,
             b,
             period,
-        },
-    )
+        })
 }
 
 fn state_name(k: usize) -> String {
-    if k == 0 {
-        "start".into()
-    } else {
-        format!("s{k}")
+    match k {
+        0 => "start".into(),
+        STOP => "stop".into(),
+        k => format!("s{k}"),
     }
 }
 
-fn codels_text(c: &Codels) -> String {
+/// The yields of `A`'s `stop` codel.
+fn stop_yields(stop: u8) -> Vec<(u8, usize)> {
+    match stop {
+        1 => vec![(2, 0)],
+        _ => vec![(1, STOP), (2, 0)],
+    }
+}
+
+fn codels_text(c: &Codels, stop: u8) -> String {
     let mut out = Vec::new();
-    for (k, ys) in c.iter().enumerate() {
+    let stop = (stop > 0).then(|| (STOP, stop_yields(stop)));
+    for (k, ys) in c.iter().cloned().enumerate().chain(stop) {
         let ys: Vec<String> = ys
             .iter()
             .map(|&(kind, to)| match kind {
@@ -304,28 +325,28 @@ fn codels_text(c: &Codels) -> String {
 }
 
 fn model(l: &Layer) -> String {
-    let machine = l
-        .machine
-        .as_ref()
-        .map_or(String::new(), |c| format!(", codels: [{}]", codels_text(c)));
+    let machine = l.machine.as_ref().map_or(String::new(), |c| {
+        format!(", codels: [{}]", codels_text(c, 0))
+    });
     format!(
         r#"System(name: "aperiodic", modules: [(name: "m",
             tasks: [(name: "t"{machine}), (name: "p", period: {})],
             services: [
                 (name: "Poke", kind: Function),
+                (name: "Halt", kind: Function, interrupts: ["A"]),
                 (name: "A", kind: Activity, task: "t", codels: [{}]),
                 (name: "B", kind: Activity, task: "p", codels: [{}]),
             ])],
         properties: [DeadlockFree])"#,
         l.period,
-        codels_text(&l.a),
-        codels_text(&l.b)
+        codels_text(&l.a, l.a_stop),
+        codels_text(&l.b, 0)
     )
 }
 
 /// One activity as the documentation describes it: where it is (`None`: `ether`),
-/// whether a request waits, whether it is paused.
-type Act = (Option<usize>, bool, bool);
+/// whether a request waits, whether it is paused, whether it is on its stop path.
+type Act = (Option<usize>, bool, bool, bool);
 
 /// The machine (if any), `A`, `B`, and the ticks modulo `B`'s period.
 type RefState = (Option<Act>, Act, Act, i64);
@@ -339,7 +360,9 @@ type RefLabel = String;
 /// for `A` (no period) makes it ready at once; one for `B` waits for `B`'s next period
 /// boundary, every `period` ticks. A plain yield goes on, `pause::` pauses, `ether` and
 /// the error path end. `pause::` in the aperiodic task waits for an event: any
-/// transition of another activity of the module but a pause, or `Poke`'s request.
+/// transition of another activity of the module but a pause, or the request of a
+/// function. `Halt` interrupts `A`: to its `stop` codel, ready at once, or to `ether`
+/// without one; on its stop path, `A` only forgets its request and its pause.
 fn successors(l: &Layer, s: RefState) -> Vec<(RefLabel, RefState)> {
     let (machine, a, b, phase) = s;
     let mut out = Vec::new();
@@ -348,28 +371,35 @@ fn successors(l: &Layer, s: RefState) -> Vec<(RefLabel, RefState)> {
     let names = ["t", "A", "B"];
     // the activities that sleep until an event: in `t`, with some pause
     let sleeps = |i: usize| {
-        i < 2 && codels[i].is_some_and(|c| c.iter().flatten().any(|&(kind, _)| kind == 1))
+        let pauses = |ys: &[(u8, usize)]| ys.iter().any(|&(kind, _)| kind == 1);
+        i < 2
+            && (codels[i].is_some_and(|c| c.iter().any(|ys| pauses(ys)))
+                || (i == 1 && l.a_stop == 2))
     };
     let build = |acts: [Option<Act>; 3], phase: i64| -> RefState {
         (acts[0], acts[1].expect("A"), acts[2].expect("B"), phase)
     };
+    // the request of a function: every sleeper wakes
+    let all_woken = |mut acts: [Option<Act>; 3]| {
+        for j in (0..3).filter(|&j| sleeps(j)) {
+            if let Some(act) = acts[j].as_mut() {
+                act.2 = false;
+            }
+        }
+        acts
+    };
     let ready = |act: Act| match act {
-        (None, req, paused) => req && !paused,
-        (Some(_), _, paused) => !paused,
+        (None, req, paused, _) => req && !paused,
+        (Some(_), _, paused, _) => !paused,
     };
     if let Some(i) = (0..3).find(|&i| acts[i].is_some_and(ready)) {
-        let (at, _, _) = acts[i].expect("ready");
+        let (at, _, _, stopping) = acts[i].expect("ready");
         let k = at.unwrap_or(0);
-        let c = codels[i].expect("codels");
-        let wake_others = |mut acts: [Option<Act>; 3]| {
-            for j in (0..3).filter(|&j| j != i && sleeps(j)) {
-                if let Some(act) = acts[j].as_mut() {
-                    act.2 = false;
-                }
-            }
-            acts
+        let yields = match k {
+            STOP => stop_yields(l.a_stop),
+            k => codels[i].expect("codels")[k].clone(),
         };
-        let mut outcomes: Vec<(String, Option<usize>, bool)> = c[k]
+        let mut outcomes: Vec<(String, Option<usize>, bool)> = yields
             .iter()
             .map(|&(kind, to)| match kind {
                 0 => (state_name(k), Some(to), false),
@@ -380,9 +410,14 @@ fn successors(l: &Layer, s: RefState) -> Vec<(RefLabel, RefState)> {
         outcomes.push((format!("{}_fail", state_name(k)), None, false));
         for (label, to, pause) in outcomes {
             let mut next = acts;
-            next[i] = Some((to, false, pause));
+            next[i] = Some((to, false, pause, stopping && to.is_some()));
             if !pause {
-                next = wake_others(next);
+                // an event: the other sleepers wake
+                for j in (0..3).filter(|&j| j != i && sleeps(j)) {
+                    if let Some(act) = next[j].as_mut() {
+                        act.2 = false;
+                    }
+                }
             }
             out.push((format!("{}_{label}", names[i]), build(next, phase)));
         }
@@ -398,27 +433,33 @@ fn successors(l: &Layer, s: RefState) -> Vec<(RefLabel, RefState)> {
     // requests
     if a.0.is_none() && !a.1 {
         let mut next = acts;
-        next[1] = Some((None, true, false));
+        next[1] = Some((None, true, false, false));
         out.push(("A_request".into(), build(next, phase)));
     }
     if b.0.is_none() && !b.1 {
         let mut next = acts;
-        next[2] = Some((None, true, true));
+        next[2] = Some((None, true, true, false));
         out.push(("B_request".into(), build(next, phase)));
     }
-    let mut poked = acts;
-    for j in (0..3).filter(|&j| sleeps(j)) {
-        if let Some(act) = poked[j].as_mut() {
-            act.2 = false;
-        }
-    }
-    out.push(("Poke_request".into(), build(poked, phase)));
+    out.push(("Poke_request".into(), build(all_woken(acts), phase)));
+    let mut halted = all_woken(acts);
+    halted[1] = Some(match a {
+        (Some(_), _, _, false) if l.a_stop > 0 => (Some(STOP), false, false, true),
+        (Some(at), _, _, true) => (Some(at), false, false, true),
+        _ => (None, false, false, false),
+    });
+    out.push(("Halt_request".into(), build(halted, phase)));
     out
 }
 
 fn reference_graph(l: &Layer) -> BTreeSet<(RefState, RefLabel, RefState)> {
-    let machine = l.machine.as_ref().map(|_| (None, true, false));
-    let first = (machine, (None, false, false), (None, false, false), 0);
+    let machine = l.machine.as_ref().map(|_| (None, true, false, false));
+    let first = (
+        machine,
+        (None, false, false, false),
+        (None, false, false, false),
+        0,
+    );
     let mut seen = HashSet::from([first]);
     let mut queue = VecDeque::from([first]);
     let mut out = BTreeSet::new();
@@ -451,13 +492,19 @@ fn system_graph(l: &Layer, sys: &System) -> BTreeSet<(RefState, RefLabel, RefSta
     let act = |s: &State, c: u32, codels: &Codels| -> Act {
         let at = match sys.location_name(s, c) {
             "ether" => None,
+            "stop" => Some(STOP),
             loc => Some(
                 (0..codels.len())
                     .find(|&k| state_name(k) == loc)
                     .expect("a codel state"),
             ),
         };
-        (at, flag(s, c, "req"), flag(s, c, "paused"))
+        (
+            at,
+            flag(s, c, "req"),
+            flag(s, c, "paused"),
+            flag(s, c, "stopping"),
+        )
     };
     let view = |s: &State| -> RefState {
         for c in [machine, Some(a), Some(b)].into_iter().flatten() {

@@ -78,7 +78,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         "request",
                         l,
                         Some(name(STOPPING)),
-                        vec![set(REQ, true)],
+                        unpause(aperiodic, vec![set(REQ, true)]),
                     ));
                 } else {
                     t.push(tr(
@@ -129,7 +129,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         "interrupt",
                         l,
                         Some(name(STOPPING)),
-                        vec![set(REQ, false)],
+                        unpause(aperiodic, vec![set(REQ, false)]),
                     ));
                 }
             }
@@ -154,7 +154,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         "abort",
                         l,
                         Some(and(name(STOPPING), name(REQ))),
-                        vec![set(REQ, false)],
+                        unpause(aperiodic, vec![set(REQ, false)]),
                     ));
                 }
             }
@@ -256,9 +256,9 @@ impl<'a, 'd> Builder<'a, 'd> {
     }
 }
 
-/// `action`, which sends an activity of an aperiodic task onto its stop path, with its
-/// `paused` cleared: the stop path runs at once, as a task without a period runs what is
-/// ready.
+/// `action`, which sends an activity of an aperiodic task onto its stop path (or finds it
+/// there), with its `paused` cleared: the stop path runs at once, as a task without a
+/// period runs what is ready, and a request that interrupts is an event of the module.
 fn unpause(aperiodic: bool, mut action: Vec<Assign>) -> Vec<Assign> {
     if aperiodic {
         action.push(set(PAUSED, false));
