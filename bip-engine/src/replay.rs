@@ -274,8 +274,12 @@ fn busy_loop(system: &System, trace: &Trace, path: &[(OwnedStep, State)]) -> Res
         return Err("a run from the last state lets time pass".into());
     };
     let mut steps = Steps::new();
-    // the cycle's states: after step k (its first), ..., after the last (its first again)
-    for (_, state) in &path[k..] {
+    // the cycle's states: after step k (its first), ..., after the last (its first again);
+    // its steps are the model's own (a cycle of the environment's is its choice)
+    for (step, state) in &path[k..] {
+        if system.role(step.label) == Role::Environment {
+            return Err("the trace's cycle has a step of the environment".into());
+        }
         system
             .enabled_steps(state, &mut steps)
             .map_err(|e| format!("range error: {e}"))?;
