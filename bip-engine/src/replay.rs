@@ -329,10 +329,18 @@ fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End
                         .map(|(c, paused, r)| {
                             let (m, s, st) = engine.inspect().codel_name(c);
                             let why: Vec<String> = engine.inspect().hold_texts(c, r).collect();
-                            let wait = if paused {
-                                " (waits for its period)"
-                            } else {
-                                ""
+                            // a task without a period waits for an event of its module
+                            let aperiodic = system.genom.as_ref().is_some_and(|g| {
+                                g.module(m).zip(g.service(m, s)).is_some_and(|(mm, sv)| {
+                                    sv.task
+                                        .and_then(|t| mm.tasks.get(t))
+                                        .is_some_and(|t| t.period.is_none())
+                                })
+                            });
+                            let wait = match (paused, aperiodic) {
+                                (false, _) => "",
+                                (true, false) => " (waits for its period)",
+                                (true, true) => " (waits for an event of its module)",
                             };
                             if why.is_empty() {
                                 format!("{m}.{s} codel `{st}`{wait}")
