@@ -91,7 +91,7 @@ fn period_ticks(
     tick_us: u64,
     errors: &mut Errors,
 ) -> Option<ConstExpr> {
-    if period % tick_us != 0 {
+    if !period.is_multiple_of(tick_us) {
         errors.push(
             ModelError::new(
                 format!(
