@@ -171,6 +171,16 @@ pub fn run(args: &Args) -> u8 {
             println!("result: {} fails", bip_verifier::TIME_PROGRESS);
             exit::FAILED
         }
+        Some(End::BusyLoop { loop_start }) => {
+            let n = result.steps.len();
+            println!(
+                "time stands still: after {loop_start} step{}, the cycle of steps {}-{n} can repeat forever, and no state on it lets time pass (a busy loop)",
+                if *loop_start == 1 { "" } else { "s" },
+                loop_start + 1
+            );
+            println!("result: {} fails", bip_verifier::TIME_PROGRESS);
+            exit::FAILED
+        }
         Some(End::RangeError { message }) => {
             println!("range error from the last state: {message}");
             println!("result: RangeErrors fails");

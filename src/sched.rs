@@ -229,6 +229,13 @@ fn text(title: &str, sched: &Schedulability, assignment: Assignment) -> String {
             t.unbudgeted.join(", ")
         );
     }
+    if !sched.aperiodic.is_empty() {
+        let _ = writeln!(
+            out,
+            "  note: left out, without a period and with no wcet on their codels (they take no time here): {}",
+            sched.aperiodic.join(", ")
+        );
+    }
     if assignment != Assignment::Given {
         let kind = if assignment == Assignment::RateMonotonic {
             "rate-monotonic"
@@ -328,6 +335,7 @@ fn json(
         "assignment": format!("{assignment:?}"),
         "demand": demand,
         "cpus": cpus,
+        "aperiodic_left_out": sched.aperiodic,
         "schedulable": sched.schedulable(),
         "result": sched.verdict(),
     });

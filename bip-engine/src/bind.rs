@@ -55,7 +55,7 @@ pub(crate) struct CodelTable {
     pub info: CodelInfo,
     /// For each of `map.ids`, its index among the module's fields.
     pub ids_field: Vec<usize>,
-    /// Its task's period in ticks.
+    /// Its task's period in ticks ([`period_ticks`]).
     pub period_ticks: u64,
     /// Its task, an index into [`Tables::tasks`].
     pub task: Option<u32>,
@@ -243,7 +243,7 @@ impl Tables {
             let port_base = t.ports.len();
             let task_base = t.tasks.len() as u32;
             t.tasks
-                .extend(m.tasks.iter().map(|k| (u64::from(k.period), k.deadline_us)));
+                .extend(m.tasks.iter().map(|k| (period_ticks(k), k.deadline_us)));
             for p in &m.ports {
                 t.ports.push((m.name.clone(), p.name.clone()));
                 t.port_types.push(p.ty.clone());
@@ -262,10 +262,7 @@ impl Tables {
                 if let Some(i) = s.interrupt {
                     t.interrupts_of[i as usize] = Some(sid);
                 }
-                let period_ticks = s
-                    .task
-                    .and_then(|k| m.tasks.get(k))
-                    .map_or(1, |task| u64::from(task.period));
+                let period_ticks = s.task.and_then(|k| m.tasks.get(k)).map_or(1, period_ticks);
                 let mut activity = None;
                 if let Some(comp) = s.component {
                     t.activity_of[comp as usize] = Some(sid);
@@ -515,4 +512,12 @@ fn activity_table(
         pending_args: None,
         output: None,
     })
+}
+
+/// A task's period in ticks; for an aperiodic task, which the clock never releases and
+/// which has no deadline, more ticks than a run ever has: its clock never releases it,
+/// its deadline (the period, lacking one) never passes, and rate-monotonic priorities
+/// place it below every periodic task.
+pub(crate) fn period_ticks(task: &bip_model::genom::TaskMap) -> u64 {
+    task.period.map_or(u64::MAX, u64::from)
 }

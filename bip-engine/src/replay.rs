@@ -59,6 +59,10 @@ pub enum End {
     /// state with no step, or on a cycle (which starts after `loop_start` steps and
     /// returns to its first state) that no run from it leaves for a tick.
     Timelock { loop_start: Option<usize> },
+    /// Time cannot pass on the trace's cycle, which starts after `loop_start` steps and
+    /// returns to its first state (`TimeProgress`'s trace of a busy loop): no state on it
+    /// has a step of a `Time` connector, though a run may leave it.
+    BusyLoop { loop_start: usize },
     /// A step from the last state, or a property there (a response property's trigger or
     /// response: in it or on a step out of it), has a range error.
     RangeError { message: String },
@@ -257,10 +261,36 @@ fn timelock(
         Ok(Some(false)) => Ok(End::Timelock {
             loop_start: trace.loop_start,
         }),
-        Ok(Some(true)) => Err("a run from the last state lets time pass".into()),
+        Ok(Some(true)) => busy_loop(system, trace, path),
         Ok(None) => Err("the states reachable from the last state are too many to search".into()),
         Err(e) => Err(format!("range error: {e}")),
     }
+}
+
+/// A trace of `TimeProgress` whose last state lets time pass in some run: confirmed if it
+/// is a lasso none of whose cycle's states has a step of a `Time` connector.
+fn busy_loop(system: &System, trace: &Trace, path: &[(OwnedStep, State)]) -> Result<End, String> {
+    let Some(k) = trace.loop_start else {
+        return Err("a run from the last state lets time pass".into());
+    };
+    let mut steps = Steps::new();
+    // the cycle's states: after step k (its first), ..., after the last (its first again);
+    // its steps are the model's own (a cycle of the environment's is its choice)
+    for (step, state) in &path[k..] {
+        if system.role(step.label) == Role::Environment {
+            return Err("the trace's cycle has a step of the environment".into());
+        }
+        system
+            .enabled_steps(state, &mut steps)
+            .map_err(|e| format!("range error: {e}"))?;
+        if steps.iter().any(|s| system.role(s.label) == Role::Time) {
+            return Err(
+                "a state on the trace's cycle lets time pass, and so does a run from the last state"
+                    .into(),
+            );
+        }
+    }
+    Ok(End::BusyLoop { loop_start: k })
 }
 
 fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End {
@@ -299,10 +329,18 @@ fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End
                         .map(|(c, paused, r)| {
                             let (m, s, st) = engine.inspect().codel_name(c);
                             let why: Vec<String> = engine.inspect().hold_texts(c, r).collect();
-                            let wait = if paused {
-                                " (waits for its period)"
-                            } else {
-                                ""
+                            // a task without a period waits for an event of its module
+                            let aperiodic = system.genom.as_ref().is_some_and(|g| {
+                                g.module(m).zip(g.service(m, s)).is_some_and(|(mm, sv)| {
+                                    sv.task
+                                        .and_then(|t| mm.tasks.get(t))
+                                        .is_some_and(|t| t.period.is_none())
+                                })
+                            });
+                            let wait = match (paused, aperiodic) {
+                                (false, _) => "",
+                                (true, false) => " (waits for its period)",
+                                (true, true) => " (waits for an event of its module)",
                             };
                             if why.is_empty() {
                                 format!("{m}.{s} codel `{st}`{wait}")

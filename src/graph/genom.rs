@@ -34,12 +34,12 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
             } else {
                 ""
             };
+            let period = match &task.period {
+                Some(p) => format!("period {}", p.value),
+                None => "aperiodic".into(),
+            };
             node.row(
-                format!(
-                    "task {}, period {}{machine}",
-                    task.name.as_str(),
-                    task.period.value
-                ),
+                format!("task {}, {period}{machine}", task.name.as_str()),
                 "task",
             );
         }

@@ -28,7 +28,9 @@ fn replays_to_its_verdict(system: &System, trace: &Trace) -> Result<(), String> 
         | (Verdict::Violation(p), Some(End::Unanswered { property, .. }))
         | (Verdict::Witness(p), Some(End::Witness { property })) => p == property,
         (Verdict::RangeError(_), Some(End::RangeError { .. })) => true,
-        (Verdict::Violation(p), Some(End::Timelock { .. })) => p == "TimeProgress",
+        (Verdict::Violation(p), Some(End::Timelock { .. } | End::BusyLoop { .. })) => {
+            p == "TimeProgress"
+        }
         _ => false,
     };
     if shown {

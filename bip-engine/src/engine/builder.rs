@@ -244,10 +244,10 @@ impl EngineBuilder {
                     .map(|k| SimulatedTask {
                         cpu: k.cpu,
                         priority: k.priority,
-                        period_ticks: u64::from(k.period),
-                        deadline_us: k
-                            .deadline_us
-                            .unwrap_or_else(|| u64::from(k.period).saturating_mul(tick_us)),
+                        period_ticks: crate::bind::period_ticks(k),
+                        deadline_us: k.deadline_us.unwrap_or_else(|| {
+                            crate::bind::period_ticks(k).saturating_mul(tick_us)
+                        }),
                     })
                     .collect(),
             )

@@ -2,8 +2,7 @@
 //! files"): what is modelled (tasks and their periods, out ports, services, their
 //! interrupts, `after`, codel state machines with their yields, exceptions, the ports each
 //! codel writes, the data types of ports and activities' parameters, `before`, task
-//! `delay`s and codel WCETs) and what is refused because it would change the behaviour
-//! without being modelled (a task without a period that an activity runs in). The rest is
+//! `delay`s and codel WCETs; a task without a period is an aperiodic task). The rest is
 //! kept in the component as information.
 
 use std::collections::HashSet;
@@ -13,7 +12,7 @@ use super::params;
 use super::types::Types;
 use crate::diag::{Errors, ModelError};
 use crate::genom::syntax::{CodelDef, ModuleDef, PortDef, ServiceDef, ServiceKind, TaskDef};
-use crate::source::{ConstExpr, ConstValue, Spanned, Text};
+use crate::source::{ConstExpr, ConstValue, Span, Spanned, Text};
 
 /// The modules of a file's components; `tick_us` is the model's tick in microseconds.
 pub fn modules(spec: &Spec, tick_us: u64) -> Result<Vec<ModuleDef>, Vec<ModelError>> {
@@ -83,6 +82,36 @@ fn doc(lines: &[Text]) -> Option<Text> {
     Some(Text::new(text.join("\n"), first.span))
 }
 
+/// A task's period in ticks of `tick_us`; `None` (with an error at it) if it is not a
+/// whole number of them.
+fn period_ticks(
+    t: &Task,
+    period: u64,
+    span: Span,
+    tick_us: u64,
+    errors: &mut Errors,
+) -> Option<ConstExpr> {
+    if !period.is_multiple_of(tick_us) {
+        errors.push(
+            ModelError::new(
+                format!(
+                    "the period of task `{}` ({period} µs) is not a whole number of ticks of {tick_us} µs",
+                    t.name
+                ),
+                span,
+            )
+            .with_help("choose the model's `tick_ms` to divide every period"),
+        );
+        return None;
+    }
+    let ticks = i64::try_from(period / tick_us).unwrap_or(i64::MAX);
+    Some(Spanned {
+        value: ConstValue::Int(ticks),
+        span,
+        verbatim: false,
+    })
+}
+
 fn module(
     c: &Component,
     tick_us: u64,
@@ -97,47 +126,22 @@ fn module(
             if let (None, Some((_, span))) = (t.period, t.delay) {
                 errors.push(
                     ModelError::new(format!("task `{}` has a delay and no period", t.name), span)
-                        .with_help("a delay offsets the period boundaries: give the task a `period`"),
-                );
-            }
-            let Some((period, span)) = t.period else {
-                // a task no activity runs in only runs its own state machine, which is
-                // not modelled; one an activity runs in needs a period
-                let user = c
-                    .services
-                    .iter()
-                    .find(|s| s.task.as_ref().is_some_and(|n| n.value == t.name.value));
-                if let Some(s) = user {
-                    errors.push(
-                        ModelError::new(format!("task `{}` has no period", t.name), t.name.span)
-                            .with_help("bip models periodic tasks only: give it a `period`")
-                            .with_note(s.name.span, format!("activity `{}` runs in it", s.name)),
-                    );
-                }
-                return None;
-            };
-            if period % tick_us != 0 {
-                errors.push(
-                    ModelError::new(
-                        format!(
-                            "the period of task `{}` ({period} µs) is not a whole number of ticks of {tick_us} µs",
-                            t.name
+                        .with_help(
+                            "a delay offsets the period boundaries: give the task a `period`",
                         ),
-                        span,
-                    )
-                    .with_help("choose the model's `tick_ms` to divide every period"),
                 );
-                return None;
             }
-            let ticks = i64::try_from(period / tick_us).unwrap_or(i64::MAX);
+            // without a period, the task is aperiodic: it runs its codels as soon as
+            // they are ready (docs/genom.md, "Aperiodic tasks")
+            let period = match t.period {
+                None => None,
+                Some((period, span)) => Some(period_ticks(t, period, span, tick_us, errors)?),
+            };
+            let delay = t.period.and_then(|(p, _)| delay(t, p, tick_us, errors));
             Some(TaskDef {
                 name: t.name.clone(),
-                period: Spanned {
-                    value: ConstValue::Int(ticks),
-                    span,
-                    verbatim: false,
-                },
-                delay: delay(t, period, tick_us, errors),
+                period,
+                delay,
                 priority: None,
                 cpu: None,
                 deadline: None,

@@ -12,6 +12,15 @@ pub const REQ: &str = "req";
 pub const PAUSED: &str = "paused";
 pub const STOPPING: &str = "stopping";
 pub const DONE: &str = "done";
+/// An activity's variable that records an event of its module (a transition other than
+/// a pause) until the module's wake-up has delivered it, and the port of that wake-up.
+pub const WOKE: &str = "woke";
+pub const WAKE: &str = "wake";
+
+/// The connector that wakes module `m`'s sleeping aperiodic activities.
+pub fn wake_connector(m: &str) -> String {
+    format!("{m}_wake")
+}
 
 /// The component of module `m` (its ids, port ages, function ports).
 pub fn module_component(m: &str) -> String {

@@ -19,7 +19,7 @@ pub(crate) struct Recipe {
 #[derive(Clone, Debug)]
 pub(crate) struct RecipeModule {
     pub name: String,
-    pub tasks: Vec<(String, i64)>,
+    pub tasks: Vec<(String, Option<i64>)>,
     /// Port names and their age caps, for ports whose age is tracked.
     pub ports: Vec<(String, Option<i64>)>,
     /// The declared type of each port's data.
@@ -282,7 +282,7 @@ impl Recipe {
                             .unwrap_or_default();
                         TaskMap {
                             name: n.clone(),
-                            period: u32::try_from(*p).unwrap_or(u32::MAX),
+                            period: p.map(|p| u32::try_from(p).unwrap_or(u32::MAX)),
                             cpu: budget.cpu,
                             priority: budget.priority,
                             deadline_us: budget.deadline_us,

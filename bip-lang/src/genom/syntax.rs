@@ -25,13 +25,16 @@ pub struct ModuleDef {
     pub services: Vec<ServiceDef>,
 }
 
-/// An execution task: activities of the task are released every `period` ticks.
+/// An execution task: activities of the task are released every `period` ticks, or at
+/// once without a period (an aperiodic task, docs/genom.md, "Aperiodic tasks").
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TaskDef {
     pub name: Text,
-    /// In ticks; at least 1.
-    pub period: ConstExpr,
+    /// In ticks; at least 1. Without one the task is aperiodic: it runs its codels as
+    /// soon as they are ready, and `pause::` waits for an event of its module.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period: Option<ConstExpr>,
     /// The offset of the task's period boundaries, in ticks, below the period: they fall
     /// on the ticks `delay + k * period` after the start (GenoM3's `delay`).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -84,7 +84,16 @@ pub(super) fn check(
                     Err(e) => errors.push(e),
                 }
             }
-            if let Some(d) = &task.deadline {
+            if let (Some(d), None) = (&task.deadline, &task.period) {
+                errors.push(
+                    ModelError::new(
+                        format!("task `{}.{}` has a deadline but no period", module.name, task.name),
+                        d.span,
+                    )
+                    .with_label("a deadline counts from a period's release")
+                    .with_help("an aperiodic task has no release to count from: give it a `period`, or leave the deadline out"),
+                );
+            } else if let Some(d) = &task.deadline {
                 if tick_us.is_none() {
                     needs_tick(errors, d.span);
                 }
@@ -126,7 +135,10 @@ pub(super) fn check(
                 let Some(us) = duration(errors, consts, w, "a WCET") else {
                     continue;
                 };
-                let period_us = tick_us.and_then(|t| t.checked_mul(task.1 as u64));
+                // an aperiodic task has no period for a codel to fit in
+                let period_us = tick_us
+                    .zip(task.1)
+                    .and_then(|(t, p)| t.checked_mul(p as u64));
                 if let Some(period_us) = period_us.filter(|&p| us > p) {
                     errors.push(
                         ModelError::new(

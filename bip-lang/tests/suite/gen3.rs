@@ -267,15 +267,24 @@ fn a_component_becomes_a_module_of_the_genom_layer() {
     let m = &def.modules[0];
     assert_eq!(m.name.value, "full");
     assert!(m.ids.is_empty(), "data are abstracted");
-    let tasks: Vec<(&str, String)> = m
+    let tasks: Vec<(&str, Option<String>)> = m
         .tasks
         .iter()
-        .map(|t| (t.name.value.as_str(), t.period.value.to_string()))
+        .map(|t| {
+            let period = t.period.as_ref().map(|p| p.value.to_string());
+            (t.name.value.as_str(), period)
+        })
         .collect();
+    // `events` has no period: an aperiodic task, with its machine
     assert_eq!(
         tasks,
-        [("main", "1".to_string()), ("slow", "10".to_string())]
+        [
+            ("main", Some("1".to_string())),
+            ("slow", Some("10".to_string())),
+            ("events", None)
+        ]
     );
+    assert_eq!(m.tasks[2].codels.len(), 1);
     let ports: Vec<&str> = m.ports.iter().map(|p| p.name.value.as_str()).collect();
     assert_eq!(ports, ["odom", "samples"], "out ports only");
     let kinds: Vec<ServiceKind> = m.services.iter().map(|s| s.kind).collect();
@@ -436,8 +445,24 @@ component c {
         def.tick_ms.as_ref().map(|t| t.value.to_string()),
         Some("20".into())
     );
-    assert_eq!(m.tasks[0].period.value.to_string(), "2");
-    assert_eq!(m.tasks[1].period.value.to_string(), "1");
+    assert_eq!(
+        m.tasks[0]
+            .period
+            .as_ref()
+            .expect("a period")
+            .value
+            .to_string(),
+        "2"
+    );
+    assert_eq!(
+        m.tasks[1]
+            .period
+            .as_ref()
+            .expect("a period")
+            .value
+            .to_string(),
+        "1"
+    );
     assert_eq!(m.ports[0].name.value, "where");
 }
 
@@ -464,7 +489,11 @@ component c {
         def.tick_ms.as_ref().map(|t| t.value.to_string()),
         Some("10".into())
     );
-    let periods: Vec<String> = m.tasks.iter().map(|t| t.period.value.to_string()).collect();
+    let periods: Vec<String> = m
+        .tasks
+        .iter()
+        .map(|t| t.period.as_ref().expect("a period").value.to_string())
+        .collect();
     assert_eq!(periods, ["2", "1", "3"]);
     // a function-like macro's name without arguments is not a call
     assert_eq!(m.ports[0].name.value, "MS");
@@ -579,7 +608,6 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         ("component c { task t { period -5 ms; }; };", "a duration is positive", 1, 31),
         ("component c { task t { speed 3; }; };", "expected a task property", 1, 24),
         ("component c { task t { scheduling fast; }; };", "expected `real-time`, found `fast`", 1, 35),
-        ("component c { task t; activity a() { task t; codel<start> s() yield ether; }; };", "task `t` has no period", 1, 20),
         ("component c { task t { period 10 ms; delay 10 ms; }; };", "the delay of task `t` is not less than its period", 1, 44),
         // port
         ("component c { port sideways double p; };", "expected `in` or `out`, found `sideways`", 1, 20),
@@ -600,6 +628,8 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         // what bip's checks of a module find, in the .gen file
         ("component c { task t { period 1 s; }; activity a() { task t; codel<start> s() yield nowhere; }; };", "codel `start` yields to `nowhere`", 1, 85),
         ("component c { activity a() { task missing; codel<start> s() yield ether; }; };", "module `c` has no task `missing`", 1, 35),
+        // an aperiodic task: its activity's codel states may not take the wake port's name
+        ("component c { task t; activity a() { task t; codel<start> s() yield pause::wake; codel<wake> w() yield ether; }; };", "a codel state cannot be named `wake`", 1, 88),
         // interfaces
         ("interface i { task t { period 1 s; }; };", "interface `i` declares a task", 1, 20),
         ("component c { provides i; };", "interface `i` is not declared", 1, 24),

@@ -138,7 +138,10 @@ component c <%
         "component c { task t { period (12 bitand 10) bitor (1 xor 3) ms; }; activity A() { task t; codel <start> f() yield ether; }; };",
     );
     // (12 & 10) | (1 ^ 3) = 8 | 2 = 10 ms, one tick of the 10 ms the import chooses
-    assert!(matches!(m.tasks[0].period.value, ConstValue::Int(1)));
+    assert!(matches!(
+        m.tasks[0].period.as_ref().expect("a period").value,
+        ConstValue::Int(1)
+    ));
 }
 
 #[test]
@@ -436,7 +439,11 @@ fn the_preprocessor_is_bounded() {
     };
     // within the bound, the calls nest as C's do
     assert!(matches!(
-        module(&nested(60)).tasks[0].period.value,
+        module(&nested(60)).tasks[0]
+            .period
+            .as_ref()
+            .expect("a period")
+            .value,
         ConstValue::Int(1)
     ));
     // past it, an error at the call that passes it (the 65th `F`, 2 columns each)

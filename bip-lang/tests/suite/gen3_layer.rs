@@ -70,7 +70,17 @@ fn gen_entries_take_their_places_among_ron_modules() {
     let names: Vec<(&str, String)> = def
         .modules
         .iter()
-        .map(|m| (m.name.value.as_str(), m.tasks[0].period.value.to_string()))
+        .map(|m| {
+            (
+                m.name.value.as_str(),
+                m.tasks[0]
+                    .period
+                    .as_ref()
+                    .expect("a period")
+                    .value
+                    .to_string(),
+            )
+        })
         .collect();
     assert_eq!(
         names,

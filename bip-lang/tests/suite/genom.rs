@@ -372,7 +372,7 @@ fn the_engine_map_names_every_codel_and_yield() {
     let goto = map.service("ndd", "GoTo").expect("GoTo");
     assert_eq!(
         map.module("ndd").expect("ndd").tasks[goto.task.expect("task")].period,
-        2
+        Some(2)
     );
     assert_eq!(
         sys.interactions[goto.request.expect("GoTo has a request") as usize].name,

@@ -81,8 +81,9 @@ impl IdsField {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct TaskMap {
     pub name: String,
-    /// In ticks.
-    pub period: u32,
+    /// In ticks; `None` for an aperiodic task (it runs its codels as soon as they are
+    /// ready, docs/genom.md, "Aperiodic tasks").
+    pub period: Option<u32>,
     /// Index into the system's [`Budgets::cpus`](crate::Budgets::cpus) (0 if the model
     /// declares none).
     pub cpu: u32,

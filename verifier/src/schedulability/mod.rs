@@ -62,6 +62,9 @@ pub struct Schedulability {
     pub set: TaskSet,
     /// `None` if some demand is unbounded: the layer is then not schedulable.
     pub analysis: Option<Analysis>,
+    /// The GenoM layer's aperiodic tasks (`module.task`), left out: they have no period,
+    /// and their codels no WCET, so they take no time in the analysis.
+    pub aperiodic: Vec<String>,
 }
 
 impl Schedulability {
@@ -212,6 +215,12 @@ pub fn schedulability(
     let Some(table) = tasks::TaskTable::new(system) else {
         return Ok(None);
     };
+    if let Some((task, _)) = table.aperiodic.iter().find(|(_, budgeted)| *budgeted) {
+        return Err(SchedError::Task {
+            task: task.clone(),
+            what: "it has no period, and its codels declare WCETs: the work it may do between two releases of the other tasks has no bound (every request or event can run its codels again), so no response time can be given; give it a period, or leave its WCETs out".into(),
+        });
+    }
     let (demands, method) = match choice {
         _ if !table.has_codel_tasks() => (bounds(system, &table), DemandMethod::Declared),
         DemandChoice::Bound => (
@@ -276,6 +285,7 @@ pub fn schedulability(
         None
     };
     Ok(Some(Schedulability {
+        aperiodic: table.aperiodic.into_iter().map(|(name, _)| name).collect(),
         tasks: table.tasks,
         demands,
         method,

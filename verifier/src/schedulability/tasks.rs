@@ -44,6 +44,10 @@ pub struct TaskTable {
     /// The tick interaction, which ends every GenoM task's period; `None` without
     /// GenoM tasks to analyse.
     pub tick: Option<u32>,
+    /// The GenoM layer's tasks without a period, left out of the analysis, each with
+    /// whether some codel it runs declares a WCET (its work between two releases of the
+    /// other tasks then has no bound: the set cannot be analysed).
+    pub aperiodic: Vec<(String, bool)>,
 }
 
 impl TaskTable {
@@ -54,6 +58,7 @@ impl TaskTable {
             tasks: Vec::new(),
             cost: vec![None; system.interactions.len()],
             tick: None,
+            aperiodic: Vec::new(),
         };
         if let Some(map) = system.genom.as_ref() {
             table.add_layer(map);
@@ -96,6 +101,20 @@ impl TaskTable {
         self.tick = Some(map.tick);
         for (mi, module) in map.modules.iter().enumerate() {
             for (ti, task) in module.tasks.iter().enumerate() {
+                let name = format!("{}.{}", module.name, task.name);
+                // a task without a period has no work per period to analyse: without
+                // WCETs it takes no time, as an unbudgeted codel does; with some, no
+                // bound can be given (`TaskTable::aperiodic`)
+                let Some(period) = task.period else {
+                    let budgeted = module
+                        .services
+                        .iter()
+                        .filter(|s| s.task == Some(ti))
+                        .flat_map(|s| &s.codels)
+                        .any(|c| c.wcet_us.is_some());
+                    self.aperiodic.push((name, budgeted));
+                    continue;
+                };
                 let index = self.tasks.len();
                 let mut unbudgeted = Vec::new();
                 for service in module.services.iter().filter(|s| s.task == Some(ti)) {
@@ -118,12 +137,12 @@ impl TaskTable {
                     }
                 }
                 self.tasks.push(LayerTask {
-                    name: format!("{}.{}", module.name, task.name),
+                    name,
                     kind: TaskKind::Genom {
                         module: mi,
                         task: ti,
                     },
-                    period_us: u64::from(task.period).saturating_mul(tick_us),
+                    period_us: u64::from(period).saturating_mul(tick_us),
                     cpu: task.cpu,
                     priority: task.priority,
                     deadline_us: task.deadline_us,

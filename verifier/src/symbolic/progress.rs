@@ -10,9 +10,12 @@
 //!    tick within `K` steps. A GenoM layer, whose tick waits while a codel can run and
 //!    whose codels cannot loop without a pause, passes this one.
 //!
-//! Then from every reachable state a tick can fire, and no state is timelocked. A
-//! candidate neither condition clears leaves the property inconclusive, with the
-//! candidate; never "holds" without the proof. A tick that fails when fired would break
+//! Then from every reachable state a tick can fire, and no state is timelocked; and no
+//! run stays for ever on a cycle of states without a tick (a busy loop): under the first
+//! condition every state has a tick enabled, or it is proved by the second (states
+//! cleared one by one by a search are followed by the second condition, since they may
+//! form such a cycle). A candidate neither condition clears leaves the property
+//! inconclusive, with the candidate; never "holds" without the proof. A tick that fails when fired would break
 //! the argument, so the proof is claimed only once range errors are proved absent.
 
 use std::collections::{HashSet, VecDeque};
@@ -33,7 +36,7 @@ const MAX_PATH: usize = 32;
 
 pub enum Finding {
     /// Every state satisfying the invariants has a tick, at once or after `cleared`
-    /// candidates' searches.
+    /// candidates' searches ([`time_progress`] answers this only with `cleared` 0).
     Proved {
         cleared: usize,
     },
@@ -53,6 +56,13 @@ pub fn time_progress(p: &mut Prover<'_>, range_errors_proved: bool) -> Finding {
         );
     }
     match states_tick(p) {
+        // states without a tick that each reach one may still form a cycle, a busy loop
+        // on which a run stays for ever: only the bound on paths without a tick excludes it
+        Finding::Proved { cleared } if cleared > 0 => paths_tick(p).unwrap_or_else(|| {
+            Finding::Unknown(format!(
+                "no state is a timelock ({cleared} states satisfying the invariants have no tick enabled but reach one), but a busy loop through such states is not excluded: no bound on the steps without a tick was found"
+            ))
+        }),
         Finding::Candidate(state) => paths_tick(p).unwrap_or(Finding::Candidate(state)),
         Finding::Unknown(why) if p.budget.watch.look().is_none() => {
             paths_tick(p).unwrap_or(Finding::Unknown(why))

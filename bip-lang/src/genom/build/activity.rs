@@ -28,13 +28,20 @@ impl<'a, 'd> Builder<'a, 'd> {
         let mut locations = vec![text(ETHER)];
         locations.extend(locs.iter().map(|l| text(*l)));
         // a task's machine starts pending, released at its task's first period boundary
-        // like a requested activity (docs/genom.md, "Task machines")
+        // like a requested activity (docs/genom.md, "Task machines"); in an aperiodic
+        // task, at once
         let machine = s.machine;
+        let aperiodic = self.aperiodic(r);
         let starts = i64::from(machine && s.codel("start").is_some());
         let mut vars = vec![
             var(REQ, TypeDef::Bool, Some(starts)),
-            var(PAUSED, TypeDef::Bool, Some(starts)),
+            var(PAUSED, TypeDef::Bool, Some(starts * i64::from(!aperiodic))),
         ];
+        // the events that wake the module's sleeping aperiodic activities (`wake.rs`)
+        let emits = self.emits(r);
+        if emits {
+            vars.push(var(WOKE, TypeDef::Bool, Some(0)));
+        }
         if has_stop {
             vars.push(var(STOPPING, TypeDef::Bool, Some(0)));
         }
@@ -52,7 +59,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 "request",
                 ETHER,
                 Some(not(name(REQ))),
-                vec![set(REQ, true), set(PAUSED, true)],
+                vec![set(REQ, true), set(PAUSED, !aperiodic)],
             ));
         }
         if self_int {
@@ -64,14 +71,14 @@ impl<'a, 'd> Builder<'a, 'd> {
                         "request",
                         "stop",
                         Some(not(name(STOPPING))),
-                        vec![set(STOPPING, true), set(REQ, true)],
+                        unpause(aperiodic, vec![set(STOPPING, true), set(REQ, true)]),
                     ));
                     t.push(tr(
                         l,
                         "request",
                         l,
                         Some(name(STOPPING)),
-                        vec![set(REQ, true)],
+                        unpause(aperiodic, vec![set(REQ, true)]),
                     ));
                 } else {
                     t.push(tr(
@@ -79,7 +86,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         "request",
                         ETHER,
                         None,
-                        vec![set(REQ, true), set(PAUSED, true)],
+                        vec![set(REQ, true), set(PAUSED, !aperiodic)],
                     ));
                 }
             }
@@ -93,7 +100,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                     port,
                     "stop",
                     Some(not(name(STOPPING))),
-                    vec![set(STOPPING, true), set(REQ, false)],
+                    unpause(aperiodic, vec![set(STOPPING, true), set(REQ, false)]),
                 ));
             } else {
                 t.push(tr(
@@ -122,7 +129,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         "interrupt",
                         l,
                         Some(name(STOPPING)),
-                        vec![set(REQ, false)],
+                        unpause(aperiodic, vec![set(REQ, false)]),
                     ));
                 }
             }
@@ -147,7 +154,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         "abort",
                         l,
                         Some(and(name(STOPPING), name(REQ))),
-                        vec![set(REQ, false)],
+                        unpause(aperiodic, vec![set(REQ, false)]),
                     ));
                 }
             }
@@ -179,10 +186,18 @@ impl<'a, 'd> Builder<'a, 'd> {
             if has_stop {
                 end.push(set(STOPPING, false));
             }
-            end.push(assign(name(PAUSED), name(REQ)));
+            // a queued restart waits for the next period boundary, or none
+            end.push(match aperiodic {
+                false => assign(name(PAUSED), name(REQ)),
+                true => set(PAUSED, false),
+            });
             for (from, guard, pre) in &sources {
                 for y in &c.yields {
                     let mut action = pre.clone();
+                    // every transition but a pause is an event of the module
+                    if emits && !matches!(y, Yield::Pause(_)) {
+                        action.push(set(WOKE, true));
+                    }
                     let to = match *y {
                         Yield::Go(k) => s.codels[k].state,
                         Yield::Pause(k) => {
@@ -200,6 +215,9 @@ impl<'a, 'd> Builder<'a, 'd> {
                     t.push(tr(from, c.state, to, Some(guard.clone()), action));
                 }
                 let mut action = pre.clone();
+                if emits {
+                    action.push(set(WOKE, true));
+                }
                 action.extend(end.iter().cloned());
                 t.push(tr(
                     from,
@@ -210,6 +228,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 ));
             }
         }
+        self.wake_transitions(r, &locs, &mut ports, &mut t);
         let atom = AtomDef {
             locations,
             initial: text(ETHER),
@@ -235,4 +254,14 @@ impl<'a, 'd> Builder<'a, 'd> {
         );
         self.add_component(comp, activity_atom(m, s.name), s.def.name.span, what);
     }
+}
+
+/// `action`, which sends an activity of an aperiodic task onto its stop path (or finds it
+/// there), with its `paused` cleared: the stop path runs at once, as a task without a
+/// period runs what is ready, and a request that interrupts is an event of the module.
+fn unpause(aperiodic: bool, mut action: Vec<Assign>) -> Vec<Assign> {
+    if aperiodic {
+        action.push(set(PAUSED, false));
+    }
+    action
 }

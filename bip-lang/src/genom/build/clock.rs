@@ -1,7 +1,8 @@
 //! The clock: one atom whose `tick` port is the trigger of the tick broadcast, with the
 //! phase of the tasks' common cycle when their periods differ; and the tick connector,
 //! whose action ages the ports that constraints read and clears each activity's `paused`
-//! at its task's period boundaries (every period, offset by the task's `delay`). Both depend on the same least common multiple of the periods.
+//! at its task's period boundaries (every period, offset by the task's `delay`). Both
+//! depend on the same least common multiple of the periods (of periodic tasks only).
 
 use super::{connector, port, text, tr, var, Builder};
 use crate::diag::ModelError;
@@ -29,15 +30,16 @@ impl<'a, 'd> Builder<'a, 'd> {
         let mut l = 1i64;
         for m in &self.layer.modules {
             for s in m.services.iter().filter(|s| s.is_activity()) {
-                if let Some(t) = s.task {
-                    let p = m.tasks[t].1;
+                // an aperiodic task has no boundaries, so no part in the cycle
+                if let Some((t, p)) = s.task.and_then(|t| Some((t, m.tasks[t].1?))) {
                     l = (l / gcd(l, p)).saturating_mul(p).min(MAX_PHASE + 1);
                     if l > MAX_PHASE {
                         let span = m
                             .def
                             .tasks
                             .get(t)
-                            .map_or(m.def.name.span, |t| t.period.span);
+                            .and_then(|t| t.period.as_ref())
+                            .map_or(m.def.name.span, |p| p.span);
                         return (l, Some(span));
                     }
                 }
@@ -100,7 +102,11 @@ impl<'a, 'd> Builder<'a, 'd> {
                 };
                 let c = activity_component(m.name, s.name);
                 ports.push(port(&c, "tick"));
-                let p = m.tasks[task].1;
+                // an aperiodic task's activity is woken by its module's events, not by
+                // time (`wake.rs`)
+                let Some(p) = m.tasks[task].1 else {
+                    continue;
+                };
                 let paused = member(&c, PAUSED);
                 if p == 1 {
                     action.push(assign(paused, boolean(false)));

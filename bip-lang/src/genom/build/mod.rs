@@ -11,6 +11,7 @@
 //! - `activity.rs`: an activity's atom (requests, interrupts, abort, codels);
 //! - `services.rs`: a service's request, interrupt and codel connectors, with their
 //!   conditions;
+//! - `wake.rs`: aperiodic tasks, whose paused activities wait for an event of the module;
 //! - `finish.rs`: the core model assembled, user connectors joining generated ones;
 //! - `priorities.rs`, `properties.rs`: the generated priorities, and the properties.
 
@@ -21,6 +22,7 @@ mod module;
 mod priorities;
 mod properties;
 mod services;
+mod wake;
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 
@@ -153,6 +155,8 @@ struct Builder<'a, 'd> {
     /// Generated connectors, their guards and actions kept apart until user connectors
     /// have extended them.
     connectors: Vec<(ConnectorDef, Option<Expr>, Vec<Assign>)>,
+    /// The modules' wake connectors, above every other step (`wake.rs`).
+    wakes: Vec<String>,
     recipe: Recipe,
 }
 
@@ -186,6 +190,7 @@ pub(super) fn build(
         components: Vec::new(),
         activity_components: HashSet::new(),
         connectors: Vec::new(),
+        wakes: Vec::new(),
         recipe: Recipe::default(),
     };
     for mi in 0..layer.modules.len() {
@@ -216,6 +221,9 @@ pub(super) fn build(
                 &user,
             );
         }
+    }
+    for mi in 0..layer.modules.len() {
+        b.wake(mi);
     }
     let out = b.finish(user);
     if b.errors.is_empty() {

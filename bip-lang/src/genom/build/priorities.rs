@@ -9,7 +9,8 @@ use crate::syntax::{ExprDef, PriorityDef};
 impl<'a, 'd> Builder<'a, 'd> {
     /// Codels are urgent (the tick is below every codel step), requests wait for the
     /// functional layer to be quiescent (below every codel step), and codels of different
-    /// activities run in declaration order (earlier activities above later ones). The
+    /// activities run in declaration order (earlier activities above later ones); the
+    /// modules' wake-ups are above all of them. The
     /// declared priorities form a chain through the last activity; the core closes them
     /// transitively. Then the user's priorities.
     pub(super) fn priorities(&mut self, user: &UserTexts) -> Vec<PriorityDef> {
@@ -41,6 +42,14 @@ impl<'a, 'd> Builder<'a, 'd> {
                 out.push(pr(TICK, high));
                 for r in &requests {
                     out.push(pr(r, high));
+                }
+            }
+        }
+        // a module's wake-up is delivered before anything else happens
+        if let Some(first) = levels.first() {
+            for wake in &self.wakes {
+                for low in first {
+                    out.push(pr(low, wake));
                 }
             }
         }

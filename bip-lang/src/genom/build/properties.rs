@@ -4,7 +4,7 @@
 use std::collections::HashSet;
 
 use super::{Builder, UserTexts};
-use crate::genom::check::ETHER;
+use crate::genom::check::{ServiceRef, ETHER};
 use crate::genom::names::*;
 use crate::genom::tree::{all, and, at, boolean, member, not, or};
 use crate::syntax::{ConnectorDef, ExprDef, PropertyDef, Role, Text};
@@ -37,7 +37,13 @@ impl<'a, 'd> Builder<'a, 'd> {
                 .filter(|c| requests.contains(c.name.as_str()))
                 .all(|c| c.role == Role::Environment)
         };
-        // with no activity at all, nothing is ever outstanding
+        // with no activity at all, nothing is ever outstanding; an aperiodic task's
+        // activity that sleeps until an event of its module waits as an idle one waits
+        // for a request
+        let sleeping: HashSet<String> = (0..self.layer.modules.len())
+            .flat_map(|mi| self.sleepers(mi).into_iter().map(move |k| (mi, k)))
+            .map(|(module, service)| self.comp(ServiceRef { module, service }))
+            .collect();
         let idle = open.then(|| {
             let activities = self
                 .recipe
@@ -45,8 +51,14 @@ impl<'a, 'd> Builder<'a, 'd> {
                 .iter()
                 .flat_map(|m| m.services.iter())
                 .filter_map(|s| s.component.as_deref());
-            all(activities.map(|c| and(at(c, ETHER), not(member(c, REQ)))))
-                .unwrap_or_else(|| boolean(true))
+            all(activities.map(|c| {
+                let idle = and(at(c, ETHER), not(member(c, REQ)));
+                match sleeping.contains(c) {
+                    true => or(idle, member(c, PAUSED)),
+                    false => idle,
+                }
+            }))
+            .unwrap_or_else(|| boolean(true))
         });
         self.recipe.idle = idle.clone();
         let mut out = Vec::with_capacity(self.def.properties.len());

@@ -289,6 +289,9 @@ impl<'a, 'd> Builder<'a, 'd> {
             };
             ports.push(port(&self.comp(target), "interrupt"));
         }
+        if !s.is_activity() {
+            ports.extend(self.sleeper_ports(r.module, &s.interrupts));
+        }
         for &a in &s.after {
             let target = ServiceRef {
                 module: r.module,

@@ -30,7 +30,7 @@ pub const ETHER: &str = "ether";
 /// The prefix of a yield that waits for the task's next period.
 pub const PAUSE: &str = "pause::";
 /// Port names of a generated activity atom that codel states may not take.
-pub const ACTIVITY_PORTS: [&str; 4] = ["request", "interrupt", "abort", "tick"];
+pub const ACTIVITY_PORTS: [&str; 5] = ["request", "interrupt", "abort", "tick", "wake"];
 /// Port names of a generated module atom that services may not take.
 pub const MODULE_PORTS: [&str; 2] = ["tick", "write"];
 /// A codel that writes ids takes one step per combination of values it may write (the
@@ -62,8 +62,8 @@ pub struct Layer<'d> {
 pub struct Module<'d> {
     pub def: &'d ModuleDef,
     pub name: &'d str,
-    /// Task names and periods (in ticks, at least 1).
-    pub tasks: Vec<(&'d str, i64)>,
+    /// Task names and periods (in ticks, at least 1; `None`: an aperiodic task).
+    pub tasks: Vec<(&'d str, Option<i64>)>,
     /// Each task's `delay` in ticks (0 if not given), below its period.
     pub delays: Vec<i64>,
     pub ports: Vec<&'d str>,

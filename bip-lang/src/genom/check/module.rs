@@ -25,13 +25,13 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
     let mut delays = Vec::new();
     for t in &m.tasks {
         check_name(errors, &t.name, "task");
-        let period = match consts.int(&t.period) {
+        let period = t.period.as_ref().map(|written| match consts.int(written) {
             Ok(p) if p >= 1 => p,
             Ok(p) => {
                 errors.push(
-                    ModelError::new(format!("task `{}` has period {p}", t.name), t.period.span)
+                    ModelError::new(format!("task `{}` has period {p}", t.name), written.span)
                         .with_label("a period is at least 1 tick")
-                        .with_help("a task releases its paused activities every `period` ticks"),
+                        .with_help("a task releases its paused activities every `period` ticks; leave `period` out for a task that runs its codels as soon as they are ready"),
                 );
                 1
             }
@@ -39,7 +39,7 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
                 errors.push(e);
                 1
             }
-        };
+        });
         tasks.push((t.name.as_str(), period));
         delays.push(delay(errors, consts, t, period));
     }
@@ -109,8 +109,16 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
 
 /// A task's `delay`: the offset of its period boundaries, from 0 to one less than its
 /// period (0 if not given).
-fn delay(errors: &mut Errors, consts: &Constants, t: &TaskDef, period: i64) -> i64 {
+fn delay(errors: &mut Errors, consts: &Constants, t: &TaskDef, period: Option<i64>) -> i64 {
     let Some(written) = &t.delay else { return 0 };
+    let Some(period) = period else {
+        errors.push(
+            ModelError::new(format!("task `{}` has a delay but no period", t.name), written.span)
+                .with_label("a delay offsets period boundaries, which this task has none of")
+                .with_help("give the task a `period`, or leave the delay out (an aperiodic task runs its codels as soon as they are ready)"),
+        );
+        return 0;
+    };
     match consts.int(written) {
         Ok(d) if (0..period).contains(&d) => d,
         Ok(d) => {
@@ -235,7 +243,7 @@ fn service_types(errors: &mut Errors, consts: &Constants, s: &mut Service<'_>) {
 fn service<'d>(
     errors: &mut Errors,
     m: &'d ModuleDef,
-    tasks: &[(&str, i64)],
+    tasks: &[(&str, Option<i64>)],
     ports: &[&str],
     ids: &[(&str, Option<(i64, i64)>)],
     index: &HashMap<&str, usize>,

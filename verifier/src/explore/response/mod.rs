@@ -75,12 +75,6 @@ pub(super) fn decide(
             .map(|d| d.expect("every question is answered"))
             .collect()
     };
-    let stopped = |watch: &Watch| {
-        inconclusive(match watch.stopped() {
-            Some(stop) => format!("{stop} while the state graph was searched"),
-            None => "the state graph could not be stored".into(),
-        })
-    };
     watch.rebase();
     let watching = Watching {
         system,
@@ -106,7 +100,10 @@ pub(super) fn decide(
         None
     };
     let progress = match (&timelocks, time_progress) {
-        (Some(t), true) => Some(time_progress_verdict(system, visited, &g, t)?),
+        (Some(t), true) => {
+            watch.rebase();
+            Some(time_progress_verdict(system, visited, &g, t, watch)?)
+        }
         _ => None,
     };
     let locked: Option<&[bool]> = timelocks.as_ref().map(|t| t.locked.as_slice());
@@ -199,18 +196,17 @@ pub(super) fn decide(
 }
 
 /// The verdict of time progress: fails with a shortest trace to the first timelocked
-/// state, on to where the run is stuck, and why time cannot pass there.
+/// state, on to where the run is stuck, and why time cannot pass there; else with a
+/// shortest lasso to a busy loop, and why time cannot pass where it starts.
 fn time_progress_verdict(
     system: &System,
     visited: &Visited,
     g: &Flagged,
     t: &Timelocks,
+    watch: &Watch,
 ) -> Result<Decided, VerifyError> {
     let Some(run) = timelock::first_timelock(g, t) else {
-        return Ok(Decided {
-            verdict: PropertyVerdict::Holds { witness: None },
-            note: None,
-        });
+        return busy_loop_verdict(system, visited, g, watch);
     };
     let mut trace = run_trace(system, visited, g, &run)?;
     trace.verdict = Verdict::Violation(crate::properties::TIME_PROGRESS.into());
@@ -243,6 +239,54 @@ fn time_progress_verdict(
             trace: Some(trace),
         },
         note: None,
+    })
+}
+
+/// Time progress where no state is timelocked: it holds unless a run can stay for ever
+/// on a busy loop, a cycle on which no state lets time pass.
+fn busy_loop_verdict(
+    system: &System,
+    visited: &Visited,
+    g: &Flagged,
+    watch: &Watch,
+) -> Result<Decided, VerifyError> {
+    let run = match timelock::first_busy_loop(g, watch) {
+        None => return Ok(stopped(watch)),
+        Some(None) => {
+            return Ok(Decided {
+                verdict: PropertyVerdict::Holds { witness: None },
+                note: None,
+            })
+        }
+        Some(Some(run)) => run,
+    };
+    let mut trace = run_trace(system, visited, g, &run)?;
+    trace.verdict = Verdict::Violation(crate::properties::TIME_PROGRESS.into());
+    let start = run.loop_start.expect("a busy loop is a cycle");
+    let mut state = system.initial_state();
+    system
+        .layout
+        .decode(visited.state(g.ids[run.states[start] as usize]), &mut state);
+    let steps = |n: usize| format!("{n} step{}", if n == 1 { "" } else { "s" });
+    Ok(Decided {
+        verdict: PropertyVerdict::Fails {
+            reason: format!(
+                "a busy loop: after {}, a cycle of {} can repeat forever without letting time pass (no state on it has a tick; the run may leave it, but need not); {}",
+                steps(start),
+                steps(run.edges.len() - start),
+                timelock::why(system, &state)
+            ),
+            trace: Some(trace),
+        },
+        note: None,
+    })
+}
+
+/// Inconclusive: `watch` stopped the search of the graph, or the graph was not stored.
+fn stopped(watch: &Watch) -> Decided {
+    inconclusive(match watch.stopped() {
+        Some(stop) => format!("{stop} while the state graph was searched"),
+        None => "the state graph could not be stored".into(),
     })
 }
 

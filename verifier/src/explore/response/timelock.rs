@@ -8,13 +8,18 @@
 //! first; a component lets time pass if one of its states has a tick, or an edge to a
 //! component that lets time pass. A state in range error counts as letting time pass:
 //! its run ends in the error, which `RangeErrors` reports.
+//!
+//! Time progress also fails on a *busy loop*, a reachable cycle on which no state lets
+//! time pass though the run could leave it (a loop of plain yields, codels that wake each
+//! other for ever): the liveness properties assume that time diverges, and on such a run
+//! it does not. Another pass finds the components of the states without a tick.
 
 use bip_model::System;
 
 use super::run::{shortest_path, Run};
-use super::watched::{Flagged, TICK};
+use super::watched::{Flagged, ENVIRONMENT, TICK};
 use crate::explore::graph::IN_ERROR;
-use crate::explore::scc;
+use crate::explore::scc::{self, OUTSIDE};
 use crate::watch::Watch;
 
 /// The timelocked states of a graph, with its components.
@@ -67,18 +72,58 @@ pub(crate) fn first_timelock(g: &Flagged, t: &Timelocks) -> Option<Run> {
     let stuck = |s: u32| g.edges(s).is_empty() || t.cyclic[t.comp[s as usize] as usize];
     let to_end = shortest_path(g, first, |_| true, stuck).expect("a finite graph loops or ends");
     run.extend(g, &to_end);
+    close_cycle(g, &mut run, &t.comp, |_| true);
+    Some(run)
+}
+
+/// Ends `run`, whose last state is in component `comp[last]`, with a cycle of that
+/// component through it along edges `follow` admits (the run's `loop_start`), if the
+/// component holds one.
+fn close_cycle(g: &Flagged, run: &mut Run, comp: &[u32], follow: impl Fn(usize) -> bool) {
     let entry = run.last();
-    let c = t.comp[entry as usize];
-    let inside = |e: usize| t.comp[g.targets[e] as usize] == c;
+    let c = comp[entry as usize];
+    let inside = |e: usize| follow(e) && comp[g.targets[e] as usize] == c;
     let Some(first_edge) = g.edges(entry).find(|&e| inside(e)) else {
-        return Some(run);
+        return;
     };
     let back = shortest_path(g, g.targets[first_edge], inside, |s| s == entry)
         .expect("a component is strongly connected");
     run.loop_start = Some(run.edges.len());
     run.push(g, first_edge);
     run.extend(g, &back);
-    Some(run)
+}
+
+/// A busy loop: a reachable cycle of states none of which lets time pass in one step (no
+/// tick leaves them), made of steps the model takes by itself, on which a run stays for
+/// ever while time stands still, though it could leave (else its states are timelocked,
+/// which [`first_timelock`] reports). A cycle with a step of the environment is the
+/// environment's choice to act without end in an instant, not the model's: it is not
+/// one. A shortest run to such a cycle, then the cycle (the run's `loop_start`);
+/// `Some(None)` if there is none, `None` once `watch` says stop.
+pub(crate) fn first_busy_loop(g: &Flagged, watch: &Watch) -> Option<Option<Run>> {
+    let held = |s: u32| {
+        g.state_flags[s as usize] & IN_ERROR == 0 && g.edges(s).all(|e| g.edge_data[e] & TICK == 0)
+    };
+    let follow = |e: usize| g.edge_data[e] & ENVIRONMENT == 0 && held(g.targets[e]);
+    let scc = scc::components(g, held, follow, watch)?;
+    let mut cyclic = vec![false; scc.len()];
+    for c in 0..scc.len() as u32 {
+        cyclic[c as usize] = scc.members(c).iter().any(|&x| {
+            g.edges(x)
+                .any(|e| follow(e) && scc.of[g.targets[e] as usize] == c)
+        });
+    }
+    let on_loop = |s: u32| scc.of[s as usize] != OUTSIDE && cyclic[scc.of[s as usize] as usize];
+    let Some(stem) = shortest_path(g, 0, |_| true, on_loop) else {
+        return Some(None);
+    };
+    let mut run = Run {
+        states: vec![0],
+        ..Run::default()
+    };
+    run.extend(g, &stem);
+    close_cycle(g, &mut run, &scc.of, follow);
+    Some(Some(run))
 }
 
 /// Why time cannot pass in `state`, in the model's names: what holds each `Time`

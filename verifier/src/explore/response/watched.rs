@@ -16,8 +16,10 @@ pub(crate) struct Watched<'a> {
 
 /// Flag bits: on an edge, bit 0 is a tick (on a state, bit 0 is the graph's `IN_ERROR`).
 /// Property `p`'s trigger is bit `1 + 2p`, its response bit `2 + 2p`, on the steps and
-/// states where they happen.
+/// states where they happen; bit 31, on an edge, a step of the environment.
 pub(crate) const TICK: u32 = 1;
+/// On an edge, the step of an `Environment` connector (above the properties' bits).
+pub(crate) const ENVIRONMENT: u32 = 1 << 31;
 /// The properties one graph can flag.
 pub(crate) const MAX_WATCHED: usize = 15;
 
@@ -94,10 +96,10 @@ impl Keep for Watching<'_, '_> {
         me: u32,
         failures: &mut Self::Notes,
     ) -> u32 {
-        let mut flags = if self.system.role(step.label) == Role::Time {
-            TICK
-        } else {
-            0
+        let mut flags = match self.system.role(step.label) {
+            Role::Time => TICK,
+            Role::Environment => ENVIRONMENT,
+            _ => 0,
         };
         for (p, w) in self.watched.iter().enumerate() {
             for (bit, h) in [(trigger_bit(p), w.trigger), (response_bit(p), w.response)] {
