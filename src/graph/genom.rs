@@ -1,6 +1,7 @@
 //! The GenoM layer as written: each module a box listing its tasks and services; each out
 //! port an oval, with arrows from the services whose codels write it and to those that
-//! read it; the constraints as labelled edges between the services they tie; the model's
+//! read it; each in port an oval with an arrow into its module, and one from the out port
+//! a connection says it reads; the constraints as labelled edges between the services they tie; the model's
 //! own components beside the modules, joined to the services whose connectors they extend.
 //! Names are the user's: the expansion's components and connectors never show.
 
@@ -83,10 +84,30 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
                 .fill("#e8f1fa");
             ports.insert(name, g.add(node));
         }
+        // an in port: an oval of its own, whose data flows into its module
+        for port in &module.in_ports {
+            let name = format!("{m}.{}", port.name.as_str());
+            let node = Node::new(format!("port {name}"), name.as_str(), "in-port")
+                .shape(Shape::Ellipse)
+                .fill("#ffffff");
+            let p = g.add(node);
+            g.connect(Edge::new(End::node(p), End::node(at), "reads").colour(PORT));
+            ports.insert(name, p);
+        }
     }
     for (from, port) in writes {
         if let Some(&to) = ports.get(&port) {
             g.connect(Edge::new(from, End::node(to), "writes").colour(PORT));
+        }
+    }
+    // the data flow between components: each out port to the in ports connected to it
+    for c in &def.connections {
+        if let (Some(&from), Some(&to)) = (ports.get(c.reads.as_str()), ports.get(c.port.as_str())) {
+            g.connect(
+                Edge::new(End::node(from), End::node(to), "connection")
+                    .label("connected")
+                    .colour(PORT),
+            );
         }
     }
     let users = user_components(def, &mut g);

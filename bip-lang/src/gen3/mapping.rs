@@ -1,5 +1,5 @@
 //! From a GenoM3 component to a module of bip's GenoM layer (docs/genom.md, "GenoM3
-//! files"): what is modelled (tasks and their periods, out ports, services, their
+//! files"): what is modelled (tasks and their periods, out and in ports, services, their
 //! interrupts, `after`, codel state machines with their yields, exceptions, the ports each
 //! codel writes, the data types of ports and activities' parameters, `before`, task
 //! `delay`s and codel WCETs) and what is refused because it would change the behaviour
@@ -146,16 +146,19 @@ fn module(
             })
         })
         .collect();
-    let ports = c
-        .ports
-        .iter()
-        .filter(|p| p.dir == PortDir::Out)
-        .map(|p| PortDef {
-            name: p.name.clone(),
-            doc: doc(&p.doc),
-            ty: types.data_type(&p.ty, "", p.name.span),
-        })
-        .collect();
+    let ports_of = |dir: PortDir| {
+        c.ports
+            .iter()
+            .filter(|p| p.dir == dir)
+            .map(|p| PortDef {
+                name: p.name.clone(),
+                doc: doc(&p.doc),
+                ty: types.data_type(&p.ty, "", p.name.span),
+            })
+            .collect()
+    };
+    let ports = ports_of(PortDir::Out);
+    let in_ports = ports_of(PortDir::In);
     params::check(c, errors);
     let services = c
         .services
@@ -168,6 +171,7 @@ fn module(
         ids: Vec::new(),
         tasks,
         ports,
+        in_ports,
         services,
     }
 }

@@ -29,26 +29,17 @@ pub fn service_ref(errors: &mut Errors, layer: &Layer<'_>, t: &Text) -> Option<S
     })
 }
 
-/// Resolves `"module.port"`.
+/// Resolves `"module.port"`: an out port, or a connected in port (the out port it reads).
 fn port_ref(errors: &mut Errors, layer: &Layer<'_>, t: &Text) -> Option<PortRef> {
     let (m, p, ms, ps) = split_dotted(errors, t, "`module.port`")?;
     let mi = module_index(errors, layer, m, ms)?;
-    let module = &layer.modules[mi];
-    let Some(pi) = module.ports.iter().position(|&x| x == p) else {
-        errors.push(
-            ModelError::new(format!("module `{m}` has no out port `{p}`"), ps)
-                .with_help(one_of("its ports are", module.ports.iter().copied())),
-        );
-        return None;
-    };
-    Some(PortRef {
-        module: mi,
-        port: pi,
-    })
+    super::port_ref(layer, mi, p, ps)
+        .map_err(|e| errors.push(e))
+        .ok()
 }
 
 /// The index of module `m` (written at `span`), or an error listing the modules.
-fn module_index(errors: &mut Errors, layer: &Layer<'_>, m: &str, span: Span) -> Option<usize> {
+pub(super) fn module_index(errors: &mut Errors, layer: &Layer<'_>, m: &str, span: Span) -> Option<usize> {
     let found = layer.modules.iter().position(|x| x.name == m);
     if found.is_none() {
         errors.push(
@@ -62,7 +53,7 @@ fn module_index(errors: &mut Errors, layer: &Layer<'_>, m: &str, span: Span) -> 
 }
 
 /// Splits `"a.b"` into its two names and their spans in the file.
-fn split_dotted<'t>(
+pub(super) fn split_dotted<'t>(
     errors: &mut Errors,
     t: &'t Text,
     form: &str,
