@@ -270,8 +270,9 @@ fn codel_defs(
         .iter()
         .flat_map(|codel| {
             let writes = writes(c, s, codel);
+            // with its unit: a bare number below 100 µs reads as a slip for milliseconds
             let wcet = codel.wcet.map(|(us, span)| Spanned {
-                value: ConstValue::Int(i64::try_from(us).unwrap_or(i64::MAX)),
+                value: ConstValue::Expr(format!("{us}us")),
                 span,
                 verbatim: false,
             });
