@@ -4,6 +4,7 @@
 //! IDL types `gen3_types`, mutated `gen3_fuzz`); reproducers of crashes and hangs
 //! (`robustness`) and mutated example models through the loader (`fuzz`).
 
+mod connections;
 mod data_types;
 mod diagnostics;
 mod fuzz;
