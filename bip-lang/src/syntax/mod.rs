@@ -150,6 +150,26 @@ fn tidy_ron(text: &str) -> String {
                 continue;
             }
         }
+        if line.trim() == "ConnectionDef(" {
+            // a connection, two names, goes on one line
+            let fields: Vec<&str> = lines[i + 1..]
+                .iter()
+                .map(|l| l.trim())
+                .take_while(|l| !l.starts_with(')'))
+                .collect();
+            let close = i + 1 + fields.len();
+            if let Some(end) = lines.get(close) {
+                let indent = &line[..line.len() - line.trim_start().len()];
+                let joined = fields.join(" ");
+                out.push_str(indent);
+                out.push('(');
+                out.push_str(joined.trim_end_matches(','));
+                out.push_str(end.trim());
+                out.push('\n');
+                i = close + 1;
+                continue;
+            }
+        }
         out.push_str(&strip_inner(line, &INNER));
         out.push('\n');
         i += 1;
