@@ -7,7 +7,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use bip_lang::genom::syntax::{ConstraintDef, ServiceKind};
+use bip_lang::genom::syntax::{CodelDef, ConstraintDef, ServiceKind};
 use bip_lang::source::Text;
 use bip_lang::syntax::SystemDef;
 use bip_model::System;
@@ -29,13 +29,14 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
     for module in &def.modules {
         let m = module.name.as_str();
         let mut node = Node::new(format!("module {m}"), m, "module").fill("#f7f7f2");
+        let mut machines = Vec::new();
         for task in &module.tasks {
             let machine = if task.has_machine() {
                 ", runs a machine"
             } else {
                 ""
             };
-            node.row(
+            let row = node.row(
                 format!(
                     "task {}, period {}{machine}",
                     task.name.as_str(),
@@ -43,6 +44,9 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
                 ),
                 "task",
             );
+            if task.has_machine() {
+                machines.push((row, task.name.as_str(), &task.codels));
+            }
         }
         let mut rows = Vec::new();
         for service in &module.services {
@@ -65,17 +69,26 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
             rows.push((service, node.row(text, kind)));
         }
         let at = g.add(node);
-        for (service, row) in rows {
-            let end = End::row(at, row);
-            services.insert(format!("{m}.{}", service.name.as_str()), end);
-            let written: BTreeSet<&str> = service
-                .codels
+        // what the services' codels and the tasks' machines write
+        let mut written = |end: End, codels: &[CodelDef]| {
+            let ports: BTreeSet<&str> = codels
                 .iter()
                 .flat_map(|c| c.writes.iter().map(|p| p.as_str()))
                 .collect();
-            for port in written {
+            for port in ports {
                 writes.push((end, format!("{m}.{port}")));
             }
+        };
+        for (service, row) in rows {
+            let end = End::row(at, row);
+            services.insert(format!("{m}.{}", service.name.as_str()), end);
+            written(end, &service.codels);
+        }
+        // a machine is named like a service, by its task (constraints name it so)
+        for (row, task, codels) in machines {
+            let end = End::row(at, row);
+            services.insert(format!("{m}.{task}"), end);
+            written(end, codels);
         }
         for port in &module.ports {
             let name = format!("{m}.{}", port.name.as_str());
@@ -102,7 +115,8 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
     }
     // the data flow between components: each out port to the in ports connected to it
     for c in &def.connections {
-        if let (Some(&from), Some(&to)) = (ports.get(c.reads.as_str()), ports.get(c.port.as_str())) {
+        if let (Some(&from), Some(&to)) = (ports.get(c.reads.as_str()), ports.get(c.port.as_str()))
+        {
             g.connect(
                 Edge::new(End::node(from), End::node(to), "connection")
                     .label("connected")

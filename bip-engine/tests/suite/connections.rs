@@ -56,7 +56,8 @@ fn an_in_port_reads_the_data_of_the_out_port_it_is_connected_to() {
         assert_eq!(frame.v, 1.0);
     }
     assert!(
-        read.windows(2).all(|p| p[0].map(|f| f.x) <= p[1].map(|f| f.x)),
+        read.windows(2)
+            .all(|p| p[0].map(|f| f.x) <= p[1].map(|f| f.x)),
         "{read:?}"
     );
     // and reading the in port from outside is reading the out port

@@ -167,7 +167,10 @@ impl<'a, 'd> Rewriter<'a, 'd> {
         // a connected in port's age is its writer's
         let port = port_ref(self.layer, m, &field.name, field.span)?;
         let writer = &self.layer.modules[port.module];
-        let var = member(&module_component(writer.name), &age_var(writer.ports[port.port]));
+        let var = member(
+            &module_component(writer.name),
+            &age_var(writer.ports[port.port]),
+        );
         Ok((port, var))
     }
 

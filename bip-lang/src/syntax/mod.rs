@@ -16,8 +16,8 @@ use serde::de::{self, Deserialize, Deserializer, EnumAccess, MapAccess, VariantA
 use serde::ser::{Serialize, SerializeStructVariant, Serializer};
 
 pub use crate::genom::syntax::{
-    CodelDef, ConnectionDef, ConstraintDef, DataTypeDef, FieldDef, ModuleDef, PortDef, ServiceDef, ServiceKind,
-    TaskDef,
+    CodelDef, ConnectionDef, ConstraintDef, DataTypeDef, FieldDef, ModuleDef, PortDef, ServiceDef,
+    ServiceKind, TaskDef,
 };
 pub use crate::source::Text;
 use crate::source::{ident_has_parens, ConstExpr, OrderedMap, Span};

@@ -35,9 +35,7 @@ fn a_connected_in_port_is_the_out_port_it_reads() {
         )
         .replace("age(controller.state)", "age(estimator.frame)");
     assert_ne!(direct, FIXTURE);
-    let normalise = |core: String| {
-        core.replace("controller.state", "estimator.frame")
-    };
+    let normalise = |core: String| core.replace("controller.state", "estimator.frame");
     assert_eq!(normalise(core(FIXTURE)), normalise(core(&direct)));
     // the estimator's age is the one the guard reads
     assert!(core(FIXTURE).contains("estimator.age_frame <= 2"));
@@ -111,7 +109,9 @@ fn bad_connections_are_errors_at_their_place() {
         "controller",
     );
     assert_error(
-        &bad(&format!("{conn}, (port: \"controller.state\", reads: \"estimator.frame\")")),
+        &bad(&format!(
+            "{conn}, (port: \"controller.state\", reads: \"estimator.frame\")"
+        )),
         "in port `controller.state` is connected twice",
         "controller.state",
     );
@@ -124,7 +124,10 @@ fn bad_connections_are_errors_at_their_place() {
         "estimator.frame",
     );
     assert_error(
-        &with(r#"in_ports: [(name: "state""#, r#"in_ports: [(name: "command""#),
+        &with(
+            r#"in_ports: [(name: "state""#,
+            r#"in_ports: [(name: "command""#,
+        ),
         "command",
         "command",
     );
@@ -164,7 +167,9 @@ fn import_wires_several_files() {
     let printed = def.to_ron().expect("prints");
     // a connection per line
     assert!(
-        printed.contains("    connections: [\n        (port: \"ctl.state\", reads: \"est.frame\"),\n    ],"),
+        printed.contains(
+            "    connections: [\n        (port: \"ctl.state\", reads: \"est.frame\"),\n    ],"
+        ),
         "{printed}"
     );
     // the tick divides both files' periods, and what it prints loads back

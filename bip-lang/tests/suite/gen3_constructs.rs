@@ -252,7 +252,11 @@ component c {
 "#,
     );
     // written with their unit, so that a budget below 100 µs is no slip for milliseconds
-    let wcets: Vec<Option<String>> = m.services[0].codels.iter().map(|c| written(&c.wcet)).collect();
+    let wcets: Vec<Option<String>> = m.services[0]
+        .codels
+        .iter()
+        .map(|c| written(&c.wcet))
+        .collect();
     assert_eq!(wcets, [Some("20us".into()), Some("2000us".into())]);
     let line = "component c { task t { period 10 ms; }; activity A() { task t; codel <start> f() yield ether wcet 0 ms; }; };";
     expect_error(line, "a duration is positive", 1, 99);

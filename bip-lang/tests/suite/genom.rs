@@ -253,7 +253,11 @@ fn genom_names_in_expressions() {
             "may only be compared with a constant",
             "ndd_GoTo.req",
         ),
-        ("age(sick.scna) < 2", "module `sick` has no port `scna`", "scna"),
+        (
+            "age(sick.scna) < 2",
+            "module `sick` has no port `scna`",
+            "scna",
+        ),
         ("sick.Scan", "is a service, not a value", "Scan"),
         ("sick.scan > 0", "is a port, not a value", "scan"),
     ];

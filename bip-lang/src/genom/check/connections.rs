@@ -1,13 +1,13 @@
 //! The model's `connections` (which out port each in port reads, as a deployment wires
-//! components), and the resolution of a port name that a constraint or an expression
-//! reads: an out port, or an in port, which stands for the out port it is connected to.
+//! components), and the resolution of the names that constraints, connections and
+//! expressions give: a module, and a port, which is an out port or an in port that
+//! stands for the out port it is connected to.
 
-use super::constraints::{module_index, split_dotted};
 use super::{Layer, PortRef};
 use crate::compile::one_of;
 use crate::diag::{Errors, ModelError};
 use crate::source::Span;
-use crate::syntax::ConnectionDef;
+use crate::syntax::{ConnectionDef, Text};
 
 /// Checks each connection and records on its in port the out port it reads: both ends
 /// exist, the first is an in port and the second an out port, their data types agree,
@@ -90,7 +90,12 @@ pub(super) fn connect(errors: &mut Errors, layer: &mut Layer<'_>, defs: &[Connec
 
 /// The out port that port `name` of module `module` stands for: the port itself, or the
 /// out port an in port is connected to. `span` is where the name is written.
-pub fn port_ref(layer: &Layer<'_>, module: usize, name: &str, span: Span) -> Result<PortRef, ModelError> {
+pub fn port_ref(
+    layer: &Layer<'_>,
+    module: usize,
+    name: &str,
+    span: Span,
+) -> Result<PortRef, ModelError> {
     let m = &layer.modules[module];
     if let Some(port) = m.ports.iter().position(|&x| x == name) {
         return Ok(PortRef { module, port });
@@ -107,10 +112,65 @@ pub fn port_ref(layer: &Layer<'_>, module: usize, name: &str, span: Span) -> Res
                 m.name
             ))
         }),
-        None => Err(ModelError::new(format!("module `{}` has no port `{name}`", m.name), span)
-            .with_help(one_of(
-                "its ports are",
-                m.ports.iter().copied().chain(m.in_ports.iter().map(|x| x.name)),
-            ))),
+        None => Err(
+            ModelError::new(format!("module `{}` has no port `{name}`", m.name), span).with_help(
+                one_of(
+                    "its ports are",
+                    m.ports
+                        .iter()
+                        .copied()
+                        .chain(m.in_ports.iter().map(|x| x.name)),
+                ),
+            ),
+        ),
+    }
+}
+
+/// The index of module `m` (written at `span`), or an error listing the modules.
+pub(super) fn module_index(
+    errors: &mut Errors,
+    layer: &Layer<'_>,
+    m: &str,
+    span: Span,
+) -> Option<usize> {
+    let found = layer.modules.iter().position(|x| x.name == m);
+    if found.is_none() {
+        errors.push(
+            ModelError::new(format!("unknown module `{m}`"), span).with_help(one_of(
+                "the modules are",
+                layer.modules.iter().map(|x| x.name),
+            )),
+        );
+    }
+    found
+}
+
+/// Splits `"a.b"` into its two names and their spans in the file.
+pub(super) fn split_dotted<'t>(
+    errors: &mut Errors,
+    t: &'t Text,
+    form: &str,
+) -> Option<(&'t str, &'t str, Span, Span)> {
+    let text = t.as_str();
+    let ok = |s: &str| {
+        s.chars()
+            .next()
+            .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+    };
+    match text.split_once('.') {
+        Some((a, b)) if ok(a) && ok(b) => Some((
+            a,
+            b,
+            t.sub_span(0..a.len()),
+            t.sub_span(a.len() + 1..text.len()),
+        )),
+        _ => {
+            errors.push(ModelError::new(
+                format!("expected {form}, found `{text}`"),
+                t.span,
+            ));
+            None
+        }
     }
 }

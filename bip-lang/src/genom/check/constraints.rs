@@ -1,6 +1,7 @@
 //! The constraints between services (`Exclusive`, `AtMost`, `Requires`, `Fresh`,
 //! `Guard`), with the `"module.Service"` and `"module.port"` names they use resolved.
 
+use super::connections::{module_index, split_dotted};
 use super::{ConstraintKind, Layer, PortRef, ServiceRef};
 use crate::compile::{one_of, unique, Constants};
 use crate::diag::{Errors, ModelError};
@@ -36,50 +37,6 @@ fn port_ref(errors: &mut Errors, layer: &Layer<'_>, t: &Text) -> Option<PortRef>
     super::port_ref(layer, mi, p, ps)
         .map_err(|e| errors.push(e))
         .ok()
-}
-
-/// The index of module `m` (written at `span`), or an error listing the modules.
-pub(super) fn module_index(errors: &mut Errors, layer: &Layer<'_>, m: &str, span: Span) -> Option<usize> {
-    let found = layer.modules.iter().position(|x| x.name == m);
-    if found.is_none() {
-        errors.push(
-            ModelError::new(format!("unknown module `{m}`"), span).with_help(one_of(
-                "the modules are",
-                layer.modules.iter().map(|x| x.name),
-            )),
-        );
-    }
-    found
-}
-
-/// Splits `"a.b"` into its two names and their spans in the file.
-pub(super) fn split_dotted<'t>(
-    errors: &mut Errors,
-    t: &'t Text,
-    form: &str,
-) -> Option<(&'t str, &'t str, Span, Span)> {
-    let text = t.as_str();
-    let ok = |s: &str| {
-        s.chars()
-            .next()
-            .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
-            && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-    };
-    match text.split_once('.') {
-        Some((a, b)) if ok(a) && ok(b) => Some((
-            a,
-            b,
-            t.sub_span(0..a.len()),
-            t.sub_span(a.len() + 1..text.len()),
-        )),
-        _ => {
-            errors.push(ModelError::new(
-                format!("expected {form}, found `{text}`"),
-                t.span,
-            ));
-            None
-        }
-    }
 }
 
 pub(super) fn constraint<'d>(
