@@ -83,6 +83,9 @@ fn the_fixture_imports_with_every_construct() {
         ports,
         ["tuning", "tuning_copy", "odometry", "beacon_request"]
     );
+    // in ports: the provided interface's in port, the used one's out port
+    let in_ports: Vec<&str> = m.in_ports.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(in_ports, ["setpoint", "beacon"]);
     // `ids::gains` and `drive::ids::gains` are the ids' structure
     for p in &m.ports[..2] {
         assert!(
