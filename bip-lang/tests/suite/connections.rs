@@ -8,6 +8,7 @@ use crate::support;
 use support::errors::assert_error;
 
 use bip_lang::{expand_str, import_gen_files, load_str};
+use proptest::prelude::*;
 
 const FIXTURE: &str = include_str!("../../../robots/tests/connections.ron");
 
@@ -182,4 +183,87 @@ fn import_wires_several_files() {
         "{}",
         e.summary()
     );
+}
+
+/// A random layer: per module a period and, per in port, the module whose out port it
+/// reads (if connected) and the largest age a `Fresh` on it allows (if any).
+#[derive(Clone, Debug)]
+struct Wiring {
+    periods: Vec<u8>,
+    inputs: Vec<[(Option<usize>, Option<u8>); 2]>,
+}
+
+fn wiring() -> impl Strategy<Value = Wiring> {
+    (2usize..=4).prop_flat_map(|n| {
+        let input = (proptest::option::of(0..n), proptest::option::of(0u8..4));
+        (
+            proptest::collection::vec(1u8..=3, n),
+            proptest::collection::vec([input.clone(), input], n),
+        )
+            .prop_map(|(periods, inputs)| Wiring { periods, inputs })
+    })
+}
+
+/// The layer's text; with `direct`, what reads an in port names the out port it is
+/// connected to instead (the naive reading of a connection), and nothing is connected.
+fn wired(w: &Wiring, direct: bool) -> String {
+    let mut modules = String::new();
+    let mut connections = String::new();
+    let mut constraints = String::new();
+    let mut invariants = String::new();
+    for (m, period) in w.periods.iter().enumerate() {
+        modules.push_str(&format!(
+            r#"(name: "m{m}", tasks: [(name: "t", period: {period})], ports: [(name: "o")],
+                in_ports: [(name: "i0"), (name: "i1")],
+                services: [(name: "S", kind: Activity, task: "t", codels: [
+                    (state: "start", yields: ["pause::run"]),
+                    (state: "run", yields: ["pause::run", "ether"], writes: ["o"]),
+                ])]),
+            "#
+        ));
+        for (k, (writer, fresh)) in w.inputs[m].iter().enumerate() {
+            let Some(writer) = writer else { continue };
+            let read = match direct {
+                true => format!("m{writer}.o"),
+                false => {
+                    connections.push_str(&format!(r#"(port: "m{m}.i{k}", reads: "m{writer}.o"),"#));
+                    format!("m{m}.i{k}")
+                }
+            };
+            if let Some(age) = fresh {
+                constraints.push_str(&format!(
+                    r#"Fresh(service: "m{m}.S", port: "{read}", max_age: {age}),"#
+                ));
+                invariants.push_str(&format!(
+                    r#"Invariant(name: "m{m}_i{k}", expr: "age({read}) <= {age} || !(m{m}.S@run)"),"#
+                ));
+            }
+        }
+    }
+    format!(
+        "System(name: \"wired\", modules: [{modules}], connections: [{connections}], \
+         constraints: [{constraints}], properties: [{invariants}])"
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// Whatever the wiring, a layer that reads its in ports expands to the core of the one
+    /// that reads the out ports they are connected to.
+    #[test]
+    fn random_wirings_expand_as_their_writers_named(w in wiring()) {
+        let connected = core(&wired(&w, false));
+        let direct = core(&wired(&w, true));
+        // the properties are kept as written: name the writers there too
+        let mut renamed = connected;
+        for (m, inputs) in w.inputs.iter().enumerate() {
+            for (k, (writer, _)) in inputs.iter().enumerate() {
+                if let Some(writer) = writer {
+                    renamed = renamed.replace(&format!("m{m}.i{k}"), &format!("m{writer}.o"));
+                }
+            }
+        }
+        prop_assert_eq!(renamed, direct);
+    }
 }
