@@ -61,14 +61,19 @@ enum Command {
         /// Model file (RON).
         file: PathBuf,
     },
-    /// Print the components of a GenoM3 `.gen` file as the equivalent model (RON), checked
+    /// Print the components of GenoM3 `.gen` files as the equivalent model (RON), checked
     /// as `bip check` would.
     Import {
-        /// The `.gen` file.
-        file: PathBuf,
+        /// The `.gen` files, their components the model's modules in this order.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
         /// A directory `#include` searches (after the including file's own).
         #[arg(short = 'I', value_name = "DIR")]
         include: Vec<PathBuf>,
+        /// Wire an in port to an out port, as a deployment's `connect_port` does:
+        /// `--connect flight.state=pom.frame` (the in port first).
+        #[arg(long = "connect", value_name = "IN=OUT")]
+        connect: Vec<String>,
     },
     /// Verify a model's properties (deadlock freedom, invariants, reachability, range
     /// errors) by exploring its states or by symbolic proofs. Exit code 0: all hold,
@@ -110,7 +115,11 @@ fn main() -> ExitCode {
     let code = match cli.command {
         Command::Check { files } => check::run(&files),
         Command::Expand { file } => expand::run(&file),
-        Command::Import { file, include } => import::run(&file, &include),
+        Command::Import {
+            files,
+            include,
+            connect,
+        } => import::run(&files, &include, &connect),
         Command::Verify(args) => verify::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Simulate(args) => simulate::run(&args),

@@ -7,7 +7,7 @@ use crate::prelude::*;
 
 use alloc::sync::Arc;
 
-use bip_model::genom::map::DataType;
+use bip_model::genom::map::{DataType, GenomMap};
 use bip_model::genom::{CodelMap, Condition};
 use bip_model::{Pick, Role, System};
 
@@ -176,6 +176,9 @@ pub(crate) struct Tables {
     pub ports: Vec<(String, String)>,
     /// The declared type of each port's data.
     pub port_types: Vec<Option<DataType>>,
+    /// (module, in port, the port store entry of the out port it reads) per connected in
+    /// port: its codels read the writer's data under the in port's name.
+    pub port_links: Vec<(String, String, usize)>,
     /// The system has internal transitions: without any, the engine need not look for
     /// their steps (a GenoM layer has none).
     pub has_internal: bool,
@@ -214,6 +217,7 @@ impl Tables {
             activities: Vec::new(),
             ports: Vec::new(),
             port_types: Vec::new(),
+            port_links: Vec::new(),
             has_internal: system.summary().internal_transitions > 0,
             time: Vec::new(),
             progress_mask: Vec::new(),
@@ -356,6 +360,7 @@ impl Tables {
                 });
             }
         }
+        t.port_links = port_links(map);
         Ok(t.finish(system, kind))
     }
 
@@ -520,4 +525,24 @@ fn activity_table(
 /// place it below every periodic task.
 pub(crate) fn period_ticks(task: &bip_model::genom::TaskMap) -> u64 {
     task.period.map_or(u64::MAX, u64::from)
+}
+
+/// Each connected in port and the port store entry of the out port it reads (the store
+/// holds every module's out ports, module after module, in the map's order).
+fn port_links(map: &GenomMap) -> Vec<(String, String, usize)> {
+    let mut base = Vec::with_capacity(map.modules.len());
+    let mut next = 0;
+    for m in &map.modules {
+        base.push(next);
+        next += m.ports.len();
+    }
+    map.modules
+        .iter()
+        .flat_map(|m| m.in_ports.iter().map(move |p| (m, p)))
+        .filter_map(|(m, p)| {
+            let (wm, wp) = p.reads?;
+            let k = base.get(wm as usize)? + wp as usize;
+            Some((m.name.clone(), p.name.clone(), k))
+        })
+        .collect()
 }

@@ -1,5 +1,6 @@
 //! Port data (GenoM posters): the model tracks only a port's age; the data lives here,
-//! one value of any type per out port, written by the module's codels and read by anyone.
+//! one value of any type per out port, written by the module's codels and read by anyone,
+//! under its name or under the name of an in port connected to it.
 //! A port whose type the model declares takes only values of that type; any port keeps
 //! the type of its first value.
 
@@ -18,6 +19,8 @@ pub(crate) struct PortStore {
     types: Vec<Option<DataType>>,
     /// The value of each, and its Rust type's name.
     values: Vec<Option<(Box<dyn Any + Send>, &'static str)>>,
+    /// (module, in port, entry) per connected in port: reading it reads that entry.
+    links: Vec<(String, String, usize)>,
 }
 
 /// A value of another type than a port takes: the port (`module.port`), what it takes
@@ -30,19 +33,32 @@ pub(crate) struct WrongType {
 }
 
 impl PortStore {
-    pub fn new(names: Vec<(String, String)>, types: Vec<Option<DataType>>) -> PortStore {
+    pub fn new(
+        names: Vec<(String, String)>,
+        types: Vec<Option<DataType>>,
+        links: Vec<(String, String, usize)>,
+    ) -> PortStore {
         let values = names.iter().map(|_| None).collect();
         PortStore {
             names,
             types,
             values,
+            links,
         }
     }
 
+    /// The entry of out port `module.port`, or of the out port that in port `module.port`
+    /// is connected to.
     pub fn index(&self, module: &str, port: &str) -> Option<usize> {
         self.names
             .iter()
             .position(|(m, p)| m == module && p == port)
+            .or_else(|| {
+                self.links
+                    .iter()
+                    .find(|(m, p, _)| m == module && p == port)
+                    .map(|l| l.2)
+            })
     }
 
     pub fn get<T: Any>(&self, module: &str, port: &str) -> Option<&T> {

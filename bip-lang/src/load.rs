@@ -164,15 +164,38 @@ pub fn import_gen_file(
     path: &Path,
     include: &[std::path::PathBuf],
 ) -> Result<SystemDef, LoadError> {
-    let shown = path.display().to_string();
+    import_gen_files(&[path], include, &[])
+}
+
+/// `bip import` of several files: their components as modules, file after file, with the
+/// `connections` given as `(in port, out port)` names (`("flight.state", "pose.frame")`),
+/// checked as [`load_file`] checks a model.
+pub fn import_gen_files(
+    paths: &[&Path],
+    include: &[std::path::PathBuf],
+    connections: &[(String, String)],
+) -> Result<SystemDef, LoadError> {
+    let shown: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    let shown_all = shown.join(", ");
     let empty = Arc::new(String::new());
     let mut files = crate::source_map::SourceMap::default();
     let fail = |errors: Vec<ModelError>, files: &crate::source_map::SourceMap| {
-        LoadError::model(&shown, &empty, errors).with_files(files)
+        LoadError::model(&shown_all, &empty, errors).with_files(files)
     };
-    let spec = gen3::read(path, &shown, include, &mut files, 0, Span::NONE)
-        .map_err(|e| fail(vec![e], &files))?;
-    let mut def = gen3::import(&spec, &shown).map_err(|e| fail(e, &files))?;
+    let mut specs = Vec::new();
+    for (path, shown) in paths.iter().zip(shown) {
+        let spec = gen3::read(path, &shown, include, &mut files, 0, Span::NONE)
+            .map_err(|e| fail(vec![e], &files))?;
+        specs.push((spec, shown));
+    }
+    let mut def = gen3::import(&specs).map_err(|e| fail(e, &files))?;
+    def.connections = connections
+        .iter()
+        .map(|(port, reads)| crate::syntax::ConnectionDef {
+            port: crate::syntax::Text::new(port.clone(), Span::NONE),
+            reads: crate::syntax::Text::new(reads.clone(), Span::NONE),
+        })
+        .collect();
     def.sources = files;
     compile(&def).map_err(|e| fail(e, &def.sources))?;
     Ok(def)

@@ -1,12 +1,13 @@
 //! The GenoM layer as written: each module a box listing its tasks and services; each out
 //! port an oval, with arrows from the services whose codels write it and to those that
-//! read it; the constraints as labelled edges between the services they tie; the model's
+//! read it; each in port an oval with an arrow into its module, and one from the out port
+//! a connection says it reads; the constraints as labelled edges between the services they tie; the model's
 //! own components beside the modules, joined to the services whose connectors they extend.
 //! Names are the user's: the expansion's components and connectors never show.
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use bip_lang::genom::syntax::{ConstraintDef, ServiceKind};
+use bip_lang::genom::syntax::{CodelDef, ConstraintDef, ServiceKind};
 use bip_lang::source::Text;
 use bip_lang::syntax::SystemDef;
 use bip_model::System;
@@ -28,6 +29,7 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
     for module in &def.modules {
         let m = module.name.as_str();
         let mut node = Node::new(format!("module {m}"), m, "module").fill("#f7f7f2");
+        let mut machines = Vec::new();
         for task in &module.tasks {
             let machine = if task.has_machine() {
                 ", runs a machine"
@@ -38,10 +40,13 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
                 Some(p) => format!("period {}", p.value),
                 None => "aperiodic".into(),
             };
-            node.row(
+            let row = node.row(
                 format!("task {}, {period}{machine}", task.name.as_str()),
                 "task",
             );
+            if task.has_machine() {
+                machines.push((row, task.name.as_str(), &task.codels));
+            }
         }
         let mut rows = Vec::new();
         for service in &module.services {
@@ -64,17 +69,26 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
             rows.push((service, node.row(text, kind)));
         }
         let at = g.add(node);
-        for (service, row) in rows {
-            let end = End::row(at, row);
-            services.insert(format!("{m}.{}", service.name.as_str()), end);
-            let written: BTreeSet<&str> = service
-                .codels
+        // what the services' codels and the tasks' machines write
+        let mut written = |end: End, codels: &[CodelDef]| {
+            let ports: BTreeSet<&str> = codels
                 .iter()
                 .flat_map(|c| c.writes.iter().map(|p| p.as_str()))
                 .collect();
-            for port in written {
+            for port in ports {
                 writes.push((end, format!("{m}.{port}")));
             }
+        };
+        for (service, row) in rows {
+            let end = End::row(at, row);
+            services.insert(format!("{m}.{}", service.name.as_str()), end);
+            written(end, &service.codels);
+        }
+        // a machine is named like a service, by its task (constraints name it so)
+        for (row, task, codels) in machines {
+            let end = End::row(at, row);
+            services.insert(format!("{m}.{task}"), end);
+            written(end, codels);
         }
         for port in &module.ports {
             let name = format!("{m}.{}", port.name.as_str());
@@ -83,10 +97,31 @@ pub fn graph(def: &SystemDef, system: &System) -> Graph {
                 .fill("#e8f1fa");
             ports.insert(name, g.add(node));
         }
+        // an in port: an oval of its own, whose data flows into its module
+        for port in &module.in_ports {
+            let name = format!("{m}.{}", port.name.as_str());
+            let node = Node::new(format!("port {name}"), name.as_str(), "in-port")
+                .shape(Shape::Ellipse)
+                .fill("#ffffff");
+            let p = g.add(node);
+            g.connect(Edge::new(End::node(p), End::node(at), "reads").colour(PORT));
+            ports.insert(name, p);
+        }
     }
     for (from, port) in writes {
         if let Some(&to) = ports.get(&port) {
             g.connect(Edge::new(from, End::node(to), "writes").colour(PORT));
+        }
+    }
+    // the data flow between components: each out port to the in ports connected to it
+    for c in &def.connections {
+        if let (Some(&from), Some(&to)) = (ports.get(c.reads.as_str()), ports.get(c.port.as_str()))
+        {
+            g.connect(
+                Edge::new(End::node(from), End::node(to), "connection")
+                    .label("connected")
+                    .colour(PORT),
+            );
         }
     }
     let users = user_components(def, &mut g);

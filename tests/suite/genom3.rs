@@ -81,6 +81,67 @@ fn bip_import_prints_a_model_that_loads() {
 }
 
 #[test]
+fn bip_import_wires_several_files_as_connect_says() {
+    let gen: Vec<String> = ["rotorcraft", "pose", "flight", "maneuver", "mocap"]
+        .iter()
+        .map(|c| format!("robots/drone/{c}.gen"))
+        .collect();
+    let mut args: Vec<&str> = vec!["import"];
+    args.extend(gen.iter().map(String::as_str));
+    args.extend([
+        "-I",
+        "robots/drone/idl",
+        "--connect",
+        "flight.state=pose.frame",
+    ]);
+    let out = bip(&args);
+    let printed = String::from_utf8_lossy(&out.stdout).to_string();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        printed.contains(
+            "    connections: [\n        (port: \"flight.state\", reads: \"pose.frame\"),\n    ],"
+        ),
+        "{printed}"
+    );
+    assert!(printed.contains("name: \"layer\""), "{printed}");
+    // what it prints is the layer, and loads
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let path = dir.path().join("layer.ron");
+    std::fs::write(&path, &printed).expect("writes");
+    let check = bip(&["check", path.to_str().expect("utf-8")]);
+    assert_eq!(
+        check.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    // a malformed `--connect`, and one that names an out port as the in port
+    for (connect, says) in [
+        ("flight.state", "expected `module.in_port=module.out_port`"),
+        (
+            "pose.frame=flight.state",
+            "`pose.frame` is an out port: a connection's `port` is an in port",
+        ),
+        (
+            "flight.stat=pose.frame",
+            "module `flight` has no in port `stat`",
+        ),
+    ] {
+        let mut bad = args[..args.len() - 1].to_vec();
+        bad.push(connect);
+        let out = bip(&bad);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(says), "{connect}: {stderr}");
+    }
+}
+
+#[test]
 fn bip_import_shows_an_error_in_the_gen_file() {
     let dir = tempfile::tempdir().expect("a temporary directory");
     let path = dir.path().join("bad.gen");

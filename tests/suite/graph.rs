@@ -246,3 +246,25 @@ fn graphviz_reads_the_dot_where_it_is_installed() {
         );
     }
 }
+
+/// The data flow crosses components: the estimator's machine writes its out port, which
+/// the connection takes to the controller's in port, which the controller reads and its
+/// freshness constraint names.
+#[test]
+fn a_connection_is_drawn_from_the_out_port_to_the_in_port() {
+    let dot = graph(&["robots/tests/connections.ron", "--format", "dot"]);
+    for edge in [
+        r##""module estimator":r0 -> "port estimator.frame" [color="#1d5e8c" class="writes"];"##,
+        r##""port estimator.frame" -> "port controller.state" [label="connected" color="#1d5e8c" class="connection"];"##,
+        r##""port controller.state" -> "module controller" [color="#1d5e8c" class="reads"];"##,
+        r##""port controller.state" -> "module controller":r1 [label="fresh_state: age ≤ 2""##,
+    ] {
+        assert!(dot.contains(edge), "{edge} in {dot}");
+    }
+    let (texts, classes) = svg_parts(&graph(&["robots/drone/drone.ron"]));
+    assert_eq!(count(&classes, "edge connection"), 6, "{classes:?}");
+    assert_eq!(count(&classes, "node in-port"), 6, "{classes:?}");
+    for name in ["flight.state", "pose.frame", "rotorcraft.rotor_input"] {
+        assert!(texts.iter().any(|t| t == name), "{name}: {texts:?}");
+    }
+}

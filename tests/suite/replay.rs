@@ -291,3 +291,21 @@ fn guards_are_evaluated_in_one_order_by_verify_and_simulate() {
     let sim = simulate_and_replay(&m, dir.path(), 1);
     assert!(sim.contains("RANGE ERROR"), "{sim}");
 }
+
+/// The connected fixture's deadlock (the estimator fails, the controller's codel waits for
+/// a fresh frame on its in port for ever) and its witness replay through the engine as
+/// the verifier found them: the engine's held codel reads the same age.
+#[test]
+fn traces_of_a_layer_wired_by_connections_replay() {
+    let dir = tempfile::tempdir().unwrap();
+    let replays = verify_and_replay("robots/tests/connections.ron", dir.path());
+    assert_eq!(replays.len(), 2, "{replays:?}");
+    assert!(
+        replays.iter().any(|r| r.contains("deadlock")),
+        "{replays:?}"
+    );
+    assert!(
+        replays.iter().any(|r| r.contains("controls")),
+        "{replays:?}"
+    );
+}

@@ -273,6 +273,7 @@ impl EngineBuilder {
         let ports = PortStore::new(
             core::mem::take(&mut t.ports),
             core::mem::take(&mut t.port_types),
+            core::mem::take(&mut t.port_links),
         );
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
         let activities = t.activities.len();

@@ -7,6 +7,7 @@ mod api;
 mod bounded;
 mod budgets;
 mod common;
+mod connections;
 mod faults;
 mod golden;
 mod property;

@@ -1,5 +1,5 @@
 //! From a GenoM3 component to a module of bip's GenoM layer (docs/genom.md, "GenoM3
-//! files"): what is modelled (tasks and their periods, out ports, services, their
+//! files"): what is modelled (tasks and their periods, out and in ports, services, their
 //! interrupts, `after`, codel state machines with their yields, exceptions, the ports each
 //! codel writes, the data types of ports and activities' parameters, `before`, task
 //! `delay`s and codel WCETs; a task without a period is an aperiodic task). The rest is
@@ -150,16 +150,19 @@ fn module(
             })
         })
         .collect();
-    let ports = c
-        .ports
-        .iter()
-        .filter(|p| p.dir == PortDir::Out)
-        .map(|p| PortDef {
-            name: p.name.clone(),
-            doc: doc(&p.doc),
-            ty: types.data_type(&p.ty, "", p.name.span),
-        })
-        .collect();
+    let ports_of = |dir: PortDir| {
+        c.ports
+            .iter()
+            .filter(|p| p.dir == dir)
+            .map(|p| PortDef {
+                name: p.name.clone(),
+                doc: doc(&p.doc),
+                ty: types.data_type(&p.ty, "", p.name.span),
+            })
+            .collect()
+    };
+    let ports = ports_of(PortDir::Out);
+    let in_ports = ports_of(PortDir::In);
     params::check(c, errors);
     let services = c
         .services
@@ -172,6 +175,7 @@ fn module(
         ids: Vec::new(),
         tasks,
         ports,
+        in_ports,
         services,
     }
 }
@@ -270,8 +274,9 @@ fn codel_defs(
         .iter()
         .flat_map(|codel| {
             let writes = writes(c, s, codel);
+            // with its unit: a bare number below 100 µs reads as a slip for milliseconds
             let wcet = codel.wcet.map(|(us, span)| Spanned {
-                value: ConstValue::Int(i64::try_from(us).unwrap_or(i64::MAX)),
+                value: ConstValue::Expr(format!("{us}us")),
                 span,
                 verbatim: false,
             });

@@ -157,51 +157,71 @@ fn model_tick_us(def: &SystemDef, at: Span) -> Result<u64, ModelError> {
     }
 }
 
-/// The model that holds a `.gen` file's components as modules (what `bip import` prints),
-/// with the tick its periods need: its `clock-rate`, or the greatest common divisor of its
-/// periods and delays, in whole milliseconds.
-pub fn import(spec: &Spec, shown: &str) -> Result<SystemDef, Vec<ModelError>> {
-    let Some(first) = spec.components.first() else {
+/// The model that holds the components of `.gen` files as modules (what `bip import`
+/// prints), file after file, with the tick their periods need: their `clock-rate`s, or
+/// else the greatest common divisor of their periods and delays, in whole milliseconds.
+/// Each file comes with its name as messages show it. The model is named after its one
+/// component, or `layer` when the files declare several.
+pub fn import(specs: &[(Spec, String)]) -> Result<SystemDef, Vec<ModelError>> {
+    let mut components = specs.iter().flat_map(|(s, _)| &s.components);
+    let Some(first) = components.next() else {
+        let shown: Vec<&str> = specs.iter().map(|(_, n)| n.as_str()).collect();
         return Err(vec![ModelError::new(
-            format!("{shown} declares no component"),
+            format!("{} declares no component", shown.join(", ")),
             Span::NONE,
         )]);
     };
-    let tick_us = import_tick_us(spec).map_err(|e| vec![e])?;
-    let modules = modules(spec, tick_us)?;
+    let name = match components.next() {
+        None => first.name.clone(),
+        Some(_) => crate::source::Text::new("layer".to_string(), Span::NONE),
+    };
+    let tick_us = import_tick_us(specs.iter().map(|(s, _)| s)).map_err(|e| vec![e])?;
+    let mut modules_found = Vec::new();
+    let mut errors = Vec::new();
+    for (spec, _) in specs {
+        match modules(spec, tick_us) {
+            Ok(mut m) => modules_found.append(&mut m),
+            Err(mut e) => errors.append(&mut e),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
     Ok(SystemDef {
-        name: first.name.clone(),
+        name,
         tick_ms: Some(Spanned::generated(ConstValue::Int((tick_us / 1000) as i64))),
-        modules,
+        modules: modules_found,
         properties: vec![PropertyDef::DeadlockFree { terminal: None }],
         ..SystemDef::default()
     })
 }
 
-/// The tick for a file on its own: `clock-rate`, or the gcd of the periods and delays.
-fn import_tick_us(spec: &Spec) -> Result<u64, ModelError> {
-    let gcd = |mut a: u64, mut b: u64| {
-        while b != 0 {
-            (a, b) = (b, a % b);
-        }
-        a
-    };
-    let mut tick: Option<(u64, Span)> = None;
-    for c in &spec.components {
-        if let Some(rate) = c.clock_rate {
-            tick = Some(rate);
-            break;
-        }
-        // the periods and the delays (a delay of zero divides any tick)
-        let times = c
-            .tasks
-            .iter()
-            .flat_map(|t| [t.period, t.delay.filter(|d| d.0 > 0)])
-            .flatten();
-        for (p, span) in times {
-            tick = Some(tick.map_or((p, span), |(t, s)| (gcd(t, p), s)));
-        }
+fn gcd(mut a: u64, mut b: u64) -> u64 {
+    while b != 0 {
+        (a, b) = (b, a % b);
     }
+    a
+}
+
+/// The tick for files on their own: the gcd of their components' `clock-rate`s if any
+/// declares one, else the gcd of the periods and delays.
+fn import_tick_us<'s>(specs: impl Iterator<Item = &'s Spec> + Clone) -> Result<u64, ModelError> {
+    let fold = |times: &mut dyn Iterator<Item = (u64, Span)>| {
+        times.fold(None, |tick: Option<(u64, Span)>, (t, span)| {
+            Some(tick.map_or((t, span), |(u, s)| (gcd(u, t), s)))
+        })
+    };
+    let components = specs.flat_map(|s| &s.components);
+    let rates = fold(&mut components.clone().filter_map(|c| c.clock_rate));
+    // the periods and the delays (a delay of zero divides any tick)
+    let tick = rates.or_else(|| {
+        fold(&mut components.flat_map(|c| {
+            c.tasks
+                .iter()
+                .flat_map(|t| [t.period, t.delay.filter(|d| d.0 > 0)])
+                .flatten()
+        }))
+    });
     let Some((us, span)) = tick else {
         return Ok(1000);
     };

@@ -24,6 +24,8 @@ pub(crate) struct RecipeModule {
     pub ports: Vec<(String, Option<i64>)>,
     /// The declared type of each port's data.
     pub port_types: Vec<Option<DataType>>,
+    /// The in ports, with their declared types and the `(module, port)` each reads.
+    pub in_ports: Vec<InPortMap>,
     /// Ids field names, in order.
     pub ids: Vec<String>,
     pub services: Vec<RecipeService>,
@@ -290,6 +292,7 @@ impl Recipe {
                     })
                     .collect(),
                 ports,
+                in_ports: m.in_ports.clone(),
                 ids,
                 services,
             });

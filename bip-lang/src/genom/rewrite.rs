@@ -7,7 +7,7 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use super::check::{too_old, Layer, PortRef, ETHER};
+use super::check::{port_ref, too_old, Layer, PortRef, ETHER};
 use super::names::{activity_component, age_var, module_component, REQ};
 use super::tree::{at, member};
 use crate::compile::{one_of, Constants};
@@ -164,16 +164,14 @@ impl<'a, 'd> Rewriter<'a, 'd> {
                 "e.g. `age(pom.pose)`",
             );
         };
-        let module = &self.layer.modules[m];
-        let Some(p) = module.ports.iter().position(|&p| p == field.name) else {
-            return fail_help(
-                field.span,
-                format!("module `{}` has no out port `{}`", module.name, field.name),
-                one_of("its ports are", module.ports.iter().copied()),
-            );
-        };
-        let var = member(&module_component(module.name), &age_var(module.ports[p]));
-        Ok((PortRef { module: m, port: p }, var))
+        // a connected in port's age is its writer's
+        let port = port_ref(self.layer, m, &field.name, field.span)?;
+        let writer = &self.layer.modules[port.module];
+        let var = member(
+            &module_component(writer.name),
+            &age_var(writer.ports[port.port]),
+        );
+        Ok((port, var))
     }
 
     fn walk(
@@ -285,7 +283,8 @@ impl<'a, 'd> Rewriter<'a, 'd> {
                             ),
                         );
                     }
-                    if module.ports.contains(&field.name.as_str()) {
+                    let in_port = module.in_ports.iter().any(|p| p.name == field.name);
+                    if in_port || module.ports.contains(&field.name.as_str()) {
                         return fail_help(
                             field.span,
                             format!("`{}.{}` is a port, not a value", module.name, field.name),

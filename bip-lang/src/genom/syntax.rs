@@ -5,7 +5,7 @@ use crate::source::{ConstExpr, ConstValue, Span, Text};
 use crate::syntax::VarDef;
 pub use bip_model::genom::map::ServiceKind;
 
-/// A GenoM3-style module: ids, execution tasks, out ports and services.
+/// A GenoM3-style module: ids, execution tasks, out and in ports and services.
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModuleDef {
@@ -21,6 +21,10 @@ pub struct ModuleDef {
     /// Out ports (posters).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub ports: Vec<PortDef>,
+    /// In ports: what the module reads from another's out port, once the model's
+    /// `connections` say which (docs/model.md, "Connections").
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub in_ports: Vec<PortDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub services: Vec<ServiceDef>,
 }
@@ -66,7 +70,8 @@ impl TaskDef {
     }
 }
 
-/// An out port (poster). Its age is tracked when some expression or constraint reads it.
+/// An out port (poster), or an in port. An out port's age is tracked when some expression
+/// or constraint reads it (or an in port connected to it).
 #[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PortDef {
@@ -157,6 +162,17 @@ pub struct CodelDef {
     /// Worst-case execution time of one run: `"2ms"`, `"150us"`, or microseconds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wcet: Option<ConstExpr>,
+}
+
+/// A connection: module `m`'s in port `p` reads module `n`'s out port `q`
+/// (`(port: "m.p", reads: "n.q")`, GenoM3's `connect_port` said in the model).
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConnectionDef {
+    /// The in port, `"module.port"`.
+    pub port: Text,
+    /// The out port it reads, `"module.port"`.
+    pub reads: Text,
 }
 
 /// A system-level constraint between services of (possibly different) modules. Services

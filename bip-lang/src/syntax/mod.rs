@@ -16,8 +16,8 @@ use serde::de::{self, Deserialize, Deserializer, EnumAccess, MapAccess, VariantA
 use serde::ser::{Serialize, SerializeStructVariant, Serializer};
 
 pub use crate::genom::syntax::{
-    CodelDef, ConstraintDef, DataTypeDef, FieldDef, ModuleDef, PortDef, ServiceDef, ServiceKind,
-    TaskDef,
+    CodelDef, ConnectionDef, ConstraintDef, DataTypeDef, FieldDef, ModuleDef, PortDef, ServiceDef,
+    ServiceKind, TaskDef,
 };
 pub use crate::source::Text;
 use crate::source::{ident_has_parens, ConstExpr, OrderedMap, Span};
@@ -66,6 +66,9 @@ pub struct SystemDef {
         deserialize_with = "crate::gen3::entries::deserialize_modules"
     )]
     pub modules: Vec<ModuleDef>,
+    /// Which out port each connected in port of a module reads (docs/model.md, "Connections").
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub connections: Vec<ConnectionDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub constraints: Vec<ConstraintDef>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -94,14 +97,14 @@ impl SystemDef {
 
     /// True if the model has a GenoM layer to expand.
     pub fn has_genom_layer(&self) -> bool {
-        !self.modules.is_empty() || !self.constraints.is_empty()
+        !self.modules.is_empty() || !self.constraints.is_empty() || !self.connections.is_empty()
     }
 }
 
 /// Writes printed RON the way docs/model.md does: the inner structs without their type names
 /// (`(from: …)`, not `TransitionDef(from: …)`), and lists of plain values on one line.
 fn tidy_ron(text: &str) -> String {
-    const INNER: [&str; 11] = [
+    const INNER: [&str; 12] = [
         "VarDef(",
         "TransitionDef(",
         "ComponentDef(",
@@ -113,6 +116,7 @@ fn tidy_ron(text: &str) -> String {
         "ServiceDef(",
         "CodelDef(",
         "FieldDef(",
+        "ConnectionDef(",
     ];
     let lines: Vec<&str> = text.lines().collect();
     let mut out = String::with_capacity(text.len());
@@ -143,6 +147,26 @@ fn tidy_ron(text: &str) -> String {
                 out.push_str(suffix);
                 out.push('\n');
                 i = j + 1;
+                continue;
+            }
+        }
+        if line.trim() == "ConnectionDef(" {
+            // a connection, two names, goes on one line
+            let fields: Vec<&str> = lines[i + 1..]
+                .iter()
+                .map(|l| l.trim())
+                .take_while(|l| !l.starts_with(')'))
+                .collect();
+            let close = i + 1 + fields.len();
+            if let Some(end) = lines.get(close) {
+                let indent = &line[..line.len() - line.trim_start().len()];
+                let joined = fields.join(" ");
+                out.push_str(indent);
+                out.push('(');
+                out.push_str(joined.trim_end_matches(','));
+                out.push_str(end.trim());
+                out.push('\n');
+                i = close + 1;
                 continue;
             }
         }

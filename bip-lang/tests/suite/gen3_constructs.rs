@@ -55,6 +55,14 @@ fn int(v: &Option<bip_lang::source::ConstExpr>) -> Option<i64> {
     }
 }
 
+/// A constant written as text (`"20us"`).
+fn written(v: &Option<bip_lang::source::ConstExpr>) -> Option<String> {
+    match v.as_ref().map(|c| &c.value) {
+        Some(ConstValue::Expr(e)) => Some(e.clone()),
+        _ => None,
+    }
+}
+
 fn names(v: &[bip_lang::source::Text]) -> Vec<&str> {
     v.iter().map(|t| t.as_str()).collect()
 }
@@ -75,6 +83,9 @@ fn the_fixture_imports_with_every_construct() {
         ports,
         ["tuning", "tuning_copy", "odometry", "beacon_request"]
     );
+    // in ports: the provided interface's in port, the used one's out port
+    let in_ports: Vec<&str> = m.in_ports.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(in_ports, ["setpoint", "beacon"]);
     // `ids::gains` and `drive::ids::gains` are the ids' structure
     for p in &m.ports[..2] {
         assert!(
@@ -93,8 +104,8 @@ fn the_fixture_imports_with_every_construct() {
         Some("moves at a speed")
     );
     assert_eq!(names(&mv.codels[0].throws), ["e_stalled"]);
-    let wcets: Vec<Option<i64>> = mv.codels.iter().map(|c| int(&c.wcet)).collect();
-    assert_eq!(wcets, [Some(2000), Some(5000), None]);
+    let wcets: Vec<Option<String>> = mv.codels.iter().map(|c| written(&c.wcet)).collect();
+    assert_eq!(wcets, [Some("2000us".into()), Some("5000us".into()), None]);
     assert_eq!(names(&service("Calibrate").before), ["Move"]);
     assert_eq!(
         names(&service("Halt").interrupts),
@@ -240,14 +251,19 @@ component c {
   activity A(in long x) {
     task t;
     validate check(local in x) wcet 1 ms;
-    codel <start> f() yield pause::main wcet 500 us;
+    codel <start> f() yield pause::main wcet 20 us;
     codel <main> g() yield pause::main, ether wcet 2 ms;
   };
 };
 "#,
     );
-    let wcets: Vec<Option<i64>> = m.services[0].codels.iter().map(|c| int(&c.wcet)).collect();
-    assert_eq!(wcets, [Some(500), Some(2000)]);
+    // written with their unit, so that a budget below 100 µs is no slip for milliseconds
+    let wcets: Vec<Option<String>> = m.services[0]
+        .codels
+        .iter()
+        .map(|c| written(&c.wcet))
+        .collect();
+    assert_eq!(wcets, [Some("20us".into()), Some("2000us".into())]);
     let line = "component c { task t { period 10 ms; }; activity A() { task t; codel <start> f() yield ether wcet 0 ms; }; };";
     expect_error(line, "a duration is positive", 1, 99);
     let line = "component c { task t { period 10 ms; }; activity A() { task t; codel <start> f() yield ether wcet; }; };";

@@ -210,7 +210,7 @@ fn service_reference_errors() {
         (
             r#"Requires(service: "ndd.GoTo", active: ["sick.Scan"]),"#,
             r#"Fresh(service: "ndd.GoTo", port: "sick.pose", max_age: 2),"#,
-            "module `sick` has no out port `pose`",
+            "module `sick` has no port `pose`",
             "pose",
         ),
         (
@@ -253,7 +253,11 @@ fn genom_names_in_expressions() {
             "may only be compared with a constant",
             "ndd_GoTo.req",
         ),
-        ("age(sick.scna) < 2", "no out port `scna`", "scna"),
+        (
+            "age(sick.scna) < 2",
+            "module `sick` has no port `scna`",
+            "scna",
+        ),
         ("sick.Scan", "is a service, not a value", "Scan"),
         ("sick.scan > 0", "is a port, not a value", "scan"),
     ];

@@ -5,6 +5,7 @@
 //! (`robustness`) and mutated example models through the loader (`fuzz`).
 
 mod aperiodic;
+mod connections;
 mod data_types;
 mod diagnostics;
 mod fuzz;

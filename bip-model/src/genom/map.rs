@@ -45,6 +45,8 @@ pub struct ModuleMap {
     pub component: u32,
     pub tasks: Vec<TaskMap>,
     pub ports: Vec<PortMap>,
+    /// The in ports, each with the out port it reads if a connection says which.
+    pub in_ports: Vec<InPortMap>,
     /// The ids fields, in order.
     pub ids: Vec<IdsField>,
     pub services: Vec<ServiceMap>,
@@ -100,6 +102,16 @@ pub struct PortMap {
     pub ty: Option<DataType>,
     /// Where the port's age lives, if any expression or constraint reads it.
     pub age: Option<AgeMap>,
+}
+
+/// An in port: a name under which a module's codels read another module's out port.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct InPortMap {
+    pub name: String,
+    /// The type of its data, if the model declares one (the out port's, when both do).
+    pub ty: Option<DataType>,
+    /// The out port it reads, `(module, port)` indices into the map, if connected.
+    pub reads: Option<(u32, u32)>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

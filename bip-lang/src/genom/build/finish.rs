@@ -107,6 +107,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 connectors,
                 priorities,
                 modules: Vec::new(),
+                connections: Vec::new(),
                 constraints: Vec::new(),
                 sources: def.sources.clone(),
                 properties,

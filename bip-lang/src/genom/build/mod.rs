@@ -37,7 +37,7 @@ use crate::syntax::{
     ActionDef, AtomDef, ComponentDef, ConnectorDef, ConnectorKindDef, ExprDef, Role, SystemDef,
     Text, TransitionDef, TypeDef, VarDef,
 };
-use bip_model::genom::map::Reason;
+use bip_model::genom::map::{InPortMap, Reason};
 
 /// The result of expanding a model: its core form and the recipe of the engine's map
 /// (compile it with [`Expansion::compile`]).
@@ -301,6 +301,15 @@ impl<'a, 'd> Builder<'a, 'd> {
                     })
                     .collect(),
                 port_types: m.port_types.clone(),
+                in_ports: m
+                    .in_ports
+                    .iter()
+                    .map(|p| InPortMap {
+                        name: p.name.to_string(),
+                        ty: p.ty.clone(),
+                        reads: p.reads.map(|r| (r.module as u32, r.port as u32)),
+                    })
+                    .collect(),
                 ids: m.ids.iter().map(|(x, _)| x.to_string()).collect(),
                 services: Vec::new(),
             });

@@ -1,6 +1,7 @@
 //! The constraints between services (`Exclusive`, `AtMost`, `Requires`, `Fresh`,
 //! `Guard`), with the `"module.Service"` and `"module.port"` names they use resolved.
 
+use super::connections::{module_index, split_dotted};
 use super::{ConstraintKind, Layer, PortRef, ServiceRef};
 use crate::compile::{one_of, unique, Constants};
 use crate::diag::{Errors, ModelError};
@@ -29,66 +30,13 @@ pub fn service_ref(errors: &mut Errors, layer: &Layer<'_>, t: &Text) -> Option<S
     })
 }
 
-/// Resolves `"module.port"`.
+/// Resolves `"module.port"`: an out port, or a connected in port (the out port it reads).
 fn port_ref(errors: &mut Errors, layer: &Layer<'_>, t: &Text) -> Option<PortRef> {
     let (m, p, ms, ps) = split_dotted(errors, t, "`module.port`")?;
     let mi = module_index(errors, layer, m, ms)?;
-    let module = &layer.modules[mi];
-    let Some(pi) = module.ports.iter().position(|&x| x == p) else {
-        errors.push(
-            ModelError::new(format!("module `{m}` has no out port `{p}`"), ps)
-                .with_help(one_of("its ports are", module.ports.iter().copied())),
-        );
-        return None;
-    };
-    Some(PortRef {
-        module: mi,
-        port: pi,
-    })
-}
-
-/// The index of module `m` (written at `span`), or an error listing the modules.
-fn module_index(errors: &mut Errors, layer: &Layer<'_>, m: &str, span: Span) -> Option<usize> {
-    let found = layer.modules.iter().position(|x| x.name == m);
-    if found.is_none() {
-        errors.push(
-            ModelError::new(format!("unknown module `{m}`"), span).with_help(one_of(
-                "the modules are",
-                layer.modules.iter().map(|x| x.name),
-            )),
-        );
-    }
-    found
-}
-
-/// Splits `"a.b"` into its two names and their spans in the file.
-fn split_dotted<'t>(
-    errors: &mut Errors,
-    t: &'t Text,
-    form: &str,
-) -> Option<(&'t str, &'t str, Span, Span)> {
-    let text = t.as_str();
-    let ok = |s: &str| {
-        s.chars()
-            .next()
-            .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
-            && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-    };
-    match text.split_once('.') {
-        Some((a, b)) if ok(a) && ok(b) => Some((
-            a,
-            b,
-            t.sub_span(0..a.len()),
-            t.sub_span(a.len() + 1..text.len()),
-        )),
-        _ => {
-            errors.push(ModelError::new(
-                format!("expected {form}, found `{text}`"),
-                t.span,
-            ));
-            None
-        }
-    }
+    super::port_ref(layer, mi, p, ps)
+        .map_err(|e| errors.push(e))
+        .ok()
 }
 
 pub(super) fn constraint<'d>(

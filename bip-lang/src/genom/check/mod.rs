@@ -5,10 +5,12 @@
 //! This file holds the layer's types and the order of the checks; the checks are in:
 //! - `module.rs`: modules and their services;
 //! - `codels.rs`: an activity's codel automaton;
+//! - `connections.rs`: which out port each in port reads, and port names resolved;
 //! - `constraints.rs`: the constraints between services;
 //! - `types.rs`: the data types of ports, arguments and outputs.
 
 mod codels;
+mod connections;
 mod constraints;
 mod module;
 mod types;
@@ -21,6 +23,7 @@ use crate::source::line_col;
 use crate::syntax::{CodelDef, ConstraintDef, ModuleDef, ServiceDef, ServiceKind, SystemDef, Text};
 use bip_model::genom::map::{ConstraintRef, DataType, Reason};
 
+pub use connections::port_ref;
 use constraints::constraint;
 pub use constraints::{service_ref, too_old};
 use module::module;
@@ -69,10 +72,22 @@ pub struct Module<'d> {
     pub ports: Vec<&'d str>,
     /// The declared type of each port's data.
     pub port_types: Vec<Option<DataType>>,
+    /// The in ports, with the out port each reads once `connections` are checked.
+    pub in_ports: Vec<InPort<'d>>,
     /// The ids fields and their ranges (`None` if a bound is not a constant: the core
     /// reports it).
     pub ids: Vec<(&'d str, Option<(i64, i64)>)>,
     pub services: Vec<Service<'d>>,
+}
+
+/// An in port of a module.
+#[derive(Debug)]
+pub struct InPort<'d> {
+    pub name: &'d str,
+    /// The declared type of its data.
+    pub ty: Option<DataType>,
+    /// The out port it reads, if a connection says which.
+    pub reads: Option<PortRef>,
 }
 
 #[derive(Debug)]
@@ -197,6 +212,7 @@ pub fn check<'d>(
         modules,
         constraints: Vec::new(),
     };
+    connections::connect(&mut errors, &mut layer, &def.connections);
     unique(
         &mut errors,
         def.constraints.iter().filter_map(ConstraintDef::name),

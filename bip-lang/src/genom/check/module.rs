@@ -1,4 +1,4 @@
-//! A module and its services: tasks and their periods, ports, the `ids` fields and their
+//! A module and its services: tasks and their periods, out and in ports, the `ids` fields and their
 //! bounds, and each service's kind, task, `interrupts` and `after`, resolved to indices
 //! within the module.
 
@@ -6,7 +6,7 @@ use std::collections::HashMap;
 
 use super::codels::codels;
 use super::types::data_type;
-use super::{Module, Service, MODULE_PORTS};
+use super::{InPort, Module, Service, MODULE_PORTS};
 use crate::compile::{check_name, one_of, unique, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::syntax::{ModuleDef, ServiceDef, ServiceKind, TaskDef, Text, TypeDef};
@@ -14,7 +14,11 @@ use crate::syntax::{ModuleDef, ServiceDef, ServiceKind, TaskDef, Text, TypeDef};
 pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleDef) -> Module<'d> {
     let what = |kind: &str| format!("{kind} of module `{}`", m.name);
     unique(errors, m.tasks.iter().map(|t| &t.name), &what("task"));
-    unique(errors, m.ports.iter().map(|p| &p.name), &what("port"));
+    unique(
+        errors,
+        m.ports.iter().chain(&m.in_ports).map(|p| &p.name),
+        &what("port"),
+    );
     unique(
         errors,
         m.services.iter().filter(|s| !s.machine).map(|s| &s.name),
@@ -43,7 +47,7 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
         tasks.push((t.name.as_str(), period));
         delays.push(delay(errors, consts, t, period));
     }
-    for p in &m.ports {
+    for p in m.ports.iter().chain(&m.in_ports) {
         check_name(errors, &p.name, "port");
     }
     let ports: Vec<&str> = m.ports.iter().map(|p| p.name.as_str()).collect();
@@ -76,6 +80,15 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
         .iter()
         .map(|p| p.ty.as_ref().and_then(|t| data_type(errors, consts, t)))
         .collect();
+    let in_ports = m
+        .in_ports
+        .iter()
+        .map(|p| InPort {
+            name: p.name.as_str(),
+            ty: p.ty.as_ref().and_then(|t| data_type(errors, consts, t)),
+            reads: None,
+        })
+        .collect();
     for s in &mut services {
         service_types(errors, consts, s);
     }
@@ -102,6 +115,7 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
         delays,
         ports,
         port_types,
+        in_ports,
         ids,
         services,
     }
