@@ -164,6 +164,20 @@ pub fn import_gen_file(
     path: &Path,
     include: &[std::path::PathBuf],
 ) -> Result<SystemDef, LoadError> {
+    read_checked_gen_file(path, include).map(|(_, def)| def)
+}
+
+/// A `.gen` file as read (its IDL types and codel functions, which the model leaves out),
+/// once checked as [`import_gen_file`] checks it: for tools such as bip-codegen's C
+/// headers.
+pub fn read_gen_file(path: &Path, include: &[std::path::PathBuf]) -> Result<gen3::Spec, LoadError> {
+    read_checked_gen_file(path, include).map(|(spec, _)| spec)
+}
+
+fn read_checked_gen_file(
+    path: &Path,
+    include: &[std::path::PathBuf],
+) -> Result<(gen3::Spec, SystemDef), LoadError> {
     let shown = path.display().to_string();
     let empty = Arc::new(String::new());
     let mut files = crate::source_map::SourceMap::default();
@@ -175,5 +189,5 @@ pub fn import_gen_file(
     let mut def = gen3::import(&spec, &shown).map_err(|e| fail(e, &files))?;
     def.sources = files;
     compile(&def).map_err(|e| fail(e, &def.sources))?;
-    Ok(def)
+    Ok((spec, def))
 }

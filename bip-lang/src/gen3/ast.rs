@@ -22,8 +22,10 @@ pub struct TypeDecl {
     pub name: Text,
     /// `struct`, `union`, `enum`, `typedef`, `native`, `const`, `exception`.
     pub kind: &'static str,
-    /// The IDL type (`typedef`, `const`), or the members (`struct`, `exception`).
+    /// The IDL type (`typedef`, `const`), or the members (`struct`, `union`, `exception`).
     pub members: Vec<Member>,
+    /// A union's discriminator type (`switch (long)`): `None` for the other kinds.
+    pub switch: Option<String>,
 }
 
 /// A member of a structure, an ids field, a local variable: a name and its IDL type.

@@ -110,6 +110,7 @@ impl Idl {
             name: full,
             kind,
             members,
+            switch: None,
         });
     }
 
@@ -376,7 +377,7 @@ impl Idl {
     fn union_body(&mut self, c: &mut Cursor, name: &Text, depth: usize) -> Result<(), ModelError> {
         c.next();
         c.expect_punct("(")?;
-        self.type_spec(c, depth + 1)?;
+        let switch = self.type_spec(c, depth + 1)?;
         c.expect_punct(")")?;
         c.expect_punct("{")?;
         let mut members = Vec::new();
@@ -398,6 +399,9 @@ impl Idl {
         }
         c.expect_punct("}")?;
         self.declare(name, "union", members);
+        if let Some(d) = self.decls.last_mut() {
+            d.switch = Some(switch);
+        }
         Ok(())
     }
 }
