@@ -26,6 +26,9 @@ pub struct TypeDecl {
     pub members: Vec<Member>,
     /// A union's discriminator type (`switch (long)`): `None` for the other kinds.
     pub switch: Option<String>,
+    /// A numeric constant's value, as C writes it (`200`, `0.5`): `None` for the other
+    /// kinds and for string and character constants.
+    pub value: Option<String>,
 }
 
 /// A member of a structure, an ids field, a local variable: a name and its IDL type.

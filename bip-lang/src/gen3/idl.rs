@@ -111,6 +111,7 @@ impl Idl {
             kind,
             members,
             switch: None,
+            value: None,
         });
     }
 
@@ -162,6 +163,13 @@ impl Idl {
                         ty,
                     }],
                 );
+                if let Some(d) = self.decls.last_mut() {
+                    d.value = value.and_then(|v| match v {
+                        Value::Int(i) => Some(i.to_string()),
+                        Value::Float(f) if f.is_finite() => Some(format!("{f:?}")),
+                        Value::Float(_) => None,
+                    });
+                }
             }
             "typedef" => {
                 c.next();

@@ -142,6 +142,11 @@ pub enum Body {
     Native,
     /// The members of its `_detail` struct; `void` without any.
     Exception(Vec<(String, CType)>),
+    /// A numeric constant: its type and its value as C writes it.
+    Const {
+        ty: CType,
+        value: String,
+    },
 }
 
 /// A declared type: its C name and what it is.
@@ -191,7 +196,8 @@ impl CTypes {
                     .chain(&component.exceptions)
                     .map(|d| (own(d), d)),
             )
-            .filter(|(_, d)| d.kind != "const")
+            // a constant GenoM3 maps is numeric: a string's has no value here
+            .filter(|(_, d)| d.kind != "const" || d.value.is_some())
             .collect();
         let mut types = CTypes {
             order: Vec::new(),
@@ -214,29 +220,43 @@ impl CTypes {
                     .map(|m| Ok((m.name.value.clone(), types.ctype(&m.ty, key)?)))
                     .collect()
             };
-            let body = match d.kind {
-                "struct" => Body::Struct(members(&types)?),
-                "exception" => Body::Exception(members(&types)?),
-                "union" => Body::Union {
-                    switch: types.ctype(d.switch.as_deref().unwrap_or("long"), key)?,
-                    members: members(&types)?,
-                },
-                "enum" => {
-                    let scope = key.rsplit_once("::").map_or("", |(s, _)| s);
-                    Body::Enum(
-                        d.members
-                            .iter()
-                            .map(|m| cname(&format!("{scope}::{}", m.name.value)))
-                            .collect(),
-                    )
-                }
-                "typedef" => {
-                    let target = d.members.first().map_or("", |m| m.ty.as_str());
-                    let scope = key.rsplit_once("::").map_or("", |(s, _)| s);
-                    Body::Typedef(types.ctype(target, scope)?)
-                }
-                _ => Body::Native,
-            };
+            let body = (|| -> Result<Body, CodegenError> {
+                Ok(match d.kind {
+                    "struct" => Body::Struct(members(&types)?),
+                    "exception" => Body::Exception(members(&types)?),
+                    "union" => Body::Union {
+                        switch: types.ctype(d.switch.as_deref().unwrap_or("long"), key)?,
+                        members: members(&types)?,
+                    },
+                    "enum" => {
+                        let scope = key.rsplit_once("::").map_or("", |(s, _)| s);
+                        Body::Enum(
+                            d.members
+                                .iter()
+                                .map(|m| cname(&format!("{scope}::{}", m.name.value)))
+                                .collect(),
+                        )
+                    }
+                    "const" => {
+                        let ty = d.members.first().map_or("", |m| m.ty.as_str());
+                        let scope = key.rsplit_once("::").map_or("", |(s, _)| s);
+                        Body::Const {
+                            ty: types.ctype(ty, scope)?,
+                            value: d.value.clone().unwrap_or_default(),
+                        }
+                    }
+                    "typedef" => {
+                        let target = d.members.first().map_or("", |m| m.ty.as_str());
+                        let scope = key.rsplit_once("::").map_or("", |(s, _)| s);
+                        Body::Typedef(types.ctype(target, scope)?)
+                    }
+                    _ => Body::Native,
+                })
+            })()
+            .map_err(|e| match e {
+                CodegenError::CMapping(m) => CodegenError::CMapping(format!("`{key}`: {m}")),
+                other => other,
+            })?;
             if let Some(decl) = types.decls.get_mut(key) {
                 decl.body = body;
             }
@@ -352,7 +372,7 @@ impl CTypes {
             CType::Named(k) => match self.decls.get(k).map(|x| &x.body) {
                 Some(Body::Enum(_)) => Basic::U32.layout(),
                 Some(Body::Typedef(target)) => self.layout_at(target, d)?,
-                Some(Body::Native) | None => pointer(),
+                Some(Body::Native) | Some(Body::Const { .. }) | None => pointer(),
                 Some(Body::Union { .. }) | Some(Body::Struct(_)) | Some(Body::Exception(_)) => {
                     struct_layout(&self.member_layouts(t, d)?).0
                 }

@@ -75,7 +75,7 @@ pub fn declaration(out: &mut String, types: &CTypes, key: &str, written: &mut Wr
             .chain(members.iter().map(|(_, t)| t))
             .collect(),
         Body::Typedef(t) => vec![t],
-        Body::Enum(_) | Body::Native => Vec::new(),
+        Body::Enum(_) | Body::Native | Body::Const { .. } => Vec::new(),
     };
     match &d.body {
         Body::Struct(_) | Body::Union { .. } | Body::Native => {
@@ -114,6 +114,22 @@ pub fn declaration(out: &mut String, types: &CTypes, key: &str, written: &mut Wr
         }
         Body::Typedef(t) => guarded(out, n, &format!("typedef {};\n", types.declare(t, n))),
         Body::Native => {}
+        Body::Const { ty, value } => {
+            // past an `int64_t`, the literal is an unsigned long long
+            let suffix = if value
+                .parse::<i128>()
+                .is_ok_and(|v| v > i128::from(i64::MAX))
+            {
+                "ULL"
+            } else {
+                ""
+            };
+            guarded(
+                out,
+                n,
+                &format!("static const {} = {value}{suffix};\n", types.declare(ty, n)),
+            );
+        }
         Body::Exception(ms) => {
             let full = format!("::{key}");
             let mut s = format!(

@@ -68,7 +68,7 @@ fn laid_out(types: &CTypes) -> Vec<CType> {
     for key in &types.order {
         let Some(d) = types.decl(key) else { continue };
         let members: Vec<&CType> = match &d.body {
-            Body::Native => continue,
+            Body::Native | Body::Const { .. } => continue,
             Body::Exception(ms) if ms.is_empty() => continue,
             Body::Struct(ms) | Body::Exception(ms) => ms.iter().map(|(_, t)| t).collect(),
             Body::Union { switch, members } => std::iter::once(switch)
@@ -164,6 +164,10 @@ fn the_mapping_follows_genom3s_table() {
         // strings, arrays, scoped names, natives
         "  geo_label name;\n  geo_text note;\n  char odd[7];\n  geo_mat rotation;\n  uint8_t bytes[3][5];\n",
         "typedef char geo_label[16];",
+        // numeric constants (a string constant is not mapped)
+        "static const int32_t geo_dim = 3;",
+        "static const double geo_half = 0.5;",
+        "static const uint64_t geo_big = 18446744073709551615ULL;",
         "typedef char *geo_text;",
         "typedef double geo_mat[3][3];",
         "  geo_handle *h;\n",
@@ -198,6 +202,7 @@ fn the_mapping_follows_genom3s_table() {
     ] {
         assert!(text.contains(want), "the header lacks\n{want}\n---\n{text}");
     }
+    assert!(!text.contains("greeting"), "a string constant is mapped");
 }
 
 /// Codels of the fixture as GenoM3's convention declares them, one of them (`probe_check`)
