@@ -163,8 +163,17 @@ pub struct Layout {
     pub align: u64,
 }
 
-/// Nesting bound for types within each other (a bounded sequence of itself ends here).
+/// Nesting bound for types within each other.
 const MAX_DEPTH: usize = 64;
+
+/// A walk through types for their layouts: the declared types being laid out (one met
+/// again holds itself) and those laid out already (a type held many times is laid out
+/// once).
+#[derive(Default)]
+struct Walk {
+    path: Vec<String>,
+    done: HashMap<String, Layout>,
+}
 
 /// The declarations a component sees: the file's and its own, in declaration order.
 pub struct CTypes {
@@ -344,17 +353,37 @@ impl CTypes {
 
     /// The size and alignment of `t` as C lays it out.
     pub fn layout(&self, t: &CType) -> Result<Layout, CodegenError> {
-        self.layout_at(t, 0)
+        self.layout_at(t, &mut Walk::default())
     }
 
-    fn layout_at(&self, t: &CType, depth: usize) -> Result<Layout, CodegenError> {
-        if depth > MAX_DEPTH {
+    fn layout_at(&self, t: &CType, walk: &mut Walk) -> Result<Layout, CodegenError> {
+        if walk.path.len() > MAX_DEPTH {
             return Err(CodegenError::CMapping(format!(
-                "type `{}` holds itself",
+                "type `{}` is nested too deeply",
                 self.name(t)
             )));
         }
-        let d = depth + 1;
+        let CType::Named(k) = t else {
+            return self.layout_of(t, walk);
+        };
+        if let Some(l) = walk.done.get(k) {
+            return Ok(*l);
+        }
+        if walk.path.contains(k) {
+            return Err(CodegenError::CMapping(format!(
+                "type `{}` holds itself (other than through an unbounded sequence)",
+                self.name(t)
+            )));
+        }
+        walk.path.push(k.clone());
+        let l = self.layout_of(t, walk);
+        walk.path.pop();
+        let l = l?;
+        walk.done.insert(k.clone(), l);
+        Ok(l)
+    }
+
+    fn layout_of(&self, t: &CType, d: &mut Walk) -> Result<Layout, CodegenError> {
         Ok(match t {
             CType::Basic(b) => b.layout(),
             CType::String(None) => pointer(),
@@ -381,7 +410,11 @@ impl CTypes {
     }
 
     /// The members of a type C lays out as a struct, with their layouts, in order.
-    fn member_layouts(&self, t: &CType, d: usize) -> Result<Vec<(String, Layout)>, CodegenError> {
+    fn member_layouts(
+        &self,
+        t: &CType,
+        d: &mut Walk,
+    ) -> Result<Vec<(String, Layout)>, CodegenError> {
         let u32l = Basic::U32.layout();
         let mut out = Vec::new();
         match self.fin(t) {
@@ -435,7 +468,7 @@ impl CTypes {
     /// The members of `t` (a struct, union, exception detail, sequence or optional, or a
     /// typedef of one) with their offsets, in order; empty for other types.
     pub fn offsets(&self, t: &CType) -> Result<Vec<(String, u64)>, CodegenError> {
-        let ms = self.member_layouts(t, 0)?;
+        let ms = self.member_layouts(t, &mut Walk::default())?;
         let (_, offsets) = struct_layout(&ms);
         Ok(ms.into_iter().map(|(n, _)| n).zip(offsets).collect())
     }

@@ -49,13 +49,13 @@ fn gcc(dir: &Path, args: &[&str]) -> (bool, String) {
 }
 
 /// The anonymous sequences and optionals within `t`, by C name.
-fn templates(types: &CTypes, t: &CType, out: &mut Vec<CType>) {
+fn templates(t: &CType, out: &mut Vec<CType>) {
     match t {
         CType::Sequence(e, _) | CType::Optional(e) => {
-            templates(types, e, out);
+            templates(e, out);
             out.push(t.clone());
         }
-        CType::Array(e, _) => templates(types, e, out),
+        CType::Array(e, _) => templates(e, out),
         _ => {}
     }
 }
@@ -78,7 +78,7 @@ fn laid_out(types: &CTypes) -> Vec<CType> {
             Body::Enum(_) => Vec::new(),
         };
         for t in members {
-            templates(types, t, &mut all);
+            templates(t, &mut all);
         }
         all.push(CType::Named(key.clone()));
     }
@@ -138,6 +138,8 @@ fn every_type_the_importer_reads_has_gccs_layout() {
         "probe_ids_limits_s",
         "probe_e_bad_detail",
         "probe_ids",
+        "geo_tree",
+        "sequence_geo_tree",
     ] {
         assert!(
             all.iter().any(|t| types.name(t) == name),
@@ -309,5 +311,22 @@ fn an_event_and_a_codel_of_one_c_name_are_an_error() {
     match bip_codegen::c_headers(&spec) {
         Err(CodegenError::Clash { rust, .. }) => assert_eq!(rust, "k_go"),
         other => panic!("expected a clash, got {:?}", other.map(|_| ())),
+    }
+}
+
+#[test]
+fn a_type_that_holds_itself_is_refused_at_once() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let gen = dir.path().join("r.gen");
+    // each level holds the next twice: laid out naively, 2^64 visits
+    std::fs::write(
+        &gen,
+        "struct knot { sequence<knot, 2> a; sequence<knot, 2> b; };\ncomponent r {\n  port out knot k;\n  task t { period 10 ms; codel<start> r_start(port out k) yield ether; };\n};\n",
+    )
+    .expect("writes");
+    let spec = bip_lang::read_gen_file(&gen, &[]).unwrap_or_else(|e| panic!("{e:?}"));
+    match bip_codegen::c_headers(&spec) {
+        Err(CodegenError::CMapping(m)) => assert!(m.contains("`knot` holds itself"), "{m}"),
+        other => panic!("expected no C mapping, got {:?}", other.map(|_| ())),
     }
 }
