@@ -43,8 +43,9 @@ pub fn templates(out: &mut String, types: &CTypes, t: &CType, written: &mut Writ
             "  uint32_t _maximum, _length;\n  {};\n  void (*_release)(void *_buffer);\n",
             types.declare(e, "*_buffer")
         ),
+        // C++ codels need the constant `_maximum` set and an assignment that keeps it
         CType::Sequence(e, Some(n)) => format!(
-            "  const uint32_t _maximum;\n  uint32_t _length;\n  {};\n",
+            "  const uint32_t _maximum;\n  uint32_t _length;\n  {};\n#ifdef __cplusplus\n  {name}() : _maximum({n}), _length(0) {{}}\n  {name} &operator=(const {name} &x)\n  {{\n    _length = x._length;\n    memcpy(_buffer, x._buffer, sizeof(_buffer[0]) * _length);\n    return *this;\n  }}\n#endif\n",
             types.declare(e, &format!("_buffer[{n}]"))
         ),
         CType::Optional(e) => format!("  bool _present;\n  {};\n", types.declare(e, "_value")),

@@ -28,11 +28,17 @@ fn headers() -> (tempfile::TempDir, CTypes) {
 
 /// Runs gcc in `dir` with `args`; its status and what it said, in the C locale.
 fn gcc(dir: &Path, args: &[&str]) -> (bool, String) {
-    let out = Command::new("gcc")
+    compiler(dir, "gcc", "-std=c11", args)
+}
+
+/// Runs `program` (gcc or g++) in `dir` with `std`, every warning an error (but unused
+/// parameters, which codels often have) and `args`.
+fn compiler(dir: &Path, program: &str, std: &str, args: &[&str]) -> (bool, String) {
+    let out = Command::new(program)
         .current_dir(dir)
         .env("LC_ALL", "C")
         .args([
-            "-std=c11",
+            std,
             "-Wall",
             "-Wextra",
             "-Wno-unused-parameter",
@@ -41,7 +47,7 @@ fn gcc(dir: &Path, args: &[&str]) -> (bool, String) {
         ])
         .args(args)
         .output()
-        .expect("gcc runs (the C headers' tests need it)");
+        .unwrap_or_else(|e| panic!("{program} runs (the C headers' tests need it): {e}"));
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
@@ -178,7 +184,8 @@ fn the_mapping_follows_genom3s_table() {
         "typedef uint32_t geo_mode;\nenum {\n  geo_idle = 0,\n  geo_busy = 1,\n  geo_broken = 2,\n};",
         // sequences and optionals
         "typedef struct sequence_double {\n  uint32_t _maximum, _length;\n  double *_buffer;\n  void (*_release)(void *_buffer);\n} sequence_double;",
-        "typedef struct sequence8_geo_vec {\n  const uint32_t _maximum;\n  uint32_t _length;\n  geo_vec _buffer[8];\n} sequence8_geo_vec;",
+        "typedef struct sequence8_geo_vec {\n  const uint32_t _maximum;\n  uint32_t _length;\n  geo_vec _buffer[8];\n#ifdef __cplusplus\n",
+        "#endif\n} sequence8_geo_vec;",
         "typedef struct optional_geo_vec {\n  bool _present;\n  geo_vec _value;\n} optional_geo_vec;",
         // unions
         "struct geo_reading {\n  int16_t _d;\n  union {\n    double range;\n    geo_vec direction;\n    int8_t code;\n  } _u;\n};",
@@ -329,4 +336,32 @@ fn a_type_that_holds_itself_is_refused_at_once() {
         Err(CodegenError::CMapping(m)) => assert!(m.contains("`knot` holds itself"), "{m}"),
         other => panic!("expected no C mapping, got {:?}", other.map(|_| ())),
     }
+}
+
+#[test]
+fn cxx_codels_compile_against_the_headers_too() {
+    // GenoM3 components may write codels in C++ (`lang "c"` with `.cc` files): the headers
+    // are `extern "C"`, and a bounded sequence has its `_maximum` set and can be assigned
+    let (dir, _) = headers();
+    let codel = r#"#include "probe_c_types.h"
+
+genom_event
+probe_check(const geo_vec *t, double gain, const genom_context self)
+{
+  sequence8_geo_vec trail;
+  sequence8_geo_vec copy;
+  trail._length = 1;
+  trail._buffer[0] = *t;
+  copy = trail;
+  return copy._maximum == 8 && copy._buffer[0].v[0] > gain ? probe_ether : genom_ok;
+}
+"#;
+    std::fs::write(dir.path().join("codel.cc"), codel).expect("writes");
+    let (ok, said) = compiler(
+        dir.path(),
+        "g++",
+        "-std=c++11",
+        &["-c", "codel.cc", "-o", "codel.o"],
+    );
+    assert!(ok, "a C++ codel does not compile:\n{said}");
 }
