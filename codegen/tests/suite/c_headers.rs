@@ -365,3 +365,39 @@ probe_check(const geo_vec *t, double gain, const genom_context self)
     );
     assert!(ok, "a C++ codel does not compile:\n{said}");
 }
+
+#[test]
+fn a_build_script_rewrites_the_headers_only_when_they_change() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let gen = dir.path().join("b.gen");
+    let out = dir.path().join("include");
+    let component = "component b {\n  ids { double x; };\n  task t { period 10 ms; codel<start> b_start(inout x) yield ether; };\n};\n";
+    std::fs::write(&gen, component).expect("writes");
+    let paths = bip_codegen::write_c_headers(&gen, &[], &out).expect("writes the headers");
+    let header = out.join("b_c_types.h");
+    assert!(paths.contains(&header) && paths.contains(&out.join("genom3/c/context.h")));
+    let modified = || {
+        std::fs::metadata(&header)
+            .and_then(|m| m.modified())
+            .expect("written")
+    };
+    let first = modified();
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    bip_codegen::write_c_headers(&gen, &[], &out).expect("writes the headers");
+    assert_eq!(
+        first,
+        modified(),
+        "an unchanged file leaves the header alone"
+    );
+    std::fs::write(&gen, component.replace("double x", "float x")).expect("writes");
+    bip_codegen::write_c_headers(&gen, &[], &out).expect("writes the headers");
+    let text = std::fs::read_to_string(&header).expect("reads");
+    assert!(
+        text.contains("b_start(float *x, const genom_context self);"),
+        "{text}"
+    );
+    // a file with an error: its summary, with its position
+    std::fs::write(&gen, "component b {\n  ids { double x; }\n};\n").expect("writes");
+    let err = bip_codegen::write_c_headers(&gen, &[], &out).expect_err("a bad file");
+    assert!(err.to_string().contains("b.gen:3:"), "{err}");
+}
