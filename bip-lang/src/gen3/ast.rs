@@ -142,6 +142,18 @@ pub struct Param {
     pub init: Option<Span>,
 }
 
+impl Param {
+    /// The name a codel gives it (`local in x`): an attribute's ids member by its last
+    /// member (`in speed.max` is `max`), as GenoM3 names it.
+    pub fn local_name(&self) -> &str {
+        self.name
+            .value
+            .rsplit('.')
+            .next()
+            .unwrap_or(&self.name.value)
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Service {
     pub name: Text,

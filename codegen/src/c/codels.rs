@@ -232,18 +232,25 @@ fn param(
         return Ok(Param::Data(CType::Named(ids.to_string())));
     };
     let id = comp.ids.iter().find(|m| &m.name.value == first);
-    let local = s.and_then(|s| {
-        s.params
-            .iter()
-            .find(|q| q.name.value == *first)
-            .and_then(|q| q.ty.clone())
-            .or_else(|| {
-                s.locals
-                    .iter()
-                    .find(|l| l.name.value == *first)
-                    .map(|l| l.ty.clone())
-            })
-    });
+    // a parameter or local: its IDL type, or an attribute's ids member path
+    let local = s.and_then(
+        |s| match s.params.iter().find(|q| q.local_name() == first) {
+            Some(q) => Some(match &q.ty {
+                Some(ty) => Ok(ty.clone()),
+                None => Err(q
+                    .name
+                    .value
+                    .split('.')
+                    .map(str::to_string)
+                    .collect::<Vec<_>>()),
+            }),
+            None => s
+                .locals
+                .iter()
+                .find(|l| &l.name.value == first)
+                .map(|l| Ok(l.ty.clone())),
+        },
+    );
     let port = comp.ports.iter().find(|q| &q.name.value == first);
     let source = p.source.unwrap_or(if id.is_some() {
         Source::Ids
@@ -255,16 +262,16 @@ fn param(
         Source::Remote
     });
     let mut t = match source {
-        Source::Ids => {
-            let m = id.ok_or_else(|| CodegenError::CMapping(format!("no ids member `{first}`")))?;
-            types.ctype(&m.ty, ids)?
-        }
-        Source::Local => {
-            let ty = local.ok_or_else(|| {
-                CodegenError::CMapping(format!("no typed parameter or local `{first}`"))
-            })?;
-            types.ctype(&ty, c)?
-        }
+        Source::Ids => ids_member(types, comp, ids, &p.path[..1])?,
+        Source::Local => match local {
+            Some(Ok(ty)) => types.ctype(&ty, c)?,
+            Some(Err(path)) => ids_member(types, comp, ids, &path)?,
+            None => {
+                return Err(CodegenError::CMapping(format!(
+                    "no parameter or local `{first}`"
+                )))
+            }
+        },
         Source::Port => {
             return match port {
                 Some(q) => Ok(Param::Port(cname(&format!("{c}::{}", q.name.value)))),
@@ -282,6 +289,27 @@ fn param(
             .ok_or_else(|| CodegenError::CMapping(format!("`{step}` is not a member here")))?;
     }
     Ok(Param::Data(t))
+}
+
+/// The type of the ids member at `path` (`["body", "wmin"]`).
+fn ids_member(
+    types: &CTypes,
+    comp: &Component,
+    ids: &str,
+    path: &[String],
+) -> Result<CType, CodegenError> {
+    let no = |what: &str| CodegenError::CMapping(format!("no ids member `{what}`"));
+    let first = path.first().ok_or_else(|| no(""))?;
+    let m = comp
+        .ids
+        .iter()
+        .find(|m| &m.name.value == first)
+        .ok_or_else(|| no(first))?;
+    let mut t = types.ctype(&m.ty, ids)?;
+    for step in &path[1..] {
+        t = member(types, &t, step).ok_or_else(|| no(&path.join(".")))?;
+    }
+    Ok(t)
 }
 
 /// The type of member `step` (`x`, or an index `[2]`) of `t`.

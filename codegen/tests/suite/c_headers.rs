@@ -204,6 +204,8 @@ fn the_mapping_follows_genom3s_table() {
         // the passing conventions: in by value, a struct by const pointer, out and inout
         // by pointer, an array as an array, ports as const handles, the context last
         "probe_check(const geo_vec *t, double gain, const genom_context self);",
+        // an attribute's ids member, named by its last member
+        "probe_check_limits(double lo, double hi, probe_ids_limits_s *limits, const genom_context self);",
         "probe_set_target(const geo_vec *t, geo_vec *target, double gains[4], const genom_context self);",
         "probe_track_start(const geo_label who, int32_t steps, double *best, const geo_label name, const geo_vec *target, const probe_world *world, const genom_context self);",
         "probe_track_run(probe_ids_limits_s *limits, geo_basics *all, const geo_mat rotation, double gains, const probe_frames *frames, const probe_sensors *sensors, int32_t *count, bool *armed, const genom_context self);",
