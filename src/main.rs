@@ -100,7 +100,8 @@ enum Command {
     /// Show a trace in the model's terms, as text and as a sequence chart (SVG).
     Trace(trace::Args),
     /// Write the Rust bindings of the model's GenoM layer (per codel an enum of its
-    /// outcomes, per module a trait of its codels; docs/codegen.md) to a file.
+    /// outcomes, per module a trait of its codels; docs/codegen.md) to a file, or with
+    /// `--c` the C headers a GenoM3 component's codels include.
     Codegen(codegen::Args),
     /// Explore the model's states in a web browser: fire steps, go back and forward,
     /// step through a counterexample (a local server on 127.0.0.1; Ctrl-C stops it).

@@ -167,6 +167,14 @@ pub fn import_gen_file(
     import_gen_files(&[path], include, &[])
 }
 
+/// A `.gen` file as read (its IDL types and codel functions, which the model leaves out),
+/// once checked as [`import_gen_file`] checks it: for tools such as bip-codegen's C
+/// headers.
+pub fn read_gen_file(path: &Path, include: &[std::path::PathBuf]) -> Result<gen3::Spec, LoadError> {
+    let (mut specs, _) = read_checked_gen_files(&[path], include, &[])?;
+    Ok(specs.remove(0))
+}
+
 /// `bip import` of several files: their components as modules, file after file, with the
 /// `connections` given as `(in port, out port)` names (`("flight.state", "pose.frame")`),
 /// checked as [`load_file`] checks a model.
@@ -175,6 +183,15 @@ pub fn import_gen_files(
     include: &[std::path::PathBuf],
     connections: &[(String, String)],
 ) -> Result<SystemDef, LoadError> {
+    read_checked_gen_files(paths, include, connections).map(|(_, def)| def)
+}
+
+/// The files as read, one spec each, and the model of their components.
+fn read_checked_gen_files(
+    paths: &[&Path],
+    include: &[std::path::PathBuf],
+    connections: &[(String, String)],
+) -> Result<(Vec<gen3::Spec>, SystemDef), LoadError> {
     let shown: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
     let shown_all = shown.join(", ");
     let empty = Arc::new(String::new());
@@ -198,5 +215,5 @@ pub fn import_gen_files(
         .collect();
     def.sources = files;
     compile(&def).map_err(|e| fail(e, &def.sources))?;
-    Ok(def)
+    Ok((specs.into_iter().map(|(spec, _)| spec).collect(), def))
 }

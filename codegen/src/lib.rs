@@ -14,7 +14,12 @@
 //! model's types), a trait with one method per codel, and a `bind` that gives an
 //! implementation of the trait to an `EngineBuilder` as one module object (a missing
 //! codel does not compile). The code depends on bip-engine alone.
+//!
+//! For a GenoM3 component whose codels are C, [`c`] writes the headers those codels
+//! include (GenoM3's C mapping of its types, its events, ports and codel prototypes):
+//! `bip_codegen::write_c_headers("loco.gen", &[], out_dir.join("include"))`.
 
+pub mod c;
 mod context;
 mod emit;
 mod names;
@@ -26,6 +31,8 @@ use std::path::{Path, PathBuf};
 
 use bip_model::System;
 
+pub use c::{c_headers, write_c_headers, write_c_headers_of};
+
 /// What keeps bindings from being generated.
 #[derive(Debug, thiserror::Error)]
 pub enum CodegenError {
@@ -33,7 +40,11 @@ pub enum CodegenError {
     Load(bip_lang::LoadError),
     #[error("the model has no GenoM layer: no codel to bind")]
     NoGenomLayer,
-    /// Two names of the model give the same Rust name in one scope.
+    /// A type or a codel parameter that GenoM3's C mapping (or bip's headers) does not
+    /// cover, with its place.
+    #[error("no C mapping: {0}")]
+    CMapping(String),
+    /// Two names of the model give the same Rust (or C) name in one scope.
     #[error("{first} and {second} both become `{rust}` in the bindings; rename one")]
     Clash {
         first: String,

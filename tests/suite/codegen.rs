@@ -55,3 +55,52 @@ fn codegen_says_why_it_cannot() {
         text(&o.stderr)
     );
 }
+
+#[test]
+fn codegen_writes_a_components_c_headers() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let out = dir.path().join("include");
+    let o = bip(&[
+        "codegen",
+        "robots/genom3/loco.gen",
+        "-I",
+        "robots/genom3/idl",
+        "--c",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    for file in ["loco_c_types.h", "acloco.h", "genom3/c/context.h"] {
+        assert!(out.join(file).is_file(), "{file} is not written");
+    }
+    // what a build script writes: the same text
+    let spec = bip_lang::read_gen_file(
+        std::path::Path::new("robots/genom3/loco.gen"),
+        &["robots/genom3/idl".into()],
+    )
+    .expect("reads");
+    let headers = bip_codegen::c_headers(&spec).expect("maps");
+    let (_, types) = headers
+        .iter()
+        .find(|(p, _)| p == "loco_c_types.h")
+        .expect("the component's header");
+    let written = std::fs::read_to_string(out.join("loco_c_types.h")).expect("written");
+    assert_eq!(&written, types);
+    assert!(
+        written.contains("loco_move_track(const rover_speed *ref, rover_speed *current, bool powered, const genom_context self);"),
+        "{written}"
+    );
+
+    // without its include folder, the `.gen` file's error, with its place
+    let o = bip(&[
+        "codegen",
+        "robots/genom3/loco.gen",
+        "--c",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o.stderr).contains("cannot find the included file `rover.idl`"),
+        "{}",
+        text(&o.stderr)
+    );
+}

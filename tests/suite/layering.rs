@@ -141,6 +141,8 @@ const CRATES: &[Layers] = &[
             ("types", &["types"]),
             ("parts", &["context", "requests", "signature"]),
             ("text", &["emit"]),
+            // the C headers of a GenoM3 component's codels, apart from the Rust bindings
+            ("c", &["c"]),
         ],
     },
     Layers {

@@ -22,8 +22,13 @@ pub struct TypeDecl {
     pub name: Text,
     /// `struct`, `union`, `enum`, `typedef`, `native`, `const`, `exception`.
     pub kind: &'static str,
-    /// The IDL type (`typedef`, `const`), or the members (`struct`, `exception`).
+    /// The IDL type (`typedef`, `const`), or the members (`struct`, `union`, `exception`).
     pub members: Vec<Member>,
+    /// A union's discriminator type (`switch (long)`): `None` for the other kinds.
+    pub switch: Option<String>,
+    /// A numeric constant's value, as C writes it (`200`, `0.5`): `None` for the other
+    /// kinds and for string and character constants.
+    pub value: Option<String>,
 }
 
 /// A member of a structure, an ids field, a local variable: a name and its IDL type.
@@ -135,6 +140,18 @@ pub struct Param {
     pub ty: Option<String>,
     /// Where its default value (and documentation) is written.
     pub init: Option<Span>,
+}
+
+impl Param {
+    /// The name a codel gives it (`local in x`): an attribute's ids member by its last
+    /// member (`in speed.max` is `max`), as GenoM3 names it.
+    pub fn local_name(&self) -> &str {
+        self.name
+            .value
+            .rsplit('.')
+            .next()
+            .unwrap_or(&self.name.value)
+    }
 }
 
 #[derive(Clone, Debug)]

@@ -110,6 +110,8 @@ impl Idl {
             name: full,
             kind,
             members,
+            switch: None,
+            value: None,
         });
     }
 
@@ -161,6 +163,13 @@ impl Idl {
                         ty,
                     }],
                 );
+                if let Some(d) = self.decls.last_mut() {
+                    d.value = value.and_then(|v| match v {
+                        Value::Int(i) => Some(i.to_string()),
+                        Value::Float(f) if f.is_finite() => Some(format!("{f:?}")),
+                        Value::Float(_) => None,
+                    });
+                }
             }
             "typedef" => {
                 c.next();
@@ -376,7 +385,7 @@ impl Idl {
     fn union_body(&mut self, c: &mut Cursor, name: &Text, depth: usize) -> Result<(), ModelError> {
         c.next();
         c.expect_punct("(")?;
-        self.type_spec(c, depth + 1)?;
+        let switch = self.type_spec(c, depth + 1)?;
         c.expect_punct(")")?;
         c.expect_punct("{")?;
         let mut members = Vec::new();
@@ -398,6 +407,9 @@ impl Idl {
         }
         c.expect_punct("}")?;
         self.declare(name, "union", members);
+        if let Some(d) = self.decls.last_mut() {
+            d.switch = Some(switch);
+        }
         Ok(())
     }
 }

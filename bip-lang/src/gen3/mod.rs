@@ -9,7 +9,7 @@
 //! `cursor` (reading tokens, and what was expected instead), `consts` (constant
 //! expressions), `idl` (types and IDL declarations), `component` (GenoM's declarations),
 //! `interfaces` (`provides`, `uses`, `extends`, and services refined), `ast` (what is
-//! read), `mapping` (to modules), `params` (codel parameters resolved), `types` (IDL types as data types), `entries` (the `Gen(...)` entries of a
+//! read), `mapping` (to modules), `params` (codel parameters resolved), `idl_type` (an IDL type's text as a tree), `types` (IDL types as data types), `entries` (the `Gen(...)` entries of a
 //! model's `modules`). Every error names the construct, with the file, line and column
 //! of its place in the `.gen` file.
 
@@ -19,6 +19,7 @@ mod consts;
 mod cursor;
 pub mod entries;
 mod idl;
+pub mod idl_type;
 mod interfaces;
 mod lexer;
 mod mapping;

@@ -37,7 +37,7 @@ fn locals(s: Option<&Service>) -> Vec<&str> {
     s.map_or(Vec::new(), |s| {
         s.params
             .iter()
-            .map(|p| p.name.as_str())
+            .map(|p| p.local_name())
             .chain(s.locals.iter().map(|l| l.name.as_str()))
             .collect()
     })

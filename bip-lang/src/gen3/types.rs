@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 
 use super::ast::{Component, Dir, Kind, Service, Spec, TypeDecl};
-use super::idl::{MANY_WORD_BASIC, ONE_WORD_BASIC};
+use super::idl_type::{parse, Idl};
 use crate::compile::check_name;
 use crate::diag::Errors;
 use crate::genom::syntax::{DataTypeDef, FieldDef};
@@ -19,69 +19,6 @@ const MAX_DEPTH: usize = 64;
 /// Bound on the parts of one record, its fields within fields counted: structures that
 /// hold others several times grow exponentially with their nesting.
 const MAX_PARTS: usize = 10_000;
-
-/// An IDL type as the parser keeps its text: `unsigned long`, `sequence<rover::pose, 16>`,
-/// `string<32>`, `struct inner_s`, `double[3][2]`.
-enum Idl<'t> {
-    /// A basic type: `boolean`, `unsigned long long`, `double`, `any`, ...
-    Basic(&'t str),
-    /// `string`, `string<N>`, `wstring`, `wstring<N>`.
-    Text,
-    Sequence(Box<Idl<'t>>),
-    Optional(Box<Idl<'t>>),
-    /// An array of the dimensions as written, outermost first.
-    Array(Box<Idl<'t>>, Vec<&'t str>),
-    /// A declared type, by its name as written (scoped or not).
-    Named(&'t str),
-}
-
-fn parse(text: &str) -> Idl<'_> {
-    let text = text.trim();
-    if text.ends_with(']') {
-        let mut base = text;
-        let mut dims = Vec::new();
-        while let Some(rest) = base.strip_suffix(']') {
-            let Some(open) = rest.rfind('[') else { break };
-            dims.push(rest[open + 1..].trim());
-            base = rest[..open].trim_end();
-        }
-        dims.reverse();
-        return Idl::Array(Box::new(parse(base)), dims);
-    }
-    if MANY_WORD_BASIC.contains(&text) || ONE_WORD_BASIC.contains(&text) {
-        return Idl::Basic(text);
-    }
-    let word = text.split(['<', ' ']).next().unwrap_or(text);
-    match word {
-        "string" | "wstring" => Idl::Text,
-        "sequence" | "optional" => {
-            let inner = text[word.len()..]
-                .trim()
-                .strip_prefix('<')
-                .and_then(|t| t.strip_suffix('>'))
-                .unwrap_or("");
-            // the bound, if any, follows the last comma outside angle brackets
-            let mut depth = 0usize;
-            let mut end = inner.len();
-            for (i, ch) in inner.char_indices() {
-                match ch {
-                    '<' => depth += 1,
-                    '>' => depth = depth.saturating_sub(1),
-                    ',' if depth == 0 => end = i,
-                    _ => {}
-                }
-            }
-            let element = Box::new(parse(&inner[..end]));
-            if word == "sequence" {
-                Idl::Sequence(element)
-            } else {
-                Idl::Optional(element)
-            }
-        }
-        "struct" | "union" | "enum" => Idl::Named(text[word.len()..].trim()),
-        _ => Idl::Named(text),
-    }
-}
 
 /// The IDL declarations of a file, by scoped name, to resolve the names types use.
 pub(super) struct Types<'s> {
@@ -203,7 +140,7 @@ impl<'s> Types<'s> {
                     _ => None,
                 }
             }
-            Idl::Text | Idl::Sequence(_) | Idl::Optional(_) | Idl::Array(..) => None,
+            Idl::Text(_) | Idl::Sequence(..) | Idl::Optional(_) | Idl::Array(..) => None,
         }
     }
 
@@ -227,8 +164,8 @@ impl<'s> Types<'s> {
                 other => other,
             }
             .to_string(),
-            Idl::Text => "String".to_string(),
-            Idl::Sequence(e) => format!("Vec<{}>", self.rust(e, scope)),
+            Idl::Text(_) => "String".to_string(),
+            Idl::Sequence(e, _) => format!("Vec<{}>", self.rust(e, scope)),
             Idl::Optional(e) => format!("Option<{}>", self.rust(e, scope)),
             Idl::Array(e, dims) => dims
                 .iter()

@@ -204,6 +204,29 @@ component c {
     );
 }
 
+/// An attribute's parameter that is an ids member (`in limits.lo`) is named by its last
+/// member in its codels (`local in lo`), as GenoM3 names it.
+#[test]
+fn an_attributes_ids_member_is_named_by_its_last_member() {
+    let m = module(
+        r#"
+component c {
+  ids { struct range { double lo, hi; } limits; };
+  attribute SetLimits(in limits.lo, in limits.hi) {
+    validate c_check(local in lo, local in hi, inout limits);
+  };
+};
+"#,
+    );
+    assert_eq!(m.services[0].name.as_str(), "SetLimits");
+    expect_error(
+        "component c {\n  ids { double x; };\n  attribute Set(in x) { validate c_check(local in y); };\n};\n",
+        "codel `c_check`: no parameter or local of the service is named `y`",
+        3,
+        51,
+    );
+}
+
 #[test]
 fn a_delay_is_the_first_release_offset_in_ticks() {
     let text = |delay: &str| {
