@@ -4,7 +4,9 @@
 //! against a naive interpreter of what the documentation says requests, interrupts,
 //! stop paths, periods and the declaration order do.
 
-use std::collections::{BTreeSet, HashSet, VecDeque};
+use std::collections::BTreeSet;
+
+use crate::support::graphs::reachable_graph;
 use std::path::Path;
 
 use bip_lang::{expand_file, load_file, load_str};
@@ -452,18 +454,7 @@ fn reference_successors(m: &Module, s: &RefState) -> Vec<(String, RefState)> {
 
 fn reference_graph(m: &Module) -> BTreeSet<(RefState, String, RefState)> {
     let first: RefState = (vec![IDLE; m.activities.len()], 0);
-    let mut seen = HashSet::from([first.clone()]);
-    let mut queue = VecDeque::from([first]);
-    let mut out = BTreeSet::new();
-    while let Some(s) = queue.pop_front() {
-        for (label, next) in reference_successors(m, &s) {
-            if seen.insert(next.clone()) {
-                queue.push_back(next.clone());
-            }
-            out.insert((s.clone(), label, next));
-        }
-    }
-    out
+    reachable_graph(first, |s| reference_successors(m, s), |s| s.clone())
 }
 
 /// The expanded system's reachable graph, in the interpreter's terms.
@@ -505,18 +496,14 @@ fn system_graph(m: &Module, sys: &System) -> BTreeSet<(RefState, String, RefStat
             .map_or(0, |v| sys.value(s, clock, v));
         (acts, phase)
     };
-    let mut seen = HashSet::from([sys.initial_state()]);
-    let mut queue = VecDeque::from([sys.initial_state()]);
-    let mut out = BTreeSet::new();
-    while let Some(s) = queue.pop_front() {
-        for (step, next) in sys.successors(&s).expect("no range error") {
-            out.insert((view(&s), sys.label_name(step.label), view(&next)));
-            if seen.insert(next.clone()) {
-                queue.push_back(next);
-            }
-        }
-    }
-    out
+    let steps = |s: &State| {
+        let successors = sys.successors(s).expect("no range error");
+        successors
+            .into_iter()
+            .map(|(step, next)| (sys.label_name(step.label), next))
+            .collect()
+    };
+    reachable_graph(sys.initial_state(), steps, view)
 }
 
 proptest! {
@@ -528,6 +515,7 @@ proptest! {
         let sys = load_str("interrupts.ron", &text)
             .unwrap_or_else(|e| panic!("{}\n{text}", e.summary()));
         let got = system_graph(&m, &sys);
+        prop_assert!(got.iter().any(|(_, label, _)| label == "tick"), "no tick: {}", text);
         let want = reference_graph(&m);
         let extra: Vec<_> = got.difference(&want).take(3).collect();
         let missing: Vec<_> = want.difference(&got).take(3).collect();
