@@ -73,6 +73,34 @@ pub fn parse(text: &str) -> Idl<'_> {
     }
 }
 
+/// The declaration `name` refers to from within `scope` (`a::b`), as IDL resolves it: in
+/// the scope, then in each enclosing one; `::a::b` is from the top. `lookup` finds a
+/// declaration by its full name; the answer is that full name and what `lookup` found.
+pub fn resolve_scoped<T>(
+    name: &str,
+    scope: &str,
+    lookup: impl Fn(&str) -> Option<T>,
+) -> Option<(String, T)> {
+    if let Some(absolute) = name.strip_prefix("::") {
+        return lookup(absolute).map(|d| (absolute.to_string(), d));
+    }
+    let mut scope = scope;
+    loop {
+        let full = if scope.is_empty() {
+            name.to_string()
+        } else {
+            format!("{scope}::{name}")
+        };
+        if let Some(d) = lookup(&full) {
+            return Some((full, d));
+        }
+        if scope.is_empty() {
+            return None;
+        }
+        scope = scope.rsplit_once("::").map_or("", |(outer, _)| outer);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 
 use super::ast::{Component, Dir, Kind, Service, Spec, TypeDecl};
-use super::idl_type::{parse, Idl};
+use super::idl_type::{parse, resolve_scoped, Idl};
 use crate::compile::check_name;
 use crate::diag::Errors;
 use crate::genom::syntax::{DataTypeDef, FieldDef};
@@ -40,24 +40,7 @@ impl<'s> Types<'s> {
     /// The declaration `name` refers to from within `scope` (`a::b`): IDL looks in the
     /// scope, then in each enclosing one; `::a::b` is from the top.
     fn resolve(&self, name: &str, scope: &str) -> Option<&'s TypeDecl> {
-        if let Some(absolute) = name.strip_prefix("::") {
-            return self.decls.get(absolute).copied();
-        }
-        let mut scope = scope;
-        loop {
-            let full = if scope.is_empty() {
-                name.to_string()
-            } else {
-                format!("{scope}::{name}")
-            };
-            if let Some(d) = self.decls.get(full.as_str()) {
-                return Some(d);
-            }
-            if scope.is_empty() {
-                return None;
-            }
-            scope = scope.rsplit_once("::").map_or("", |(outer, _)| outer);
-        }
+        resolve_scoped(name, scope, |full| self.decls.get(full).copied()).map(|(_, d)| d)
     }
 
     /// The data type of the IDL type `text` written in `scope`, or `None` for an anonymous

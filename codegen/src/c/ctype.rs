@@ -7,7 +7,7 @@
 use std::collections::HashMap;
 
 use bip_lang::gen3::ast::{Component, Spec, TypeDecl};
-use bip_lang::gen3::idl_type::{parse, Idl};
+use bip_lang::gen3::idl_type::{parse, resolve_scoped, Idl};
 
 use crate::CodegenError;
 
@@ -289,24 +289,10 @@ impl CTypes {
     /// The declaration `name` refers to from within `scope`: IDL looks in the scope, then
     /// in each enclosing one; `::a::b` is from the top.
     fn resolve(&self, name: &str, scope: &str) -> Option<String> {
-        if let Some(absolute) = name.strip_prefix("::") {
-            return self.decls.contains_key(absolute).then(|| absolute.into());
-        }
-        let mut scope = scope;
-        loop {
-            let full = if scope.is_empty() {
-                name.to_string()
-            } else {
-                format!("{scope}::{name}")
-            };
-            if self.decls.contains_key(&full) {
-                return Some(full);
-            }
-            if scope.is_empty() {
-                return None;
-            }
-            scope = scope.rsplit_once("::").map_or("", |(outer, _)| outer);
-        }
+        resolve_scoped(name, scope, |full| {
+            self.decls.contains_key(full).then_some(())
+        })
+        .map(|(full, ())| full)
     }
 
     /// The C type of the IDL type `text` written in `scope`.
