@@ -1,0 +1,24 @@
+//! Writes counter.gen's C headers into `OUT_DIR/include`, as a controller's build script
+//! would, and compiles the component's codels (codels/*.c) against them with the `cc`
+//! crate: a codel of another prototype than the `.gen` file gives is a compile error here.
+
+use std::path::PathBuf;
+
+fn main() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    let include = out.join("include");
+    if let Err(e) = bip_codegen::write_c_headers(dir.join("counter.gen"), &[], &include) {
+        panic!("C headers of counter.gen: {e}");
+    }
+    let codels = dir.join("codels/counter.c");
+    println!("cargo:rerun-if-changed={}", codels.display());
+    cc::Build::new()
+        .file(&codels)
+        .include(&include)
+        .std("c11")
+        .warnings(true)
+        .extra_warnings(true)
+        .warnings_into_errors(true)
+        .compile("counter_codels");
+}

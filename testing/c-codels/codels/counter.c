@@ -1,0 +1,68 @@
+/* The codels of counter.gen, as a GenoM3 component's codels are written: they include
+ * the headers bip codegen --c generates, nothing of bip's. What `step` returns is chosen
+ * by the tests (counter_test_outcome), so that each declared outcome and each undeclared
+ * one can be asked for. */
+#include <stddef.h>
+
+#include "accounter.h"
+#include "counter_c_types.h"
+
+/* What counter_count_step returns: 0 counts (pause::step until n, then ether), 1 throws
+ * its declared e_limit, 2 throws e_stray (which Count does not declare), 3 returns `step`
+ * (another codel's yield), 4 returns an event of no component, 5 returns genom_ok. */
+int counter_test_outcome = 0;
+
+static const char stray_event[] = "::counter::nowhere";
+
+genom_event
+counter_count_start(int32_t n, counter_ids *ids, const genom_context self)
+{
+  (void)self;
+  ids->count = 0;
+  ids->done = false;
+  ids->gain = 0.25;
+  return n > 0 ? counter_step : counter_ether;
+}
+
+genom_event
+counter_count_step(int32_t n, counter_ids *ids, const genom_context self)
+{
+  counter_e_limit_detail limit;
+  switch (counter_test_outcome) {
+    case 1:
+      limit.at = ids->count;
+      return counter_e_limit(&limit, self);
+    case 2: return counter_e_stray(self);
+    case 3: return counter_step;
+    case 4: return stray_event;
+    case 5: return genom_ok;
+    default: break;
+  }
+  ids->count++;
+  ids->gain *= 2;
+  if (ids->count < n) return counter_pause_step;
+  ids->done = true;
+  return counter_ether;
+}
+
+genom_event
+counter_idle_start(double gain, const genom_context self)
+{
+  (void)self;
+  return gain >= 0 ? counter_ether : counter_e_stray(self);
+}
+
+/* The ids' layout as gcc lays it out, for the tests to compare with the Rust mirror:
+ * 0 the size, 1 the alignment, 2.. each member's offset. */
+size_t
+counter_ids_layout(int what)
+{
+  switch (what) {
+    case 0: return sizeof(counter_ids);
+    case 1: return _Alignof(counter_ids);
+    case 2: return offsetof(counter_ids, count);
+    case 3: return offsetof(counter_ids, done);
+    case 4: return offsetof(counter_ids, gain);
+    default: return (size_t)-1;
+  }
+}
