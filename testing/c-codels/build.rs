@@ -13,12 +13,23 @@ fn main() {
     }
     let codels = dir.join("codels/counter.c");
     println!("cargo:rerun-if-changed={}", codels.display());
-    cc::Build::new()
+    let mut build = cc::Build::new();
+    build
         .file(&codels)
         .include(&include)
         .std("c11")
         .warnings(true)
         .extra_warnings(true)
-        .warnings_into_errors(true)
-        .compile("counter_codels");
+        .warnings_into_errors(true);
+    // BIP_C_SANITIZE=address: the codels under AddressSanitizer (.ci/run), its runtime
+    // linked into the tests; the Rust side is left as it is
+    println!("cargo:rerun-if-env-changed=BIP_C_SANITIZE");
+    if let Some(sanitizer) = std::env::var_os("BIP_C_SANITIZE") {
+        let sanitizer = sanitizer.to_string_lossy();
+        build
+            .flag(format!("-fsanitize={sanitizer}"))
+            .flag("-fno-omit-frame-pointer");
+        println!("cargo:rustc-link-lib=dylib=asan");
+    }
+    build.compile("counter_codels");
 }
