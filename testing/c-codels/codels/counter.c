@@ -8,7 +8,7 @@
 #include "counter_c_types.h"
 
 /* What counter_count_step returns: 0 counts (pause::step until n, then ether), 1 throws
- * its declared e_limit, 2 throws e_stray (which Count does not declare), 3 returns `step`
+ * its declared e_limit (the event `raised` gives back), 2 throws e_stray (which Count does not declare), 3 returns `step`
  * (another codel's yield), 4 returns an event of no component, 5 returns genom_ok. */
 int counter_test_outcome = 0;
 
@@ -28,10 +28,16 @@ genom_event
 counter_count_step(int32_t n, counter_ids *ids, const genom_context self)
 {
   counter_e_limit_detail limit;
+  const counter_e_limit_detail *kept;
+  genom_event raised = NULL;
   switch (counter_test_outcome) {
     case 1:
+      /* throws, then asks the context what it kept: the same event and detail, or the
+       * codel returns something undeclared */
       limit.at = ids->count;
-      return counter_e_limit(&limit, self);
+      if (counter_e_limit(&limit, self) != counter_e_limit_id) return stray_event;
+      kept = self->raised(&raised, self);
+      return kept && kept->at == limit.at ? raised : stray_event;
     case 2: return counter_e_stray(self);
     case 3: return counter_step;
     case 4: return stray_event;
