@@ -1,6 +1,7 @@
 //! Writes counter.gen's C headers into `OUT_DIR/include`, as a controller's build script
 //! would, and compiles the component's codels (codels/*.c) against them with the `cc`
 //! crate: a codel of another prototype than the `.gen` file gives is a compile error here.
+//! Writes the `#[repr(C)]` mirrors of counter.gen's and mirrors.gen's types.
 
 use std::path::PathBuf;
 
@@ -10,6 +11,24 @@ fn main() {
     let include = out.join("include");
     if let Err(e) = bip_codegen::write_c_headers(dir.join("counter.gen"), &[], &include) {
         panic!("C headers of counter.gen: {e}");
+    }
+    // the Rust mirrors of the components' C types
+    for (gen, file) in [
+        ("counter.gen", "counter_types.rs"),
+        ("mirrors.gen", "mirrors_types.rs"),
+    ] {
+        let spec = match bip_lang::read_gen_file(&dir.join(gen), &[]) {
+            Ok(spec) => spec,
+            Err(e) => panic!("{gen}: {e:?}"),
+        };
+        let text = match bip_codegen::c::rust_mirrors(&spec) {
+            Ok(text) => text,
+            Err(e) => panic!("Rust mirrors of {gen}: {e}"),
+        };
+        println!("cargo:rerun-if-changed={}", dir.join(gen).display());
+        if let Err(e) = std::fs::write(out.join(file), text) {
+            panic!("{file}: {e}");
+        }
     }
     let codels = dir.join("codels/counter.c");
     println!("cargo:rerun-if-changed={}", codels.display());

@@ -10,14 +10,9 @@ use bip_engine::{CodelSignature, Ctx, EngineBuilder, Next};
 
 use crate::runtime::{Context, ContextIface, Events, GenomEvent, Raised};
 
-/// `counter_ids`: the layout gcc gives the header's struct (checked by the tests).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct CounterIds {
-    pub count: i32,
-    pub done: bool,
-    pub gain: f64,
-}
+/// `counter_ids`, generated: the layout gcc gives the header's struct (checked by the
+/// tests).
+pub use crate::counter_types::counter::ids as CounterIds;
 
 // an event's size is its name's with its NUL; only its address is used
 extern "C" {

@@ -15,3 +15,65 @@ fn the_mirror_of_the_ids_has_gccs_layout() {
     assert_eq!(c(3), offset_of!(CounterIds, done));
     assert_eq!(c(4), offset_of!(CounterIds, gain));
 }
+
+/// Each generated mirror of mirrors.gen's types has the size, alignment and member
+/// offsets bip-codegen gives the C type (`CTypes::layout`, checked against gcc in
+/// codegen's tests), and the Rust path of its IDL name.
+#[test]
+fn every_kind_of_mirror_has_the_c_layout() {
+    use bip_c_codels::mirrors_types as m;
+    use bip_codegen::c::ctype::CType;
+
+    let gen = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/mirrors.gen"));
+    let spec = bip_lang::read_gen_file(gen, &[]).expect("reads");
+    let types = bip_codegen::c::c_types(&spec, &spec.components[0]).expect("C types");
+    let check = |key: &str, size: usize, align: usize, offsets: &[(&str, usize)]| {
+        let t = CType::Named(key.to_string());
+        let l = types.layout(&t).expect("a layout");
+        assert_eq!((l.size, l.align), (size as u64, align as u64), "{key}");
+        if !offsets.is_empty() {
+            let c: Vec<(String, u64)> = types.offsets(&t).expect("offsets");
+            let rust: Vec<(String, u64)> = offsets
+                .iter()
+                .map(|(n, o)| (n.to_string(), *o as u64))
+                .collect();
+            assert_eq!(c, rust, "{key}");
+        }
+    };
+    macro_rules! layout {
+        ($key:expr, $t:ty) => {
+            check($key, size_of::<$t>(), align_of::<$t>(), &[])
+        };
+        ($key:expr, $t:ty, $($f:ident),+) => {
+            check(
+                $key,
+                size_of::<$t>(),
+                align_of::<$t>(),
+                &[$((stringify!($f), offset_of!($t, $f))),+],
+            )
+        };
+    }
+    layout!("geo::point", m::geo::point, x, y);
+    layout!("geo::mode", m::geo::mode);
+    layout!("geo::path", m::geo::path);
+    layout!("geo::reading", m::geo::reading, _d, _u);
+    layout!("mirrors::e_far", m::mirrors::e_far_detail);
+    layout!(
+        "mirrors::ids",
+        m::mirrors::ids,
+        here,
+        mode,
+        route,
+        last,
+        label,
+        name,
+        marks,
+        counts,
+        maybe,
+        tag,
+        on,
+        big,
+        limits
+    );
+    layout!("mirrors::ids::limits_s", m::mirrors::ids_::limits_s, lo, hi);
+}
