@@ -52,6 +52,14 @@ counter_count_step(int32_t n, counter_ids *ids, const genom_context self)
 }
 
 genom_event
+counter_go(const place *to, place *at, const genom_context self)
+{
+  (void)self;
+  *at = *to;
+  return counter_ether;
+}
+
+genom_event
 counter_idle_start(double gain, const genom_context self)
 {
   (void)self;
@@ -69,6 +77,7 @@ counter_ids_layout(int what)
     case 2: return offsetof(counter_ids, count);
     case 3: return offsetof(counter_ids, done);
     case 4: return offsetof(counter_ids, gain);
+    case 5: return offsetof(counter_ids, at);
     default: return (size_t)-1;
   }
 }

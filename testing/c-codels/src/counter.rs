@@ -13,6 +13,8 @@ use crate::runtime::{Context, ContextIface, Events, GenomEvent, Raised};
 /// `counter_ids`, generated: the layout gcc gives the header's struct (checked by the
 /// tests).
 pub use crate::counter_types::counter::ids as CounterIds;
+/// `place`, generated: what `Go` takes, the engine's `Record(name: "place", ..)`.
+pub use crate::counter_types::place as Place;
 
 // an event's size is its name's with its NUL; only its address is used
 extern "C" {
@@ -24,6 +26,7 @@ extern "C" {
 
     fn counter_count_start(n: i32, ids: *mut CounterIds, this: *const ContextIface) -> GenomEvent;
     fn counter_count_step(n: i32, ids: *mut CounterIds, this: *const ContextIface) -> GenomEvent;
+    fn counter_go(to: *const Place, at: *mut Place, this: *const ContextIface) -> GenomEvent;
     fn counter_idle_start(gain: f64, this: *const ContextIface) -> GenomEvent;
 
     /// The tests' choice of what `counter_count_step` returns (codels/counter.c).
@@ -47,6 +50,12 @@ pub const CODELS: &[CodelSignature] = &[
         codel: "step",
         yields: &["pause::step", "ether"],
         throws: &["e_limit"],
+    },
+    CodelSignature {
+        service: "Go",
+        codel: "start",
+        yields: &["ether"],
+        throws: &[],
     },
     CodelSignature {
         service: "Idle",
@@ -110,7 +119,12 @@ pub fn bind(builder: EngineBuilder) -> (EngineBuilder, Counter) {
             match k {
                 0 => counter_count_start(n, &mut *ids, this),
                 1 => counter_count_step(n, &mut *ids, this),
-                2 => counter_idle_start(ids.gain, this),
+                2 => match ctx.args::<Place>() {
+                    Some(to) => counter_go(to, &mut ids.at, this),
+                    // a request always carries its place: the engine checked its type
+                    None => return Next::Declared(u16::MAX),
+                },
+                3 => counter_idle_start(ids.gain, this),
                 _ => return Next::Declared(u16::MAX),
             }
         };

@@ -14,6 +14,7 @@ fn the_mirror_of_the_ids_has_gccs_layout() {
     assert_eq!(c(2), offset_of!(CounterIds, count));
     assert_eq!(c(3), offset_of!(CounterIds, done));
     assert_eq!(c(4), offset_of!(CounterIds, gain));
+    assert_eq!(c(5), offset_of!(CounterIds, at));
 }
 
 /// Each generated mirror of mirrors.gen's types has the size, alignment and member

@@ -118,5 +118,28 @@ fn codels_numbered_otherwise_than_the_model_do_not_bind() {
             bip_engine::Next::ETHER
         });
     let err = builder.build().err().expect("refused").to_string();
-    assert!(err.contains("they have 2 codels, the model 3"), "{err}");
+    assert!(err.contains("they have 2 codels, the model 4"), "{err}");
+}
+
+#[test]
+fn a_record_argument_is_its_mirror_passed_by_pointer() {
+    use bip_c_codels::counter::Place;
+    let _guard = OUTCOME_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let system = system();
+    let (mut engine, counter) = engine(&system, 3);
+    // the engine checks the mirror by its name against `Record(name: "place", ..)`
+    let err = engine
+        .request("counter", "Go", 1.5f64)
+        .expect_err("refused");
+    assert!(err.to_string().contains("place"), "{err}");
+    let to = Place { x: 1.5, y: -2.0 };
+    let ticket = engine.request("counter", "Go", to).expect("a request");
+    engine.run_until(Until::Ticks(5)).expect("runs");
+    assert_eq!(done(&mut engine, ticket), Some(Outcome::Ether));
+    let at = counter.ids.lock().unwrap().at;
+    assert_eq!((at.x, at.y), (1.5, -2.0));
+    engine
+        .record()
+        .replay(&system)
+        .expect("a path of the model");
 }
