@@ -508,7 +508,7 @@ impl CTypes {
 
     /// The name GenoM3 gives an anonymous sequence or optional: its kind, its bound, then
     /// the names of what it holds (`sequence16_rover_pose`, `optional_sequence_double`).
-    fn template_name(&self, t: &CType) -> String {
+    pub(crate) fn template_name(&self, t: &CType) -> String {
         let mut out = String::new();
         let mut t = t;
         let mut first = true;

@@ -11,6 +11,7 @@
 mod codels;
 pub mod ctype;
 mod decls;
+mod mirror;
 mod runtime;
 
 use std::fmt::Write as _;
@@ -21,6 +22,7 @@ use bip_lang::gen3::ast::{Component, Spec};
 use crate::CodegenError;
 use ctype::CTypes;
 use decls::{declaration, Written};
+pub use mirror::rust_mirrors;
 
 /// The C declarations `component` of `spec` sees, its ids struct (`{c}::ids`) among them.
 pub fn c_types(spec: &Spec, component: &Component) -> Result<CTypes, CodegenError> {

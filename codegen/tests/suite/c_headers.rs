@@ -403,3 +403,13 @@ fn a_build_script_rewrites_the_headers_only_when_they_change() {
     let err = bip_codegen::write_c_headers(&gen, &[], &out).expect_err("a bad file");
     assert!(err.to_string().contains("b.gen:3:"), "{err}");
 }
+
+#[test]
+fn a_type_of_no_rust_mirror_is_an_error_naming_it() {
+    let spec = bip_lang::read_gen_file(&fixture(), &[]).expect("reads");
+    let err = bip_codegen::c::rust_mirrors(&spec)
+        .expect_err("`long double` has no Rust mirror")
+        .to_string();
+    assert!(err.contains("long double"), "{err}");
+    assert!(err.contains("`geo::basics`"), "{err}");
+}

@@ -1,0 +1,22 @@
+//! counter.gen's C codels on the engine: each outcome a codel returns, declared or not;
+//! the ids' layout on both sides; random outcomes whose recordings replay.
+
+mod layout;
+mod outcomes;
+mod property;
+
+use bip_c_codels::counter::{self, Counter};
+use bip_engine::{Engine, Policy, System};
+
+pub(crate) fn system() -> System {
+    bip_engine::load_file(concat!(env!("CARGO_MANIFEST_DIR"), "/counter.ron")).expect("loads")
+}
+
+/// An engine running counter's C codels, recording its steps.
+pub(crate) fn engine(system: &System, seed: u64) -> (Engine, Counter) {
+    let builder = Engine::builder(system.clone())
+        .policy(Policy::Seeded(seed))
+        .record(4096);
+    let (builder, counter) = counter::bind(builder);
+    (builder.build().expect("builds"), counter)
+}
