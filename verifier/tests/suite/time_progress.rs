@@ -5,13 +5,15 @@
 //! the tick, and a `Time` connector that never fires.
 
 use bip_lang::load_str;
-use bip_model::{State, System, Verdict};
+use std::collections::{HashSet, VecDeque};
+
+use bip_model::{Role, State, System, Verdict};
 use bip_verifier::{
     verify, CheckKind, Method, Options, PropertyResult, PropertyVerdict, Report, TIME_PROGRESS,
 };
 use proptest::prelude::*;
 
-use super::response::{explore, timelocked};
+use super::response::{explore, timelocked, Naive};
 
 fn run(sys: &System, method: Method, jobs: usize) -> Report {
     verify(
@@ -235,8 +237,11 @@ fn the_symbolic_method_proves_time_progress_or_says_it_cannot() {
 }
 
 /// The explicit verdict against the naive search (and `System::time_can_pass` too): it
-/// fails iff some reachable state is timelocked; its trace replays, reaches a timelocked state in as few steps as any, and
-/// stays in timelocked states, on a cycle that comes back or to a state with no step.
+/// fails iff some reachable state is timelocked or lies on a busy loop. For a timelock,
+/// its trace replays, reaches a timelocked state in as few steps as any, and stays in
+/// timelocked states, on a cycle that comes back or to a state with no step; for a busy
+/// loop (reported where no state is timelocked), its lasso replays, enters the loop in as
+/// few steps as any, and comes back through states on busy loops only.
 fn check_against_naive(sys: &System, report: &Report) -> Result<(), String> {
     let Some(p) = report.property(TIME_PROGRESS) else {
         return if sys.has_time() {
@@ -268,8 +273,32 @@ fn check_against_naive(sys: &System, report: &Report) -> Result<(), String> {
         .filter(|&s| locked[s])
         .map(|s| depth[s])
         .min();
+    let on_busy_loop = busy_loops(sys, &g);
+    let nearest_loop = (0..g.states.len())
+        .filter(|&s| on_busy_loop[s])
+        .map(|s| depth[s])
+        .min();
     match (&p.verdict, nearest) {
-        (PropertyVerdict::Holds { .. }, None) => Ok(()),
+        (PropertyVerdict::Holds { .. }, None) if nearest_loop.is_none() => Ok(()),
+        (PropertyVerdict::Fails { trace: Some(t), .. }, None) if nearest_loop.is_some() => {
+            let path = t.replay(sys).map_err(|e| e.to_string())?;
+            let states: Vec<State> = std::iter::once(sys.initial_state())
+                .chain(path.iter().map(|(_, s)| s.clone()))
+                .collect();
+            let k = t.loop_start.ok_or("a busy loop without a cycle")?;
+            if Some(k) != nearest_loop {
+                return Err(format!(
+                    "the busy loop after {k} steps, not {nearest_loop:?}"
+                ));
+            }
+            if states[k] != states[states.len() - 1] {
+                return Err("the busy loop does not return".into());
+            }
+            if !states[k..].iter().all(|s| on_busy_loop[index(s)]) {
+                return Err("the busy loop passes a state that lets time pass".into());
+            }
+            Ok(())
+        }
         (PropertyVerdict::Fails { trace: Some(t), .. }, Some(d)) => {
             let path = t.replay(sys).map_err(|e| e.to_string())?;
             let states: Vec<State> = std::iter::once(sys.initial_state())
@@ -296,9 +325,50 @@ fn check_against_naive(sys: &System, report: &Report) -> Result<(), String> {
             }
         }
         (v, n) => Err(format!(
-            "the verifier says {v:?}, the naive search finds a timelock at depth {n:?}"
+            "the verifier says {v:?}, the naive search finds a timelock at depth {n:?} and \
+             a busy loop at depth {nearest_loop:?}"
         )),
     }
+}
+
+/// Per state of `g`: it lies on a busy loop, a cycle of states with no tick among their
+/// steps and not in range error, by steps of the model's own (no `Environment` step),
+/// found by a search from each such state back to itself.
+fn busy_loops(sys: &System, g: &Naive) -> Vec<bool> {
+    if !sys.has_time() {
+        return vec![false; g.states.len()];
+    }
+    let held = |s: usize| {
+        !g.error[s]
+            && g.edges[s]
+                .iter()
+                .all(|(step, _)| sys.role(step.label) != Role::Time)
+    };
+    let follow = |s: usize| {
+        g.edges[s]
+            .iter()
+            .filter(|(step, t)| sys.role(step.label) != Role::Environment && held(*t))
+            .map(|(_, t)| *t)
+            .collect::<Vec<_>>()
+    };
+    (0..g.states.len())
+        .map(|s| {
+            if !held(s) {
+                return false;
+            }
+            let mut seen = HashSet::new();
+            let mut queue: VecDeque<usize> = follow(s).into();
+            while let Some(u) = queue.pop_front() {
+                if u == s {
+                    return true;
+                }
+                if seen.insert(u) {
+                    queue.extend(follow(u));
+                }
+            }
+            false
+        })
+        .collect()
 }
 
 proptest! {
