@@ -91,73 +91,62 @@ impl<'a, 'd> Builder<'a, 'd> {
                 }
             }
         }
-        // interrupts by other services' requests: always enabled, so that a target never
-        // holds back the request that interrupts it
-        let stop_or_end = |t: &mut Vec<TransitionDef>, port: &str, l: &str| {
-            if has_stop {
-                t.push(tr(
-                    l,
-                    port,
-                    "stop",
-                    Some(not(name(STOPPING))),
-                    unpause(aperiodic, vec![set(STOPPING, true), set(REQ, false)]),
-                ));
-            } else {
-                t.push(tr(
-                    l,
-                    port,
-                    ETHER,
-                    None,
-                    vec![set(REQ, false), set(PAUSED, false)],
-                ));
-            }
-        };
-        if self.interrupted_by_others(r) {
-            ports.push(text("interrupt"));
+        // an interrupt or an abort: at `ether` it cancels the pending request; while the
+        // activity runs, it takes the stop path (or ends); on the stop path it drops a
+        // queued restart. With `requested`, it is enabled only where it has a request to
+        // drop or a run to end.
+        let ending = |t: &mut Vec<TransitionDef>, port: &str, requested: bool| {
+            let at_ether = requested.then(|| name(REQ));
             t.push(tr(
                 ETHER,
-                "interrupt",
+                port,
                 ETHER,
-                None,
+                at_ether,
                 vec![set(REQ, false), set(PAUSED, false)],
             ));
             for l in &locs {
-                stop_or_end(&mut t, "interrupt", l);
                 if has_stop {
                     t.push(tr(
                         l,
-                        "interrupt",
+                        port,
+                        "stop",
+                        Some(not(name(STOPPING))),
+                        unpause(aperiodic, vec![set(STOPPING, true), set(REQ, false)]),
+                    ));
+                    let stopping = match requested {
+                        true => and(name(STOPPING), name(REQ)),
+                        false => name(STOPPING),
+                    };
+                    t.push(tr(
                         l,
-                        Some(name(STOPPING)),
+                        port,
+                        l,
+                        Some(stopping),
                         unpause(aperiodic, vec![set(REQ, false)]),
+                    ));
+                } else {
+                    t.push(tr(
+                        l,
+                        port,
+                        ETHER,
+                        None,
+                        vec![set(REQ, false), set(PAUSED, false)],
                     ));
                 }
             }
+        };
+        // interrupts by other services' requests: always enabled, so that a target never
+        // holds back the request that interrupts it
+        if self.interrupted_by_others(r) {
+            ports.push(text("interrupt"));
+            ending(&mut t, "interrupt", false);
         }
         // abort, for components of the model (a supervisor, a safety rule): enabled only
         // when there is something to abort, so that it never fires for nothing; nothing
         // aborts a task's machine
         if !machine {
             ports.push(text("abort"));
-            t.push(tr(
-                ETHER,
-                "abort",
-                ETHER,
-                Some(name(REQ)),
-                vec![set(REQ, false), set(PAUSED, false)],
-            ));
-            for l in &locs {
-                stop_or_end(&mut t, "abort", l);
-                if has_stop {
-                    t.push(tr(
-                        l,
-                        "abort",
-                        l,
-                        Some(and(name(STOPPING), name(REQ))),
-                        unpause(aperiodic, vec![set(REQ, false)]),
-                    ));
-                }
-            }
+            ending(&mut t, "abort", true);
         }
         // time: the tick connector's action clears `paused` at the task's period
         ports.push(text("tick"));
