@@ -46,3 +46,28 @@ fn the_reachable_graph_has_every_reachable_step_once() {
     let want = BTreeSet::from([(0, 'a', 1), (1, 'b', 0), (0, 'c', 0), (0, 'd', 1)]);
     assert_eq!(graph, want);
 }
+
+/// The expanded system's graph `got` against the reference's `want`, for the model `text`:
+/// equal, and not vacuously (time passes in it, by a step labelled `tick`); on a
+/// difference, the first few steps each has that the other has not.
+pub fn same_graph<V: Ord + std::fmt::Debug>(
+    got: &BTreeSet<(V, String, V)>,
+    want: &BTreeSet<(V, String, V)>,
+    text: &str,
+) -> Result<(), proptest::test_runner::TestCaseError> {
+    proptest::prop_assert!(
+        got.iter().any(|(_, label, _)| label == "tick"),
+        "no tick: {}",
+        text
+    );
+    let extra: Vec<_> = got.difference(want).take(3).collect();
+    let missing: Vec<_> = want.difference(got).take(3).collect();
+    proptest::prop_assert!(
+        extra.is_empty() && missing.is_empty(),
+        "steps the reference does not take: {:?}\nsteps the system lacks: {:?}\n{}",
+        extra,
+        missing,
+        text
+    );
+    Ok(())
+}
