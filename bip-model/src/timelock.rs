@@ -176,6 +176,19 @@ impl System {
 pub const MAX_TIME_SEARCH: usize = 1_000_000;
 
 impl System {
+    /// Whether a step of a `Time` connector fires from `state` itself, as the verifier's
+    /// state graph has it: a tick in range error has no successor, so it lets no time
+    /// pass (the run that takes it ends in the error, which `RangeErrors` reports).
+    pub fn ticks_from(&self, state: &State) -> Result<bool, RangeError> {
+        let mut steps = Steps::new();
+        self.enabled_steps(state, &mut steps)?;
+        let mut next = state.clone();
+        let ticks = steps
+            .iter()
+            .any(|s| self.role(s.label) == Role::Time && self.fire(state, s, &mut next).is_ok());
+        Ok(ticks)
+    }
+
     /// Whether some run from `state` fires a step of a `Time` connector: a breadth-first
     /// search through every step, of at most [`MAX_TIME_SEARCH`] states, as the verifier's
     /// state graph has them (a step in range error has no successor; a state whose steps
