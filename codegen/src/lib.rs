@@ -105,7 +105,7 @@ pub fn write_bindings_of(system: &System, out: impl AsRef<Path>) -> Result<(), C
 
 /// `text` as rustfmt formats it, if rustfmt is installed (`$RUSTFMT`, else `rustfmt` on the
 /// path) and formats it; the bindings compile as well unformatted.
-fn rustfmt(text: &str) -> Option<String> {
+pub(crate) fn rustfmt(text: &str) -> Option<String> {
     use std::io::Write as _;
     use std::process::{Command, Stdio};
     let tool = std::env::var_os("RUSTFMT").unwrap_or_else(|| "rustfmt".into());

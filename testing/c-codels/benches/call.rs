@@ -7,7 +7,7 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use bip_c_codels::counter::{self, CounterIds, CODELS};
+use bip_c_codels::counter::{self, ids as CounterIds, CODELS};
 use bip_engine::{Engine, EngineBuilder, Next, System, Until};
 
 const STEPS: u64 = 1_000_000;
@@ -58,7 +58,7 @@ fn run(system: &System, bind: &dyn Fn(EngineBuilder) -> EngineBuilder) -> Durati
 fn main() {
     let system = system();
     for round in 0..3 {
-        let c = run(&system, &|b| counter::bind(b).0);
+        let c = run(&system, &|b| counter::bind(b));
         let r = run(&system, &rust);
         println!(
             "round {round}: C codels {:.1} ns per step, Rust codels {:.1} ns per step",
