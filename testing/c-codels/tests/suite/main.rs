@@ -2,6 +2,7 @@
 //! the ids' layout on both sides; random outcomes whose recordings replay.
 
 mod layout;
+mod missing;
 mod outcomes;
 mod property;
 
