@@ -19,7 +19,7 @@ use super::ctype::{cname, Body, CTypes};
 use super::glue_args::{
     arg, holds_pointer, port_field, port_handle, port_handle_type, service_field, Conv,
 };
-use super::mirror::{zeroed, Mirrors};
+use super::mirror::{defaulted, maxima, Mirrors};
 use crate::names::ident;
 use crate::CodegenError;
 
@@ -227,7 +227,9 @@ fn component_glue(
     );
 
     // the memory of the C layout: ids, services' parameters and locals, ports' data
-    let mut state = format!("/// What the component's codels share with the engine, in the C layout: its ids, each\n/// service's parameters and locals, each port's data.\n#[derive(Clone, Copy)]\npub struct State {{\n    pub ids: {},\n", m.rust(types, &super::ctype::CType::Named(ids.clone()), 1)?);
+    let ids_type = super::ctype::CType::Named(ids.clone());
+    let mut state = format!("/// What the component's codels share with the engine, in the C layout: its ids, each\n/// service's parameters and locals, each port's data.\n#[derive(Clone, Copy)]\npub struct State {{\n    pub ids: {},\n", m.rust(types, &ids_type, 1)?);
+    let mut set = maxima(types, &ids_type, "v.ids", 0);
     let mut extra = String::new();
     let mut starts = Vec::new();
     let mut outputs = Vec::new();
@@ -236,6 +238,11 @@ fn component_glue(
             continue;
         };
         let _ = writeln!(state, "    pub {}: {data},", service_field(&s.name.value));
+        let _ = writeln!(
+            set,
+            "v.{} = {data}::default();",
+            service_field(&s.name.value)
+        );
         starts.push((s.name.value.clone(), format!("args_{}", s.name.value)));
         if s.params.iter().any(|p| p.dir != Dir::In && p.ty.is_some()) {
             outputs.push((s.name.value.clone(), format!("output_{}", s.name.value)));
@@ -259,6 +266,7 @@ fn component_glue(
         }
         let rust = m.rust(types, &t, 1)?;
         let _ = writeln!(state, "    pub {}: {rust},", port_field(name));
+        set.push_str(&maxima(types, &t, &format!("v.{}", port_field(name)), 0));
         let ty = module
             .ports
             .iter()
@@ -268,7 +276,7 @@ fn component_glue(
         port_glue(&mut extra, m, types, c, name, p.dir, &t, Conv::of(ty))?;
     }
     state.push_str("}\n");
-    state.push_str(&zeroed("State"));
+    state.push_str(&defaulted("State", &set));
     out.push_str(&state);
     out.push_str(&extra);
 
@@ -412,7 +420,12 @@ fn service_data(
         let _ = writeln!(out, "    pub {n}: {t},");
     }
     out.push_str("}\n");
-    out.push_str(&zeroed(&data));
+    let set: String = fields
+        .iter()
+        .zip(&rust)
+        .map(|((_, _, t), (n, _))| maxima(types, t, &format!("v.{n}"), 0))
+        .collect();
+    out.push_str(&defaulted(&data, &set));
     let locals = s.locals.len();
     let params = &fields[..fields.len() - locals];
     let ins: Vec<usize> = (0..params.len())
@@ -430,11 +443,11 @@ fn service_data(
                    chosen: &[usize],
                    def: Option<&DataTypeDef>,
                    out: &mut String|
-     -> Result<Option<(Conv, String)>, CodegenError> {
+     -> Result<Option<(Conv, String, bool)>, CodegenError> {
         match (chosen, def) {
             ([], _) | (_, None) => Ok(None),
             ([k], Some(d)) if !matches!(d, DataTypeDef::Rust(_)) => {
-                Ok(Some((Conv::of(Some(d)), rust[*k].1.clone())))
+                Ok(Some((Conv::of(Some(d)), rust[*k].1.clone(), false)))
             }
             (many, _) => {
                 let t = format!("{name}_{what}");
@@ -446,15 +459,20 @@ fn service_data(
                     let _ = writeln!(out, "    pub {}: {},", rust[k].0, rust[k].1);
                 }
                 out.push_str("}\n");
-                out.push_str(&zeroed(&t));
-                Ok(Some((Conv::Mirror, t)))
+                let set: String = many
+                    .iter()
+                    .map(|&k| maxima(types, &fields[k].2, &format!("v.{}", rust[k].0), 0))
+                    .collect();
+                out.push_str(&defaulted(&t, &set));
+                Ok(Some((Conv::Mirror, t, true)))
             }
         }
     };
     let mut body = String::new();
     match payload("input", &ins, def.args.as_ref(), &mut body)? {
         None => {}
-        Some((conv, t)) if ins.len() == 1 => {
+        // one parameter, of the model's type
+        Some((conv, t, false)) => {
             let f = &rust[ins[0]];
             let _ = writeln!(
                 out,
@@ -464,7 +482,8 @@ fn service_data(
                 conv.to_c("*v", &f.1)
             );
         }
-        Some((_, t)) => {
+        // the glue's struct of them
+        Some((_, t, true)) => {
             let _ = writeln!(
                 out,
                 "    let Some(v) = ctx.args::<{t}>() else {{\n        return false;\n    }};"
@@ -473,6 +492,10 @@ fn service_data(
                 let _ = writeln!(out, "    d.{0} = v.{0};", rust[k].0);
             }
         }
+    }
+    // a bounded sequence's bound is the type's, whatever the request's copy says
+    for &k in &ins {
+        out.push_str(&maxima(types, &fields[k].2, &format!("d.{}", rust[k].0), 0));
     }
     out.push_str("    true\n}\n");
     // the output, after each codel
@@ -483,14 +506,14 @@ fn service_data(
         );
         match payload("output", &outs, def.output.as_ref(), &mut body)? {
             None => {}
-            Some((conv, _)) if outs.len() == 1 => {
+            Some((conv, _, false)) => {
                 let _ = writeln!(
                     out,
                     "    ctx.set_output({});",
                     conv.to_engine(&format!("d.{}", rust[outs[0]].0))
                 );
             }
-            Some((_, t)) => {
+            Some((_, t, true)) => {
                 let fs: Vec<String> = outs
                     .iter()
                     .map(|&k| format!("{0}: d.{0}", rust[k].0))

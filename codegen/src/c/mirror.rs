@@ -156,7 +156,11 @@ impl Mirrors {
             let _ = writeln!(s, "    pub {}: {t},", ident(m));
         }
         s.push_str("}\n");
-        s.push_str(&zeroed(name));
+        let set: String = members
+            .iter()
+            .map(|(m, t)| maxima(types, t, &format!("v.{}", ident(m)), 0))
+            .collect();
+        s.push_str(&defaulted(name, &set));
         Ok(s)
     }
 
@@ -215,8 +219,47 @@ impl Mirrors {
         };
         Ok(format!(
             "#[allow(non_camel_case_types)]\n#[repr(C)]\n#[derive(Clone, Copy)]\npub struct {name} {{\n{body}}}\n{}",
-            zeroed(name)
+            defaulted(name, &maxima(types, t, "v", 0))
         ))
+    }
+}
+
+/// `Default` for `name`: all zero, then `set` (statements on `v`, the value), which gives
+/// the bounded sequences within it their bound ([`maxima`]).
+pub(super) fn defaulted(name: &str, set: &str) -> String {
+    if set.is_empty() {
+        return zeroed(name);
+    }
+    format!("impl Default for {name} {{\n    fn default() -> Self {{\n        {ZEROED}\n        let mut v: Self = unsafe {{ core::mem::zeroed() }};\n{set}        v\n    }}\n}}\n")
+}
+
+/// Statements that give every bounded sequence within `place` (of type `t`) its bound as
+/// `_maximum`, which GenoM3 sets and C codels read (it is `const` there); none if `t`
+/// holds no bounded sequence. The union's members are left: which one is live is the
+/// data's.
+pub(super) fn maxima(types: &CTypes, t: &CType, place: &str, depth: usize) -> String {
+    let each = |e: &CType, items: String| {
+        let inner = maxima(types, e, &format!("x{depth}"), depth + 1);
+        if inner.is_empty() {
+            String::new()
+        } else {
+            format!("for x{depth} in {items}.iter_mut() {{\n{inner}}}\n")
+        }
+    };
+    match types.fin(t) {
+        CType::Sequence(e, Some(n)) => {
+            format!("{place}._maximum = {n};\n") + &each(e, format!("{place}._buffer"))
+        }
+        CType::Array(e, _) => each(e, place.to_string()),
+        CType::Optional(e) => maxima(types, e, &format!("{place}._value"), depth),
+        CType::Named(k) => match types.decl(k).map(|d| &d.body) {
+            Some(Body::Struct(ms)) | Some(Body::Exception(ms)) => ms
+                .iter()
+                .map(|(m, t)| maxima(types, t, &format!("{place}.{}", ident(m)), depth))
+                .collect(),
+            _ => String::new(),
+        },
+        _ => String::new(),
     }
 }
 

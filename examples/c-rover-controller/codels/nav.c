@@ -10,6 +10,8 @@ genom_event
 nav_goto_plan(const rover_pose *goal, rover_path *route, const genom_context self)
 {
   genom_event own = nav_pause_move;
+  /* a bounded sequence comes with its bound, as GenoM3 gives it */
+  if (route->_maximum != 16) return genom_fatal;
   if (rover_sim_blocked(goal->x, goal->y)) {
     own = nav_e_blocked(self);
   } else {
@@ -29,7 +31,8 @@ nav_goto_move(const rover_path *route, double tolerance, rover_path *plan,
   (void)self;
   /* a bounded sequence's _maximum is const: its elements are copied */
   plan->_length = route->_length;
-  for (k = 0; k < route->_length && k < 16; k++) plan->_buffer[k] = route->_buffer[k];
+  for (k = 0; k < route->_length && k < plan->_maximum; k++)
+    plan->_buffer[k] = route->_buffer[k];
   if (plan->_length == 0) {
     own = nav_ether;
   } else {

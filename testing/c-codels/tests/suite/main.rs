@@ -1,10 +1,12 @@
 //! counter.gen's C codels on the engine: each outcome a codel returns, declared or not;
 //! the ids' layout on both sides; random outcomes whose recordings replay.
 
+mod compiles;
 mod layout;
 mod missing;
 mod outcomes;
 mod property;
+mod tools;
 
 use std::sync::{Arc, Mutex};
 

@@ -3,31 +3,10 @@
 //! binds counter through the generated glue, built with rustc against this crate's own
 //! dependencies, fails to link with the linker's message naming the codel.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-/// The newest `lib{name}-*.rlib` in `deps`.
-fn rlib(deps: &Path, name: &str) -> PathBuf {
-    let prefix = format!("lib{name}-");
-    std::fs::read_dir(deps)
-        .expect("the deps folder")
-        .filter_map(Result::ok)
-        .map(|e| e.path())
-        .filter(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.starts_with(&prefix) && n.ends_with(".rlib"))
-        })
-        .max_by_key(|p| p.metadata().and_then(|m| m.modified()).ok())
-        .unwrap_or_else(|| panic!("no {prefix}*.rlib in {}", deps.display()))
-}
-
-fn run(cmd: &mut Command) -> (bool, String) {
-    let out = cmd.output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
-    let said =
-        String::from_utf8_lossy(&out.stderr).into_owned() + &String::from_utf8_lossy(&out.stdout);
-    (out.status.success(), said)
-}
+use crate::tools::{run, rustc};
 
 /// Compiles counter.c (with `defines`) into a static library and links a program that
 /// binds counter through the generated glue against it: whether it linked, and what the
@@ -55,22 +34,10 @@ fn link(tmp: &Path, defines: &[&str]) -> (bool, String) {
         out.join("counter_c.rs")
     );
     std::fs::write(tmp.join("main.rs"), main).expect("writes");
-    let exe = std::env::current_exe().expect("the test's path");
-    let deps = exe.parent().expect("its folder");
-    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
-    run(Command::new(rustc)
-        .args(["--edition", "2021", "--crate-type", "bin", "-o"])
+    run(rustc()
+        .args(["--crate-type", "bin", "-o"])
         .arg(tmp.join("main"))
         .arg(tmp.join("main.rs"))
-        .arg("--extern")
-        .arg(format!("bip_engine={}", rlib(deps, "bip_engine").display()))
-        .arg("--extern")
-        .arg(format!(
-            "bip_genom_c={}",
-            rlib(deps, "bip_genom_c").display()
-        ))
-        .arg("-L")
-        .arg(format!("dependency={}", deps.display()))
         .arg("-L")
         .arg(format!("native={}", tmp.display()))
         .args(["-l", "static=codels"]))
