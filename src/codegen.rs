@@ -42,7 +42,7 @@ pub fn run(args: &Args) -> u8 {
             include: dir.clone(),
             rust: dir.join(format!("{stem}_c.rs")),
         };
-        bip_codegen::c::write_c_bindings_of(&spec, &to)
+        bip_codegen::c::write_c_bindings_of(&[&spec], &to)
     } else {
         let Some(system) = load::system(&args.file) else {
             return exit::ERROR;

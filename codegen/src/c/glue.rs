@@ -27,19 +27,28 @@ use crate::CodegenError;
 /// as the text of Rust items for a module of their own (`mod counter_c { include!(..) }`).
 /// The code depends on bip-engine and bip-genom-c.
 pub fn rust_glue(spec: &Spec) -> Result<String, CodegenError> {
-    let mut m = Mirrors::of(spec)?;
-    let modules = bip_lang::gen3::modules(spec, 1).map_err(|errors| {
-        let words: Vec<String> = errors.iter().map(|e| e.message.clone()).collect();
-        CodegenError::CMapping(words.join("; "))
-    })?;
-    for (comp, module) in spec.components.iter().zip(&modules) {
-        let types = super::c_types(spec, comp)?;
-        let text = component_glue(&mut m, &types, comp, module)
-            .map_err(|e| within(e, &format!("component `{}`", comp.name.value)))?;
-        m.items
-            .entry(vec![comp.name.value.clone()])
-            .or_default()
-            .push(text);
+    rust_glue_of(&[spec])
+}
+
+/// As [`rust_glue`] for the files of one layer, in one text: their types' mirrors once,
+/// shared by every component (the data one component's codels write on a port is the
+/// type another's read).
+pub fn rust_glue_of(specs: &[&Spec]) -> Result<String, CodegenError> {
+    let mut m = Mirrors::of(specs)?;
+    for spec in specs {
+        let modules = bip_lang::gen3::modules(spec, 1).map_err(|errors| {
+            let words: Vec<String> = errors.iter().map(|e| e.message.clone()).collect();
+            CodegenError::CMapping(words.join("; "))
+        })?;
+        for (comp, module) in spec.components.iter().zip(&modules) {
+            let types = super::c_types(spec, comp)?;
+            let text = component_glue(&mut m, &types, comp, module)
+                .map_err(|e| within(e, &format!("component `{}`", comp.name.value)))?;
+            m.items
+                .entry(vec![comp.name.value.clone()])
+                .or_default()
+                .push(text);
+        }
     }
     Ok(m.text())
 }

@@ -17,7 +17,7 @@ use crate::CodegenError;
 /// The mirrors of the types of `spec`'s components, as the text of Rust items (for a
 /// module of their own: `mod counter_c { include!(..) }`).
 pub fn rust_mirrors(spec: &Spec) -> Result<String, CodegenError> {
-    Ok(Mirrors::of(spec)?.text())
+    Ok(Mirrors::of(&[spec])?.text())
 }
 
 #[derive(Default)]
@@ -81,10 +81,15 @@ const ZEROED: &str =
     "// every field of a C mirror is valid all zero (numbers, bool, pointers, Option<fn>)";
 
 impl Mirrors {
-    /// The mirrors of every type of `spec`'s components.
-    pub(super) fn of(spec: &Spec) -> Result<Mirrors, CodegenError> {
+    /// The mirrors of every type of the components of `specs`, each once: the files of
+    /// one layer share their types' mirrors, so that a port's data written by one
+    /// component's codels is the type another's read.
+    pub(super) fn of(specs: &[&Spec]) -> Result<Mirrors, CodegenError> {
         let mut m = Mirrors::default();
-        for comp in &spec.components {
+        for (spec, comp) in specs
+            .iter()
+            .flat_map(|spec| spec.components.iter().map(move |c| (*spec, c)))
+        {
             let types = super::c_types(spec, comp)?;
             for key in &types.order {
                 if m.seen.insert(key.clone()) {

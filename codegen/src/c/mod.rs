@@ -24,7 +24,7 @@ use bip_lang::gen3::ast::{Component, Spec};
 use crate::CodegenError;
 use ctype::CTypes;
 use decls::{declaration, Written};
-pub use glue::rust_glue;
+pub use glue::{rust_glue, rust_glue_of};
 pub use mirror::rust_mirrors;
 
 /// The C declarations `component` of `spec` sees, its ids struct (`{c}::ids`) among them.
@@ -132,29 +132,48 @@ pub fn write_c_bindings(
     out: impl AsRef<Path>,
 ) -> Result<CBindings, CodegenError> {
     let gen = gen.as_ref();
-    println!("cargo:rerun-if-changed={}", gen.display());
-    for i in include {
-        println!("cargo:rerun-if-changed={}", i.display());
-    }
-    let spec = bip_lang::read_gen_file(gen, include).map_err(CodegenError::Load)?;
-    let out = out.as_ref();
     let stem = gen
         .file_stem()
         .map_or_else(|| "component".into(), |s| s.to_string_lossy().into_owned());
+    write_c_layer_bindings(&[gen], include, out, &stem)
+}
+
+/// As [`write_c_bindings`] for the `.gen` files of one layer, whose components exchange
+/// data on ports: their headers under `out/include`, and one glue for them all
+/// ([`rust_glue_of`], their types' mirrors shared) in `out/{name}_c.rs`.
+pub fn write_c_layer_bindings(
+    gens: &[impl AsRef<Path>],
+    include: &[PathBuf],
+    out: impl AsRef<Path>,
+    name: &str,
+) -> Result<CBindings, CodegenError> {
+    for i in include {
+        println!("cargo:rerun-if-changed={}", i.display());
+    }
+    let mut specs = Vec::new();
+    for gen in gens {
+        let gen = gen.as_ref();
+        println!("cargo:rerun-if-changed={}", gen.display());
+        specs.push(bip_lang::read_gen_file(gen, include).map_err(CodegenError::Load)?);
+    }
+    let out = out.as_ref();
     let written = CBindings {
         include: out.join("include"),
-        rust: out.join(format!("{stem}_c.rs")),
+        rust: out.join(format!("{name}_c.rs")),
     };
-    write_c_bindings_of(&spec, &written)?;
+    let specs: Vec<&Spec> = specs.iter().collect();
+    write_c_bindings_of(&specs, &written)?;
     Ok(written)
 }
 
-/// Writes the headers of `spec` under `to.include` and its Rust glue to `to.rust`, each
-/// only if its text changed: what [`write_c_bindings`] does once the file is read, and
-/// `bip codegen --c DIR` (the headers in `DIR`, the glue in `DIR/{stem}_c.rs`).
-pub fn write_c_bindings_of(spec: &Spec, to: &CBindings) -> Result<(), CodegenError> {
-    write_c_headers_of(spec, &to.include)?;
-    let text = rust_glue(spec)?;
+/// Writes the headers of `specs` under `to.include` and their Rust glue to `to.rust`, each
+/// only if its text changed: what [`write_c_layer_bindings`] does once the files are read,
+/// and `bip codegen --c DIR` (the headers in `DIR`, the glue in `DIR/{stem}_c.rs`).
+pub fn write_c_bindings_of(specs: &[&Spec], to: &CBindings) -> Result<(), CodegenError> {
+    for spec in specs {
+        write_c_headers_of(spec, &to.include)?;
+    }
+    let text = rust_glue_of(specs)?;
     let text = crate::rustfmt(&text).unwrap_or(text);
     write_if_changed(&to.rust, &text)
 }

@@ -1,4 +1,4 @@
-/* The codels of robots/genom3/loc.gen: dead reckoning from the wheels' encoders,
+/* The codels of robots/genom3/loc.gen: dead reckoning from the odometry odo publishes,
  * published on port pose. */
 #include <math.h>
 
@@ -6,7 +6,6 @@
 #include "loc_c_types.h"
 
 #include "hook.h"
-#include "sim.h"
 
 /* the filter's period, in seconds */
 #define LOC_DT 0.1
@@ -23,12 +22,16 @@ genom_event
 loc_track_estimate(const loc_odometry *odometry, uint32_t *n, rover_pose *estimate,
                    const loc_pose *pose, const genom_context self)
 {
-  double v, w;
+  double v = 0, w = 0;
+  const rover_speed *measured;
   rover_pose *out;
-  /* odometry is connected to nothing in genom3-rover.ron (reading it would be a fault:
-   * the model has no such data): the wheels' encoders give the speeds */
-  (void)odometry;
-  rover_sim_encoders(&v, &w);
+  /* the speeds odo published (none yet: standing still) */
+  if (odometry->read(self) != genom_ok) return genom_fatal;
+  measured = odometry->data(self);
+  if (measured) {
+    v = measured->v;
+    w = measured->w;
+  }
   estimate->theta += w * LOC_DT;
   estimate->x += v * LOC_DT * cos(estimate->theta);
   estimate->y += v * LOC_DT * sin(estimate->theta);

@@ -1,7 +1,7 @@
-//! The example controller of C codels: robots/genom3-rover.ron, whose modules are the
-//! GenoM3 components of robots/genom3 (loco, loc, nav), run by bip-engine with their
-//! codels written in C (codels/*.c), bound through the glue bip-codegen generates from
-//! the `.gen` files (`build.rs`).
+//! The example controller of C codels: rover.ron, whose modules are the GenoM3
+//! components of robots/genom3 (loco, loc, nav) and odo (odo.gen, the odometry loc's in
+//! port reads), run by bip-engine with their codels written in C (codels/*.c), bound
+//! through the glue bip-codegen generates from the `.gen` files (`build.rs`).
 //!
 //! ```text
 //! cargo run --release -p bip-c-rover-controller
@@ -18,13 +18,8 @@ pub mod world;
 
 pub use supervisor::{run, Report};
 
-/// The generated glue of each component, with the `#[repr(C)]` mirrors of its types.
-pub mod loco_c {
-    include!(concat!(env!("OUT_DIR"), "/loco_c.rs"));
-}
-pub mod loc_c {
-    include!(concat!(env!("OUT_DIR"), "/loc_c.rs"));
-}
-pub mod nav_c {
-    include!(concat!(env!("OUT_DIR"), "/nav_c.rs"));
+/// The generated glue of the four components (`rover_c::loco::bind`, …), with the
+/// `#[repr(C)]` mirrors of their types (`rover_c::rover::speed`), shared.
+pub mod rover_c {
+    include!(concat!(env!("OUT_DIR"), "/rover_c.rs"));
 }

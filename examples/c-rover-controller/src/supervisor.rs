@@ -8,27 +8,26 @@ use std::sync::{Arc, Mutex};
 use bip_engine::bip_model::PropertyKind;
 use bip_engine::{Engine, Event, Reply, System, Ticket, Trace, Until};
 
+use crate::rover_c::{loc, loco, nav, odo, rover};
+use crate::world;
 use crate::world::World;
-use crate::{loc_c, loco_c, nav_c, world};
 
-/// robots/genom3-rover.ron, whose modules are robots/genom3's `.gen` files.
+/// rover.ron: robots/genom3's `.gen` files and odo.gen, with genom3-rover.ron's rules.
 pub fn system() -> Result<System, String> {
-    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../../robots/genom3-rover.ron");
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/rover.ron");
     bip_engine::load_file(model).map_err(|e| format!("{e:?}"))
 }
 
 /// An engine running the three components' C codels, recording its steps (with a seeded
 /// choice among simultaneous steps); loc's module object is shared, for its estimate.
-pub fn engine(
-    system: &System,
-    seed: u64,
-) -> Result<(Engine, Arc<Mutex<loc_c::loc::Component>>), String> {
+pub fn engine(system: &System, seed: u64) -> Result<(Engine, Arc<Mutex<loc::Component>>), String> {
     let builder = Engine::builder(system.clone())
         .policy(bip_engine::Policy::Seeded(seed))
         .record(100_000);
-    let builder = loco_c::loco::bind(builder);
-    let (builder, loc) = loc_c::loc::bind_shared(builder);
-    let builder = nav_c::nav::bind(builder);
+    let builder = loco::bind(builder);
+    let (builder, loc) = loc::bind_shared(builder);
+    let builder = nav::bind(builder);
+    let builder = odo::bind(builder);
     Ok((builder.build().map_err(|e| e.to_string())?, loc))
 }
 
@@ -106,9 +105,9 @@ pub fn run(say: &mut dyn FnMut(String)) -> Result<Report, String> {
         say(format!("request {module}.{service}"));
         args(engine).map(|_| ()).map_err(|e| e.to_string())
     };
-    let speed = loco_c::rover::speed { v: 0.5, w: 0.0 };
-    let goal = |x: f64, y: f64| nav_c::nav::GoTo_input {
-        goal: nav_c::rover::pose {
+    let speed = rover::speed { v: 0.5, w: 0.0 };
+    let goal = |x: f64, y: f64| nav::GoTo_input {
+        goal: rover::pose {
             x,
             y,
             ..Default::default()

@@ -5,9 +5,9 @@
 //! activity's error path as the engine's `UndeclaredOutcome`.
 
 use bip_c_rover_controller::hooks::{self, Outcomes};
+use bip_c_rover_controller::rover_c::{nav, rover};
 use bip_c_rover_controller::supervisor::{check_recording, engine, system};
 use bip_c_rover_controller::world::{self, World};
-use bip_c_rover_controller::{loco_c, nav_c};
 use bip_engine::{Engine, Event, FaultKind, Outcome, Reply, Until};
 use proptest::prelude::*;
 
@@ -16,13 +16,13 @@ fn request(engine: &mut Engine, what: u8) {
     let _ = match what % 7 {
         0 => engine.request("loc", "Track", ()),
         1 => engine.request("loco", "Init", ()),
-        2 => engine.request("loco", "Move", loco_c::rover::speed { v: 0.4, w: 0.1 }),
+        2 => engine.request("loco", "Move", rover::speed { v: 0.4, w: 0.1 }),
         3 => engine.request("loco", "Stop", ()),
         4 | 5 => engine.request(
             "nav",
             "GoTo",
-            nav_c::nav::GoTo_input {
-                goal: nav_c::rover::pose {
+            nav::GoTo_input {
+                goal: rover::pose {
                     x: f64::from(what % 3),
                     y: f64::from(what % 2) * 3.0,
                     ..Default::default()
