@@ -286,6 +286,7 @@ fn component_glue(
     }
     state.push_str("}\n");
     state.push_str(&defaulted("State", &set));
+    state.push_str("// SAFETY: the pointers a state may hold (unbounded sequences' and strings' buffers,\n// natives) are the codels' own, which only this module object's codels touch, one call\n// at a time\nunsafe impl Send for State {}\n");
     out.push_str(&state);
     out.push_str(&extra);
 

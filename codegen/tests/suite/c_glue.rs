@@ -12,7 +12,7 @@ fn glue(text: &str) -> Result<String, CodegenError> {
     bip_codegen::c::rust_glue(&spec)
 }
 
-const SMALL: &str = "component g {\n  exception e_far;\n  ids { long n; sequence<double, 4> xs; };\n  port out double level;\n  task t { period 10 ms; codel<start> g_boot(out ::ids) yield ether; };\n  activity Run(in long k, in double gain) {\n    task t;\n    throw e_far;\n    local long left;\n    codel<start> g_run(in k, in gain, out left, port out level) yield pause::go, ether;\n    codel<go> g_go(inout left, ids in xs) yield pause::go, ether;\n  };\n};\n";
+const SMALL: &str = "component g {\n  exception e_far;\n  ids { long n; sequence<double, 4> xs; sequence<double> all; };\n  port out double level;\n  task t { period 10 ms; codel<start> g_boot(out ::ids) yield ether; };\n  activity Run(in long k, in double gain) {\n    task t;\n    throw e_far;\n    local long left;\n    codel<start> g_run(in k, in gain, out left, port out level) yield pause::go, ether;\n    codel<go> g_go(inout left, ids in xs) yield pause::go, ether;\n  };\n};\n";
 
 #[test]
 fn the_glue_declares_each_codel_and_numbers_them_as_the_engine_does() {
@@ -34,6 +34,8 @@ fn the_glue_declares_each_codel_and_numbers_them_as_the_engine_does() {
         "v.ids.xs._maximum = 4;",
         // the out port: its data handed to the engine as the model's Float
         "write_port::<f64>(\"level\", v as f64)",
+        // the codels' own buffers in the ids: the module object still goes to a task thread
+        "unsafe impl Send for State {}",
         "pub fn bind(",
         "pub fn bind_shared(",
     ] {

@@ -30,6 +30,21 @@ fn the_glue_of_every_gen_file_of_robots_compiles() {
         std::fs::write(&file, glue).expect("writes");
         lib.push_str(&format!("pub mod {stem}_c {{ include!({file:?}); }}\n"));
     }
+    // and a component whose memory holds pointers (an unbounded sequence in its ids, an
+    // unbounded string local): its module object still goes to a task thread
+    let gen = dir.path().join("ptrs.gen");
+    std::fs::write(
+        &gen,
+        "component ptrs {\n  ids { sequence<double> xs; };\n  task t { period 10 ms; };\n  activity A() {\n    task t;\n    local string name;\n    codel<start> p_a(inout xs, inout name) yield ether;\n  };\n};\n",
+    )
+    .expect("writes");
+    let spec = bip_lang::read_gen_file(&gen, &[]).unwrap_or_else(|e| panic!("{e:?}"));
+    let glue = bip_codegen::c::rust_glue(&spec).unwrap_or_else(|e| panic!("ptrs: {e}"));
+    let file = dir.path().join("ptrs_c.rs");
+    std::fs::write(&file, glue).expect("writes");
+    lib.push_str(&format!(
+        "pub mod ptrs_c {{ include!({file:?}); }}\npub fn bind(b: bip_engine::EngineBuilder) -> bip_engine::EngineBuilder {{ ptrs_c::ptrs::bind(b) }}\n"
+    ));
     std::fs::write(dir.path().join("lib.rs"), lib).expect("writes");
     let (ok, said) = run(rustc()
         .args(["--crate-type", "lib", "-D", "warnings", "--out-dir"])
