@@ -10,4 +10,9 @@ pub mod context;
 pub mod events;
 
 pub use context::{Context, ContextIface, GenomEvent, Raised};
+
+/// The engine the generated glue binds to, named through this crate
+/// (`bip_genom_c::bip_engine::EngineBuilder`): the glue then needs this crate alone, and
+/// names the very bip-engine this crate was built with.
+pub use bip_engine;
 pub use events::Events;

@@ -118,7 +118,7 @@ fn component_glue(
     let mut out = String::from("// The glue of the component's C codels (bip-codegen).\n");
 
     // the module object's codels, as the engine checks them against the model
-    out.push_str("/// The module object's codels as the engine numbers them (tasks' machines, then the\n/// services' codels), with their outcomes as the model declares them.\npub const CODELS: &[bip_engine::CodelSignature] = &[\n");
+    out.push_str("/// The module object's codels as the engine numbers them (tasks' machines, then the\n/// services' codels), with their outcomes as the model declares them.\npub const CODELS: &[bip_genom_c::bip_engine::CodelSignature] = &[\n");
     for n in &codels {
         let yields: Vec<String> = n
             .codel
@@ -128,7 +128,7 @@ fn component_glue(
             .collect();
         let _ = writeln!(
             out,
-            "    bip_engine::CodelSignature {{ service: {:?}, codel: {:?}, yields: {}, throws: {} }},",
+            "    bip_genom_c::bip_engine::CodelSignature {{ service: {:?}, codel: {:?}, yields: {}, throws: {} }},",
             n.owner,
             n.state,
             quoted(&yields),
@@ -291,8 +291,8 @@ fn component_glue(
     out.push_str(&extra);
 
     // the call of codel k
-    out.push_str("\n/// The call in progress, for the port handles' functions (through the context).\nstruct Call {\n    state: *mut State,\n    ctx: *mut bip_engine::Ctx<'static>,\n}\n\n");
-    out.push_str("/// Runs codel `k` on `s`; `None` if its arguments are missing.\n///\n/// # Safety\n/// `s` and `ctx` are valid for the call, `this` is the module object's context.\n#[allow(unused_variables)]\nunsafe fn call(\n    k: usize,\n    s: *mut State,\n    ctx: *mut bip_engine::Ctx<'static>,\n    this: *const bip_genom_c::ContextIface,\n) -> Option<bip_genom_c::GenomEvent> {\n    unsafe {\n        Some(match k {\n");
+    out.push_str("\n/// The call in progress, for the port handles' functions (through the context).\nstruct Call {\n    state: *mut State,\n    ctx: *mut bip_genom_c::bip_engine::Ctx<'static>,\n}\n\n");
+    out.push_str("/// Runs codel `k` on `s`; `None` if its arguments are missing.\n///\n/// # Safety\n/// `s` and `ctx` are valid for the call, `this` is the module object's context.\n#[allow(unused_variables)]\nunsafe fn call(\n    k: usize,\n    s: *mut State,\n    ctx: *mut bip_genom_c::bip_engine::Ctx<'static>,\n    this: *const bip_genom_c::ContextIface,\n) -> Option<bip_genom_c::GenomEvent> {\n    unsafe {\n        Some(match k {\n");
     for (k, (n, call)) in codels.iter().zip(&calls).enumerate() {
         let owner = n.owner;
         let start = match starts.iter().find(|(s, _)| s == owner) {
@@ -343,12 +343,12 @@ impl Component {{
 
     /// Runs codel `k` (as [`CODELS`] numbers them) and reads the event it returns: a
     /// declared outcome, or one the engine takes the activity's error path with.
-    pub fn run(&mut self, k: usize, ctx: &mut bip_engine::Ctx<'_>) -> bip_engine::Next {{
+    pub fn run(&mut self, k: usize, ctx: &mut bip_genom_c::bip_engine::Ctx<'_>) -> bip_genom_c::bip_engine::Next {{
         let Some(sig) = CODELS.get(k) else {{
-            return bip_engine::Next::Declared(u16::MAX);
+            return bip_genom_c::bip_engine::Next::Declared(u16::MAX);
         }};
         let s: *mut State = &mut self.state;
-        let ctx: *mut bip_engine::Ctx<'static> = (ctx as *mut bip_engine::Ctx<'_>).cast();
+        let ctx: *mut bip_genom_c::bip_engine::Ctx<'static> = (ctx as *mut bip_genom_c::bip_engine::Ctx<'_>).cast();
         let this = self.context.as_ptr();
         let mut now = Call {{ state: s, ctx }};
         let at: *mut Call = &mut now;
@@ -360,14 +360,14 @@ impl Component {{
             .with_call(at.cast(), || unsafe {{ call(k, s, ctx, this) }});
         match ev {{
             Some(ev) => self.events.next(k, sig, ev),
-            None => bip_engine::Next::Declared(u16::MAX),
+            None => bip_genom_c::bip_engine::Next::Declared(u16::MAX),
         }}
     }}
 }}
 
 /// Binds every codel of module `{c}` to its C function, the module object owning its
 /// memory (nothing to lock).
-pub fn bind(builder: bip_engine::EngineBuilder) -> bip_engine::EngineBuilder {{
+pub fn bind(builder: bip_genom_c::bip_engine::EngineBuilder) -> bip_genom_c::bip_engine::EngineBuilder {{
     let mut module = Component::default();
     builder.module({c:?}, CODELS, move |k, ctx| module.run(k, ctx))
 }}
@@ -375,13 +375,13 @@ pub fn bind(builder: bip_engine::EngineBuilder) -> bip_engine::EngineBuilder {{
 /// As [`bind`], the module object shared with the caller, who may read its memory between
 /// the engine's steps (a lock per codel call).
 pub fn bind_shared(
-    builder: bip_engine::EngineBuilder,
-) -> (bip_engine::EngineBuilder, std::sync::Arc<std::sync::Mutex<Component>>) {{
+    builder: bip_genom_c::bip_engine::EngineBuilder,
+) -> (bip_genom_c::bip_engine::EngineBuilder, std::sync::Arc<std::sync::Mutex<Component>>) {{
     let shared = std::sync::Arc::new(std::sync::Mutex::new(Component::default()));
     let module = std::sync::Arc::clone(&shared);
     let builder = builder.module({c:?}, CODELS, move |k, ctx| match module.lock() {{
         Ok(mut m) => m.run(k, ctx),
-        Err(_) => bip_engine::Next::Declared(u16::MAX),
+        Err(_) => bip_genom_c::bip_engine::Next::Declared(u16::MAX),
     }});
     (builder, shared)
 }}
@@ -447,7 +447,7 @@ fn service_data(
     // the arguments, at the start codel
     let _ = writeln!(
         out,
-        "/// Fills `d` for a new request of `{name}` from its arguments; false if they are missing.\n#[allow(unused_variables)]\nfn args_{name}(d: &mut {data}, ctx: &bip_engine::Ctx<'_>) -> bool {{\n    *d = {data}::default();"
+        "/// Fills `d` for a new request of `{name}` from its arguments; false if they are missing.\n#[allow(unused_variables)]\nfn args_{name}(d: &mut {data}, ctx: &bip_genom_c::bip_engine::Ctx<'_>) -> bool {{\n    *d = {data}::default();"
     );
     let payload = |what: &str,
                    chosen: &[usize],
@@ -512,7 +512,7 @@ fn service_data(
     if !outs.is_empty() {
         let _ = writeln!(
             out,
-            "/// Gives `{name}`'s output (its `out` and `inout` parameters) to the engine.\n#[allow(unused_variables)]\nfn output_{name}(d: &{data}, ctx: &mut bip_engine::Ctx<'_>) {{"
+            "/// Gives `{name}`'s output (its `out` and `inout` parameters) to the engine.\n#[allow(unused_variables)]\nfn output_{name}(d: &{data}, ctx: &mut bip_genom_c::bip_engine::Ctx<'_>) {{"
         );
         match payload("output", &outs, def.output.as_ref(), &mut body)? {
             None => {}

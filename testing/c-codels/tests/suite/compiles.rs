@@ -43,7 +43,7 @@ fn the_glue_of_every_gen_file_of_robots_compiles() {
     let file = dir.path().join("ptrs_c.rs");
     std::fs::write(&file, glue).expect("writes");
     lib.push_str(&format!(
-        "pub mod ptrs_c {{ include!({file:?}); }}\npub fn bind(b: bip_engine::EngineBuilder) -> bip_engine::EngineBuilder {{ ptrs_c::ptrs::bind(b) }}\n"
+        "pub mod ptrs_c {{ include!({file:?}); }}\npub fn bind(b: bip_genom_c::bip_engine::EngineBuilder) -> bip_genom_c::bip_engine::EngineBuilder {{ ptrs_c::ptrs::bind(b) }}\n"
     ));
     std::fs::write(dir.path().join("lib.rs"), lib).expect("writes");
     let (ok, said) = run(rustc()

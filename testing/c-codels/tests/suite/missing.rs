@@ -30,7 +30,7 @@ fn link(tmp: &Path, defines: &[&str]) -> (bool, String) {
         .arg(tmp.join("counter.o")));
     assert!(ok, "ar:\n{said}");
     let main = format!(
-        "mod glue {{ include!({:?}); }}\nfn main() {{\n    let bind: fn(bip_engine::EngineBuilder) -> bip_engine::EngineBuilder = glue::counter::bind;\n    std::hint::black_box(bind);\n}}\n",
+        "mod glue {{ include!({:?}); }}\nfn main() {{\n    let bind: fn(bip_genom_c::bip_engine::EngineBuilder) -> bip_genom_c::bip_engine::EngineBuilder = glue::counter::bind;\n    std::hint::black_box(bind);\n}}\n",
         out.join("counter_c.rs")
     );
     std::fs::write(tmp.join("main.rs"), main).expect("writes");

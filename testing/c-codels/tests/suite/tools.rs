@@ -1,5 +1,5 @@
 //! Running the tools a controller's build runs: the C compiler, `ar`, and rustc against
-//! this crate's own dependencies (bip-engine, bip-genom-c), as cargo would.
+//! this crate's own dependency bip-genom-c (which names bip-engine), as cargo would.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -27,14 +27,14 @@ pub fn run(cmd: &mut Command) -> (bool, String) {
     (out.status.success(), said)
 }
 
-/// rustc with bip-engine and bip-genom-c, as this crate's dependencies, on its paths.
+/// rustc with bip-genom-c, this crate's dependency (the newest built: the one this test
+/// was built with), and the crates it depends on, bip-engine among them, found by rustc
+/// as that build of it names them.
 pub fn rustc() -> Command {
     let exe = std::env::current_exe().expect("the test's path");
     let deps = exe.parent().expect("its folder");
     let mut cmd = Command::new(std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into()));
     cmd.args(["--edition", "2021"])
-        .arg("--extern")
-        .arg(format!("bip_engine={}", rlib(deps, "bip_engine").display()))
         .arg("--extern")
         .arg(format!(
             "bip_genom_c={}",
