@@ -1,7 +1,8 @@
 //! `bip codegen FILE --rust OUT`: write a model's Rust bindings to a file, what
 //! `bip_codegen::write_rust_bindings` does from a build script; `bip codegen FILE.gen --c
-//! DIR [-I DIR]...`: write the C headers of a GenoM3 component's codels, what
-//! `bip_codegen::write_c_headers` does (docs/codegen.md).
+//! DIR [-I DIR]...`: write the C headers of a GenoM3 component's codels and the Rust glue
+//! that binds them to bip-engine (`DIR/{stem}_c.rs`), what
+//! `bip_codegen::c::write_c_bindings` does (docs/codegen.md).
 
 use std::path::PathBuf;
 
@@ -15,7 +16,8 @@ pub struct Args {
     /// Where to write the Rust module.
     #[arg(long, value_name = "OUT")]
     rust: Option<PathBuf>,
-    /// Folder where to write the C headers of the `.gen` file's components.
+    /// Folder where to write the C headers of the `.gen` file's components and their Rust
+    /// glue (`{stem}_c.rs`).
     #[arg(long, value_name = "DIR")]
     c: Option<PathBuf>,
     /// With `--c`: folders searched by the `.gen` file's `#include`, after its own.
@@ -32,7 +34,15 @@ pub fn run(args: &Args) -> u8 {
                 return exit::ERROR;
             }
         };
-        bip_codegen::write_c_headers_of(&spec, dir).map(|_| ())
+        let stem = args
+            .file
+            .file_stem()
+            .map_or_else(|| "component".into(), |s| s.to_string_lossy().into_owned());
+        let to = bip_codegen::c::CBindings {
+            include: dir.clone(),
+            rust: dir.join(format!("{stem}_c.rs")),
+        };
+        bip_codegen::c::write_c_bindings_of(&[&spec], &to)
     } else {
         let Some(system) = load::system(&args.file) else {
             return exit::ERROR;

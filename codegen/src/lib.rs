@@ -16,8 +16,9 @@
 //! codel does not compile). The code depends on bip-engine alone.
 //!
 //! For a GenoM3 component whose codels are C, [`c`] writes the headers those codels
-//! include (GenoM3's C mapping of its types, its events, ports and codel prototypes):
-//! `bip_codegen::write_c_headers("loco.gen", &[], out_dir.join("include"))`.
+//! include (GenoM3's C mapping of its types, its events, ports and codel prototypes) and
+//! the Rust glue that binds those codels to the engine by their C names:
+//! `bip_codegen::c::write_c_bindings("loco.gen", &[], out_dir)`.
 
 pub mod c;
 mod context;
@@ -105,7 +106,7 @@ pub fn write_bindings_of(system: &System, out: impl AsRef<Path>) -> Result<(), C
 
 /// `text` as rustfmt formats it, if rustfmt is installed (`$RUSTFMT`, else `rustfmt` on the
 /// path) and formats it; the bindings compile as well unformatted.
-fn rustfmt(text: &str) -> Option<String> {
+pub(crate) fn rustfmt(text: &str) -> Option<String> {
     use std::io::Write as _;
     use std::process::{Command, Stdio};
     let tool = std::env::var_os("RUSTFMT").unwrap_or_else(|| "rustfmt".into());

@@ -1,34 +1,33 @@
-//! Writes counter.gen's C headers into `OUT_DIR/include`, as a controller's build script
-//! would, and compiles the component's codels (codels/*.c) against them with the `cc`
-//! crate: a codel of another prototype than the `.gen` file gives is a compile error here.
-//! Writes the `#[repr(C)]` mirrors of counter.gen's and mirrors.gen's types.
+//! Writes counter.gen's C headers into `OUT_DIR/include` and its Rust glue into
+//! `OUT_DIR/counter_c.rs` in one call, as a controller's build script does, and compiles
+//! the component's codels (codels/*.c) against the headers with the `cc` crate: a codel
+//! of another prototype than the `.gen` file gives is a compile error here. Writes the
+//! `#[repr(C)]` mirrors of mirrors.gen's types, for the layout tests.
 
 use std::path::PathBuf;
 
 fn main() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
-    let include = out.join("include");
-    if let Err(e) = bip_codegen::write_c_headers(dir.join("counter.gen"), &[], &include) {
-        panic!("C headers of counter.gen: {e}");
-    }
-    // the Rust mirrors of the components' C types
-    for (gen, file) in [
-        ("counter.gen", "counter_types.rs"),
-        ("mirrors.gen", "mirrors_types.rs"),
-    ] {
-        let spec = match bip_lang::read_gen_file(&dir.join(gen), &[]) {
-            Ok(spec) => spec,
-            Err(e) => panic!("{gen}: {e:?}"),
-        };
-        let text = match bip_codegen::c::rust_mirrors(&spec) {
-            Ok(text) => text,
-            Err(e) => panic!("Rust mirrors of {gen}: {e}"),
-        };
-        println!("cargo:rerun-if-changed={}", dir.join(gen).display());
-        if let Err(e) = std::fs::write(out.join(file), text) {
-            panic!("{file}: {e}");
-        }
+    let include = match bip_codegen::c::write_c_bindings(dir.join("counter.gen"), &[], &out) {
+        Ok(written) => written.include,
+        Err(e) => panic!("C bindings of counter.gen: {e}"),
+    };
+    // the Rust mirrors of mirrors.gen's C types
+    let spec = match bip_lang::read_gen_file(&dir.join("mirrors.gen"), &[]) {
+        Ok(spec) => spec,
+        Err(e) => panic!("mirrors.gen: {e:?}"),
+    };
+    let text = match bip_codegen::c::rust_mirrors(&spec) {
+        Ok(text) => text,
+        Err(e) => panic!("Rust mirrors of mirrors.gen: {e}"),
+    };
+    println!(
+        "cargo:rerun-if-changed={}",
+        dir.join("mirrors.gen").display()
+    );
+    if let Err(e) = std::fs::write(out.join("mirrors_types.rs"), text) {
+        panic!("mirrors_types.rs: {e}");
     }
     let codels = dir.join("codels/counter.c");
     println!("cargo:rerun-if-changed={}", codels.display());

@@ -89,6 +89,10 @@ fn codegen_writes_a_components_c_headers() {
         written.contains("loco_move_track(const rover_speed *ref, rover_speed *current, bool powered, const genom_context self);"),
         "{written}"
     );
+    // and the Rust glue that binds its codels, as a build script writes it
+    let glue = std::fs::read_to_string(out.join("loco_c.rs")).expect("the glue is written");
+    assert!(glue.contains("fn loco_move_track("), "{glue}");
+    assert!(glue.contains("pub fn bind("), "{glue}");
 
     // without its include folder, the `.gen` file's error, with its place
     let o = bip(&[

@@ -146,6 +146,10 @@ const CRATES: &[Layers] = &[
         ],
     },
     Layers {
+        src: "genom-c/src",
+        layers: &[("context", &["context"]), ("events", &["events"])],
+    },
+    Layers {
         src: "src",
         layers: &[
             (

@@ -136,9 +136,21 @@ fn data_member(types: &CTypes, t: &CType, args: &str) -> String {
 }
 
 /// What a codel parameter is in C.
-enum Param {
+pub enum Param {
     Data(CType),
     /// A port: its handle struct's C name.
+    Port(String),
+}
+
+/// Where a codel parameter's data lives, as a path of members and indices (`[2]`) from
+/// its root.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Place {
+    /// In the ids (an empty path is the whole ids).
+    Ids(Vec<String>),
+    /// In a parameter or a local of the codel's service (the path's first name).
+    Service(Vec<String>),
+    /// A port, by name.
     Port(String),
 }
 
@@ -162,7 +174,8 @@ pub fn prototypes(
                 p.name.value, codel.function.value
             );
             let var = c_name(p);
-            let arg = match param(types, comp, s, ids, p).map_err(|e| within(e, &place))? {
+            let (_, ty) = param(types, comp, s, ids, p).map_err(|e| within(e, &place))?;
+            let arg = match ty {
                 Param::Port(handle) => format!("const {handle} *{var}"),
                 Param::Data(t) if p.dir == Dir::In => argument_value(types, &t, &var),
                 Param::Data(t) => argument_reference(types, &t, &var),
@@ -219,17 +232,20 @@ fn argument_reference(types: &CTypes, t: &CType, var: &str) -> String {
 
 /// The type of codel parameter `p`, resolved as GenoM3 resolves its name: its source if
 /// written, else the ids member, the service's parameter or local, or the port of that
-/// name; then its path of members and indices.
-fn param(
+/// name; then its path of members and indices. With where its data lives.
+pub fn param(
     types: &CTypes,
     comp: &Component,
     s: Option<&Service>,
     ids: &str,
     p: &CodelParam,
-) -> Result<Param, CodegenError> {
+) -> Result<(Place, Param), CodegenError> {
     let c = &comp.name.value;
     let Some(first) = p.path.first() else {
-        return Ok(Param::Data(CType::Named(ids.to_string())));
+        return Ok((
+            Place::Ids(Vec::new()),
+            Param::Data(CType::Named(ids.to_string())),
+        ));
     };
     let id = comp.ids.iter().find(|m| &m.name.value == first);
     // a parameter or local: its IDL type, or an attribute's ids member path
@@ -261,11 +277,18 @@ fn param(
     } else {
         Source::Remote
     });
-    let mut t = match source {
-        Source::Ids => ids_member(types, comp, ids, &p.path[..1])?,
+    let (place, mut t) = match source {
+        Source::Ids => (
+            Place::Ids(p.path.clone()),
+            ids_member(types, comp, ids, &p.path[..1])?,
+        ),
         Source::Local => match local {
-            Some(Ok(ty)) => types.ctype(&ty, c)?,
-            Some(Err(path)) => ids_member(types, comp, ids, &path)?,
+            Some(Ok(ty)) => (Place::Service(p.path.clone()), types.ctype(&ty, c)?),
+            Some(Err(path)) => {
+                let mut at = path.clone();
+                at.extend(p.path[1..].iter().cloned());
+                (Place::Ids(at), ids_member(types, comp, ids, &path)?)
+            }
             None => {
                 return Err(CodegenError::CMapping(format!(
                     "no parameter or local `{first}`"
@@ -274,7 +297,10 @@ fn param(
         },
         Source::Port => {
             return match port {
-                Some(q) => Ok(Param::Port(cname(&format!("{c}::{}", q.name.value)))),
+                Some(q) => Ok((
+                    Place::Port(q.name.value.clone()),
+                    Param::Port(cname(&format!("{c}::{}", q.name.value))),
+                )),
                 None => Err(CodegenError::CMapping(format!("no port `{first}`"))),
             }
         }
@@ -288,7 +314,7 @@ fn param(
         t = member(types, &t, step)
             .ok_or_else(|| CodegenError::CMapping(format!("`{step}` is not a member here")))?;
     }
-    Ok(Param::Data(t))
+    Ok((place, Param::Data(t)))
 }
 
 /// The type of the ids member at `path` (`["body", "wmin"]`).

@@ -11,6 +11,8 @@
 mod codels;
 pub mod ctype;
 mod decls;
+mod glue;
+mod glue_args;
 mod mirror;
 mod runtime;
 
@@ -22,6 +24,7 @@ use bip_lang::gen3::ast::{Component, Spec};
 use crate::CodegenError;
 use ctype::CTypes;
 use decls::{declaration, Written};
+pub use glue::{rust_glue, rust_glue_of};
 pub use mirror::rust_mirrors;
 
 /// The C declarations `component` of `spec` sees, its ids struct (`{c}::ids`) among them.
@@ -86,19 +89,7 @@ pub fn write_c_headers_of(spec: &Spec, dir: &Path) -> Result<Vec<PathBuf>, Codeg
     let mut paths = Vec::new();
     for (rel, text) in c_headers(spec)? {
         let path = dir.join(rel);
-        let write = |path: &Path| -> std::io::Result<()> {
-            if let Some(parent) = path.parent() {
-                std::fs::create_dir_all(parent)?;
-            }
-            if std::fs::read_to_string(path).is_ok_and(|old| old == text) {
-                return Ok(());
-            }
-            std::fs::write(path, &text)
-        };
-        write(&path).map_err(|source| CodegenError::Write {
-            path: path.clone(),
-            source,
-        })?;
+        write_if_changed(&path, &text)?;
         paths.push(path);
     }
     Ok(paths)
@@ -119,4 +110,86 @@ pub fn write_c_headers(
     }
     let spec = bip_lang::read_gen_file(gen, include).map_err(CodegenError::Load)?;
     write_c_headers_of(&spec, dir.as_ref())
+}
+
+/// What [`write_c_bindings`] wrote.
+#[derive(Clone, Debug)]
+pub struct CBindings {
+    /// The headers' folder, for the C compiler's include path.
+    pub include: PathBuf,
+    /// The Rust glue (with the mirrors of the types), for `include!`.
+    pub rust: PathBuf,
+}
+
+/// From a build script, in one call: reads the `.gen` file `gen` (its `#include`s searched
+/// in its folder, then in `include`), writes its C headers under `out/include` and its
+/// Rust glue ([`rust_glue`]) to `out/{stem}_c.rs` (`counter.gen` gives `counter_c.rs`),
+/// each only if its text changed, and tells cargo to run the build script again when the
+/// file changes.
+pub fn write_c_bindings(
+    gen: impl AsRef<Path>,
+    include: &[PathBuf],
+    out: impl AsRef<Path>,
+) -> Result<CBindings, CodegenError> {
+    let gen = gen.as_ref();
+    let stem = gen
+        .file_stem()
+        .map_or_else(|| "component".into(), |s| s.to_string_lossy().into_owned());
+    write_c_layer_bindings(&[gen], include, out, &stem)
+}
+
+/// As [`write_c_bindings`] for the `.gen` files of one layer, whose components exchange
+/// data on ports: their headers under `out/include`, and one glue for them all
+/// ([`rust_glue_of`], their types' mirrors shared) in `out/{name}_c.rs`.
+pub fn write_c_layer_bindings(
+    gens: &[impl AsRef<Path>],
+    include: &[PathBuf],
+    out: impl AsRef<Path>,
+    name: &str,
+) -> Result<CBindings, CodegenError> {
+    for i in include {
+        println!("cargo:rerun-if-changed={}", i.display());
+    }
+    let mut specs = Vec::new();
+    for gen in gens {
+        let gen = gen.as_ref();
+        println!("cargo:rerun-if-changed={}", gen.display());
+        specs.push(bip_lang::read_gen_file(gen, include).map_err(CodegenError::Load)?);
+    }
+    let out = out.as_ref();
+    let written = CBindings {
+        include: out.join("include"),
+        rust: out.join(format!("{name}_c.rs")),
+    };
+    let specs: Vec<&Spec> = specs.iter().collect();
+    write_c_bindings_of(&specs, &written)?;
+    Ok(written)
+}
+
+/// Writes the headers of `specs` under `to.include` and their Rust glue to `to.rust`, each
+/// only if its text changed: what [`write_c_layer_bindings`] does once the files are read,
+/// and `bip codegen --c DIR` (the headers in `DIR`, the glue in `DIR/{stem}_c.rs`).
+pub fn write_c_bindings_of(specs: &[&Spec], to: &CBindings) -> Result<(), CodegenError> {
+    for spec in specs {
+        write_c_headers_of(spec, &to.include)?;
+    }
+    let text = rust_glue_of(specs)?;
+    let text = crate::rustfmt(&text).unwrap_or(text);
+    write_if_changed(&to.rust, &text)
+}
+
+fn write_if_changed(path: &Path, text: &str) -> Result<(), CodegenError> {
+    let write = || -> std::io::Result<()> {
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent)?;
+        }
+        if std::fs::read_to_string(path).is_ok_and(|old| old == text) {
+            return Ok(());
+        }
+        std::fs::write(path, text)
+    };
+    write().map_err(|source| CodegenError::Write {
+        path: path.to_path_buf(),
+        source,
+    })
 }

@@ -2,6 +2,7 @@
 //! build script's rewrite only on change. That the rover's bindings compile and run is
 //! `testing/rover-bindings`.
 
+mod c_glue;
 mod c_headers;
 
 use bip_codegen::{rust_bindings, rust_bindings_no_std, write_rust_bindings, CodegenError};

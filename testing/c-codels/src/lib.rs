@@ -1,16 +1,18 @@
-//! A GenoM3 component's C codels run on bip-engine (docs/codegen.md, "Running C
-//! codels"): `build.rs` writes counter.gen's C headers and compiles codels/counter.c
-//! against them; [`runtime`] is GenoM3's C context and the reading of a returned event;
-//! [`counter`] binds the component's codels to an engine as one module object, with the
-//! ids in memory of their C layout ([`counter_types`], generated).
+//! A GenoM3 component's C codels run on bip-engine (docs/codegen.md, "Running C codels on
+//! the engine"): `build.rs` writes counter.gen's C headers and its Rust glue
+//! (`bip_codegen::c::write_c_bindings`) and compiles codels/counter.c against the headers;
+//! [`counter`] is the generated glue (the mirrors of its types, its codels' declarations,
+//! `CODELS`, `bind`), on the runtime of `bip-genom-c`; [`hooks`] are the tests' handles on
+//! the C file.
 
-pub mod counter;
-pub mod runtime;
+pub mod hooks;
 
-/// The `#[repr(C)]` mirrors of counter.gen's C types (bip-codegen's `rust_mirrors`).
-pub mod counter_types {
-    include!(concat!(env!("OUT_DIR"), "/counter_types.rs"));
+/// counter.gen's generated glue, with the `#[repr(C)]` mirrors of its types.
+pub mod glue {
+    include!(concat!(env!("OUT_DIR"), "/counter_c.rs"));
 }
+
+pub use glue::{counter, place};
 
 /// The mirrors of mirrors.gen's types: one of each kind, for the layout tests.
 pub mod mirrors_types {

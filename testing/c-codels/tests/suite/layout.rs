@@ -3,7 +3,8 @@
 
 use std::mem::{align_of, offset_of, size_of};
 
-use bip_c_codels::counter::{counter_ids_layout, CounterIds};
+use bip_c_codels::counter::ids as CounterIds;
+use bip_c_codels::hooks::counter_ids_layout;
 
 #[test]
 fn the_mirror_of_the_ids_has_gccs_layout() {

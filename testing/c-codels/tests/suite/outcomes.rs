@@ -3,10 +3,10 @@
 //! no event, or `genom_ok` takes the activity's error path, reported as a fault. Every run
 //! is a path of the model.
 
-use bip_c_codels::counter::{set_step_outcome, Counter, OUTCOME_LOCK};
+use bip_c_codels::hooks::{set_step_outcome, OUTCOME_LOCK};
 use bip_engine::{Engine, Event, FaultKind, Outcome, Reply, Until};
 
-use crate::{engine, system};
+use crate::{engine, system, Counter};
 
 /// Runs `Count(n)` with `counter_count_step` returning outcome `mode`; its end, the
 /// engine's faults, and the module's state.
@@ -51,7 +51,7 @@ fn declared_yields_move_the_model_and_the_ids_are_read_back() {
     assert_eq!(end, Outcome::Ether);
     assert_eq!(faults, 0);
     // start set 0 and 0.25, then step ran three times (pause::step, pause::step, ether)
-    let ids = *counter.ids.lock().unwrap();
+    let ids = counter.lock().unwrap().state.ids;
     assert_eq!((ids.count, ids.done, ids.gain), (3, true, 2.0));
 }
 
@@ -60,7 +60,7 @@ fn start_yielding_ether_ends_at_once() {
     let (end, faults, counter) = count(0, 0);
     assert_eq!(end, Outcome::Ether);
     assert_eq!(faults, 0);
-    assert_eq!(counter.ids.lock().unwrap().count, 0);
+    assert_eq!(counter.lock().unwrap().state.ids.count, 0);
 }
 
 #[test]
@@ -68,7 +68,7 @@ fn a_declared_exception_ends_the_activity_with_it_and_its_detail() {
     let (end, faults, counter) = count(3, 1);
     assert_eq!(end, Outcome::Exception("e_limit".into()));
     assert_eq!(faults, 0);
-    let (_, detail) = counter.raised.last().expect("raised");
+    let (_, detail) = counter.lock().unwrap().raised().last().expect("raised");
     // counter_e_limit_detail { int32_t at; }, at the count when thrown
     assert_eq!(detail, 0i32.to_ne_bytes());
 }
@@ -123,7 +123,7 @@ fn codels_numbered_otherwise_than_the_model_do_not_bind() {
 
 #[test]
 fn a_record_argument_is_its_mirror_passed_by_pointer() {
-    use bip_c_codels::counter::Place;
+    use bip_c_codels::place as Place;
     let _guard = OUTCOME_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let system = system();
     let (mut engine, counter) = engine(&system, 3);
@@ -136,7 +136,7 @@ fn a_record_argument_is_its_mirror_passed_by_pointer() {
     let ticket = engine.request("counter", "Go", to).expect("a request");
     engine.run_until(Until::Ticks(5)).expect("runs");
     assert_eq!(done(&mut engine, ticket), Some(Outcome::Ether));
-    let at = counter.ids.lock().unwrap().at;
+    let at = counter.lock().unwrap().state.ids.at;
     assert_eq!((at.x, at.y), (1.5, -2.0));
     engine
         .record()

@@ -3,7 +3,7 @@
 //! exception only when told to throw its declared one, and every recording replays with
 //! the step relation.
 
-use bip_c_codels::counter::{set_step_outcome, OUTCOME_LOCK};
+use bip_c_codels::hooks::{set_step_outcome, OUTCOME_LOCK};
 use bip_engine::{Event, FaultKind, Outcome, Reply};
 use proptest::prelude::*;
 

@@ -1,0 +1,618 @@
+//! The Rust glue that binds a GenoM3 component's C codels to bip-engine, generated from
+//! its `.gen` file beside the mirrors of its types (docs/codegen.md, "Running C codels on
+//! the engine"). In the component's module (`counter::`): the `extern "C"` declaration of
+//! every codel function with its prototype's Rust mirror and of its events' and
+//! exceptions' symbols, `CODELS` (its module object's codels with their outcomes, which
+//! the engine checks against the model), `State` (its ids, each service's parameters and
+//! locals, each port's data, in the C layout), the port handles the codels are given,
+//! `Component` (the module object: `run(k, ctx)` calls codel `k` and reads the event it
+//! returns through `bip_genom_c::Events`), `bind` and `bind_shared`.
+
+use std::collections::BTreeSet;
+use std::fmt::Write as _;
+
+use bip_lang::gen3::ast::{Codel, Component, Dir, PortDir, Service, Spec};
+use bip_lang::genom::syntax::{DataTypeDef, ModuleDef};
+
+use super::codels::{all_codels, param, Param, Place};
+use super::ctype::{cname, Body, CTypes};
+use super::glue_args::{
+    arg, holds_pointer, port_field, port_handle, port_handle_type, service_field, Conv,
+};
+use super::mirror::{defaulted, maxima, Mirrors};
+use crate::names::ident;
+use crate::CodegenError;
+
+/// The mirrors of `spec`'s types and, in each component's module, the glue of its codels,
+/// as the text of Rust items for a module of their own (`mod counter_c { include!(..) }`).
+/// The code depends on bip-engine and bip-genom-c.
+pub fn rust_glue(spec: &Spec) -> Result<String, CodegenError> {
+    rust_glue_of(&[spec])
+}
+
+/// As [`rust_glue`] for the files of one layer, in one text: their types' mirrors once,
+/// shared by every component (the data one component's codels write on a port is the
+/// type another's read).
+pub fn rust_glue_of(specs: &[&Spec]) -> Result<String, CodegenError> {
+    let mut m = Mirrors::of(specs)?;
+    for spec in specs {
+        let modules = bip_lang::gen3::modules(spec, 1).map_err(|errors| {
+            let words: Vec<String> = errors.iter().map(|e| e.message.clone()).collect();
+            CodegenError::CMapping(words.join("; "))
+        })?;
+        for (comp, module) in spec.components.iter().zip(&modules) {
+            let types = super::c_types(spec, comp)?;
+            let text = component_glue(&mut m, &types, comp, module)
+                .map_err(|e| within(e, &format!("component `{}`", comp.name.value)))?;
+            m.items
+                .entry(vec![comp.name.value.clone()])
+                .or_default()
+                .push(text);
+        }
+    }
+    Ok(m.text())
+}
+
+fn within(e: CodegenError, place: &str) -> CodegenError {
+    match e {
+        CodegenError::CMapping(m) => CodegenError::CMapping(format!("{place}: {m}")),
+        other => other,
+    }
+}
+
+/// A codel of the module object, as the engine numbers them: tasks' machines first, then
+/// the services' codels, each state of each codel once.
+struct Numbered<'a> {
+    service: Option<&'a Service>,
+    /// The service's name, or the task's.
+    owner: &'a str,
+    state: &'a str,
+    codel: &'a Codel,
+    throws: Vec<String>,
+}
+
+fn last(name: &str) -> String {
+    name.rsplit("::").next().unwrap_or(name).to_string()
+}
+
+fn numbered(comp: &Component) -> Vec<Numbered<'_>> {
+    let tasks = comp.tasks.iter().flat_map(|t| {
+        t.codels.iter().flat_map(move |codel| {
+            codel.states.iter().map(move |st| Numbered {
+                service: None,
+                owner: &t.name.value,
+                state: &st.value,
+                codel,
+                throws: t.throws.iter().map(|e| last(&e.value)).collect(),
+            })
+        })
+    });
+    let services = comp.services.iter().flat_map(|s| {
+        s.codels.iter().flat_map(move |codel| {
+            codel.states.iter().map(move |st| Numbered {
+                service: Some(s),
+                owner: &s.name.value,
+                state: &st.value,
+                codel,
+                throws: s.throws.iter().map(|e| last(&e.value)).collect(),
+            })
+        })
+    });
+    tasks.chain(services).collect()
+}
+
+fn quoted(list: &[String]) -> String {
+    let q: Vec<String> = list.iter().map(|s| format!("{s:?}")).collect();
+    format!("&[{}]", q.join(", "))
+}
+
+fn component_glue(
+    m: &mut Mirrors,
+    types: &CTypes,
+    comp: &Component,
+    module: &ModuleDef,
+) -> Result<String, CodegenError> {
+    let c = &comp.name.value;
+    let ids = format!("{c}::ids");
+    let codels = numbered(comp);
+    let mut out = String::from("// The glue of the component's C codels (bip-codegen).\n");
+
+    // the module object's codels, as the engine checks them against the model
+    out.push_str("/// The module object's codels as the engine numbers them (tasks' machines, then the\n/// services' codels), with their outcomes as the model declares them.\npub const CODELS: &[bip_genom_c::bip_engine::CodelSignature] = &[\n");
+    for n in &codels {
+        let yields: Vec<String> = n
+            .codel
+            .yields
+            .iter()
+            .map(|y| y.value.replace(' ', ""))
+            .collect();
+        let _ = writeln!(
+            out,
+            "    bip_genom_c::bip_engine::CodelSignature {{ service: {:?}, codel: {:?}, yields: {}, throws: {} }},",
+            n.owner,
+            n.state,
+            quoted(&yields),
+            quoted(&n.throws)
+        );
+    }
+    out.push_str("];\n\n");
+
+    // the symbols: events, exceptions, codel functions
+    let mut events: BTreeSet<String> = BTreeSet::from(["ether".to_string()]);
+    for (_, codel) in all_codels(comp) {
+        events.extend(codel.yields.iter().map(|y| y.value.replace(' ', "")));
+    }
+    let exceptions: Vec<(String, String)> = types
+        .order
+        .iter()
+        .filter(|k| matches!(types.decl(k).map(|d| &d.body), Some(Body::Exception(_))))
+        .map(|k| (format!("{}_id", cname(k)), format!("::{k}")))
+        .collect();
+    out.push_str("extern \"C\" {\n");
+    for e in &events {
+        let _ = writeln!(
+            out,
+            "    static {}: [core::ffi::c_char; {}];",
+            cname(&format!("{c}::{e}")),
+            format!("::{c}::{e}").len() + 1
+        );
+    }
+    for (sym, full) in &exceptions {
+        let _ = writeln!(
+            out,
+            "    static {sym}: [core::ffi::c_char; {}];",
+            full.len() + 1
+        );
+    }
+    let _ = writeln!(
+        out,
+        "    static genom_fatal: [core::ffi::c_char; {}];",
+        "::genom::fatal".len() + 1
+    );
+
+    // each codel's arguments, and the ports they name
+    let mut calls = Vec::new();
+    let mut declared = BTreeSet::new();
+    let mut ports = BTreeSet::new();
+    for n in &codels {
+        let f = &n.codel.function.value;
+        let mut tys = Vec::new();
+        let mut exprs = Vec::new();
+        for p in &n.codel.params {
+            let place = format!("parameter `{}` of codel `{f}`", p.name.value);
+            let (at, ty) = param(types, comp, n.service, &ids, p).map_err(|e| within(e, &place))?;
+            if let (Place::Port(name), Param::Port(_)) = (&at, &ty) {
+                ports.insert(name.clone());
+            }
+            let a = arg(
+                m,
+                types,
+                &at,
+                &ty,
+                p.dir == Dir::In,
+                n.service.map(|s| s.name.value.as_str()),
+            )
+            .map_err(|e| within(e, &place))?;
+            tys.push(a.ty);
+            exprs.push(a.expr);
+        }
+        if declared.insert(f.clone()) {
+            let params: Vec<String> = tys
+                .iter()
+                .enumerate()
+                .map(|(k, t)| format!("a{k}: {t}"))
+                .chain(["this: *const bip_genom_c::ContextIface".to_string()])
+                .collect();
+            let _ = writeln!(
+                out,
+                "    fn {f}({}) -> bip_genom_c::GenomEvent;",
+                params.join(", ")
+            );
+        }
+        exprs.push("this".into());
+        calls.push(format!("{f}({})", exprs.join(", ")));
+    }
+    out.push_str("}\n\n");
+
+    // the events by address
+    let yields: Vec<String> = events
+        .iter()
+        .map(|e| {
+            format!(
+                "(core::ptr::addr_of!({}) as usize, {e:?})",
+                cname(&format!("{c}::{e}"))
+            )
+        })
+        .collect();
+    let excs: Vec<String> = exceptions
+        .iter()
+        .map(|(sym, full)| format!("(core::ptr::addr_of!({sym}) as usize, {:?})", last(full)))
+        .collect();
+    let _ = writeln!(
+        out,
+        "/// The component's events and exceptions by address, with each codel's declared ones.\npub fn events() -> bip_genom_c::Events {{\n    bip_genom_c::Events::new(\n        CODELS,\n        vec![{}],\n        vec![{}],\n    )\n}}\n",
+        yields.join(", "),
+        excs.join(", ")
+    );
+
+    // the memory of the C layout: ids, services' parameters and locals, ports' data
+    let ids_type = super::ctype::CType::Named(ids.clone());
+    let mut state = format!("/// What the component's codels share with the engine, in the C layout: its ids, each\n/// service's parameters and locals, each port's data.\n#[derive(Clone, Copy)]\npub struct State {{\n    pub ids: {},\n", m.rust(types, &ids_type, 1)?);
+    let mut set = maxima(types, &ids_type, "v.ids", 0);
+    let mut extra = String::new();
+    let mut starts = Vec::new();
+    let mut outputs = Vec::new();
+    for (s, def) in comp.services.iter().zip(&module.services) {
+        let Some(data) = service_data(m, types, comp, s, def, &mut extra)? else {
+            continue;
+        };
+        let _ = writeln!(state, "    pub {}: {data},", service_field(&s.name.value));
+        let _ = writeln!(
+            set,
+            "v.{} = {data}::default();",
+            service_field(&s.name.value)
+        );
+        starts.push((s.name.value.clone(), format!("args_{}", s.name.value)));
+        if s.params.iter().any(|p| p.dir != Dir::In && p.ty.is_some()) {
+            outputs.push((s.name.value.clone(), format!("output_{}", s.name.value)));
+        }
+    }
+    for name in &ports {
+        let Some(p) = comp.ports.iter().find(|p| &p.name.value == name) else {
+            continue;
+        };
+        let t = types.ctype(&p.ty, c)?;
+        let place = format!("port `{name}`");
+        if p.multiple {
+            return Err(CodegenError::CMapping(format!(
+                "{place}: a multiple port's handles (by id) are not in bip's glue"
+            )));
+        }
+        if holds_pointer(types, &t) {
+            return Err(CodegenError::CMapping(format!(
+                "{place}: its data holds a pointer (an unbounded string or sequence, a native), which the engine cannot keep"
+            )));
+        }
+        let rust = m.rust(types, &t, 1)?;
+        let _ = writeln!(state, "    pub {}: {rust},", port_field(name));
+        set.push_str(&maxima(types, &t, &format!("v.{}", port_field(name)), 0));
+        let ty = module
+            .ports
+            .iter()
+            .chain(&module.in_ports)
+            .find(|q| &q.name.value == name)
+            .and_then(|q| q.ty.as_ref());
+        port_glue(&mut extra, m, types, c, name, p.dir, &t, Conv::of(ty))?;
+    }
+    state.push_str("}\n");
+    state.push_str(&defaulted("State", &set));
+    state.push_str("// SAFETY: the pointers a state may hold (unbounded sequences' and strings' buffers,\n// natives) are the codels' own, which only this module object's codels touch, one call\n// at a time\nunsafe impl Send for State {}\n");
+    out.push_str(&state);
+    out.push_str(&extra);
+
+    // the call of codel k
+    out.push_str("\n/// The call in progress, for the port handles' functions (through the context).\nstruct Call {\n    state: *mut State,\n    ctx: *mut bip_genom_c::bip_engine::Ctx<'static>,\n}\n\n");
+    out.push_str("/// Runs codel `k` on `s`; `None` if its arguments are missing.\n///\n/// # Safety\n/// `s` and `ctx` are valid for the call, `this` is the module object's context.\n#[allow(unused_variables)]\nunsafe fn call(\n    k: usize,\n    s: *mut State,\n    ctx: *mut bip_genom_c::bip_engine::Ctx<'static>,\n    this: *const bip_genom_c::ContextIface,\n) -> Option<bip_genom_c::GenomEvent> {\n    unsafe {\n        Some(match k {\n");
+    for (k, (n, call)) in codels.iter().zip(&calls).enumerate() {
+        let owner = n.owner;
+        let start = match starts.iter().find(|(s, _)| s == owner) {
+            Some((_, f)) if n.state == "start" => {
+                format!(
+                    "if !{f}(&mut (*s).{}, &*ctx) {{ return None; }} ",
+                    service_field(owner)
+                )
+            }
+            _ => String::new(),
+        };
+        let body = match outputs.iter().find(|(s, _)| s == owner) {
+            Some((_, f)) => format!(
+                "let ev = {call}; {f}(&(*s).{}, &mut *ctx); ev",
+                service_field(owner)
+            ),
+            None => call.clone(),
+        };
+        let _ = writeln!(out, "            {k} => {{ {start}{body} }}");
+    }
+    out.push_str("            _ => return None,\n        })\n    }\n}\n\n");
+
+    let _ = write!(
+        out,
+        r#"/// The module object of component `{c}`: its memory of the C layout, the context its
+/// codels are given, and its events.
+pub struct Component {{
+    pub state: State,
+    context: bip_genom_c::Context,
+    events: bip_genom_c::Events,
+}}
+
+impl Default for Component {{
+    fn default() -> Self {{
+        Component {{
+            state: State::default(),
+            context: bip_genom_c::Context::default(),
+            events: events(),
+        }}
+    }}
+}}
+
+impl Component {{
+    /// What the codels raised, to be read from outside the engine.
+    pub fn raised(&self) -> std::sync::Arc<bip_genom_c::Raised> {{
+        self.context.raised()
+    }}
+
+    /// Runs codel `k` (as [`CODELS`] numbers them) and reads the event it returns: a
+    /// declared outcome, or one the engine takes the activity's error path with.
+    pub fn run(&mut self, k: usize, ctx: &mut bip_genom_c::bip_engine::Ctx<'_>) -> bip_genom_c::bip_engine::Next {{
+        let Some(sig) = CODELS.get(k) else {{
+            return bip_genom_c::bip_engine::Next::Declared(u16::MAX);
+        }};
+        let s: *mut State = &mut self.state;
+        let ctx: *mut bip_genom_c::bip_engine::Ctx<'static> = (ctx as *mut bip_genom_c::bip_engine::Ctx<'_>).cast();
+        let this = self.context.as_ptr();
+        let mut now = Call {{ state: s, ctx }};
+        let at: *mut Call = &mut now;
+        // SAFETY: the prototypes are the header's (the codels compile against it); the
+        // state, the context and the engine's `ctx` outlive the call, and the codel is
+        // given pointers into the state for the call only
+        let ev = self
+            .context
+            .with_call(at.cast(), || unsafe {{ call(k, s, ctx, this) }});
+        match ev {{
+            Some(ev) => self.events.next(k, sig, ev),
+            None => bip_genom_c::bip_engine::Next::Declared(u16::MAX),
+        }}
+    }}
+}}
+
+/// Binds every codel of module `{c}` to its C function, the module object owning its
+/// memory (nothing to lock).
+pub fn bind(builder: bip_genom_c::bip_engine::EngineBuilder) -> bip_genom_c::bip_engine::EngineBuilder {{
+    let mut module = Component::default();
+    builder.module({c:?}, CODELS, move |k, ctx| module.run(k, ctx))
+}}
+
+/// As [`bind`], the module object shared with the caller, who may read its memory between
+/// the engine's steps (a lock per codel call).
+pub fn bind_shared(
+    builder: bip_genom_c::bip_engine::EngineBuilder,
+) -> (bip_genom_c::bip_engine::EngineBuilder, std::sync::Arc<std::sync::Mutex<Component>>) {{
+    let shared = std::sync::Arc::new(std::sync::Mutex::new(Component::default()));
+    let module = std::sync::Arc::clone(&shared);
+    let builder = builder.module({c:?}, CODELS, move |k, ctx| match module.lock() {{
+        Ok(mut m) => m.run(k, ctx),
+        Err(_) => bip_genom_c::bip_engine::Next::Declared(u16::MAX),
+    }});
+    (builder, shared)
+}}
+"#
+    );
+    Ok(out)
+}
+
+/// The storage of service `s`'s parameters and locals (`{S}_data`), and, where the model's
+/// type of its arguments or output is a record of several or no model type, the
+/// `{S}_input` or `{S}_output` struct the engine takes; the functions that fill the storage
+/// from a request (`args_{S}`, at its `start` codel) and give the output (`output_{S}`,
+/// after each codel). `None` for a service with neither.
+fn service_data(
+    m: &mut Mirrors,
+    types: &CTypes,
+    comp: &Component,
+    s: &Service,
+    def: &bip_lang::genom::syntax::ServiceDef,
+    out: &mut String,
+) -> Result<Option<String>, CodegenError> {
+    let c = &comp.name.value;
+    let name = &s.name.value;
+    let mut fields = Vec::new();
+    for p in &s.params {
+        if let Some(ty) = &p.ty {
+            fields.push((p.dir, p.name.value.clone(), types.ctype(ty, c)?));
+        }
+    }
+    for l in &s.locals {
+        fields.push((Dir::InOut, l.name.value.clone(), types.ctype(&l.ty, c)?));
+    }
+    if fields.is_empty() || s.codels.is_empty() {
+        return Ok(None);
+    }
+    let mut rust = Vec::new();
+    for (_, n, t) in &fields {
+        rust.push((ident(n), m.rust(types, t, 1)?));
+    }
+    let data = format!("{name}_data");
+    let _ = writeln!(
+        out,
+        "\n/// Service `{name}`'s parameters and locals, in the C layout.\n#[derive(Clone, Copy)]\npub struct {data} {{"
+    );
+    for (n, t) in &rust {
+        let _ = writeln!(out, "    pub {n}: {t},");
+    }
+    out.push_str("}\n");
+    let set: String = fields
+        .iter()
+        .zip(&rust)
+        .map(|((_, _, t), (n, _))| maxima(types, t, &format!("v.{n}"), 0))
+        .collect();
+    out.push_str(&defaulted(&data, &set));
+    let locals = s.locals.len();
+    let params = &fields[..fields.len() - locals];
+    let ins: Vec<usize> = (0..params.len())
+        .filter(|&k| params[k].0 != Dir::Out)
+        .collect();
+    let outs: Vec<usize> = (0..params.len())
+        .filter(|&k| params[k].0 != Dir::In)
+        .collect();
+    // the arguments, at the start codel
+    let _ = writeln!(
+        out,
+        "/// Fills `d` for a new request of `{name}` from its arguments; false if they are missing.\n#[allow(unused_variables)]\nfn args_{name}(d: &mut {data}, ctx: &bip_genom_c::bip_engine::Ctx<'_>) -> bool {{\n    *d = {data}::default();"
+    );
+    let payload = |what: &str,
+                   chosen: &[usize],
+                   def: Option<&DataTypeDef>,
+                   out: &mut String|
+     -> Result<Option<(Conv, String, bool)>, CodegenError> {
+        match (chosen, def) {
+            ([], _) | (_, None) => Ok(None),
+            ([k], Some(d)) if !matches!(d, DataTypeDef::Rust(_)) => {
+                Ok(Some((Conv::of(Some(d)), rust[*k].1.clone(), false)))
+            }
+            (many, _) => {
+                let t = format!("{name}_{what}");
+                let _ = writeln!(out, "/// Service `{name}`'s {what} as the engine takes it.\n#[derive(Clone, Copy)]\npub struct {t} {{");
+                for &k in many {
+                    if holds_pointer(types, &fields[k].2) {
+                        return Err(CodegenError::CMapping(format!("service `{name}`: parameter `{}` holds a pointer (an unbounded string or sequence, a native), which a request cannot carry", fields[k].1)));
+                    }
+                    let _ = writeln!(out, "    pub {}: {},", rust[k].0, rust[k].1);
+                }
+                out.push_str("}\n");
+                let set: String = many
+                    .iter()
+                    .map(|&k| maxima(types, &fields[k].2, &format!("v.{}", rust[k].0), 0))
+                    .collect();
+                out.push_str(&defaulted(&t, &set));
+                Ok(Some((Conv::Mirror, t, true)))
+            }
+        }
+    };
+    let mut body = String::new();
+    match payload("input", &ins, def.args.as_ref(), &mut body)? {
+        None => {}
+        // one parameter, of the model's type
+        Some((conv, t, false)) => {
+            let f = &rust[ins[0]];
+            let _ = writeln!(
+                out,
+                "    match ctx.args::<{}>() {{\n        Some(v) => d.{} = {},\n        None => return false,\n    }}",
+                conv.engine_type(&t),
+                f.0,
+                conv.to_c("*v", &f.1)
+            );
+        }
+        // the glue's struct of them
+        Some((_, t, true)) => {
+            let _ = writeln!(
+                out,
+                "    let Some(v) = ctx.args::<{t}>() else {{\n        return false;\n    }};"
+            );
+            for &k in &ins {
+                let _ = writeln!(out, "    d.{0} = v.{0};", rust[k].0);
+            }
+        }
+    }
+    // a bounded sequence's bound is the type's, whatever the request's copy says
+    for &k in &ins {
+        out.push_str(&maxima(types, &fields[k].2, &format!("d.{}", rust[k].0), 0));
+    }
+    out.push_str("    true\n}\n");
+    // the output, after each codel
+    if !outs.is_empty() {
+        let _ = writeln!(
+            out,
+            "/// Gives `{name}`'s output (its `out` and `inout` parameters) to the engine.\n#[allow(unused_variables)]\nfn output_{name}(d: &{data}, ctx: &mut bip_genom_c::bip_engine::Ctx<'_>) {{"
+        );
+        match payload("output", &outs, def.output.as_ref(), &mut body)? {
+            None => {}
+            Some((conv, _, false)) => {
+                let _ = writeln!(
+                    out,
+                    "    ctx.set_output({});",
+                    conv.to_engine(&format!("d.{}", rust[outs[0]].0))
+                );
+            }
+            Some((_, t, true)) => {
+                let fs: Vec<String> = outs
+                    .iter()
+                    .map(|&k| format!("{0}: d.{0}", rust[k].0))
+                    .collect();
+                let _ = writeln!(out, "    ctx.set_output({t} {{ {} }});", fs.join(", "));
+            }
+        }
+        out.push_str("}\n");
+    }
+    out.push_str(&body);
+    Ok(Some(data))
+}
+
+/// A port's handle, as the codels see it (`{c}_p` of the header): a `#[repr(C)]` struct of
+/// the functions the glue gives, and its one static value. `data` points into the
+/// module object's state; an out port's `write` hands a copy to the engine's port, an in
+/// port's `read` copies the engine's data of the port it is connected to (none yet leaves
+/// it as it was).
+#[allow(clippy::too_many_arguments)]
+fn port_glue(
+    out: &mut String,
+    m: &mut Mirrors,
+    types: &CTypes,
+    c: &str,
+    name: &str,
+    dir: PortDir,
+    t: &super::ctype::CType,
+    conv: Conv,
+) -> Result<(), CodegenError> {
+    let rust = m.rust(types, t, 1)?;
+    let element = match types.fin(t) {
+        super::ctype::CType::String(Some(_)) => "core::ffi::c_char".to_string(),
+        super::ctype::CType::Array(e, _) => m.rust(types, e, 1)?,
+        _ => rust.clone(),
+    };
+    let handle = port_handle_type(name);
+    let field = port_field(name);
+    let (verb, body) = match dir {
+        PortDir::Out => (
+            "write",
+            format!(
+                "    let v = unsafe {{ (*(*call).state).{field} }};\n    unsafe {{ (*(*call).ctx).write_port::<{e}>({name:?}, {v}) }};",
+                e = conv.engine_type(&rust),
+                v = conv.to_engine("v")
+            ),
+        ),
+        PortDir::In => (
+            "read",
+            format!(
+                "    if let Some(v) = unsafe {{ (*(*call).ctx).port::<{e}>({c:?}, {name:?}) }} {{\n        let v = {v};\n        unsafe {{ (*(*call).state).{field} = v }};\n    }}",
+                e = conv.engine_type(&rust),
+                v = conv.to_c("*v", &rust)
+            ),
+        ),
+    };
+    let _ = write!(
+        out,
+        r#"
+/// Port `{name}`'s handle as its codels see it.
+#[repr(C)]
+pub struct {handle} {{
+    data: unsafe extern "C" fn(*const bip_genom_c::ContextIface) -> *mut {element},
+    {verb}: unsafe extern "C" fn(*const bip_genom_c::ContextIface) -> bip_genom_c::GenomEvent,
+}}
+
+#[allow(non_upper_case_globals)]
+static {h}: {handle} = {handle} {{
+    data: {field}_data,
+    {verb}: {field}_{verb},
+}};
+
+unsafe extern "C" fn {field}_data(this: *const bip_genom_c::ContextIface) -> *mut {element} {{
+    // SAFETY: the context a codel passes is its module object's, whose call is a `Call`
+    match unsafe {{ bip_genom_c::context::call::<Call>(this) }} {{
+        Some(call) => unsafe {{ core::ptr::addr_of_mut!((*(*call).state).{field}).cast() }},
+        None => core::ptr::null_mut(),
+    }}
+}}
+
+unsafe extern "C" fn {field}_{verb}(this: *const bip_genom_c::ContextIface) -> bip_genom_c::GenomEvent {{
+    // SAFETY: as in `{field}_data`
+    let Some(call) = (unsafe {{ bip_genom_c::context::call::<Call>(this) }}) else {{
+        return core::ptr::addr_of!(genom_fatal).cast();
+    }};
+{body}
+    core::ptr::null()
+}}
+"#,
+        h = port_handle(name),
+    );
+    Ok(())
+}
