@@ -1,0 +1,202 @@
+//! The rover split into the engine (this test's process) and its three module processes
+//! over zenoh on loopback: the same replies, held codels and recording as in one process.
+//! The processes are killed when the test ends, whatever its end; each test has its own
+//! port and key prefix, so tests run side by side.
+
+use std::net::TcpListener;
+use std::process::{Child, Command, Stdio};
+
+use bip_rover_controller::distributed::PROCESSES;
+use bip_zenoh::Network;
+
+/// Module processes, killed (and reaped) when dropped; they also end when their standard
+/// input closes, should this process die without dropping them.
+pub struct Processes(Vec<Child>);
+
+impl Drop for Processes {
+    fn drop(&mut self) {
+        for c in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+impl Processes {
+    pub fn spawn_one(&mut self, process: &str, network: &Network) {
+        let child = Command::new(env!("CARGO_BIN_EXE_bip-rover-controller"))
+            .args(["--module-process", process, "--until-stdin-closes"])
+            .args(["--connect", &network.listen[0]])
+            .args(["--prefix", &network.prefix])
+            .stdin(Stdio::piped())
+            .stdout(Stdio::null())
+            .spawn()
+            .expect("the controller's binary runs");
+        self.0.push(child);
+    }
+
+    /// Kills the `k`-th process spawned.
+    pub fn kill(&mut self, k: usize) {
+        let _ = self.0[k].kill();
+        let _ = self.0[k].wait();
+    }
+}
+
+/// A network of its own for test `name`: a free port on 127.0.0.1 for the engine to
+/// listen on, and a key prefix no other test uses.
+pub fn network(name: &str) -> Network {
+    let port = TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("a free port")
+        .port();
+    Network::loopback(
+        &format!("bip/test/{}/{name}", std::process::id()),
+        port,
+        true,
+    )
+}
+
+pub fn spawn_all(network: &Network) -> Processes {
+    let mut p = Processes(Vec::new());
+    for (name, _) in PROCESSES {
+        p.spawn_one(name, network);
+    }
+    p
+}
+
+#[test]
+fn the_rover_split_over_three_module_processes_runs_as_in_one() {
+    let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/rover.ron");
+    let one = bip_rover_controller::run(&model, false, &mut |_| {}).expect("in one process");
+    let network = network("split");
+    let _processes = spawn_all(&network);
+    let mut log = Vec::new();
+    let split = bip_rover_controller::supervisor::run_on(&model, false, Some(&network), &mut |l| {
+        log.push(l)
+    })
+    .unwrap_or_else(|e| panic!("distributed: {e}"));
+    let log = log.join("\n");
+    // the controller checked its recording against the model and every invariant
+    assert!(
+        log.contains("every invariant holds in every state"),
+        "{log}"
+    );
+    // the codels ran in the module processes: the engine's own simulated hardware never
+    // moved
+    assert!(log.contains("rover at x = 0.00 m, 0 packets sent"), "{log}");
+    assert_eq!(split.replies, one.replies, "{log}");
+    assert_eq!(split.held, one.held, "{log}");
+    assert_eq!(split.goto_ends, one.goto_ends);
+    assert_eq!(split.stopped_at, one.stopped_at);
+    assert_eq!(
+        (split.overruns, split.over_budget, split.faults),
+        (one.overruns, one.over_budget, one.faults)
+    );
+    // step for step the same run of the model
+    assert!(one.trace.steps.len() > 300);
+    assert_eq!(split.trace, one.trace);
+}
+
+/// The recording is a path of the model along which every invariant holds.
+fn check_recording(system: &bip_engine::System, trace: &bip_engine::Trace) {
+    use bip_engine::bip_model::PropertyKind;
+    let path = trace.replay(system).expect("the recording replays");
+    for (_, state) in &path {
+        for p in &system.properties {
+            if let PropertyKind::Invariant(e) = &p.kind {
+                assert!(
+                    system.holds(e, state, &p.name).expect("evaluates"),
+                    "invariant {} fails",
+                    p.name
+                );
+            }
+        }
+    }
+}
+
+/// The events of `ticks` ticks, as lines.
+fn run_ticks(engine: &mut bip_engine::Engine, ticks: u64) -> Vec<String> {
+    engine
+        .run_until(bip_engine::Until::Ticks(ticks))
+        .expect("the engine runs");
+    engine.events().map(|e| e.to_string()).collect()
+}
+
+#[test]
+fn a_killed_module_process_fails_its_activity_and_rejoins_when_restarted() {
+    use bip_engine::{Engine, VirtualClock};
+    use bip_rover_controller::rover::{pom, rflex};
+    use bip_zenoh::{RemoteModules, RemoteOptions};
+    use std::time::{Duration, Instant};
+
+    let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/rover.ron");
+    let system = bip_engine::load_file(&model).expect("the rover");
+    let network = network("fault");
+    let mut processes = spawn_all(&network);
+    let clock = VirtualClock::new();
+    let deadline = Duration::from_millis(300);
+    let options = RemoteOptions {
+        deadline,
+        virtual_clock: Some(clock.clone()),
+    };
+    let types = bip_rover_controller::distributed::types(&system);
+    let remote = RemoteModules::new(&network, &system, types, options).expect("the session");
+    let builder = Engine::builder(system.clone()).record(10_000).clock(clock);
+    let mut engine = bip_rover_controller::distributed::bind_remote(builder, &remote)
+        .expect("every module process answers")
+        .build()
+        .expect("the engine");
+    rflex::request_init(&mut engine).expect("a request");
+    let drive = rflex::request_track_speed(&mut engine, 0.5).expect("a request");
+    let track = pom::request_track(&mut engine).expect("a request");
+    let before = run_ticks(&mut engine, 5);
+    assert!(
+        before
+            .iter()
+            .any(|e| e.contains("rflex.TrackSpeed: started")),
+        "{before:?}"
+    );
+    assert!(before.iter().all(|e| !e.contains("fault")), "{before:?}");
+
+    // the drive process (rflex among its modules) dies with TrackSpeed running
+    processes.kill(0);
+    let t0 = Instant::now();
+    let during = run_ticks(&mut engine, 3);
+    // one run waited for its deadline, then the activity took its error path
+    assert!(t0.elapsed() < deadline * 3 + Duration::from_secs(2));
+    let ended = format!(
+        "#{} rflex.TrackSpeed: done: fault: codel rflex.TrackSpeed.track",
+        drive.0 .0
+    );
+    assert!(
+        during
+            .iter()
+            .any(|e| e.starts_with(&ended) && e.contains("did not run the codel")),
+        "{during:?}"
+    );
+    // the other processes' modules go on: pom.Track is still running, without a fault
+    assert_eq!(engine.inspect().stats().faults, 1, "{during:?}");
+    assert!(
+        during
+            .iter()
+            .all(|e| !e.contains(&format!("#{}", track.0 .0))),
+        "{during:?}"
+    );
+
+    // restarted, the process rejoins: TrackSpeed runs there again
+    processes.spawn_one("drive", &network);
+    remote
+        .wait_for("rflex", rflex::CODELS, Duration::from_secs(20))
+        .expect("the restarted process answers");
+    rflex::request_track_speed(&mut engine, 0.2).expect("a request");
+    let after = run_ticks(&mut engine, 5);
+    assert!(
+        after
+            .iter()
+            .any(|e| e.contains("rflex.TrackSpeed: started")),
+        "{after:?}"
+    );
+    assert_eq!(engine.inspect().stats().faults, 1, "{after:?}");
+    // nothing the model forbids happened: the whole run replays, every invariant holds
+    check_recording(&system, &engine.record());
+}
