@@ -9,7 +9,7 @@ use std::marker::PhantomData;
 use std::sync::Arc;
 
 use bip_engine::bip_model::genom::map::DataType;
-use bip_engine::{Ctx, HostedModule, Output, System};
+use bip_engine::{Ctx, Handle, HostedModule, Output, PendingReply, System};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use serde_json::Value;
@@ -37,6 +37,13 @@ trait Convert: Send + Sync {
         v: &Value,
     ) -> Result<(), String>;
     fn host_port(&self, h: &HostedModule, module: &str, port: &str) -> Option<Value>;
+    fn request(
+        &self,
+        handle: &Handle,
+        module: &str,
+        service: &str,
+        v: &Value,
+    ) -> Result<PendingReply, String>;
 }
 
 struct Typed<T> {
@@ -80,6 +87,17 @@ impl<T: Any + Send + Sync + Default> Convert for Typed<T> {
     }
     fn host_port(&self, h: &HostedModule, module: &str, port: &str) -> Option<Value> {
         h.port::<T>(module, port).map(self.to)
+    }
+    fn request(
+        &self,
+        handle: &Handle,
+        module: &str,
+        service: &str,
+        v: &Value,
+    ) -> Result<PendingReply, String> {
+        handle
+            .request(module, service, (self.from)(v)?)
+            .map_err(|e| e.to_string())
     }
 }
 
@@ -153,6 +171,16 @@ impl Codec {
     }
     pub(crate) fn host_port(&self, h: &HostedModule, module: &str, port: &str) -> Option<Value> {
         self.0.host_port(h, module, port)
+    }
+    /// Sends a request with arguments `v`, read as this codec's type.
+    pub(crate) fn request(
+        &self,
+        handle: &Handle,
+        module: &str,
+        service: &str,
+        v: &Value,
+    ) -> Result<PendingReply, String> {
+        self.0.request(handle, module, service, v)
     }
 }
 

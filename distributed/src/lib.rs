@@ -10,6 +10,8 @@
 //!   ([`RemoteModules::bind`] in place of the module's generated `bind`).
 //! - Module side: [`ModuleHost`] serves the runs of the modules a process holds, bound as
 //!   in one process ([`bip_engine::HostedModule`]).
+//! - Requests from other processes: [`RequestServer`] in the engine's process, [`request`]
+//!   in a client's.
 //! - [`Types`]: how the model's data cross the network (JSON, one codec per Rust type).
 //! - [`Network`]: the zenoh session (peer mode, TCP on loopback by default).
 //!
@@ -20,10 +22,12 @@ mod codec;
 mod host;
 mod network;
 mod remote;
+mod requests;
 mod wire;
 
 pub use codec::{Codec, Types};
 pub use host::ModuleHost;
 pub use network::{Network, NetworkError};
 pub use remote::{RemoteError, RemoteModules, RemoteOptions};
+pub use requests::{request, request_bytes, RequestServer, ServiceReply, ServiceRequest};
 pub use wire::{keys, Answer, Message, PortData, RunEnd, RunGrant, RunResult};

@@ -89,6 +89,11 @@ impl RemoteModules {
         })
     }
 
+    /// The engine's zenoh session (for a [`crate::RequestServer`] beside the modules).
+    pub fn session(&self) -> &zenoh::Session {
+        &self.session
+    }
+
     /// Waits until the process of `module` answers, and checks that it numbers the
     /// module's codels as `codels` does.
     pub fn wait_for(

@@ -12,6 +12,12 @@ pub mod keys {
     pub fn run(prefix: &str, module: &str) -> String {
         format!("{prefix}/module/{module}/run")
     }
+
+    /// Where the engine answers requests to services (`<prefix>/service/<module>/<Service>`;
+    /// `rest` is `<module>/<Service>`, or a pattern such as `**`).
+    pub fn service(prefix: &str, rest: &str) -> String {
+        format!("{prefix}/service/{rest}")
+    }
 }
 
 /// A query of the engine to a module process.

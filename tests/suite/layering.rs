@@ -98,7 +98,7 @@ const CRATES: &[Layers] = &[
         src: "distributed/src",
         layers: &[
             ("wire", &["network", "wire", "codec"]),
-            ("sides", &["remote", "host"]),
+            ("sides", &["remote", "host", "requests"]),
         ],
     },
     Layers {

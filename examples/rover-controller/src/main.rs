@@ -19,6 +19,46 @@ fn value(args: &[String], flag: &str) -> Option<String> {
         .and_then(|k| args.get(k + 1).cloned())
 }
 
+/// A client's request to a service of a layer (`--request module.Service [--args JSON]`):
+/// prints each reply as it comes.
+fn request(
+    network: &Network,
+    target: &str,
+    args: Option<String>,
+    timeout_ms: Option<String>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let (module, service) = target
+        .split_once('.')
+        .ok_or_else(|| format!("`{target}` is not `module.Service`"))?;
+    let args = match args {
+        Some(a) => {
+            Some(serde_json::from_str(&a).map_err(|e| format!("--args `{a}` is not JSON: {e}"))?)
+        }
+        None => None,
+    };
+    let timeout_ms: u64 = match timeout_ms {
+        Some(t) => t
+            .parse()
+            .map_err(|_| format!("--timeout-ms `{t}` is not a number"))?,
+        None => 5_000,
+    };
+    let session = network.open()?;
+    let timeout = std::time::Duration::from_millis(timeout_ms);
+    let replies = bip_zenoh::request(
+        &session,
+        &network.prefix,
+        module,
+        service,
+        args,
+        timeout,
+        |r| println!("{r}"),
+    )?;
+    match replies.last() {
+        Some(bip_zenoh::ServiceReply::Error { .. }) => Err("the request was not made".into()),
+        _ => Ok(()),
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let real_time = args.iter().any(|a| a == "--real-time");
@@ -35,7 +75,14 @@ fn main() {
         connect: value(&args, "--connect").into_iter().collect(),
         prefix: value(&args, "--prefix").unwrap_or_else(|| "bip/rover".into()),
     };
-    let result = if let Some(process) = value(&args, "--module-process") {
+    let result = if let Some(target) = value(&args, "--request") {
+        request(
+            &network,
+            &target,
+            value(&args, "--args"),
+            value(&args, "--timeout-ms"),
+        )
+    } else if let Some(process) = value(&args, "--module-process") {
         let stop = Arc::new(AtomicBool::new(false));
         if args.iter().any(|a| a == "--until-stdin-closes") {
             let stop = Arc::clone(&stop);

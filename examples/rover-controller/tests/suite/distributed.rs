@@ -200,3 +200,127 @@ fn a_killed_module_process_fails_its_activity_and_rejoins_when_restarted() {
     // nothing the model forbids happened: the whole run replays, every invariant holds
     check_recording(&system, &engine.record());
 }
+
+/// Runs the controller's binary as a client: `--request target [--args args]`; its exit
+/// status and its lines.
+fn client(network: &Network, target: &str, args: Option<&str>, timeout_ms: u64) -> (bool, String) {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_bip-rover-controller"));
+    c.args(["--request", target])
+        .args(["--connect", &network.listen[0]])
+        .args(["--prefix", &network.prefix])
+        .args(["--timeout-ms", &timeout_ms.to_string()]);
+    if let Some(a) = args {
+        c.args(["--args", a]);
+    }
+    let out = c.output().expect("the client runs");
+    let text =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.success(), text)
+}
+
+#[test]
+fn a_client_in_another_process_sends_typed_requests_and_reads_their_replies() {
+    use bip_engine::{Engine, RealClock, Until};
+    use bip_zenoh::{request_bytes, RequestServer, ServiceReply};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/rover.ron");
+    let system = bip_engine::load_file(&model).expect("the rover");
+    let network = network("requests");
+    let session = network.open().expect("the engine's session");
+    let hw = bip_rover_controller::hardware::Hardware::new();
+    let builder = bip_rover_controller::distributed::bind_codels(
+        Engine::builder(system.clone()),
+        &hw,
+        0.1,
+        None,
+    );
+    let mut engine = builder.clock(RealClock::new()).build().expect("the engine");
+    let types = bip_rover_controller::distributed::types(&system);
+    let server = RequestServer::start(
+        &session,
+        &network.prefix,
+        &system,
+        types,
+        engine.handle(),
+        Duration::from_secs(10),
+    )
+    .expect("the server");
+    let stop = Arc::new(AtomicBool::new(false));
+    let running = {
+        let stop = Arc::clone(&stop);
+        std::thread::spawn(move || {
+            while !stop.load(Ordering::Relaxed) {
+                engine.run_until(Until::Ticks(1)).expect("the engine runs");
+            }
+        })
+    };
+    // stops the engine's thread however the test ends
+    struct Stop(Arc<AtomicBool>);
+    impl Drop for Stop {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::Relaxed);
+        }
+    }
+    let _stop = Stop(Arc::clone(&stop));
+
+    // refused by the model, with its reason in the model's words
+    let (ok, out) = client(&network, "rflex.TrackSpeed", Some("0.5"), 5_000);
+    assert!(ok && out.contains("refused: after rflex.Init"), "{out}");
+    let (ok, out) = client(&network, "rflex.Init", None, 5_000);
+    assert!(
+        ok && out.contains("accepted") && out.contains("done: ether"),
+        "{out}"
+    );
+    // an activity: accepted and started; it runs until stopped
+    let (ok, out) = client(&network, "rflex.TrackSpeed", Some("0.5"), 1_500);
+    assert!(
+        ok && out.contains("accepted") && out.contains("started"),
+        "{out}"
+    );
+    let (ok, out) = client(&network, "rflex.Stop", None, 5_000);
+    assert!(ok && out.contains("done: ether"), "{out}");
+    // an end the model's rule gives: GoTo is aborted without the laser
+    let (ok, out) = client(&network, "ndd.GoTo", Some("1.0"), 5_000);
+    assert!(
+        ok && out.contains("done: aborted by a rule of the model"),
+        "{out}"
+    );
+
+    // malformed requests are refused with a message, and the engine goes on
+    let (ok, out) = client(&network, "rflex.TrackSpeed", Some("\"fast\""), 5_000);
+    assert!(
+        !ok && out
+            .contains("error: the arguments of rflex.TrackSpeed (\"fast\") are not of its type"),
+        "{out}"
+    );
+    let (ok, out) = client(&network, "rflex.Fly", None, 5_000);
+    assert!(
+        !ok && out.contains("names no service of the layer"),
+        "{out}"
+    );
+    let (ok, out) = client(&network, "rflex.Init", Some("3"), 5_000);
+    assert!(!ok && out.contains("takes no arguments"), "{out}");
+    let raw = request_bytes(
+        &session,
+        &network.prefix,
+        "rflex",
+        "Init",
+        b"{not json".to_vec(),
+        Duration::from_secs(5),
+        |_| {},
+    )
+    .expect("an answer");
+    assert!(
+        matches!(raw.as_slice(), [ServiceReply::Error { message }] if message.contains("is not `{\"args\": ...}` in JSON")),
+        "{raw:?}"
+    );
+    let (ok, out) = client(&network, "antenna.Communicate", Some("3"), 1_500);
+    assert!(ok && out.contains("accepted"), "{out}");
+
+    stop.store(true, Ordering::Relaxed);
+    running.join().expect("the engine's thread ends well");
+    drop(server);
+}
