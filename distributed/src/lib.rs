@@ -13,12 +13,14 @@
 //! - Requests from other processes: [`RequestServer`] in the engine's process, [`request`]
 //!   in a client's.
 //! - [`Types`]: how the model's data cross the network (JSON, one codec per Rust type).
+//! - [`Deployment`]: which module runs in which process, from a RON file.
 //! - [`Network`]: the zenoh session (peer mode, TCP on loopback by default).
 //!
 //! docs/distributed.md is the guide: the key expressions, the messages, faults, the
 //! rover split over three module processes.
 
 mod codec;
+mod deploy;
 mod host;
 mod network;
 mod remote;
@@ -26,6 +28,7 @@ mod requests;
 mod wire;
 
 pub use codec::{Codec, Types};
+pub use deploy::{DeployError, Deployment, Process};
 pub use host::ModuleHost;
 pub use network::{Network, NetworkError};
 pub use remote::{RemoteError, RemoteModules, RemoteOptions};

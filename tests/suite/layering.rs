@@ -97,7 +97,7 @@ const CRATES: &[Layers] = &[
     Layers {
         src: "distributed/src",
         layers: &[
-            ("wire", &["network", "wire", "codec"]),
+            ("wire", &["network", "wire", "codec", "deploy"]),
             ("sides", &["remote", "host", "requests"]),
         ],
     },

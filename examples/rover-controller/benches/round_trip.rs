@@ -9,7 +9,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::Instant;
 
 use bip_engine::{Engine, EngineBuilder, Stepped, VirtualClock};
-use bip_rover_controller::distributed::{bind_codels, bind_remote, types, PROCESSES};
+use bip_rover_controller::distributed::{bind_codels, bind_remote, types};
 use bip_rover_controller::hardware::Hardware;
 use bip_rover_controller::rover::{pom, rflex, sick};
 use bip_zenoh::{Network, RemoteModules, RemoteOptions};
@@ -74,7 +74,12 @@ fn main() {
 
     let clock = VirtualClock::new();
     let hw = Hardware::new();
-    let builder = bind_codels(Engine::builder(system.clone()), &hw, 0.1, Some(clock.clone()));
+    let builder = bind_codels(
+        Engine::builder(system.clone()),
+        &hw,
+        0.1,
+        Some(clock.clone()),
+    );
     let (times, wall) = measure(builder, clock, codels);
     report("one process", &times, wall);
 
@@ -84,7 +89,7 @@ fn main() {
         .port();
     let network = Network::loopback(&format!("bip/bench/{}", std::process::id()), port, true);
     let mut processes = Processes(Vec::new());
-    for (name, _) in PROCESSES {
+    for name in ["drive", "perception", "payload"] {
         let child = Command::new(env!("CARGO_BIN_EXE_bip-rover-controller"))
             .args(["--module-process", name, "--until-stdin-closes"])
             .args(["--connect", &network.listen[0], "--prefix", &network.prefix])

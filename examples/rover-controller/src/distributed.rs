@@ -14,13 +14,10 @@ use crate::codels::{Antenna, Camera, Heater, Laser, Localisation, Mapping, Navig
 use crate::hardware::{Dtm, Hardware, Image, Scan};
 use crate::rover::{self, Odometry, Pose};
 
-/// The module processes and the modules each runs. The modules that drive the simulated
-/// hardware share it, so they share a process (as they would share a computer).
-pub const PROCESSES: &[(&str, &[&str])] = &[
-    ("drive", &["rflex", "sick", "ndd", "antenna"]),
-    ("perception", &["pom", "aspect"]),
-    ("payload", &["heating", "camera"]),
-];
+/// The rover's deployment file: three module processes (`deploy.ron`).
+pub fn default_deployment_file() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("deploy.ron")
+}
 
 fn number(v: &serde_json::Value, field: &str) -> Result<f64, String> {
     v.get(field)
@@ -143,21 +140,13 @@ pub fn bind_remote(
     Ok(builder)
 }
 
-/// A module process: serves the codels of `process`'s modules until `stop` is set.
+/// A module process: serves the codels of `modules` until `stop` is set.
 pub fn serve_process(
     model: &std::path::Path,
-    process: &str,
+    modules: &[&str],
     network: &Network,
     stop: Arc<AtomicBool>,
 ) -> Result<(), Box<dyn Error>> {
-    let modules = PROCESSES
-        .iter()
-        .find(|p| p.0 == process)
-        .map(|p| p.1)
-        .ok_or_else(|| {
-            let names: Vec<&str> = PROCESSES.iter().map(|p| p.0).collect();
-            format!("no module process `{process}`; the rover's are {names:?}")
-        })?;
     let system = bip_engine::load_file(model)?;
     let tick_s = system.tick_ms.unwrap_or(100) as f64 / 1000.0;
     let clock = VirtualClock::new();

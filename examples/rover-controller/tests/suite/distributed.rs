@@ -6,8 +6,8 @@
 use std::net::TcpListener;
 use std::process::{Child, Command, Stdio};
 
-use bip_rover_controller::distributed::PROCESSES;
-use bip_zenoh::Network;
+use bip_rover_controller::distributed::default_deployment_file;
+use bip_zenoh::{Deployment, Network};
 
 /// Module processes, killed (and reaped) when dropped; they also end when their standard
 /// input closes, should this process die without dropping them.
@@ -56,10 +56,14 @@ pub fn network(name: &str) -> Network {
     )
 }
 
+/// The module processes of the rover's deployment file, on `network`.
 pub fn spawn_all(network: &Network) -> Processes {
+    let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/rover.ron");
+    let system = bip_engine::load_file(&model).expect("the rover");
+    let d = Deployment::load(&default_deployment_file(), &system).expect("deploy.ron");
     let mut p = Processes(Vec::new());
-    for (name, _) in PROCESSES {
-        p.spawn_one(name, network);
+    for process in &d.processes {
+        p.spawn_one(&process.name, network);
     }
     p
 }
@@ -323,4 +327,52 @@ fn a_client_in_another_process_sends_typed_requests_and_reads_their_replies() {
     stop.store(true, Ordering::Relaxed);
     running.join().expect("the engine's thread ends well");
     drop(server);
+}
+
+#[test]
+fn one_command_starts_the_layer_from_a_deployment_file() {
+    let network = network("deploy");
+    let text = std::fs::read_to_string(default_deployment_file())
+        .expect("deploy.ron")
+        .replace("bip/rover", &network.prefix)
+        .replace("tcp/127.0.0.1:7447", &network.listen[0]);
+    let dir = std::env::temp_dir().join(format!("bip-deploy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a directory");
+    let file = dir.join("deploy.ron");
+    std::fs::write(&file, &text).expect("written");
+    let run = |file: &std::path::Path| {
+        let out = Command::new(env!("CARGO_BIN_EXE_bip-rover-controller"))
+            .arg("--deploy")
+            .arg(file)
+            .stdin(Stdio::null())
+            .output()
+            .expect("the controller runs");
+        let text = String::from_utf8_lossy(&out.stdout).to_string()
+            + &String::from_utf8_lossy(&out.stderr);
+        (out.status.success(), text)
+    };
+    let (ok, out) = run(&file);
+    assert!(ok, "{out}");
+    assert!(
+        out.contains("every invariant holds in every state"),
+        "{out}"
+    );
+    // the codels ran in the module processes it started
+    assert!(out.contains("rover at x = 0.00 m, 0 packets sent"), "{out}");
+    // a module in no process, and a misspelt field, are errors with the file's words
+    let missing = dir.join("missing.ron");
+    std::fs::write(&missing, text.replace("\"pom\", ", "")).expect("written");
+    let (ok, out) = run(&missing);
+    assert!(
+        !ok && out.contains("module `pom` runs in no process"),
+        "{out}"
+    );
+    let misspelt = dir.join("misspelt.ron");
+    std::fs::write(&misspelt, text.replace("modules:", "modulez:")).expect("written");
+    let (ok, out) = run(&misspelt);
+    assert!(
+        !ok && out.contains("misspelt.ron:") && out.contains("Unexpected field named `modulez`"),
+        "{out}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }
