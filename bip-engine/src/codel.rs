@@ -78,6 +78,26 @@ pub(crate) enum CtxFault {
     },
 }
 
+impl From<CtxFault> for crate::event::FaultKind {
+    fn from(f: CtxFault) -> Self {
+        use crate::event::FaultKind;
+        match f {
+            CtxFault::IdsWrite(x) => FaultKind::UndeclaredIdsWrite(x),
+            CtxFault::PortWrite(p) => FaultKind::PortWrite(p),
+            CtxFault::NoPort(p) => FaultKind::NoSuchPort(p),
+            CtxFault::WrongType {
+                what,
+                expected,
+                given,
+            } => FaultKind::WrongType {
+                what,
+                expected,
+                given,
+            },
+        }
+    }
+}
+
 impl CtxFault {
     fn port(verb: &str, w: WrongType) -> CtxFault {
         CtxFault::WrongType {

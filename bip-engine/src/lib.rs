@@ -73,6 +73,7 @@ mod error;
 mod event;
 #[cfg(feature = "std")]
 mod handle;
+mod hosted;
 mod per_state;
 mod policy;
 mod ports;
@@ -107,6 +108,7 @@ pub use event::{
 };
 #[cfg(feature = "std")]
 pub use handle::{Handle, PendingReply};
+pub use hosted::{HostedEnd, HostedModule, HostedRun};
 pub use policy::Policy;
 pub use record::Window;
 pub use signature::{CodelSignature, ModuleTypes, ServiceTypes, Typed};

@@ -91,7 +91,14 @@ const CRATES: &[Layers] = &[
             ),
             ("remote", &["handle", "threads"]),
             ("engine", &["engine"]),
-            ("drivers", &["replay", "simulate"]),
+            ("drivers", &["replay", "simulate", "hosted"]),
+        ],
+    },
+    Layers {
+        src: "distributed/src",
+        layers: &[
+            ("wire", &["network", "wire", "codec", "deploy"]),
+            ("sides", &["remote", "host", "requests"]),
         ],
     },
     Layers {

@@ -45,6 +45,20 @@ pub struct EngineBuilder {
 }
 
 impl EngineBuilder {
+    /// The model, and the object bound to module `module` (taken away), for
+    /// [`crate::HostedModule`].
+    pub(crate) fn take_module(
+        &mut self,
+        module: &str,
+    ) -> (&System, Option<(&'static [CodelSignature], ModuleFn)>) {
+        let k = self.modules.iter().position(|m| m.0 == module);
+        let taken = k.map(|k| {
+            let (_, signature, f) = self.modules.swap_remove(k);
+            (signature, f)
+        });
+        (&self.system, taken)
+    }
+
     /// Binds codel `state` of service `service` of module `module`.
     pub fn codel(
         mut self,

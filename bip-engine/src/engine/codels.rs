@@ -15,7 +15,7 @@ use super::schedule::count_first;
 use super::{Engine, Stepped};
 use crate::bind::{CodelTable, RunStep};
 use crate::budgets::CodelTime;
-use crate::codel::{call_guarded, Body, Ctx, CtxFault, DefaultCodels, Next};
+use crate::codel::{call_guarded, Body, Ctx, DefaultCodels, Next};
 use crate::error::{EngineError, StepAsError};
 use crate::event::{Codel, CodelId, Event, Fault, FaultKind, Outcome};
 
@@ -240,21 +240,7 @@ impl Engine {
             Ok(n) => n,
         };
         if let Some(f) = self.runner.fault.take() {
-            let kind = match f {
-                CtxFault::IdsWrite(x) => FaultKind::UndeclaredIdsWrite(x),
-                CtxFault::PortWrite(p) => FaultKind::PortWrite(p),
-                CtxFault::NoPort(p) => FaultKind::NoSuchPort(p),
-                CtxFault::WrongType {
-                    what,
-                    expected,
-                    given,
-                } => FaultKind::WrongType {
-                    what,
-                    expected,
-                    given,
-                },
-            };
-            return fault(&c.name, kind);
+            return fault(&c.name, FaultKind::from(f));
         }
         match next {
             Next::Yield(y) => match c.yield_index(y) {

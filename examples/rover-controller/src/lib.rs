@@ -18,6 +18,7 @@
 //! and against every invariant.
 
 mod codels;
+pub mod distributed;
 pub mod hardware;
 pub mod supervisor;
 

@@ -10,9 +10,11 @@ use bip_engine::{
     VirtualClock,
 };
 
-use crate::codels::{Antenna, Camera, Heater, Laser, Localisation, Mapping, Navigation, Wheels};
+use bip_zenoh::{Network, RemoteModules, RemoteOptions};
+
+use crate::distributed::{bind_codels, bind_remote, types};
 use crate::hardware::Hardware;
-use crate::rover::{self, antenna, aspect, battery, camera, heating, ndd, pom, rflex, sick};
+use crate::rover::{antenna, aspect, battery, camera, heating, ndd, pom, rflex, sick};
 
 /// A request of the script, with its arguments of the types rover.ron declares.
 #[derive(Clone, Copy, Debug)]
@@ -108,26 +110,38 @@ pub fn run(
     real_time: bool,
     say: &mut dyn FnMut(String),
 ) -> Result<Report, Box<dyn Error>> {
+    run_on(model, real_time, None, say)
+}
+
+/// [`run`], with the codels in this process or, given a network, in the rover's module
+/// processes ([`crate::distributed`]), which must be running.
+pub fn run_on(
+    model: &std::path::Path,
+    real_time: bool,
+    network: Option<&Network>,
+    say: &mut dyn FnMut(String),
+) -> Result<Report, Box<dyn Error>> {
     let system = bip_engine::load_file(model)?;
     let hw = Hardware::new();
     let tick_s = system.tick_ms.unwrap_or(100) as f64 / 1000.0;
     let virtual_clock = VirtualClock::new();
-    let builder = rover::bind(
-        Engine::builder(system.clone()).record(10_000),
-        Wheels {
-            hw: hw.clone(),
+    let builder = Engine::builder(system.clone()).record(10_000);
+    let builder = match network {
+        None => bind_codels(
+            builder,
+            &hw,
             tick_s,
-        },
-        Laser { hw: hw.clone() },
-        Localisation,
-        Navigation { hw: hw.clone() },
-        Mapping,
-        Antenna { hw: hw.clone() },
-        Heater::default(),
-        Camera {
-            exposure: (!real_time).then(|| virtual_clock.clone()),
-        },
-    );
+            (!real_time).then(|| virtual_clock.clone()),
+        ),
+        Some(network) => {
+            let options = RemoteOptions {
+                virtual_clock: (!real_time).then(|| virtual_clock.clone()),
+                ..RemoteOptions::default()
+            };
+            let remote = RemoteModules::new(network, &system, types(&system), options)?;
+            bind_remote(builder, &remote)?
+        }
+    };
     let mut engine = if real_time {
         builder.clock(RealClock::new()).build()?
     } else {

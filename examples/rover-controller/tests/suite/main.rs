@@ -2,6 +2,8 @@
 //! the model gives, and its recording is a path of the model along which every invariant
 //! holds (the controller checks that itself and fails otherwise).
 
+mod distributed;
+
 use bip_rover_controller::rover::ndd;
 
 fn reply_texts<'a>(r: &'a bip_rover_controller::Report, service: &str) -> Vec<&'a str> {

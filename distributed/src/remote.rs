@@ -1,0 +1,339 @@
+//! The engine's side: a module whose codels run in another process is bound to a closure
+//! that sends each granted run there and brings its outcome back, for the engine to
+//! commit through its gate as it commits a codel it ran itself.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use bip_engine::{CodelSignature, Ctx, EngineBuilder, ModuleTypes, Next, System, VirtualClock};
+use serde_json::Value;
+use zenoh::Wait;
+
+use crate::codec::Types;
+use crate::network::{Network, NetworkError};
+use crate::wire::{keys, Answer, Message, PortData, RunEnd, RunGrant, RunResult};
+
+/// How long the engine waits for a module process.
+#[derive(Clone, Debug)]
+pub struct RemoteOptions {
+    /// The deadline of a codel run, beyond the codel's WCET when the model gives one: past
+    /// it, the run is the codel's fault and its activity takes its error path.
+    pub deadline: Duration,
+    /// The engine's virtual clock, if it runs on one: a remote codel's time on its
+    /// process's virtual clock ([`RunResult::virtual_us`]) is added to it, as a codel in
+    /// the engine's process advances the engine's clock itself.
+    pub virtual_clock: Option<VirtualClock>,
+}
+
+impl Default for RemoteOptions {
+    fn default() -> RemoteOptions {
+        RemoteOptions {
+            deadline: Duration::from_millis(500),
+            virtual_clock: None,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RemoteError {
+    #[error(transparent)]
+    Network(#[from] NetworkError),
+    #[error("{0}")]
+    Types(String),
+    #[error("the model has no module `{0}` with codels")]
+    NoSuchModule(String),
+    #[error("no process answered for module `{module}` within {waited_ms} ms (key `{key}`)")]
+    NoAnswer {
+        module: String,
+        key: String,
+        waited_ms: u128,
+    },
+    #[error("the process of module `{module}` runs other codels: {difference}")]
+    OtherCodels { module: String, difference: String },
+}
+
+/// The engine's connection to its module processes.
+pub struct RemoteModules {
+    session: zenoh::Session,
+    prefix: String,
+    types: Arc<Types>,
+    system: System,
+    options: RemoteOptions,
+}
+
+/// What the closure of a remote module knows of its codels.
+struct RemoteCodel {
+    /// `Service.codel`.
+    name: String,
+    service: String,
+    deadline: Duration,
+}
+
+impl RemoteModules {
+    /// Opens the engine's zenoh session; every typed datum of `system` must have its codec
+    /// in `types`.
+    pub fn new(
+        network: &Network,
+        system: &System,
+        types: Types,
+        options: RemoteOptions,
+    ) -> Result<RemoteModules, RemoteError> {
+        types.check(system).map_err(RemoteError::Types)?;
+        Ok(RemoteModules {
+            session: network.open()?,
+            prefix: network.prefix.clone(),
+            types: Arc::new(types),
+            system: system.clone(),
+            options,
+        })
+    }
+
+    /// The engine's zenoh session (for a [`crate::RequestServer`] beside the modules).
+    pub fn session(&self) -> &zenoh::Session {
+        &self.session
+    }
+
+    /// Waits until the process of `module` answers, and checks that it numbers the
+    /// module's codels as `codels` does.
+    pub fn wait_for(
+        &self,
+        module: &str,
+        codels: &[CodelSignature],
+        timeout: Duration,
+    ) -> Result<(), RemoteError> {
+        let key = keys::run(&self.prefix, module);
+        let start = Instant::now();
+        let want: Vec<String> = codels
+            .iter()
+            .map(|c| format!("{}.{}", c.service, c.codel))
+            .collect();
+        while start.elapsed() < timeout {
+            let left = timeout.saturating_sub(start.elapsed());
+            let answer = query(
+                &self.session,
+                &key,
+                &Message::Hello,
+                left.min(Duration::from_millis(250)),
+            );
+            if let Ok(Answer::Hello { codels, .. }) = answer {
+                if codels != want {
+                    return Err(RemoteError::OtherCodels {
+                        module: module.into(),
+                        difference: format!("it runs {codels:?}, the engine expects {want:?}"),
+                    });
+                }
+                return Ok(());
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        Err(RemoteError::NoAnswer {
+            module: module.into(),
+            key,
+            waited_ms: timeout.as_millis(),
+        })
+    }
+
+    /// Binds module `module` of `builder` to its process: in place of its generated
+    /// `bind`, with the same signature and types, which the engine checks against its
+    /// model as it does in one process.
+    pub fn bind(
+        &self,
+        builder: EngineBuilder,
+        module: &str,
+        codels: &'static [CodelSignature],
+        types: &'static ModuleTypes,
+    ) -> Result<EngineBuilder, RemoteError> {
+        let map = self
+            .system
+            .genom
+            .as_ref()
+            .and_then(|g| g.module(module))
+            .ok_or_else(|| RemoteError::NoSuchModule(module.into()))?;
+        let fields: Vec<String> = map.ids.iter().map(|f| f.name.clone()).collect();
+        let remote: Vec<RemoteCodel> = map
+            .services
+            .iter()
+            .flat_map(|s| {
+                s.codels.iter().map(|c| RemoteCodel {
+                    name: format!("{}.{}", s.name, c.state),
+                    service: s.name.clone(),
+                    deadline: self.options.deadline + Duration::from_micros(c.wcet_us.unwrap_or(0)),
+                })
+            })
+            .collect();
+        let mut proxy = Proxy {
+            session: self.session.clone(),
+            key: keys::run(&self.prefix, module),
+            module: module.to_string(),
+            types: Arc::clone(&self.types),
+            fields,
+            codels: remote,
+            seen: HashMap::new(),
+            clock: self.options.virtual_clock.clone(),
+        };
+        Ok(builder
+            .typed_as(module, types)
+            .module(module, codels, move |k, ctx| proxy.run(k, ctx)))
+    }
+}
+
+/// Sends a query and reads its one answer.
+fn query(
+    session: &zenoh::Session,
+    key: &str,
+    message: &Message,
+    timeout: Duration,
+) -> Result<Answer, String> {
+    let replies = session
+        .get(key)
+        .payload(message.to_bytes())
+        .timeout(timeout)
+        .wait()
+        .map_err(|e| format!("cannot query `{key}`: {e}"))?;
+    let reply = match replies.recv_timeout(timeout) {
+        Ok(Some(r)) => r,
+        _ => {
+            return Err(format!(
+                "no answer on `{key}` within {} ms",
+                timeout.as_millis()
+            ))
+        }
+    };
+    let sample = reply.result().map_err(|e| {
+        format!(
+            "an error on `{key}`: {}",
+            e.payload().try_to_string().unwrap_or_default()
+        )
+    })?;
+    serde_json::from_slice(&sample.payload().to_bytes())
+        .map_err(|e| format!("an unreadable answer on `{key}`: {e}"))
+}
+
+/// The closure of one remote module.
+struct Proxy {
+    session: zenoh::Session,
+    key: String,
+    module: String,
+    types: Arc<Types>,
+    fields: Vec<String>,
+    codels: Vec<RemoteCodel>,
+    /// The port data the module's process holds, as last sent or received: only changes
+    /// are sent.
+    seen: HashMap<(String, String), Value>,
+    clock: Option<VirtualClock>,
+}
+
+impl Proxy {
+    fn run(&mut self, k: usize, ctx: &mut Ctx<'_>) -> Next {
+        match self.try_run(k, ctx) {
+            Ok(next) => next,
+            // the engine makes it the codel's fault, with this message, without the
+            // panic hook's noise
+            Err(why) => std::panic::resume_unwind(Box::new(why)),
+        }
+    }
+
+    fn try_run(&mut self, k: usize, ctx: &mut Ctx<'_>) -> Result<Next, String> {
+        let codel = self
+            .codels
+            .get(k)
+            .ok_or_else(|| format!("module `{}` has no codel {k}", self.module))?;
+        let ids = self
+            .fields
+            .iter()
+            .map(|f| ctx.get(f).unwrap_or(0))
+            .collect();
+        let args = self
+            .types
+            .args_codec(&self.module, &codel.service)
+            .and_then(|c| c.read_args(ctx));
+        let mut ports = Vec::new();
+        for (m, p, c) in self.types.ports() {
+            let Some(data) = c.read_port(ctx, m, p) else {
+                continue;
+            };
+            let key = (m.to_string(), p.to_string());
+            if self.seen.get(&key) != Some(&data) {
+                self.seen.insert(key, data.clone());
+                ports.push(PortData {
+                    module: m.into(),
+                    port: p.into(),
+                    data,
+                });
+            }
+        }
+        let grant = RunGrant {
+            codel: k as u32,
+            name: codel.name.clone(),
+            ids,
+            args,
+            ports,
+            now_us: ctx.now_us(),
+            tick: ctx.tick(),
+        };
+        let deadline = codel.deadline;
+        let answer = query(&self.session, &self.key, &Message::Run(grant), deadline);
+        let result = match answer {
+            Ok(Answer::Ran(r)) => r,
+            Ok(Answer::Refused { reason }) => {
+                // what it holds is unknown now: send every port again next time
+                self.seen.clear();
+                return Err(format!(
+                    "the process of module `{}` refused the run: {reason}",
+                    self.module
+                ));
+            }
+            Ok(Answer::Hello { .. }) => {
+                return Err("a module process answered a run with its codels".into())
+            }
+            Err(e) => {
+                self.seen.clear();
+                return Err(format!(
+                    "the process of module `{}` did not run the codel (deadline {} ms): {e}",
+                    self.module,
+                    deadline.as_millis()
+                ));
+            }
+        };
+        self.apply(ctx, &codel.service.clone(), result)
+    }
+
+    /// Does in the engine's context what the codel did in its process.
+    fn apply(&mut self, ctx: &mut Ctx<'_>, service: &str, r: RunResult) -> Result<Next, String> {
+        if let Some(clock) = &self.clock {
+            clock.advance(r.virtual_us);
+        }
+        for (j, f) in self.fields.iter().enumerate() {
+            if r.written >> j & 1 == 1 {
+                let v = r
+                    .ids
+                    .get(j)
+                    .copied()
+                    .ok_or("fewer ids fields than written")?;
+                ctx.set(f, v);
+            }
+        }
+        for p in r.ports {
+            let codec = self
+                .types
+                .port_codec(&p.module, &p.port)
+                .ok_or_else(|| format!("no codec for port `{}.{}`", p.module, p.port))?;
+            codec
+                .write_port(ctx, &p.port, &p.data)
+                .map_err(|e| format!("port `{}.{}`: {e}", p.module, p.port))?;
+            self.seen.insert((p.module, p.port), p.data);
+        }
+        if let Some(v) = r.output {
+            let codec = self
+                .types
+                .output_codec(&self.module, service)
+                .ok_or_else(|| format!("no codec for the output of `{}.{service}`", self.module))?;
+            codec.set_output(ctx, &v)?;
+        }
+        match r.end {
+            RunEnd::Outcome(k) => Ok(Next::Declared(k)),
+            RunEnd::Fault(why) => Err(why),
+        }
+    }
+}
