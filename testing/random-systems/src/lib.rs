@@ -6,8 +6,12 @@
 //! the incremental enabled set, the state cache and the gate (bip-model), and the symbolic
 //! encoding and verdicts against the explicit ones (bip-verifier). What only some suites
 //! can take (roles, guards that fail, properties) is behind [`Options`].
+//!
+//! [`timed`] draws timed task sets instead, with the naive interpreter of the timed
+//! semantics that answers for them.
 
 mod ron;
+pub mod timed;
 
 pub use bip_model::Rng;
 
