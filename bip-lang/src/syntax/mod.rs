@@ -277,6 +277,10 @@ pub struct ConnectorDef {
     pub guard: Option<ExprDef>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub action: Option<ActionDef>,
+    /// Of a `Time` connector: the time units its step stands for (default 1), evaluated on
+    /// the state the step leaves; its action reads it as `advance`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub advance: Option<ExprDef>,
 }
 
 #[derive(Clone, Debug, Default, serde::Deserialize, serde::Serialize)]

@@ -1,5 +1,6 @@
 //! bip-verifier's integration tests, in one binary (one link instead of five):
 //!
+//! - `advance`: time steps of several units, in bounded response and range errors;
 //! - `known_answers`: verdicts, state counts and trace lengths known independently of bip;
 //! - `random_systems`: every worker count gives the same report, equal to a naive search;
 //! - `response`: response properties against a naive search for unanswered triggers, on
@@ -11,6 +12,7 @@
 //! - `time_progress`: timelocks against a naive search for a tick from every state, the
 //!   fuzzer's timelocks that made liveness properties hold, and the symbolic method.
 
+mod advance;
 mod known_answers;
 mod random_systems;
 mod response;

@@ -107,6 +107,7 @@ fn connector(name: &str, ports: Vec<ExprDef>, role: Role) -> ConnectorDef {
         role,
         guard: None,
         action: None,
+        advance: None,
     }
 }
 

@@ -1,6 +1,7 @@
-//! What the response properties keep of the stored graph: which steps are ticks, and
-//! where each property's trigger and response happen, on states and on steps, as flag
-//! bits; and the first range error met in evaluating them.
+//! What the response properties keep of the stored graph: which steps are ticks and how
+//! many time units each stands for, and where each property's trigger and response
+//! happen, on states and on steps, as flag bits; and the first range error met in
+//! evaluating them.
 
 use bip_model::{Happenings, Happens, Role, State, Step, System};
 
@@ -39,7 +40,18 @@ pub(crate) fn at_start(g: &Flagged, p: usize) -> Happenings {
 /// Where property `p`'s trigger and response happen on edge `e`, counting the state it
 /// leads to (as `System::happenings_on` does).
 pub(crate) fn on_edge(g: &Flagged, p: usize, e: usize) -> Happenings {
-    of_bits(g.edge_data[e] | g.state_flags[g.targets[e] as usize], p)
+    of_bits(
+        g.edge_data[e].bits | g.state_flags[g.targets[e] as usize],
+        p,
+    )
+}
+
+/// What is kept of a step: its flag bits, and the time units it stands for (0 but for a
+/// tick, [`System::time_advance`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct EdgeFlags {
+    pub(crate) bits: u32,
+    pub(crate) units: u32,
 }
 
 fn of_bits(bits: u32, p: usize) -> Happenings {
@@ -58,7 +70,7 @@ pub(crate) struct EvalFailure {
 
 /// The graph the response properties are decided on: flag bits on its edges, and per
 /// property its first range error.
-pub(crate) type Flagged = Graph<u32, Vec<Option<EvalFailure>>>;
+pub(crate) type Flagged = Graph<EdgeFlags, Vec<Option<EvalFailure>>>;
 
 /// The properties watched on a graph of `system`.
 pub(crate) struct Watching<'s, 'a> {
@@ -67,7 +79,7 @@ pub(crate) struct Watching<'s, 'a> {
 }
 
 impl Keep for Watching<'_, '_> {
-    type Edge = u32;
+    type Edge = EdgeFlags;
     type Notes = Vec<Option<EvalFailure>>;
 
     fn notes(&self) -> Self::Notes {
@@ -95,12 +107,17 @@ impl Keep for Watching<'_, '_> {
         next: &State,
         me: u32,
         failures: &mut Self::Notes,
-    ) -> u32 {
+    ) -> EdgeFlags {
         let mut flags = match self.system.role(step.label) {
             Role::Time => TICK,
             Role::Environment => ENVIRONMENT,
             _ => 0,
         };
+        // the step fired, so its advance evaluates (to at least 1)
+        let units = self
+            .system
+            .time_advance(state, step)
+            .map_or(1, |u| u32::try_from(u).unwrap_or(u32::MAX));
         for (p, w) in self.watched.iter().enumerate() {
             for (bit, h) in [(trigger_bit(p), w.trigger), (response_bit(p), w.response)] {
                 match self.system.happens_on(h, state, step, next, &w.context) {
@@ -110,7 +127,7 @@ impl Keep for Watching<'_, '_> {
                 }
             }
         }
-        flags
+        EdgeFlags { bits: flags, units }
     }
 
     fn merge(&self, failures: &mut Self::Notes, later: Self::Notes) {
