@@ -5,7 +5,7 @@
 //! with a trigger unanswered, ends a shortest counterexample.
 
 use super::run::Run;
-use super::watched::{at_start, on_edge, trigger_bit, Flagged, TICK};
+use super::watched::{at_start, on_edge, trigger_bit, units, Flagged, TICK};
 use crate::explore::graph::IN_ERROR;
 use crate::watch::Watch;
 
@@ -43,9 +43,8 @@ impl Observer<'_> {
     /// From observer value `o`, along edge `e`.
     fn next(&self, o: u32, e: usize) -> Next {
         let mut o = o;
-        let edge = self.g.edge_data[e];
-        if o > 0 && edge.bits & TICK != 0 {
-            let after = u64::from(o - 1) + u64::from(edge.units);
+        if o > 0 && self.g.edge_data[e] & TICK != 0 {
+            let after = u64::from(o - 1) + u64::from(units(self.g, e));
             if after > self.within {
                 return Next::Late;
             }
@@ -68,7 +67,7 @@ pub(crate) fn search(g: &Flagged, p: usize, within: u64, watch: &Watch) -> Found
     let obs = Observer { g, p, within };
     let trigger = trigger_bit(p);
     let vacuous = !g.state_flags.iter().any(|f| f & trigger != 0)
-        && !g.edge_data.iter().any(|f| f.bits & trigger != 0);
+        && !g.edge_data.iter().any(|f| f & trigger != 0);
     if vacuous {
         return Found::Holds { vacuous };
     }

@@ -64,9 +64,7 @@ impl Waiting<'_> {
     fn fair(&self, s: u32, e: usize) -> bool {
         match self.forever {
             Forever::Any => true,
-            Forever::Divergent(locked) => {
-                self.g.edge_data[e].bits & TICK != 0 || locked[s as usize]
-            }
+            Forever::Divergent(locked) => self.g.edge_data[e] & TICK != 0 || locked[s as usize],
             Forever::Timelocked(locked) => locked[s as usize],
         }
     }
@@ -95,7 +93,7 @@ pub(crate) fn search<'g>(g: &'g Flagged, p: usize, forever: Forever<'g>, watch: 
     // avoided: a trigger happens in the initial state or on a step (counting the state it
     // leads to), and starts a wait only if the response does not happen there too
     let vacuous = !g.state_flags.iter().any(|f| f & trigger != 0)
-        && !g.edge_data.iter().any(|f| f.bits & trigger != 0);
+        && !g.edge_data.iter().any(|f| f & trigger != 0);
     let mut start = None;
     if at_start(g, p).waits_after(false) && doomed(0) {
         start = Some((0, None));

@@ -43,7 +43,7 @@ pub(crate) fn locked(g: &Flagged, watch: &Watch) -> Option<Timelocks> {
             for e in g.edges(x) {
                 let d = scc.of[g.targets[e] as usize];
                 cyclic[c as usize] |= d == c;
-                passes[c as usize] |= g.edge_data[e].bits & TICK != 0 || passes[d as usize];
+                passes[c as usize] |= g.edge_data[e] & TICK != 0 || passes[d as usize];
             }
         }
     }
@@ -102,10 +102,9 @@ fn close_cycle(g: &Flagged, run: &mut Run, comp: &[u32], follow: impl Fn(usize) 
 /// `Some(None)` if there is none, `None` once `watch` says stop.
 pub(crate) fn first_busy_loop(g: &Flagged, watch: &Watch) -> Option<Option<Run>> {
     let held = |s: u32| {
-        g.state_flags[s as usize] & IN_ERROR == 0
-            && g.edges(s).all(|e| g.edge_data[e].bits & TICK == 0)
+        g.state_flags[s as usize] & IN_ERROR == 0 && g.edges(s).all(|e| g.edge_data[e] & TICK == 0)
     };
-    let follow = |e: usize| g.edge_data[e].bits & ENVIRONMENT == 0 && held(g.targets[e]);
+    let follow = |e: usize| g.edge_data[e] & ENVIRONMENT == 0 && held(g.targets[e]);
     let scc = scc::components(g, held, follow, watch)?;
     let mut cyclic = vec![false; scc.len()];
     for c in 0..scc.len() as u32 {

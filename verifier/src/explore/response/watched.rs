@@ -40,18 +40,13 @@ pub(crate) fn at_start(g: &Flagged, p: usize) -> Happenings {
 /// Where property `p`'s trigger and response happen on edge `e`, counting the state it
 /// leads to (as `System::happenings_on` does).
 pub(crate) fn on_edge(g: &Flagged, p: usize, e: usize) -> Happenings {
-    of_bits(
-        g.edge_data[e].bits | g.state_flags[g.targets[e] as usize],
-        p,
-    )
+    of_bits(g.edge_data[e] | g.state_flags[g.targets[e] as usize], p)
 }
 
-/// What is kept of a step: its flag bits, and the time units it stands for (0 but for a
-/// tick, [`System::time_advance`]).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct EdgeFlags {
-    pub(crate) bits: u32,
-    pub(crate) units: u32,
+/// The time units tick `e` stands for ([`System::time_advance`]): 1 in a model without
+/// `advance`.
+pub(crate) fn units(g: &Flagged, e: usize) -> u32 {
+    g.notes.units.get(e).copied().unwrap_or(1)
 }
 
 fn of_bits(bits: u32, p: usize) -> Happenings {
@@ -70,30 +65,44 @@ pub(crate) struct EvalFailure {
 
 /// The graph the response properties are decided on: flag bits on its edges, and per
 /// property its first range error.
-pub(crate) type Flagged = Graph<EdgeFlags, Vec<Option<EvalFailure>>>;
+pub(crate) type Flagged = Graph<u32, Notes>;
+
+/// What the graph notes besides its flags: per property its first range error, and in a
+/// model with `advance` the time units of each edge in edge order (0 but for ticks; a
+/// chunk's edges and the chunks come in order), empty otherwise so that other models pay
+/// nothing for it.
+pub(crate) struct Notes {
+    pub(crate) failures: Vec<Option<EvalFailure>>,
+    pub(crate) units: Vec<u32>,
+}
 
 /// The properties watched on a graph of `system`.
 pub(crate) struct Watching<'s, 'a> {
     pub(crate) system: &'s System,
     pub(crate) watched: &'s [Watched<'a>],
+    /// The system has an `advance` ([`System::has_advance`]): the graph notes units.
+    pub(crate) advance: bool,
 }
 
 impl Keep for Watching<'_, '_> {
-    type Edge = EdgeFlags;
-    type Notes = Vec<Option<EvalFailure>>;
+    type Edge = u32;
+    type Notes = Notes;
 
     fn notes(&self) -> Self::Notes {
-        (0..self.watched.len()).map(|_| None).collect()
+        Notes {
+            failures: (0..self.watched.len()).map(|_| None).collect(),
+            units: Vec::new(),
+        }
     }
 
-    fn state(&self, state: &State, me: u32, failures: &mut Self::Notes) -> u32 {
+    fn state(&self, state: &State, me: u32, notes: &mut Self::Notes) -> u32 {
         let mut flags = 0u32;
         for (p, w) in self.watched.iter().enumerate() {
             for (bit, h) in [(trigger_bit(p), w.trigger), (response_bit(p), w.response)] {
                 match self.system.happens_in(h, state, &w.context) {
                     Ok(true) => flags |= bit,
                     Ok(false) => {}
-                    Err(e) => fail(&mut failures[p], me, e.to_string()),
+                    Err(e) => fail(&mut notes.failures[p], me, e.to_string()),
                 }
             }
         }
@@ -106,36 +115,39 @@ impl Keep for Watching<'_, '_> {
         step: Step<'_>,
         next: &State,
         me: u32,
-        failures: &mut Self::Notes,
-    ) -> EdgeFlags {
+        notes: &mut Self::Notes,
+    ) -> u32 {
         let mut flags = match self.system.role(step.label) {
             Role::Time => TICK,
             Role::Environment => ENVIRONMENT,
             _ => 0,
         };
-        // the step fired, so its advance evaluates (to at least 1)
-        let units = self
-            .system
-            .time_advance(state, step)
-            .map_or(1, |u| u32::try_from(u).unwrap_or(u32::MAX));
+        if self.advance {
+            // the step fired, so its advance evaluates (to at least 1)
+            let units = self.system.time_advance(state, step);
+            notes
+                .units
+                .push(units.map_or(1, |u| u32::try_from(u).unwrap_or(u32::MAX)));
+        }
         for (p, w) in self.watched.iter().enumerate() {
             for (bit, h) in [(trigger_bit(p), w.trigger), (response_bit(p), w.response)] {
                 match self.system.happens_on(h, state, step, next, &w.context) {
                     Ok(true) => flags |= bit,
                     Ok(false) => {}
-                    Err(err) => fail(&mut failures[p], me, err.to_string()),
+                    Err(err) => fail(&mut notes.failures[p], me, err.to_string()),
                 }
             }
         }
-        EdgeFlags { bits: flags, units }
+        flags
     }
 
-    fn merge(&self, failures: &mut Self::Notes, later: Self::Notes) {
-        for (mine, theirs) in failures.iter_mut().zip(later) {
+    fn merge(&self, notes: &mut Self::Notes, later: Self::Notes) {
+        for (mine, theirs) in notes.failures.iter_mut().zip(later.failures) {
             if mine.is_none() {
                 *mine = theirs;
             }
         }
+        notes.units.extend(later.units);
     }
 }
 
