@@ -5,7 +5,7 @@ use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 use super::build::{Expansion, UserExpr, UserTexts};
-use super::{build, check, events, machines, rewrite, timing};
+use super::{build, check, events, machines, rewrite, timed, timing};
 use crate::compile::{compile_core, written_text, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::expr::{Assign, Expr};
@@ -34,6 +34,14 @@ pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion
         errors.push(e);
     }
     let timing = timing::check(def, &layer, &consts, &mut errors);
+    let timed = timed::check(def, &layer, &consts, &timing, &mut errors);
+    if let Some(timed) = &timed {
+        errors.push(
+            ModelError::new("`time: Exact` is not supported yet", timed.span)
+                .with_help("leave `time` out: codels are then instants and `bip sched` analyses the time budgets"),
+        );
+    }
+
     let mut rw = rewrite::Rewriter::new(&layer, &consts);
     let mut user = UserTexts::default();
     // each user text as a tree, rewritten if it names GenoM things
@@ -139,6 +147,14 @@ pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion
         .collect();
     let mut expansion = build::build(&layer, def, caps, user)?;
     expansion.recipe.timing = timing;
+    if let Some(t) = &timed {
+        expansion.recipe.time_unit_us = Some(t.unit_us);
+        expansion.recipe.cores = t
+            .tasks
+            .iter()
+            .map(|m| m.iter().map(|task| task.core).collect())
+            .collect();
+    }
     Ok(expansion)
 }
 

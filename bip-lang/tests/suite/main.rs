@@ -22,4 +22,5 @@ mod response;
 mod robustness;
 mod support;
 mod task_machines;
+mod timed;
 mod timing;

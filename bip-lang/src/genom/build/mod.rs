@@ -285,6 +285,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             self.recipe.modules.push(RecipeModule {
                 name: m.name.to_string(),
                 tasks: m.tasks.iter().map(|&(n, p)| (n.to_string(), p)).collect(),
+                delays: m.delays.clone(),
                 ports: m
                     .ports
                     .iter()
