@@ -35,12 +35,6 @@ pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion
     }
     let timing = timing::check(def, &layer, &consts, &mut errors);
     let timed = timed::check(def, &layer, &consts, &timing, &mut errors);
-    if let Some(timed) = &timed {
-        errors.push(
-            ModelError::new("`time: Exact` is not supported yet", timed.span)
-                .with_help("leave `time` out: codels are then instants and `bip sched` analyses the time budgets"),
-        );
-    }
 
     let mut rw = rewrite::Rewriter::new(&layer, &consts);
     let mut user = UserTexts::default();
@@ -145,7 +139,7 @@ pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion
         .into_iter()
         .map(|(p, k)| (p, k.max(0) + 1))
         .collect();
-    let mut expansion = build::build(&layer, def, caps, user)?;
+    let mut expansion = build::build(&layer, def, caps, user, timed.as_ref())?;
     expansion.recipe.timing = timing;
     if let Some(t) = &timed {
         expansion.recipe.time_unit_us = Some(t.unit_us);

@@ -23,4 +23,5 @@ mod robustness;
 mod support;
 mod task_machines;
 mod timed;
+mod timed_expansion;
 mod timing;

@@ -3,7 +3,7 @@
 
 use bip_lang::load_str;
 
-use crate::support::errors::{assert_error, first_error};
+use crate::support::errors::assert_error;
 
 const TIMED: &str = r#"System(
     name: "ts",
@@ -48,16 +48,23 @@ fn pinned(t0: &str, t1: &str) -> String {
 }
 
 #[test]
-fn a_timed_model_passes_every_check() {
-    // what is left is the expansion
-    let (msg, covered, _) = first_error(TIMED);
-    assert!(msg.contains("`time: Exact` is not supported yet"), "{msg}");
-    assert_eq!(covered, "Exact");
-    // with a unit that divides every duration, and pinned tasks
-    let (msg, _, _) = first_error(&bad("time: Exact,", r#"time: Exact(unit: "500us"),"#));
-    assert!(msg.contains("not supported yet"), "{msg}");
-    let (msg, _, _) = first_error(&pinned("core: 1", "core: 0"));
-    assert!(msg.contains("not supported yet"), "{msg}");
+fn a_timed_model_loads_with_its_unit() {
+    let unit = |text: &str| {
+        let system = load_str("ts.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()));
+        let map = system.genom.expect("a GenoM layer");
+        let t0 = &map.modules[0].tasks[0];
+        assert_eq!((t0.period, t0.delay), (Some(5), 1));
+        map.time_unit_us
+    };
+    // the largest that divides 1 ms (the tick, periods, delay, deadline) and 500 µs
+    assert_eq!(unit(TIMED), Some(500));
+    assert_eq!(
+        unit(&bad("time: Exact,", r#"time: Exact(unit: "250us"),"#)),
+        Some(250)
+    );
+    let system = load_str("p.ron", &pinned("core: 1", "core: 0")).expect("loads");
+    let tasks = &system.genom.expect("a GenoM layer").modules[0].tasks;
+    assert_eq!((tasks[0].core, tasks[1].core), (Some(1), Some(0)));
 }
 
 #[test]
@@ -230,4 +237,24 @@ fn time_in_a_model_without_genom_layer() {
         "`time: Exact` times a GenoM layer, and this model has none",
         "Exact",
     );
+}
+
+#[test]
+fn a_bound_in_ticks_where_the_unit_is_not_the_tick() {
+    let with_response = TIMED.replacen(
+        "    ],\n)",
+        "    ],\n    properties: [Replies(service: \"m0.Run\", within: 3)],\n)",
+        1,
+    );
+    assert!(with_response.contains("within: 3"));
+    assert_error(
+        &with_response,
+        "`within` in a timed model whose time unit (500 µs) is not its tick is not supported yet",
+        "3",
+    );
+    // with the tick as the unit, a bound counts units that are ticks
+    let whole = with_response
+        .replacen(r#""500us""#, r#""1ms""#, 1)
+        .replacen("time: Exact,", r#"time: Exact(unit: "1ms"),"#, 1);
+    load_str("whole.ron", &whole).unwrap_or_else(|e| panic!("{}", e.summary()));
 }

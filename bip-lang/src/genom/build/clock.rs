@@ -27,7 +27,7 @@ const MAX_PHASE: i64 = 1 << 20;
 impl<'a, 'd> Builder<'a, 'd> {
     /// The tick's part for module `mi`: the ports that constraints read age by one, up to
     /// their cap, where `on_tick` holds (always if `None`).
-    fn age_ports(
+    pub(super) fn age_ports(
         &self,
         mi: usize,
         on_tick: Option<&Expr>,
@@ -86,7 +86,11 @@ impl<'a, 'd> Builder<'a, 'd> {
     }
 
     pub(super) fn clock(&mut self) {
-        let (l, too_long) = self.phase_len();
+        // a timed model's phase counts time units (its cycle checked with the layer)
+        let (l, too_long) = match self.timed {
+            Some(t) => (t.hyperperiod as i64, None),
+            None => self.phase_len(),
+        };
         if let Some(span) = too_long {
             self.errors.push(
                 ModelError::new(

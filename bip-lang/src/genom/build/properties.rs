@@ -129,6 +129,9 @@ impl<'a, 'd> Builder<'a, 'd> {
                 }
             });
         }
+        if let Some(t) = self.timed {
+            out.extend(self.deadline_invariants(t));
+        }
         out
     }
 }
