@@ -131,9 +131,10 @@ pub fn is_timed(system: &System) -> bool {
         .is_some_and(|g| g.time_unit_us.is_some())
 }
 
-/// True if `system` declares time budgets that a verification checks as `Schedulable`.
+/// True if `system` declares time budgets that a verification checks as `Schedulable`
+/// (a timed model checks its deadlines as invariants instead).
 pub fn has_time_budgets(system: &System) -> bool {
-    tasks::TaskTable::new(system).is_some()
+    !is_timed(system) && tasks::TaskTable::new(system).is_some()
 }
 
 /// `Schedulable` as a property of a verification: `None` if the model declares no WCET.

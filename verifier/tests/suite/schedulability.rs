@@ -483,12 +483,59 @@ fn a_timed_model_decides_its_deadlines_by_exploration() {
         &|_| {},
     )
     .unwrap();
-    let trace = report.properties[0]
-        .verdict
-        .trace()
-        .expect("a counterexample");
+    let hi = report
+        .properties
+        .iter()
+        .find(|p| p.name == "m.hi meets its 2 ms deadline")
+        .expect("hi's deadline");
+    let trace = hi.verdict.trace().expect("a counterexample");
     let ticks = trace.steps.iter().filter(|s| s.step == "tick").count();
     assert_eq!(ticks, 8);
     // with 3 ms, `hi` responds in at most 3 ms: no miss
     assert!(verdicts(&text("3ms")).iter().all(|(_, fails)| !fails));
+    // and the worst responses are 3 ms each, each with the run that ends in the job end
+    // that takes it; with a miss they are not given
+    let worst = |text: &str| -> Vec<(String, Option<String>, Option<String>)> {
+        let system = load_str("ts.ron", text).unwrap();
+        let report = bip_verifier::verify(
+            &system,
+            bip_verifier::Method::Explicit,
+            &Options::default(),
+            &|_| {},
+        )
+        .unwrap();
+        report
+            .properties
+            .iter()
+            .filter(|p| p.kind == bip_verifier::CheckKind::WorstResponse)
+            .map(|p| {
+                let last = p
+                    .verdict
+                    .trace()
+                    .and_then(|t| t.steps.last())
+                    .map(|s| s.step.clone());
+                let figure = p.verdict.holds().then(|| p.note.clone()).flatten();
+                (p.name.clone(), figure, last)
+            })
+            .collect()
+    };
+    let some = |s: &str| Some(s.to_string());
+    assert_eq!(
+        worst(&text("3ms")),
+        [
+            (
+                "m.hi worst response".to_string(),
+                some("3 ms"),
+                some("m_hi_done")
+            ),
+            (
+                "m.lo worst response".to_string(),
+                some("3 ms"),
+                some("m_lo_done")
+            )
+        ]
+    );
+    assert!(worst(&text("2ms"))
+        .iter()
+        .all(|(_, figure, _)| figure.is_none()));
 }
