@@ -404,6 +404,7 @@ fn kind_name(kind: CheckKind) -> &'static str {
         CheckKind::TimeProgress => "time progress",
         CheckKind::RangeErrors => "range errors",
         CheckKind::Schedulable => "schedulability",
+        CheckKind::WorstResponse => "worst response time",
     }
 }
 
@@ -446,6 +447,14 @@ fn text_report(
         .unwrap_or(0);
     for p in &report.properties {
         let (word, mut detail) = match &p.verdict {
+            PropertyVerdict::Holds { witness: Some(t) } if p.kind == CheckKind::WorstResponse => (
+                "holds",
+                format!(
+                    "{}, reached after {}",
+                    p.note.clone().unwrap_or_default(),
+                    count(t.steps.len() as u64, "step")
+                ),
+            ),
             PropertyVerdict::Holds { witness: Some(t) } => (
                 "holds",
                 format!("witness after {}", count(t.steps.len() as u64, "step")),
