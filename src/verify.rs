@@ -523,6 +523,13 @@ fn text_report(
             "\nnote: steps that make range errors have no successor; the other verdicts are about the states reachable without them"
         );
     }
+    if let Some(unit) = system.genom.as_ref().and_then(|g| g.time_unit_us) {
+        let _ = writeln!(
+            s,
+            "\nnote: time counted in whole units of {}; a real-time schedule whose codels end between units may differ (docs/model.md, \"What integer time leaves out\"; declare a finer unit with `time: Exact(unit: ...)` to look between them)",
+            bip_sched::show_micros(unit)
+        );
+    }
     if !args.quiet {
         write_figures(&mut s, report);
     }

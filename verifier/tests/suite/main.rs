@@ -10,7 +10,9 @@
 //! - `symbolic_known_answers`: the symbolic method on models whose answers are known;
 //! - `symbolic_verdicts`: the symbolic method never contradicts the explicit one;
 //! - `time_progress`: timelocks against a naive search for a tick from every state, the
-//!   fuzzer's timelocks that made liveness properties hold, and the symbolic method.
+//!   fuzzer's timelocks that made liveness properties hold, and the symbolic method;
+//! - `timed_oracle`: the timed expansion against a naive interpreter of the timed
+//!   semantics, on random task sets.
 
 mod advance;
 mod known_answers;
@@ -20,3 +22,4 @@ mod schedulability;
 mod symbolic_known_answers;
 mod symbolic_verdicts;
 mod time_progress;
+mod timed_oracle;

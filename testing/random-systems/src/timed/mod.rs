@@ -109,11 +109,12 @@ impl Task {
 }
 
 impl TaskSet {
-    /// Every duration of the model in microseconds: periods, delays, deadlines, bcets,
-    /// wcets (zeros included).
+    /// Every duration of the model in microseconds: the tick, periods, delays, deadlines,
+    /// bcets, wcets (zeros included).
     fn durations_us(&self) -> impl Iterator<Item = u64> + '_ {
         let tick = self.tick_ms * 1000;
-        self.tasks.iter().flat_map(move |t| {
+        // the tick too: ports age once per tick, so a unit divides it
+        std::iter::once(tick).chain(self.tasks.iter().flat_map(move |t| {
             [
                 t.period_ticks * tick,
                 t.delay_ticks * tick,
@@ -125,7 +126,7 @@ impl TaskSet {
                     .iter()
                     .flat_map(|c| [c.bcet_us.unwrap_or(0), c.wcet_us.unwrap_or(0)]),
             )
-        })
+        }))
     }
 
     /// The time unit in microseconds: the declared one, or the gcd of every duration of
