@@ -69,6 +69,13 @@ pub fn run(args: &Args) -> u8 {
         return exit::ERROR;
     };
     memory_guard::release();
+    if bip_verifier::is_timed(&system) {
+        eprintln!(
+            "error: {}: a timed model (`time: Exact`) is not supported by `bip sched` yet: its response-time analysis assumes preemptive single-core CPUs; `bip verify` decides its deadlines by exploration",
+            args.file.display()
+        );
+        return exit::ERROR;
+    }
     let options = Options {
         max_states: args.max_states,
         max_memory: args.max_memory,

@@ -243,7 +243,7 @@ fn chart(system: &System, trace: &Trace, user: &view::UserTrace) -> Chart {
         .map(|st| match st.kind {
             view::Kind::Tick => Row::Tick {
                 number: st.number,
-                label: format!("{}  tick", st.number),
+                label: format!("{}  {}", st.number, st.label),
             },
             view::Kind::Step => Row::Step(Step {
                 number: st.number,

@@ -404,6 +404,7 @@ fn kind_name(kind: CheckKind) -> &'static str {
         CheckKind::TimeProgress => "time progress",
         CheckKind::RangeErrors => "range errors",
         CheckKind::Schedulable => "schedulability",
+        CheckKind::WorstResponse => "worst response time",
     }
 }
 
@@ -446,6 +447,14 @@ fn text_report(
         .unwrap_or(0);
     for p in &report.properties {
         let (word, mut detail) = match &p.verdict {
+            PropertyVerdict::Holds { witness: Some(t) } if p.kind == CheckKind::WorstResponse => (
+                "holds",
+                format!(
+                    "{}, reached after {}",
+                    p.note.clone().unwrap_or_default(),
+                    count(t.steps.len() as u64, "step")
+                ),
+            ),
             PropertyVerdict::Holds { witness: Some(t) } => (
                 "holds",
                 format!("witness after {}", count(t.steps.len() as u64, "step")),
@@ -512,6 +521,13 @@ fn text_report(
         let _ = writeln!(
             s,
             "\nnote: steps that make range errors have no successor; the other verdicts are about the states reachable without them"
+        );
+    }
+    if let Some(unit) = system.genom.as_ref().and_then(|g| g.time_unit_us) {
+        let _ = writeln!(
+            s,
+            "\nnote: time counted in whole units of {}; a real-time schedule whose codels end between units may differ (docs/model.md, \"What integer time leaves out\"; declare a finer unit with `time: Exact(unit: ...)` to look between them)",
+            bip_sched::show_micros(unit)
         );
     }
     if !args.quiet {

@@ -26,6 +26,8 @@ pub enum BuildError {
     TooMany(String, &'static str),
     #[error("threads for tasks need the `std` feature")]
     NoThreads,
+    #[error("a timed model (`time: Exact`) cannot be run by the engine yet: its codels' starts, finishes and time units are not bound to the engine's clock; verify it with `bip verify`")]
+    Timed,
 }
 
 /// The engine cannot go on: the model computed a value outside a range (which `bip

@@ -163,7 +163,8 @@ pub enum Event {
         /// it has a `name`).
         property: Arc<str>,
         within: u64,
-        /// The ticks since the trigger: `within + 1`, the tick that passed the bound.
+        /// The time units since the trigger at the tick that passed the bound: `within + 1`
+        /// where each tick is one unit, more where a tick stands for several (`advance`).
         elapsed_ticks: u64,
         /// The request that the engine accepted in the step on which the trigger happened:
         /// for a `request(m.S)` trigger (and so `Replies`), the request that started the

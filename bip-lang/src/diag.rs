@@ -75,6 +75,15 @@ impl Errors {
     pub fn is_empty(&self) -> bool {
         self.list.is_empty()
     }
+
+    /// Moves `other`'s errors here; true if it had any.
+    pub fn absorb(&mut self, other: Errors) -> bool {
+        let any = !other.is_empty();
+        for e in other.list {
+            self.push(e);
+        }
+        any
+    }
 }
 
 /// A model file that could not be loaded. Its `Debug` is [`LoadError::summary`] (one line

@@ -283,6 +283,14 @@ pub(crate) fn ident_has_parens(word: &str) -> bool {
     claim(&TokenKey::Ident(word.to_string())).is_some_and(|t| t.paren_follows)
 }
 
+/// Claims the next identifier token `word` (one of the claimed words: an enum variant
+/// that a check reports at), with whether `(` follows it; no position if the value did
+/// not come from a file.
+pub(crate) fn claim_word(word: &str) -> (Span, bool) {
+    claim(&TokenKey::Ident(word.to_string()))
+        .map_or((Span::NONE, false), |t| (t.span, t.paren_follows))
+}
+
 // ---------------------------------------------------------------------------------------
 // The tokenizer and the locator.
 
@@ -300,10 +308,20 @@ struct Token {
     paren_follows: bool,
 }
 
-/// The identifiers a value claims (booleans, and the one enum variant that may be written
-/// with or without parentheses); other identifiers are field and variant names, which serde
-/// reads itself.
-const CLAIMED_WORDS: &[&str] = &["true", "false", "DeadlockFree"];
+/// The identifiers a value claims (booleans, the enum variants that may be written with or
+/// without parentheses, and the variants of a CPU's scheduling, which checks report at);
+/// other identifiers are field and variant names, which serde reads itself.
+const CLAIMED_WORDS: &[&str] = &[
+    "true",
+    "false",
+    "DeadlockFree",
+    "Exact",
+    "FixedPriority",
+    "Edf",
+    "Job",
+    "Codel",
+    "Preemptive",
+];
 
 /// FNV-1a: token keys are short and the locator hashes one per value of the file, where
 /// SipHash's resistance to collisions chosen by an attacker buys nothing.

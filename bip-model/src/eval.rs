@@ -32,6 +32,9 @@ pub enum Expr {
     Chain(Box<Expr>, Vec<(BinOp, Expr)>),
     Cond(Box<Expr>, Box<Expr>, Box<Expr>),
     Quant(Box<Quant>),
+    /// `advance` in the action of a `Time` connector: the time units its step stands for,
+    /// evaluated on the state the step leaves (docs/model.md, "Connectors").
+    Advance,
 }
 
 impl Expr {
@@ -40,7 +43,12 @@ impl Expr {
     /// by zero) and no index computed from the state (which may be out of bounds).
     pub fn cannot_fail(&self) -> bool {
         match self {
-            Expr::Const(_) | Expr::Slot(_) | Expr::Local(_) | Expr::At(..) | Expr::Bound(_) => true,
+            Expr::Const(_)
+            | Expr::Slot(_)
+            | Expr::Local(_)
+            | Expr::At(..)
+            | Expr::Bound(_)
+            | Expr::Advance => true,
             Expr::Not(e) => e.cannot_fail(),
             Expr::Binary(op, a, b) => {
                 !matches!(
@@ -108,11 +116,13 @@ impl Failure for () {
 }
 
 /// The values an expression reads: state slots, the slot base of the component whose own
-/// variables `Local` refers to, and the quantified variables.
+/// variables `Local` refers to, the quantified variables, and in a `Time` connector's
+/// action its step's `advance`.
 pub struct Env<'a> {
     pub slots: &'a [i64],
     pub base: u32,
     bound: [i64; MAX_QUANT_DEPTH],
+    pub advance: i64,
 }
 
 impl<'a> Env<'a> {
@@ -121,6 +131,7 @@ impl<'a> Env<'a> {
             slots,
             base,
             bound: [0; MAX_QUANT_DEPTH],
+            advance: 1,
         }
     }
 }
@@ -164,6 +175,7 @@ impl Expr {
                 }
             }
             Expr::Bound(d) => env.bound[*d as usize],
+            Expr::Advance => env.advance,
             Expr::Not(e) => (e.eval_as(env)? == 0) as i64,
             Expr::Neg(e) => e
                 .eval_as(env)?
@@ -273,9 +285,12 @@ impl Expr {
     pub fn reads_nothing(&self) -> bool {
         match self {
             Expr::Const(_) => true,
-            Expr::Slot(_) | Expr::Local(_) | Expr::At(..) | Expr::Indexed(_) | Expr::Bound(_) => {
-                false
-            }
+            Expr::Slot(_)
+            | Expr::Local(_)
+            | Expr::At(..)
+            | Expr::Indexed(_)
+            | Expr::Bound(_)
+            | Expr::Advance => false,
             Expr::Not(e) | Expr::Neg(e) => e.reads_nothing(),
             Expr::Binary(_, a, b) => a.reads_nothing() && b.reads_nothing(),
             Expr::Chain(first, rest) => {
@@ -290,7 +305,9 @@ impl Expr {
         match self {
             Expr::Bound(d) => *d >= depth,
             Expr::Const(_) => true,
-            Expr::Slot(_) | Expr::Local(_) | Expr::At(..) | Expr::Indexed(_) => false,
+            Expr::Slot(_) | Expr::Local(_) | Expr::At(..) | Expr::Indexed(_) | Expr::Advance => {
+                false
+            }
             Expr::Not(e) | Expr::Neg(e) => e.reads_nothing_but_bound(depth),
             Expr::Binary(_, a, b) => {
                 a.reads_nothing_but_bound(depth) && b.reads_nothing_but_bound(depth)
@@ -309,10 +326,11 @@ impl Expr {
     }
 
     /// Calls `f` with every state slot this expression may read, given the slot base for
-    /// `Local` reads. Used to know which components an interaction depends on.
+    /// `Local` reads. Used to know which components an interaction depends on. (`advance`
+    /// reads the slots of its connector's `advance` expression, which its reader counts.)
     pub fn for_each_slot(&self, base: u32, f: &mut impl FnMut(u32)) {
         match self {
-            Expr::Const(_) | Expr::Bound(_) => {}
+            Expr::Const(_) | Expr::Bound(_) | Expr::Advance => {}
             Expr::Slot(s) | Expr::At(s, _) => f(*s),
             Expr::Local(n) => f(base + n),
             Expr::Indexed(ix) => {

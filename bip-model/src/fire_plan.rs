@@ -193,7 +193,14 @@ impl System {
                     let first = out.written.len() as u32;
                     out.written.extend(assigns.iter().map(|a| a.slot(base)));
                     let slots = (first, out.written.len() as u32);
-                    if let Some(c) = constants {
+                    // an `advance` is evaluated and checked where the step fires
+                    let advance = match who {
+                        ActionOf::Interaction(i) => self.interactions[i as usize].advance.is_some(),
+                        ActionOf::Transition(_) => false,
+                    };
+                    if advance {
+                        out.ops.push(PlanOp::Action { code, base, who });
+                    } else if let Some(c) = constants {
                         // in order: a later assignment of the same slot wins, as it does
                         // when the action runs
                         let set = c

@@ -147,6 +147,10 @@ pub struct Interaction {
     pub trigger: Option<u32>,
     pub guard: Option<Expr>,
     pub action: Vec<Assign>,
+    /// Of a `Time` connector: the time units its step stands for, evaluated on the state
+    /// the step leaves, at least 1 (a smaller value is a range error of the step); its
+    /// action reads it as [`Expr::Advance`]. None: 1.
+    pub advance: Option<Expr>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -235,6 +239,10 @@ pub enum RangeErrorKind {
         index: i64,
         count: u32,
     },
+    /// A `Time` connector's `advance` evaluated to less than 1.
+    AdvanceBelowOne {
+        value: i64,
+    },
 }
 
 impl core::fmt::Display for RangeError {
@@ -247,6 +255,11 @@ impl core::fmt::Display for RangeError {
             ),
             RangeErrorKind::DivisionByZero => write!(f, "division by zero in the {}", self.context),
             RangeErrorKind::Overflow => write!(f, "integer overflow in the {}", self.context),
+            RangeErrorKind::AdvanceBelowOne { value } => write!(
+                f,
+                "advance = {value} is below 1 (a time step stands for at least one unit) in the {}",
+                self.context
+            ),
             RangeErrorKind::IndexOutOfBounds {
                 family,
                 index,

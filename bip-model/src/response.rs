@@ -235,10 +235,11 @@ impl System {
 }
 
 /// A response property watched along a run, step by step, as the verifier's bounded
-/// observer counts: the ticks since the oldest trigger not yet answered.
+/// observer counts: the time units since the oldest trigger not yet answered (each tick
+/// counts its `advance`, [`System::time_advance`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ResponseWatch {
-    /// The ticks since the oldest unanswered trigger, if one waits.
+    /// The time units since the oldest unanswered trigger, if one waits.
     pub waiting: Option<u64>,
 }
 
@@ -256,8 +257,8 @@ impl ResponseWatch {
         })
     }
 
-    /// Watches one step; true if it is a tick that passes the bound of a trigger still
-    /// waiting (the watch then stays as it was).
+    /// Watches one step; true if it is a tick that takes the time since a trigger still
+    /// waiting past the bound (the watch then stays as it was).
     pub fn observe(
         &mut self,
         system: &System,
@@ -269,11 +270,13 @@ impl ResponseWatch {
     ) -> Result<bool, RangeError> {
         let h = system.happenings_on(spec, before, step, after, context)?;
         if let Some(c) = self.waiting {
-            if system.role(step.label) == Role::Time {
-                if spec.within == Some(c) {
+            let units = system.time_advance(before, step)?;
+            if units > 0 {
+                let after = c.saturating_add(units);
+                if spec.within.is_some_and(|k| after > k) {
                     return Ok(true);
                 }
-                self.waiting = Some(c + 1);
+                self.waiting = Some(after);
             }
         }
         if !h.waits_after(self.waiting.is_some()) {

@@ -469,7 +469,8 @@ impl System {
         let idx = &self.enable_index;
         if let Label::Interaction(i) = step.label {
             let code = idx.inter_actions[i as usize];
-            if !code.is_empty() {
+            // an `advance` is evaluated (and checked) with the action, even an empty one
+            if !code.is_empty() || self.interactions[i as usize].advance.is_some() {
                 let who = ActionOf::Interaction(i);
                 f(FireOp::Action { code, base: 0, who })?;
             }
@@ -512,7 +513,12 @@ impl System {
                 &self.atom_of(p.component).transitions[p.transition as usize].action[..]
             }
         };
-        self.run_action(code, tree, base, state, written)
+        // the connector's action runs first, so `state` is still the one the step leaves
+        let advance = match who {
+            ActionOf::Interaction(i) => self.advance_of(i, state)?,
+            ActionOf::Transition(_) => 1,
+        };
+        self.run_action(code, tree, base, advance, state, written)
             .map_err(|e| {
                 let context = match who {
                     ActionOf::Interaction(i) => {
@@ -534,6 +540,7 @@ impl System {
         code: ActionCode,
         tree: impl Fn() -> &'a [Assign],
         base: u32,
+        advance: u64,
         state: &mut State,
         written: &mut W,
     ) -> Result<(), ActionError> {
@@ -551,10 +558,9 @@ impl System {
             let (slot, v) = match a.eval(&self.enable_index.flat, state.slots(), base) {
                 Some(r) => r.map_err(ActionError::Eval)?,
                 None => {
-                    let v = tree()[k]
-                        .value
-                        .eval(&mut Env::new(state.slots(), base))
-                        .map_err(ActionError::Eval)?;
+                    let mut env = Env::new(state.slots(), base);
+                    env.advance = advance as i64;
+                    let v = tree()[k].value.eval(&mut env).map_err(ActionError::Eval)?;
                     (a.slot(base), v)
                 }
             };

@@ -180,6 +180,48 @@ impl System {
         self.connectors.iter().any(|c| c.role == Role::Time)
     }
 
+    /// The time units a step stands for: 0 for a step that is not of a `Time` connector,
+    /// its interaction's `advance` evaluated on `state` (the state the step leaves) for one
+    /// that is, 1 without one. Where the step fires, this is its value; where the
+    /// evaluation fails or gives less than 1, the step is a range error.
+    pub fn time_advance(
+        &self,
+        state: &State,
+        step: crate::steps::Step<'_>,
+    ) -> Result<u64, RangeError> {
+        match step.label {
+            crate::steps::Label::Interaction(i) if self.role(step.label) == Role::Time => {
+                self.advance_of(i, state)
+            }
+            _ => Ok(0),
+        }
+    }
+
+    /// Interaction `i`'s `advance` on `state`: 1 without one.
+    pub(crate) fn advance_of(&self, i: u32, state: &State) -> Result<u64, RangeError> {
+        let inter = &self.interactions[i as usize];
+        let Some(e) = &inter.advance else {
+            return Ok(1);
+        };
+        let context = || format!("advance of {}", inter.name);
+        let value = e
+            .eval(&mut Env::new(state.slots(), 0))
+            .map_err(|err| self.range_error(err, &context()))?;
+        if value < 1 {
+            return Err(RangeError {
+                context: context(),
+                kind: RangeErrorKind::AdvanceBelowOne { value },
+            });
+        }
+        Ok(value as u64)
+    }
+
+    /// True if some interaction has an `advance`: its `Time` steps stand for more than one
+    /// unit, or for a number that depends on the state.
+    pub fn has_advance(&self) -> bool {
+        self.interactions.iter().any(|i| i.advance.is_some())
+    }
+
     /// Human description of a transition: `phil[0]: thinking -take_left-> hungry`.
     pub fn describe_transition(&self, component: u32, transition: u32) -> String {
         let comp = &self.components[component as usize];

@@ -67,12 +67,22 @@ pub fn user_trace(system: &System, trace: &Trace, all: bool) -> Result<UserTrace
     let slots = slots(system);
     let mut before = system.initial_state();
     let mut steps = Vec::with_capacity(path.len());
+    let advance = system.has_advance();
     for (k, (step, after)) in path.iter().enumerate() {
         let role = match step.label {
             Label::Interaction(i) => roles.get(&i),
             Label::Internal { .. } => None,
         };
-        let (label, kind, shown_elsewhere) = describe(system, step, role);
+        let (mut label, kind, shown_elsewhere) = describe(system, step, role);
+        // where time steps may stand for several units, each says how many
+        if advance {
+            let units = system
+                .time_advance(&before, step.as_step())
+                .map_err(|e| format!("step {}: {e}", k + 1))?;
+            if units > 0 {
+                label = format!("{label} +{units}");
+            }
+        }
         // a tick is time passing for everyone: a rule, not a synchronisation
         let mut lanes: Vec<usize> = match kind {
             Kind::Tick => Vec::new(),

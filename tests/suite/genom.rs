@@ -21,6 +21,7 @@ fn expand_prints_core_that_checks_with_the_same_sizes() {
         "robots/rover.ron",
         "robots/satellite.ron",
         "robots/tests/mini.ron",
+        "robots/tests/timed.ron",
     ] {
         let out = bip(&["expand", model]);
         assert_eq!(

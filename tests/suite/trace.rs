@@ -341,3 +341,51 @@ fn simulate_draws_its_run_as_a_timeline_with_a_lane_per_activity() {
     assert_ne!(out.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no GenoM layer"));
 }
+
+#[test]
+fn a_time_step_shows_the_units_it_stands_for() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let model = dir.path().join("stepper.ron");
+    std::fs::write(
+        &model,
+        r#"System(
+    name: "stepper",
+    atoms: {
+        "S": Atom(locations: ["s"], initial: "s", ports: ["tick"],
+            vars: [(name: "k", ty: Int(0, 4), init: 0)],
+            transitions: [(from: "s", port: "tick", to: "s", action: "k = (k + 1) % 5")]),
+    },
+    components: [(name: "c", atom: "S")],
+    connectors: [(name: "tick", ports: ["c.tick"], role: Time, advance: "c.k + 1")],
+    properties: [Invariant(name: "below_three", expr: "c.k < 3")],
+)"#,
+    )
+    .unwrap();
+    let (model, traces) = (model.to_str().unwrap(), dir.path().to_str().unwrap());
+    let out = bip(&["verify", model, "-q", "--trace-dir", traces]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let trace = dir.path().join("below_three.trace.ron");
+    let out = bip(&["trace", "show", model, trace.to_str().unwrap()]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    let steps: Vec<&str> = text.lines().skip(1).map(str::trim).collect();
+    assert_eq!(
+        steps[..3],
+        [
+            "1  tick +1  [c]  c.k = 1",
+            "2  tick +2  [c]  c.k = 2",
+            "3  tick +3  [c]  c.k = 3"
+        ],
+        "{text}"
+    );
+}

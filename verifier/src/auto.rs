@@ -14,7 +14,7 @@ use bip_model::System;
 use crate::error::VerifyError;
 use crate::options::Options;
 use crate::progress::Progress;
-use crate::report::{Method, PropertyVerdict, Report, Stop};
+use crate::report::{CheckKind, Method, PropertyVerdict, Report, Stop};
 use crate::{explore, symbolic};
 
 /// States the explicit phase may store.
@@ -36,10 +36,12 @@ pub(crate) fn verify(
         ..options.clone()
     };
     let explicit = explore::verify(system, &explicit_options, progress)?;
-    let open = explicit
-        .properties
-        .iter()
-        .any(|p| matches!(p.verdict, PropertyVerdict::Inconclusive { .. }));
+    // a timed model's worst responses are the explicit method's alone: the symbolic one
+    // has nothing to add to them
+    let open = explicit.properties.iter().any(|p| {
+        matches!(p.verdict, PropertyVerdict::Inconclusive { .. })
+            && p.kind != CheckKind::WorstResponse
+    });
     // the user's interrupt and time limit end the whole run, not just the explicit phase
     let ended = matches!(
         explicit.stopped,

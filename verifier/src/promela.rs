@@ -75,6 +75,11 @@ struct Pick {
 
 impl<'a> Exporter<'a> {
     fn new(sys: &'a System) -> Result<Exporter<'a>, ExportError> {
+        if sys.has_advance() {
+            return Err(ExportError::Unsupported(
+                "a time step of more than one unit (`advance`)".into(),
+            ));
+        }
         let mut names = Vec::with_capacity(sys.slot_count());
         let mut seen = HashSet::new();
         for slot in 0..sys.slot_count() as u32 {
@@ -609,6 +614,8 @@ impl<'a> Exporter<'a> {
     fn expr(&self, e: &Expr, base: u32, bound: &mut Vec<i64>) -> Result<String, ExportError> {
         Ok(match e {
             Expr::Const(v) => format!("{v}"),
+            // without any `advance` (refused above), every time step is one unit
+            Expr::Advance => "1".into(),
             Expr::Slot(s) => self.names[*s as usize].clone(),
             Expr::Local(n) => self.names[(base + n) as usize].clone(),
             Expr::At(s, loc) => format!("({} == {loc})", self.names[*s as usize]),

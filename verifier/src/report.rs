@@ -47,6 +47,9 @@ pub enum CheckKind {
     /// With time budgets: every task's work of a period ends by its deadline
     /// (docs/sched.md); reported after range errors.
     Schedulable,
+    /// In a timed model, a task's worst response time over every reachable job end
+    /// (`note`), with the run that reaches it (docs/verify.md).
+    WorstResponse,
 }
 
 /// The verdict on one property.

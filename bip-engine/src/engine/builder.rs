@@ -170,6 +170,13 @@ impl EngineBuilder {
 
     pub fn build(self) -> Result<Engine, BuildError> {
         let system = self.system;
+        if system
+            .genom
+            .as_ref()
+            .is_some_and(|g| g.time_unit_us.is_some())
+        {
+            return Err(BuildError::Timed);
+        }
         let mut t = Tables::new(&system)?;
         if !self.bindings.is_empty() && system.genom.is_none() {
             return Err(BuildError::NoGenomLayer);

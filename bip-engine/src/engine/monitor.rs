@@ -99,6 +99,7 @@ impl Engine {
             let p = &system.properties[w.property];
             let Some(spec) = bounded(p) else { continue };
             let was_waiting = w.watch.waiting.is_some();
+            let counted = w.watch.waiting.unwrap_or(0);
             let passed = !w.late
                 && w.watch
                     .observe(system, spec, before, step, after, &w.context)?;
@@ -118,10 +119,12 @@ impl Engine {
             w.late = (w.late || passed) && w.watch.waiting.is_some();
             if passed {
                 let within = spec.within.unwrap_or(0);
+                // the tick that passed the bound stands for one unit, or its advance
+                let elapsed = counted + system.time_advance(before, step)?;
                 let event = Event::ResponseLate {
                     property: Arc::clone(&w.name),
                     within,
-                    elapsed_ticks: within + 1,
+                    elapsed_ticks: elapsed,
                     ticket: w.ticket,
                 };
                 self.stats.responses_late += 1;

@@ -7,27 +7,130 @@ use std::collections::HashMap;
 use super::{check_name, unique, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::source::{ConstExpr, ConstValue, Span, Text};
-use crate::syntax::{AtomTaskDef, SystemDef};
+use crate::syntax::{AtomTaskDef, Policy, Preemption, SystemDef};
 use bip_model::{Budgets, ComponentTask};
 
 /// The model's CPUs, checked: names and no duplicate.
 pub(crate) fn cpus(def: &SystemDef, errors: &mut Errors) -> Vec<String> {
     for cpu in &def.cpus {
-        check_name(errors, cpu, "CPU");
+        check_name(errors, &cpu.name, "CPU");
     }
-    unique(errors, def.cpus.iter(), "CPU");
-    def.cpus.iter().map(|c| c.value.clone()).collect()
+    unique(errors, def.cpus.iter().map(|c| &c.name), "CPU");
+    def.cpus.iter().map(|c| c.name.value.clone()).collect()
+}
+
+/// The number of cores of each CPU, checked (at least 1; 1 if not given), one per
+/// declared CPU; `None` where a count is wrong (reported).
+pub(crate) fn cpu_cores(
+    def: &SystemDef,
+    consts: &Constants,
+    errors: &mut Errors,
+) -> Vec<Option<u32>> {
+    def.cpus
+        .iter()
+        .map(|cpu| {
+            let Some(written) = &cpu.cores else {
+                return Some(1);
+            };
+            match consts.int(written) {
+                Ok(n) if n >= 1 => match u32::try_from(n) {
+                    Ok(n) => Some(n),
+                    Err(_) => {
+                        errors.push(ModelError::new(
+                            format!("CPU `{}` has {n} cores, more than bip can count", cpu.name),
+                            written.span,
+                        ));
+                        None
+                    }
+                },
+                Ok(n) => {
+                    errors.push(
+                        ModelError::new(format!("CPU `{}` has {n} cores", cpu.name), written.span)
+                            .with_label("a CPU has at least one core"),
+                    );
+                    None
+                }
+                Err(e) => {
+                    errors.push(e);
+                    None
+                }
+            }
+        })
+        .collect()
+}
+
+/// The help of an error on what only a timed model gives a meaning to.
+pub(crate) const UNTIMED_HELP: &str = "add `time: Exact` beside `name` to verify the GenoM \
+    layer's codels taking time on the CPUs' cores (docs/model.md, \"Time budgets\")";
+
+/// What only a timed GenoM layer gives a meaning to, refused in a model without one: the
+/// response-time analysis of an untimed model (`bip sched`, `Schedulable`) schedules one
+/// core per CPU, by fixed priorities, preemptively.
+pub(crate) fn untimed_cpus(def: &SystemDef, consts: &Constants, errors: &mut Errors) {
+    let help = UNTIMED_HELP;
+    for cpu in &def.cpus {
+        if let Some(c) = &cpu.cores {
+            if consts.int(c).is_ok_and(|n| n != 1) {
+                errors.push(
+                    ModelError::new(
+                        format!("CPU `{}` has several cores in an untimed model", cpu.name),
+                        c.span,
+                    )
+                    .with_label(
+                        "the response-time analysis of an untimed model schedules one core per CPU",
+                    )
+                    .with_help(help),
+                );
+            }
+        }
+        if let Some(p) = cpu
+            .policy
+            .as_ref()
+            .filter(|p| p.value != Policy::FixedPriority)
+        {
+            errors.push(
+                ModelError::new(
+                    format!(
+                        "CPU `{}` schedules by `{}` in an untimed model",
+                        cpu.name,
+                        p.value.word()
+                    ),
+                    p.span,
+                )
+                .with_label("the response-time analysis of an untimed model is by fixed priorities")
+                .with_help(help),
+            );
+        }
+        if let Some(p) = cpu
+            .preemption
+            .as_ref()
+            .filter(|p| p.value != Preemption::Preemptive)
+        {
+            errors.push(
+                ModelError::new(
+                    format!(
+                        "CPU `{}` has `preemption: {}` in an untimed model",
+                        cpu.name,
+                        p.value.word()
+                    ),
+                    p.span,
+                )
+                .with_label("the response-time analysis of an untimed model is preemptive")
+                .with_help(help),
+            );
+        }
+    }
 }
 
 /// The index of `cpu` among the model's CPUs, or an error at it.
 pub(crate) fn cpu_index(def: &SystemDef, cpu: &Text, errors: &mut Errors) -> Option<u32> {
-    if let Some(i) = def.cpus.iter().position(|c| c.value == cpu.value) {
+    if let Some(i) = def.cpus.iter().position(|c| c.name.value == cpu.value) {
         return Some(i as u32);
     }
     let help = if def.cpus.is_empty() {
         "the model declares no CPUs: add `cpus: [...]` beside `name`".to_string()
     } else {
-        let names: Vec<&str> = def.cpus.iter().map(|c| c.as_str()).collect();
+        let names: Vec<&str> = def.cpus.iter().map(|c| c.name.as_str()).collect();
         format!("the model's CPUs are: {}", names.join(", "))
     };
     errors.push(ModelError::new(format!("unknown CPU `{cpu}`"), cpu.span).with_help(help));
@@ -221,7 +324,15 @@ pub(crate) fn component_tasks(
 /// The budgets of a core model: its CPUs and its atoms' tasks, with every rule checked.
 pub(crate) fn check(def: &SystemDef, errors: &mut Errors) -> Budgets {
     let (consts, _) = Constants::new(def); // the compiler reports its errors
+    if let Some(time) = &def.time {
+        errors.push(
+            ModelError::new("`time: Exact` times a GenoM layer, and this model has none", time.span)
+                .with_help("leave `time` out: an atom that stands for a task is analysed by `bip sched`, its codels do not take time in the model"),
+        );
+    }
     let cpus = cpus(def, errors);
+    cpu_cores(def, &consts, errors);
+    untimed_cpus(def, &consts, errors);
     let tasks = component_tasks(def, &consts, errors);
     let placed: Vec<Placed> = tasks.iter().map(|t| t.1.clone()).collect();
     check_priorities(cpus.len(), &placed, errors);
@@ -243,6 +354,26 @@ pub(crate) fn duration(
     c: &ConstExpr,
     what: &str,
 ) -> Option<u64> {
+    duration_in(errors, consts, c, what, false)
+}
+
+/// [`duration`], zero allowed (a best-case execution time).
+pub(crate) fn duration_or_zero(
+    errors: &mut Errors,
+    consts: &Constants,
+    c: &ConstExpr,
+    what: &str,
+) -> Option<u64> {
+    duration_in(errors, consts, c, what, true)
+}
+
+fn duration_in(
+    errors: &mut Errors,
+    consts: &Constants,
+    c: &ConstExpr,
+    what: &str,
+    zero_ok: bool,
+) -> Option<u64> {
     let us = match &c.value {
         ConstValue::Expr(text) => match with_unit(text) {
             Some(Ok(us)) => Ok(us),
@@ -257,6 +388,7 @@ pub(crate) fn duration(
     };
     let bare = !matches!(&c.value, ConstValue::Expr(text) if with_unit(text).is_some());
     match us {
+        Ok(0) if zero_ok => return Some(0),
         Ok(0) => errors.push(
             ModelError::new(format!("{what} of zero"), c.span)
                 .with_help("a duration is positive: `\"2ms\"`, `\"150us\"`, or microseconds"),

@@ -12,7 +12,7 @@ use crate::source::Span;
 use crate::syntax::{
     parse_range_in_file, ActionDef, ConnectorDef, ConnectorKindDef, ExprDef, SystemDef,
 };
-use bip_model::{Assign, Connector, Interaction, PortRef, Target, VarType};
+use bip_model::{Assign, Connector, Interaction, PortRef, Role, Target, VarType};
 
 impl Compiler {
     pub(super) fn connectors(&mut self, def: &SystemDef) {
@@ -81,6 +81,20 @@ impl Compiler {
         };
         let guard = cd.guard.as_ref().map(ExprDef::tree).transpose()?;
         let action = cd.action.as_ref().map(ActionDef::tree).transpose()?;
+        if let (Some(a), false) = (&cd.advance, cd.role == Role::Time) {
+            return Err(ModelError::new(
+                format!(
+                    "connector `{}` has an `advance` but is not a time step",
+                    cd.name
+                ),
+                a.span(),
+            )
+            .with_help("only a connector with `role: Time` stands for time passing"));
+        }
+        let advance = match &cd.advance {
+            Some(a) => Some((a.span(), a.tree()?)),
+            None => None,
+        };
 
         let id = self.connectors.len() as u32;
         let start = self.interactions.len() as u32;
@@ -102,7 +116,11 @@ impl Compiler {
                 Some(i) => format!("{}[{i}]", cd.name),
                 None => cd.name.value.clone(),
             };
-            let inter = self.interaction(cd, id, name, fixed, &ports, &trigger, &guard, &action)?;
+            let mut inter =
+                self.interaction(cd, id, name, fixed, &ports, &trigger, &guard, &action)?;
+            if let Some((span, e)) = &advance {
+                inter.advance = Some(self.advance(*span, e, fixed)?);
+            }
             self.interactions.push(inter);
         }
         self.connector_by_name.insert(cd.name.value.clone(), id);
@@ -114,6 +132,35 @@ impl Compiler {
             indices,
         });
         Ok(())
+    }
+
+    /// A `Time` connector's `advance` in one instance: an integer expression over any
+    /// component, at least 1 if it is a constant (otherwise where it is evaluated).
+    fn advance(
+        &self,
+        span: Span,
+        e: &expr::Expr,
+        fixed: &[(&str, i64)],
+    ) -> Result<bip_model::eval::Expr, ModelError> {
+        let names = self.names();
+        let mut r = Resolver::new(&names, Place::Global, fixed);
+        let value = r.expect(e, Ty::Int).map_err(|err| {
+            let mut m = expr_error(err);
+            m.message.push_str(&in_instance(fixed));
+            m
+        })?;
+        if let bip_model::eval::Expr::Const(v) = value {
+            if v < 1 {
+                return Err(ModelError::new(
+                    format!(
+                        "`advance` is {v}{}; a time step stands for at least 1 unit",
+                        in_instance(fixed)
+                    ),
+                    span,
+                ));
+            }
+        }
+        Ok(value)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -130,10 +177,7 @@ impl Compiler {
     ) -> Result<Interaction, ModelError> {
         let names = self.names();
         let mut r = Resolver::new(&names, Place::Global, fixed);
-        let at = |fixed: &[(&str, i64)]| match fixed.first() {
-            Some((v, i)) => format!(" (in instance {v} = {i})"),
-            None => String::new(),
-        };
+        let at = in_instance;
         let mut port_ref = |e: &expr::Expr| -> Result<PortRef, ModelError> {
             let (comp, member) = r.static_member(e).map_err(|err| {
                 let mut m = expr_error(err);
@@ -231,7 +275,11 @@ impl Compiler {
                     VarType::Bool => Ty::Bool,
                     VarType::Int { .. } => Ty::Int,
                 };
-                let value = r.expect(&a.value, ty).map_err(fail)?;
+                // a time step's action reads its `advance`
+                r.advance = cd.role == Role::Time;
+                let value = r.expect(&a.value, ty).map_err(fail);
+                r.advance = false;
+                let value = value?;
                 assigns.push(Assign {
                     target: Target::Slot(c.var_slot(v)),
                     value,
@@ -245,7 +293,16 @@ impl Compiler {
             trigger: trigger_pos,
             guard,
             action: assigns,
+            advance: None,
         })
+    }
+}
+
+/// Where an error is, in a connector with `forall`: ` (in instance i = 3)`.
+fn in_instance(fixed: &[(&str, i64)]) -> String {
+    match fixed.first() {
+        Some((v, i)) => format!(" (in instance {v} = {i})"),
+        None => String::new(),
     }
 }
 

@@ -144,6 +144,8 @@ pub struct Resolver<'a> {
     runs: Vec<i128>,
     /// Body evaluations of all quantifiers resolved so far, per evaluation.
     work: i128,
+    /// In a `Time` connector's action: `advance` names its step's time units.
+    pub advance: bool,
 }
 
 impl<'a> Resolver<'a> {
@@ -155,6 +157,7 @@ impl<'a> Resolver<'a> {
             quant: Vec::new(),
             runs: Vec::new(),
             work: 0,
+            advance: false,
         }
     }
 
@@ -410,6 +413,9 @@ impl<'a> Resolver<'a> {
         }
         if let Some(&(_, v)) = self.fixed.iter().rev().find(|(f, _)| *f == n) {
             return Ok((C::Const(v), Ty::Int));
+        }
+        if self.advance && n == "advance" {
+            return Ok((C::Advance, Ty::Int));
         }
         if let Place::Atom(atom) = self.place {
             if let Some(v) = atom.var_index(n) {

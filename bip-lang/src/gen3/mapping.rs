@@ -145,6 +145,7 @@ fn module(
                 priority: None,
                 cpu: None,
                 deadline: None,
+                core: None,
                 doc: doc(&t.doc),
                 codels: codel_defs(c, None, &t.codels, &throws(&t.throws, exceptions, errors)),
             })
@@ -286,6 +287,8 @@ fn codel_defs(
                 throws: throws.to_vec(),
                 writes: writes.clone(),
                 wcet: wcet.clone(),
+                // GenoM3 declares a WCET only
+                bcet: None,
             })
         })
         .collect()

@@ -5,7 +5,7 @@ use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 use super::build::{Expansion, UserExpr, UserTexts};
-use super::{build, check, events, machines, rewrite, timing};
+use super::{build, check, events, machines, rewrite, timed, timing};
 use crate::compile::{compile_core, written_text, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::expr::{Assign, Expr};
@@ -34,6 +34,8 @@ pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion
         errors.push(e);
     }
     let timing = timing::check(def, &layer, &consts, &mut errors);
+    let timed = timed::check(def, &layer, &consts, &timing, &mut errors);
+
     let mut rw = rewrite::Rewriter::new(&layer, &consts);
     let mut user = UserTexts::default();
     // each user text as a tree, rewritten if it names GenoM things
@@ -137,8 +139,16 @@ pub(crate) fn expand_in(def: &SystemDef, text: Option<&str>) -> Result<Expansion
         .into_iter()
         .map(|(p, k)| (p, k.max(0) + 1))
         .collect();
-    let mut expansion = build::build(&layer, def, caps, user)?;
+    let mut expansion = build::build(&layer, def, caps, user, timed.as_ref())?;
     expansion.recipe.timing = timing;
+    if let Some(t) = &timed {
+        expansion.recipe.time_unit_us = Some(t.unit_us);
+        expansion.recipe.cores = t
+            .tasks
+            .iter()
+            .map(|m| m.iter().map(|task| task.core).collect())
+            .collect();
+    }
     Ok(expansion)
 }
 

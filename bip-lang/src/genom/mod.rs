@@ -15,6 +15,7 @@
 //!   clock and tick, modules, activities, services' connectors, the assembly with user
 //!   connectors, priorities, properties);
 //! - `timing`: the time budgets (CPUs, priorities, deadlines, WCETs), checked;
+//! - `timed`: a timed layer's time unit, durations in units, cores and scheduling, checked;
 //! - `recipe`: the engine's map of the layer by names, as the expansion writes it; once
 //!   the expanded model is compiled it becomes a [`bip_model::GenomMap`].
 
@@ -27,6 +28,7 @@ mod names;
 mod recipe;
 mod rewrite;
 pub mod syntax;
+mod timed;
 mod timing;
 mod tree;
 

@@ -82,3 +82,53 @@ pub fn age_var(p: &str) -> String {
 pub fn done_var(f: &str) -> String {
     format!("done_{f}")
 }
+
+// A timed model's generated names (docs/genom.md, "Timed models").
+
+/// Variables of a task atom: its job's stage ([`STAGE_IDLE`], [`STAGE_READY`],
+/// [`STAGE_RUNNING`]), which of its codels holds the core (0: none, else its number from
+/// 1 in the task's order), that codel's elapsed time units, and whether a period boundary
+/// passed while its job was unfinished.
+pub const STAGE: &str = "stage";
+pub const RUNNING_CODEL: &str = "codel";
+pub const ELAPSED: &str = "x";
+pub const LATE: &str = "late";
+pub const STAGE_IDLE: i64 = 0;
+pub const STAGE_READY: i64 = 1;
+pub const STAGE_RUNNING: i64 = 2;
+
+/// The component of task `t` of module `m` (`m_t` is its machine's).
+pub fn task_component(m: &str, t: &str) -> String {
+    format!("{m}_{t}_task")
+}
+
+pub fn task_atom(m: &str, t: &str) -> String {
+    format!("Task_{m}_{t}")
+}
+
+/// The connector by which task `m.t`'s ready job takes a core.
+pub fn dispatch_connector(m: &str, t: &str) -> String {
+    format!("{m}_{t}_dispatch")
+}
+
+/// The connector by which task `m.t`'s job ends, freeing its core.
+pub fn done_connector(m: &str, t: &str) -> String {
+    format!("{m}_{t}_done")
+}
+
+/// The connector that starts codel `state` of activity `m.s` on its task's core (its
+/// finish is [`codel_connector`]).
+pub fn start_connector(m: &str, s: &str, state: &str) -> String {
+    format!("{m}_{s}_{state}_start")
+}
+
+/// The connector by which codel `state` of activity `m.s` finishes after its activity
+/// was interrupted or aborted while it ran: it frees the core, its outcome dropped.
+pub fn dropped_connector(m: &str, s: &str, state: &str) -> String {
+    format!("{m}_{s}_{state}_dropped")
+}
+
+/// The invariant that task `m.t` meets its deadline (`deadline` as the user reads it).
+pub fn deadline_property(m: &str, t: &str, deadline: &str) -> String {
+    format!("{m}.{t} meets its {deadline} deadline")
+}

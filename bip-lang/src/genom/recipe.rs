@@ -14,12 +14,18 @@ pub(crate) struct Recipe {
     pub modules: Vec<RecipeModule>,
     pub idle: Option<Expr>,
     pub timing: Timing,
+    /// A timed model's time unit in microseconds.
+    pub time_unit_us: Option<u64>,
+    /// A timed model's pinned cores, by module and task.
+    pub cores: Vec<Vec<Option<u32>>>,
 }
 
 #[derive(Clone, Debug)]
 pub(crate) struct RecipeModule {
     pub name: String,
     pub tasks: Vec<(String, Option<i64>)>,
+    /// Each task's `delay` in ticks.
+    pub delays: Vec<i64>,
     /// Port names and their age caps, for ports whose age is tracked.
     pub ports: Vec<(String, Option<i64>)>,
     /// The declared type of each port's data.
@@ -110,7 +116,7 @@ impl Recipe {
         let interaction = |name: &str| system.interaction_index(name).ok_or_else(|| missing(name));
         let component = |name: &str| system.component_index(name).ok_or_else(|| missing(name));
         let mut modules = Vec::new();
-        for m in &self.modules {
+        for (mi, m) in self.modules.iter().enumerate() {
             let mc = component(&m.name)?;
             let atom = system.atom_of(mc);
             let mut ports = Vec::new();
@@ -237,6 +243,7 @@ impl Recipe {
                     if !ids.is_empty() && stride as usize != ids_transitions.len() {
                         return Err(missing("the transitions that write ids"));
                     }
+                    let codel_key = (m.name.clone(), s.name.clone(), c.state.clone());
                     codels.push(CodelMap {
                         state: c.state.clone(),
                         run: interaction(&c.run)?,
@@ -247,11 +254,8 @@ impl Recipe {
                         ids,
                         ids_transitions,
                         holds,
-                        wcet_us: self
-                            .timing
-                            .wcets
-                            .get(&(m.name.clone(), s.name.clone(), c.state.clone()))
-                            .copied(),
+                        wcet_us: self.timing.wcets.get(&codel_key).copied(),
+                        bcet_us: self.timing.bcets.get(&codel_key).copied(),
                     });
                 }
                 services.push(ServiceMap {
@@ -275,7 +279,9 @@ impl Recipe {
                 tasks: m
                     .tasks
                     .iter()
-                    .map(|(n, p)| {
+                    .zip(&m.delays)
+                    .enumerate()
+                    .map(|(ti, ((n, p), &delay))| {
                         let budget = self
                             .timing
                             .tasks
@@ -285,6 +291,13 @@ impl Recipe {
                         TaskMap {
                             name: n.clone(),
                             period: p.map(|p| u32::try_from(p).unwrap_or(u32::MAX)),
+                            delay: u32::try_from(delay).unwrap_or(u32::MAX),
+                            core: self
+                                .cores
+                                .get(mi)
+                                .and_then(|c| c.get(ti))
+                                .copied()
+                                .flatten(),
                             cpu: budget.cpu,
                             priority: budget.priority,
                             deadline_us: budget.deadline_us,
@@ -304,6 +317,7 @@ impl Recipe {
         Ok(GenomMap {
             tick: interaction(&self.tick)?,
             tick_ms: system.tick_ms,
+            time_unit_us: self.time_unit_us,
             modules,
             idle,
         })

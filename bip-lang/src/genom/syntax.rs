@@ -54,6 +54,10 @@ pub struct TaskDef {
     /// the period.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub deadline: Option<ConstExpr>,
+    /// In a timed model, the core of its CPU the task is pinned to (from 0); absent: it
+    /// runs on any free core of its CPU.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub core: Option<ConstExpr>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub doc: Option<Text>,
     /// The task's own state machine (GenoM3's permanent activity): codels like an
@@ -162,6 +166,9 @@ pub struct CodelDef {
     /// Worst-case execution time of one run: `"2ms"`, `"150us"`, or microseconds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wcet: Option<ConstExpr>,
+    /// Best-case execution time of one run, at most the WCET; by default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bcet: Option<ConstExpr>,
 }
 
 /// A connection: module `m`'s in port `p` reads module `n`'s out port `q`

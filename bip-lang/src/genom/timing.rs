@@ -7,8 +7,10 @@
 
 use std::collections::HashMap;
 
-use super::check::Layer;
-use crate::compile::budgets::{self, check_priorities, cpu_index, duration, show_us, Placed};
+use super::check::{Codel, Layer};
+use crate::compile::budgets::{
+    self, check_priorities, cpu_index, duration, duration_or_zero, show_us, Placed,
+};
 use crate::compile::Constants;
 use crate::diag::{Errors, ModelError};
 use crate::source::Span;
@@ -21,6 +23,13 @@ pub(crate) struct Timing {
     pub tasks: HashMap<(String, String), TaskBudget>,
     /// WCETs in microseconds, by (module, service, codel state).
     pub wcets: HashMap<(String, String, String), u64>,
+    /// Declared BCETs in microseconds (each at most its codel's WCET), by (module,
+    /// service, codel state).
+    pub bcets: HashMap<(String, String, String), u64>,
+    /// The number of cores of each declared CPU (`None` where the count is wrong).
+    pub cores: Vec<Option<u32>>,
+    /// A tick in microseconds, if known.
+    pub tick_us: Option<u64>,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -115,6 +124,16 @@ pub(super) fn check(
         }
         for service in &module.services {
             for codel in &service.codels {
+                let key = || {
+                    (
+                        module.name.to_string(),
+                        service.name.to_string(),
+                        codel.state.to_string(),
+                    )
+                };
+                if let Some(us) = codel_bcet(errors, consts, module.name, service.name, codel) {
+                    timing.bcets.insert(key(), us);
+                }
                 let Some(w) = &codel.def.wcet else { continue };
                 let Some(task) = service.task.and_then(|t| module.tasks.get(t)) else {
                     errors.push(
@@ -156,14 +175,7 @@ pub(super) fn check(
                         .with_help("a codel must be able to finish within its task's period"),
                     );
                 }
-                timing.wcets.insert(
-                    (
-                        module.name.to_string(),
-                        service.name.to_string(),
-                        codel.state.to_string(),
-                    ),
-                    us,
-                );
+                timing.wcets.insert(key(), us);
             }
         }
     }
@@ -175,5 +187,65 @@ pub(super) fn check(
             .map(|t| t.1),
     );
     check_priorities(def.cpus.len(), &placed, errors);
+    timing.cores = budgets::cpu_cores(def, consts, errors);
+    timing.tick_us = tick_us;
+    // a timed model's own checks are `timed`'s
+    if def.time.is_none() {
+        budgets::untimed_cpus(def, consts, errors);
+        for task in layer.modules.iter().flat_map(|m| &m.def.tasks) {
+            if let Some(core) = &task.core {
+                errors.push(
+                    ModelError::new(
+                        format!(
+                            "task `{}` is pinned to a core in an untimed model",
+                            task.name
+                        ),
+                        core.span,
+                    )
+                    .with_label(
+                        "the response-time analysis of an untimed model schedules one core per CPU",
+                    )
+                    .with_help(budgets::UNTIMED_HELP),
+                );
+            }
+        }
+    }
     timing
+}
+
+/// A codel's declared `bcet` in microseconds, checked against its WCET (a codel without
+/// one takes no time); `None` if it declares none or it is wrong (reported).
+fn codel_bcet(
+    errors: &mut Errors,
+    consts: &Constants,
+    module: &str,
+    service: &str,
+    codel: &Codel<'_>,
+) -> Option<u64> {
+    let written = codel.def.bcet.as_ref()?;
+    let bcet = duration_or_zero(errors, consts, written, "a BCET")?;
+    let wcet = match &codel.def.wcet {
+        // a wrong WCET is reported by itself
+        Some(w) => duration(&mut Errors::default(), consts, w, "a WCET")?,
+        None => 0,
+    };
+    if bcet > wcet {
+        let at_least = format!(
+            "codel `{}` of `{module}.{service}` takes at least {}",
+            codel.state,
+            show_us(bcet)
+        );
+        errors.push(match &codel.def.wcet {
+            Some(w) => ModelError::new(
+                format!("{at_least}, more than its WCET ({})", show_us(wcet)),
+                written.span,
+            )
+            .with_note(w.span, "its WCET")
+            .with_help("a codel's best-case execution time is at most its worst case"),
+            None => ModelError::new(format!("{at_least}, and has no WCET"), written.span)
+                .with_help("a codel without a `wcet` takes no time: give its `wcet`"),
+        });
+        return None;
+    }
+    Some(bcet)
 }

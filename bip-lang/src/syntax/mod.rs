@@ -7,6 +7,7 @@
 
 mod code;
 mod task;
+mod timed;
 mod var;
 
 use std::fmt;
@@ -27,6 +28,7 @@ pub use code::{
     parse_action_in_file, parse_in_file, parse_range_in_file, syntax_error, ActionDef, ExprDef,
 };
 pub use task::AtomTaskDef;
+pub use timed::{CpuDef, Policy, Preemption, TimeDef};
 pub use var::{TypeDef, VarDef};
 
 /// The `ron` options every model file is read and printed with (docs/model.md:
@@ -44,10 +46,18 @@ pub struct SystemDef {
     /// Real-time length of one model tick in milliseconds (used by the engine's clock).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tick_ms: Option<ConstExpr>,
+    /// `Exact`: the GenoM layer's codels take time on their CPUs' cores in the verified
+    /// model (docs/model.md, "Time budgets"); absent: codels are instants.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time: Option<TimeDef>,
     /// The CPUs the tasks (of the GenoM layer, and atoms') run on, for the scheduling
     /// analysis (docs/model.md, "Time budgets"); none declared: one.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub cpus: Vec<Text>,
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "timed::deserialize_cpus"
+    )]
+    pub cpus: Vec<CpuDef>,
     #[serde(default, skip_serializing_if = "OrderedMap::is_empty")]
     pub constants: OrderedMap<Text, ConstExpr>,
     #[serde(default, skip_serializing_if = "OrderedMap::is_empty")]
@@ -104,7 +114,8 @@ impl SystemDef {
 /// Writes printed RON the way docs/model.md does: the inner structs without their type names
 /// (`(from: …)`, not `TransitionDef(from: …)`), and lists of plain values on one line.
 fn tidy_ron(text: &str) -> String {
-    const INNER: [&str; 12] = [
+    const INNER: [&str; 13] = [
+        "CpuDef(",
         "VarDef(",
         "TransitionDef(",
         "ComponentDef(",
@@ -277,6 +288,10 @@ pub struct ConnectorDef {
     pub guard: Option<ExprDef>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub action: Option<ActionDef>,
+    /// Of a `Time` connector: the time units its step stands for (default 1), evaluated on
+    /// the state the step leaves; its action reads it as `advance`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub advance: Option<ExprDef>,
 }
 
 #[derive(Clone, Debug, Default, serde::Deserialize, serde::Serialize)]

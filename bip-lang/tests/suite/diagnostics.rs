@@ -359,3 +359,36 @@ fn a_connector_that_fails_is_reported_once_not_again_by_its_priorities() {
     assert_eq!(err.errors().len(), 1, "{}", err.summary());
     assert_error(&text, "has no variable `usse`", "usse");
 }
+
+#[test]
+fn advance_of_time_steps() {
+    let pair = r#"ports: ["fork[i].take", "fork[(i+1)%N].take"])"#;
+    let with = |fields: &str| {
+        let ports = pair.trim_end_matches(')');
+        ok_model().replace(pair, &format!("{ports}, {fields})"))
+    };
+    let ok =
+        with(r#"role: Time, advance: "fork[i].uses + 1", action: "fork[i].uses = advance % 5""#);
+    load_str("ok.ron", &ok).unwrap_or_else(|e| panic!("{}", e.summary()));
+    assert_error(
+        &with(r#"advance: "2""#),
+        "connector `pair` has an `advance` but is not a time step",
+        "2",
+    );
+    assert_error(
+        &with(r#"role: Time, advance: "i - 1""#),
+        "`advance` is -1 (in instance i = 0); a time step stands for at least 1 unit",
+        "i - 1",
+    );
+    assert_error(
+        &with(r#"role: Time, advance: "fork[i]@free""#),
+        "expected an integer",
+        "fork[i]@free",
+    );
+    // only a time step's action reads its advance
+    assert_error(
+        &with(r#"action: "fork[i].uses = advance""#),
+        "unknown name `advance`",
+        "advance",
+    );
+}

@@ -22,4 +22,6 @@ mod response;
 mod robustness;
 mod support;
 mod task_machines;
+mod timed;
+mod timed_expansion;
 mod timing;

@@ -162,7 +162,7 @@ fn emit(e: &Expr, ops: &mut Vec<Op>, depth: usize) -> bool {
         Expr::Slot(s) => ops.push(Op::Slot(*s)),
         Expr::Local(n) => ops.push(Op::Local(*n)),
         Expr::At(s, loc) => ops.push(Op::At(*s, *loc)),
-        Expr::Indexed(_) | Expr::Bound(_) | Expr::Quant(_) => return false,
+        Expr::Indexed(_) | Expr::Bound(_) | Expr::Quant(_) | Expr::Advance => return false,
         Expr::Not(a) | Expr::Neg(a) => {
             if !emit(a, ops, depth) {
                 return false;

@@ -39,7 +39,7 @@ fn reads(e: &Expr, out: &mut Vec<(u32, bool)>) -> bool {
             out.push((*n, true));
             true
         }
-        Expr::Indexed(_) | Expr::Bound(_) | Expr::Quant(_) => false,
+        Expr::Indexed(_) | Expr::Bound(_) | Expr::Quant(_) | Expr::Advance => false,
         Expr::Not(a) | Expr::Neg(a) => reads(a, out),
         Expr::Binary(_, a, b) => reads(a, out) && reads(b, out),
         Expr::Chain(first, rest) => reads(first, out) && rest.iter().all(|(_, x)| reads(x, out)),

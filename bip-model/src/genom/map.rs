@@ -30,6 +30,9 @@ pub struct GenomMap {
     pub tick: u32,
     /// Real time of one tick in milliseconds (`tick_ms` of the model), if given.
     pub tick_ms: Option<u64>,
+    /// In a timed model (`time: Exact`), its time unit in microseconds: codels hold
+    /// cores for their execution times, and the tick is one unit.
+    pub time_unit_us: Option<u64>,
     pub modules: Vec<ModuleMap>,
     /// "No activity has work outstanding" (every activity at `ether` and not requested),
     /// which `DeadlockFree` excuses when requests come from the environment; `None` if
@@ -86,6 +89,11 @@ pub struct TaskMap {
     /// In ticks; `None` for an aperiodic task (it runs its codels as soon as they are
     /// ready, docs/genom.md, "Aperiodic tasks").
     pub period: Option<u32>,
+    /// The offset of its period boundaries in ticks, below the period: they fall on the
+    /// ticks `delay + k * period` after the start.
+    pub delay: u32,
+    /// In a timed model, the core of its CPU it is pinned to; `None`: any free core.
+    pub core: Option<u32>,
     /// Index into the system's [`Budgets::cpus`](crate::Budgets::cpus) (0 if the model
     /// declares none).
     pub cpu: u32,
@@ -301,6 +309,8 @@ pub struct CodelMap {
     pub holds: Vec<Condition>,
     /// Its worst-case execution time in microseconds, if declared.
     pub wcet_us: Option<u64>,
+    /// Its best-case execution time in microseconds, if declared.
+    pub bcet_us: Option<u64>,
 }
 
 /// An ids field a codel writes (docs/genom.md, "Codels that write ids").

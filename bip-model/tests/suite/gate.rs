@@ -114,10 +114,35 @@ fn walk(
 
 #[test]
 fn random_systems_agree_with_and_without_cache_and_plans() {
+    let (compared, planned, known) = walk_random_systems(0..300, generate);
+    assert!(compared > 5_000, "only {compared} states compared");
+    assert!(planned > 500, "only {planned} steps fired by their plan");
+    assert!(known > 100, "only {known} steps taken from the cache");
+}
+
+/// Time steps with an `advance`, which their plans must evaluate and check as firing does.
+#[test]
+fn random_systems_with_advances_agree_with_and_without_cache_and_plans() {
+    let options = Options {
+        roles: true,
+        advance: true,
+        ..Options::default()
+    };
+    let (compared, planned, _) = walk_random_systems(0..300, |seed| generate_with(seed, &options));
+    assert!(compared > 5_000, "only {compared} states compared");
+    assert!(planned > 500, "only {planned} steps fired by their plan");
+}
+
+/// Walks each generated system with and without cache and plans: the states compared,
+/// the steps fired by their plan, the steps taken from the cache.
+fn walk_random_systems(
+    seeds: std::ops::Range<u64>,
+    generate: impl Fn(u64) -> Gen,
+) -> (usize, usize, u64) {
     let mut compared = 0;
     let mut planned = 0;
     let mut known = 0;
-    for seed in 0..300u64 {
+    for seed in seeds {
         let g = generate(seed);
         let text = g.to_ron();
         let Ok(mut sys) = load_str("generated.ron", &text) else {
@@ -143,9 +168,7 @@ fn random_systems_agree_with_and_without_cache_and_plans() {
         planned += seen.planned;
         known += seen.known;
     }
-    assert!(compared > 5_000, "only {compared} states compared");
-    assert!(planned > 500, "only {planned} steps fired by their plan");
-    assert!(known > 100, "only {known} steps taken from the cache");
+    (compared, planned, known)
 }
 
 #[test]

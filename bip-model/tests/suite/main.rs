@@ -1,5 +1,6 @@
 //! bip-model's integration tests, in one binary (one link instead of seven):
 //!
+//! - `advance`: the time units of a `Time` connector's steps;
 //! - `reference`: the step relation against a naive interpreter of the semantics, on
 //!   thousands of random systems;
 //! - `semantics`: one test per rule of the semantics;
@@ -8,6 +9,7 @@
 //! - `state_cache`: the state cache against the relation;
 //! - `trace`: the trace format and replay.
 
+mod advance;
 mod gate;
 mod incremental;
 mod priorities;

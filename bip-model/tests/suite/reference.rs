@@ -86,7 +86,22 @@ impl Reference<'_> {
                     other => unreachable!("operator {other}"),
                 }
             }
+            // read only through `with_advance`, which replaces it by the step's value
+            Ex::Advance => unreachable!("`advance` outside a time step's action"),
         })
+    }
+
+    /// "A `Time` connector's `advance` is evaluated on the state the step leaves, and its
+    /// action reads it as `advance`": the expression with `advance` replaced by its value.
+    fn with_advance(e: &Ex, value: i64) -> Ex {
+        let sub = |x: &Ex| Box::new(Self::with_advance(x, value));
+        match e {
+            Ex::Advance => Ex::Int(value),
+            Ex::Not(a) => Ex::Not(sub(a)),
+            Ex::Bin(op, a, b) => Ex::Bin(op, sub(a), sub(b)),
+            Ex::Ite(c, a, b) => Ex::Ite(sub(c), sub(a), sub(b)),
+            leaf => leaf.clone(),
+        }
     }
 
     /// "a port is enabled if its component has a transition from its current location on
@@ -264,8 +279,17 @@ impl Reference<'_> {
             Ok(())
         };
         if let Some((ci, inst)) = conn {
+            // a time step stands for its `advance` units (1 by default), at least 1, and
+            // that value is computed before anything changes
+            let advance = match &self.conns[ci].advance {
+                Some(e) => self.eval(e, s, 0, inst)?,
+                None => 1,
+            };
+            if advance < 1 {
+                return Err(Failure);
+            }
             for (f, idx, v, e) in &self.conns[ci].action {
-                let value = self.eval(e, &n, 0, inst)?;
+                let value = self.eval(&Self::with_advance(e, advance), &n, 0, inst)?;
                 assign(&mut n, self.component(*f, *idx, inst), *v, value)?;
             }
         }
@@ -338,6 +362,7 @@ fn reference_system(seed: u64) -> Gen {
         seed,
         &Options {
             roles: true,
+            advance: true,
             ..Options::default()
         },
     )
@@ -433,9 +458,11 @@ fn generator_covers_every_rule() {
     let mut range_errors = 0;
     let mut compared = 0;
     let mut roles = 0;
+    let mut advances = 0;
     for seed in 0..400u64 {
         let g = reference_system(seed);
         roles += g.conns.iter().filter(|c| c.role.is_some()).count();
+        advances += g.conns.iter().filter(|c| c.advance.is_some()).count();
         broadcast += g.conns.iter().filter(|c| c.trigger.is_some()).count();
         forall += g.conns.iter().filter(|c| c.forall.is_some()).count();
         priorities += g.prios.len();
@@ -478,6 +505,7 @@ fn generator_covers_every_rule() {
         ("non-deterministic atoms", nondeterministic),
         ("range errors at the initial state", range_errors),
         ("connectors with a role", roles),
+        ("time connectors with an advance", advances),
     ] {
         assert!(n >= 20, "only {n} {what} in 400 systems");
     }

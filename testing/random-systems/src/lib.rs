@@ -6,8 +6,12 @@
 //! the incremental enabled set, the state cache and the gate (bip-model), and the symbolic
 //! encoding and verdicts against the explicit ones (bip-verifier). What only some suites
 //! can take (roles, guards that fail, properties) is behind [`Options`].
+//!
+//! [`timed`] draws timed task sets instead, with the naive interpreter of the timed
+//! semantics that answers for them.
 
 mod ron;
+pub mod timed;
 
 pub use bip_model::Rng;
 
@@ -29,6 +33,10 @@ pub struct Options {
     /// With `properties`: a `LeadsTo` and, if a connector has the Time role, a bounded
     /// `Response`, between two conditions over the components' values.
     pub responses: bool,
+    /// With `roles`: Time connectors may have an `advance` (which may fail or be below 1)
+    /// and read it in their action, after an assignment that may change what it reads.
+    /// Drawn after everything else, so that the rest of each system is the same without.
+    pub advance: bool,
 }
 
 impl Options {
@@ -40,6 +48,7 @@ impl Options {
             failing_guards: true,
             properties: true,
             responses: false,
+            advance: false,
         }
     }
 }
@@ -62,6 +71,8 @@ pub enum Ex {
     Not(Box<Ex>),
     Bin(&'static str, Box<Ex>, Box<Ex>),
     Ite(Box<Ex>, Box<Ex>, Box<Ex>),
+    /// `advance`, in a Time connector's action.
+    Advance,
 }
 
 /// How a connector names a family member: a constant, or `(i + k) % count` in a `forall`.
@@ -122,6 +133,8 @@ pub struct Conn {
     /// (family, index, variable) = value
     pub action: Vec<(usize, Idx, usize, Ex)>,
     pub role: Option<Role>,
+    /// Of a Time connector ([`Options::advance`]).
+    pub advance: Option<Ex>,
 }
 
 #[derive(Clone, Debug)]
@@ -417,6 +430,7 @@ pub fn generate_with(seed: u64, opts: &Options) -> Gen {
             guard,
             action,
             role,
+            advance: None,
         });
     }
     // a component may take part once per connector instance: drop connectors that break it
@@ -487,6 +501,7 @@ pub fn generate_with(seed: u64, opts: &Options) -> Gen {
                 guard: None,
                 action: Vec::new(),
                 role: None,
+                advance: None,
             });
         }
         // from the last connector of the system before them (if any) up through the new ones
@@ -517,6 +532,9 @@ pub fn generate_with(seed: u64, opts: &Options) -> Gen {
             });
         }
     }
+    if opts.advance {
+        add_advances(&mut r, &mut gen);
+    }
     if opts.properties {
         let (atoms, families) = (&gen.atoms, &gen.families);
         let mut leaf = |r: &mut Rng, want_bool: bool| global_leaf(r, atoms, families, want_bool);
@@ -537,6 +555,58 @@ pub fn generate_with(seed: u64, opts: &Options) -> Gen {
         });
     }
     gen
+}
+
+/// Gives Time connectors an `advance` over their participants' variables (it may divide,
+/// so fail, and it may be below 1), and an assignment reading it after their action.
+fn add_advances(r: &mut Rng, gen: &mut Gen) {
+    for ci in 0..gen.conns.len() {
+        if gen.conns[ci].role != Some(Role::Time) || !r.chance(70) {
+            continue;
+        }
+        let ports = gen.conns[ci].ports.clone();
+        let (atoms, families) = (&gen.atoms, &gen.families);
+        let int_vars = |f: usize| -> Vec<usize> {
+            let atom = &atoms[families[f].atom];
+            (0..atom.vars.len())
+                .filter(|&v| !atom.vars[v].is_bool)
+                .collect()
+        };
+        let mut leaf = |r: &mut Rng, want_bool: bool| -> Option<Ex> {
+            let (f, idx, _) = ports[r.below(ports.len())];
+            if want_bool {
+                return Some(Ex::At(f, idx, r.below(atoms[families[f].atom].locs)));
+            }
+            let vars = int_vars(f);
+            (!vars.is_empty()).then(|| Ex::Var(f, idx, vars[r.below(vars.len())]))
+        };
+        // mostly small positive values, so that most time steps fire; one that reads no
+        // variable is a positive constant (a constant below 1 is a load error)
+        let advance = match leaf(r, false) {
+            Some(var) => {
+                let op = ACTION_OPS[r.below(ACTION_OPS.len())];
+                let other = gen_int(r, 1, &mut leaf, ACTION_OPS);
+                let e = Ex::Bin(op, Box::new(var), Box::new(other));
+                Ex::Bin("+", Box::new(Ex::Int(2)), Box::new(e))
+            }
+            None => Ex::Int(1 + r.below(3) as i64),
+        };
+        let (f, idx, _) = ports[r.below(ports.len())];
+        let vars = int_vars(f);
+        let reads = (!vars.is_empty() && r.chance(80)).then(|| {
+            let v = vars[r.below(vars.len())];
+            let e = Ex::Bin("-", Box::new(Ex::Advance), Box::new(Ex::Int(2)));
+            (
+                f,
+                idx,
+                v,
+                Ex::Bin("+", Box::new(Ex::Var(f, idx, v)), Box::new(e)),
+            )
+        });
+        let c = &mut gen.conns[ci];
+        c.advance = Some(advance);
+        c.action.extend(reads);
+    }
 }
 
 pub fn instances(c: &Conn) -> impl Iterator<Item = Option<usize>> {

@@ -91,6 +91,9 @@ impl Gen {
                     .collect();
                 s += &format!(", action: \"{}\"", act.join("; "));
             }
+            if let Some(a) = &c.advance {
+                s += &format!(", advance: \"{}\"", self.show(a, Some(c.forall.is_some())));
+            }
             match c.role {
                 Some(Role::Time) => s += ", role: Time",
                 Some(Role::Environment) => s += ", role: Environment",
@@ -153,6 +156,7 @@ impl Gen {
             Ex::Int(i) if *i < 0 => format!("({i})"),
             Ex::Int(i) => i.to_string(),
             Ex::Bool(b) => b.to_string(),
+            Ex::Advance => "advance".into(),
             Ex::Local(v) => format!("v{v}"),
             Ex::Var(f, idx, v) => {
                 format!("{}.v{v}", self.show_comp(*f, *idx, global == Some(true)))

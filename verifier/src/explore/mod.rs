@@ -28,6 +28,8 @@ pub(crate) mod graph;
 mod response;
 pub(crate) mod scc;
 mod targets;
+mod trace;
+mod worst;
 
 use std::sync::atomic::{AtomicBool, AtomicU64};
 use std::sync::Mutex;

@@ -4,9 +4,7 @@
 use std::borrow::Cow;
 
 use bip_model::eval::Expr;
-use bip_model::{
-    Happens, OwnedStep, Property, PropertyKind as ModelKind, State, Steps, System, Trace,
-};
+use bip_model::{Happens, Property, PropertyKind as ModelKind, System};
 
 use crate::error::VerifyError;
 use crate::properties::{
@@ -14,9 +12,10 @@ use crate::properties::{
     RANGE_ERRORS, TIME_PROGRESS,
 };
 use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
-use crate::visited::{StateId, Visited};
 
 use super::response::{decide, Decided, Question};
+use super::trace::trace_to;
+use super::worst::worst_responses;
 use super::{Explorer, Finding, Found};
 
 /// What one property checks, with its compiled expression.
@@ -203,6 +202,18 @@ impl Explorer<'_> {
                 error_step,
             });
         }
+        // a timed model's worst responses, given only when every state was seen and no
+        // deadline is missed
+        let deadlines_hold = properties
+            .iter()
+            .filter(|p| p.kind == CheckKind::Invariant)
+            .all(|p| !p.verdict.fails());
+        properties.extend(worst_responses(
+            self.system,
+            &self.visited,
+            complete,
+            deadlines_hold,
+        )?);
         tracing::info!(
             states,
             transitions = self.transitions,
@@ -238,7 +249,7 @@ impl Explorer<'_> {
                 format!("range error: {m}"),
             ),
         };
-        let trace = trace_to(self.system, &self.visited, f.state, trace_verdict)?;
+        let trace = trace_to(self.system, &self.visited, f.state, None, trace_verdict)?;
         let n = trace.steps.len();
         let after = format!("after {n} step{}", if n == 1 { "" } else { "s" });
         Ok(match f.what {
@@ -277,43 +288,4 @@ impl Explorer<'_> {
             _ => PropertyVerdict::Holds { witness: None },
         }
     }
-}
-
-/// The trace from the initial state to stored state `id`. The steps are found again by
-/// firing the enabled steps of each state on the path until one leads to the next state.
-fn trace_to(
-    system: &System,
-    visited: &Visited,
-    id: StateId,
-    verdict: bip_model::Verdict,
-) -> Result<Trace, VerifyError> {
-    let layout = &system.layout;
-    let path = visited.path_to(id);
-    let mut steps = Steps::new();
-    let mut next = system.initial_state();
-    let mut packed = vec![0u8; layout.bytes()];
-    let mut out: Vec<(OwnedStep, State)> = Vec::with_capacity(path.len());
-    let mut state = layout.unpack(visited.state(path[0]));
-    for &to in &path[1..] {
-        let target = visited.state(to);
-        system.enabled_steps(&state, &mut steps).map_err(|e| {
-            VerifyError::Internal(format!("a state on a trace has a range error: {e}"))
-        })?;
-        let mut taken = None;
-        for step in steps.iter() {
-            if system.fire(&state, step, &mut next).is_ok() {
-                layout.encode(&next, &mut packed);
-                if packed == target {
-                    taken = Some(step.to_owned());
-                    break;
-                }
-            }
-        }
-        let step = taken.ok_or_else(|| {
-            VerifyError::Internal("no step leads to the next state of a trace".into())
-        })?;
-        state = next.clone();
-        out.push((step, next.clone()));
-    }
-    Ok(Trace::from_path(system, verdict, &out))
 }

@@ -120,9 +120,29 @@ impl Observer<'_> {
             .filter(|(_, l)| p.sys().role(**l) == Role::Time)
             .map(|(k, _)| v.sel.is(k as i64)));
         let waiting = o.ge(1);
-        let at_bound = eq_num(o, self.late - 1);
-        let late = and([waiting.clone(), tick.clone(), at_bound]);
-        let counted = ite_int(&and2(&waiting, &tick), &(o + 1i64), o);
+        let (late, counted) = if p.sys().has_advance() {
+            // a tick counts its advance, evaluated on the frame it leaves; it is late if
+            // the count passes the bound
+            let mut units = num(0);
+            for (k, l) in labels.iter().enumerate() {
+                let Label::Interaction(i) = *l else { continue };
+                if p.sys().role(*l) != Role::Time {
+                    continue;
+                }
+                let advance = match &p.sys().interactions[i as usize].advance {
+                    Some(e) => p.eval(e, f).int_term(),
+                    None => num(1),
+                };
+                units = ite_int(&v.sel.is(k as i64), &advance, &units);
+            }
+            let sum = o + &units;
+            let late = and([waiting.clone(), tick.clone(), sum.ge(self.late)]);
+            (late, ite_int(&and2(&waiting, &tick), &sum, o))
+        } else {
+            let at_bound = eq_num(o, self.late - 1);
+            let late = and([waiting.clone(), tick.clone(), at_bound]);
+            (late, ite_int(&and2(&waiting, &tick), &(o + 1i64), o))
+        };
         let (rs, rs_err) = self.on_step(p, self.spec.response, labels, v, f, g);
         let (ra, _) = self.in_state(p, self.spec.response, g);
         let (ts, ts_err) = self.on_step(p, self.spec.trigger, labels, v, f, g);

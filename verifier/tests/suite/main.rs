@@ -1,5 +1,6 @@
 //! bip-verifier's integration tests, in one binary (one link instead of five):
 //!
+//! - `advance`: time steps of several units, in bounded response and range errors;
 //! - `known_answers`: verdicts, state counts and trace lengths known independently of bip;
 //! - `random_systems`: every worker count gives the same report, equal to a naive search;
 //! - `response`: response properties against a naive search for unanswered triggers, on
@@ -9,8 +10,11 @@
 //! - `symbolic_known_answers`: the symbolic method on models whose answers are known;
 //! - `symbolic_verdicts`: the symbolic method never contradicts the explicit one;
 //! - `time_progress`: timelocks against a naive search for a tick from every state, the
-//!   fuzzer's timelocks that made liveness properties hold, and the symbolic method.
+//!   fuzzer's timelocks that made liveness properties hold, and the symbolic method;
+//! - `timed_oracle`: the timed expansion against a naive interpreter of the timed
+//!   semantics, on random task sets.
 
+mod advance;
 mod known_answers;
 mod random_systems;
 mod response;
@@ -18,3 +22,4 @@ mod schedulability;
 mod symbolic_known_answers;
 mod symbolic_verdicts;
 mod time_progress;
+mod timed_oracle;

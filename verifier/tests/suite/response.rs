@@ -3,7 +3,7 @@
 //! oracle written here: a naive search of the explored graph that looks, from every
 //! trigger, for a run that avoids the response forever (a dead end, or a cycle through a
 //! tick, or through a timelocked state, reachable from it and back, found edge by edge)
-//! or past the bound (per trigger, counting ticks; or on such a cycle of timelocked
+//! or past the bound (per trigger, counting time units, each tick its advance; or on such a cycle of timelocked
 //! states). A state is timelocked when a search from it finds no tick. Every counterexample must replay with the step relation, a lasso must
 //! return to the state where its cycle starts, and the run must show the trigger
 //! unanswered.
@@ -143,21 +143,24 @@ fn oracle(sys: &System, g: &Naive, spec: ResponseSpec<'_>) -> Answer {
             })
         }),
         Some(bound) => starts.iter().any(|&x| {
-            // (state, ticks since this trigger), waiting for the response
+            // (state, time units since this trigger), waiting for the response
             let mut seen = HashSet::from([(x, 0u64)]);
             let mut queue = VecDeque::from([(x, 0u64)]);
             while let Some((s, c)) = queue.pop_front() {
                 if dead(s) {
                     return true;
                 }
-                for (k, (_, t)) in g.edges[s].iter().enumerate() {
-                    if tick(s, k) && c == bound {
+                for (k, (step, t)) in g.edges[s].iter().enumerate() {
+                    let units = sys
+                        .time_advance(&g.states[s], step.as_step())
+                        .expect("a step that fired");
+                    if tick(s, k) && c + units > bound {
                         return true;
                     }
                     if edge_resp[s][k] || resp[*t] {
                         continue;
                     }
-                    let next = (*t, c + u64::from(tick(s, k)));
+                    let next = (*t, c + units);
                     if seen.insert(next) {
                         queue.push_back(next);
                     }
@@ -734,6 +737,7 @@ proptest! {
     fn random_systems_match_the_oracle(seed in any::<u64>(), roles in any::<bool>()) {
         let opts = bip_random_systems::Options {
             responses: true,
+            advance: true,
             ..bip_random_systems::Options::verifier(roles)
         };
         let text = bip_random_systems::generate_with(seed, &opts).to_ron();
@@ -758,6 +762,7 @@ proptest! {
     fn random_systems_symbolic_agrees_with_explicit(seed in any::<u64>(), roles in any::<bool>()) {
         let opts = bip_random_systems::Options {
             responses: true,
+            advance: true,
             ..bip_random_systems::Options::verifier(roles)
         };
         let text = bip_random_systems::generate_with(seed, &opts).to_ron();
@@ -835,6 +840,7 @@ fn random_systems_give_the_symbolic_method_response_properties_to_decide() {
     for seed in 0..80u64 {
         let opts = bip_random_systems::Options {
             responses: true,
+            advance: true,
             ..bip_random_systems::Options::verifier(true)
         };
         let text = bip_random_systems::generate_with(seed, &opts).to_ron();

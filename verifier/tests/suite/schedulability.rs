@@ -428,3 +428,114 @@ fn a_loop_of_plain_yields_has_no_demand_bound() {
     assert_eq!(bound, vec![None, Some(300)]);
     assert_eq!(oracle(&system), vec![None, Some(300)]);
 }
+
+/// A timed model (`time: Exact`) decides its deadlines by exploration, one generated
+/// invariant per task, and has no `Schedulable` by response-time analysis: `lo` runs
+/// 3 ms from 4, 8, ... on the one core, cooperatively, so `hi` (released at 1, 5, ...,
+/// 1 ms of work) waits for it and misses its 2 ms deadline, first at 8 ms.
+#[test]
+fn a_timed_model_decides_its_deadlines_by_exploration() {
+    let text = |hi_deadline: &str| {
+        format!(
+            r#"System(name: "ts", tick_ms: 1, time: Exact, cpus: [(name: "main", preemption: Job)],
+    modules: [(name: "m", tasks: [
+        (name: "hi", period: 4, delay: 1, priority: 2, deadline: "{hi_deadline}", codels: [
+            (state: "start", yields: ["pause::run"], bcet: "1ms", wcet: "1ms"),
+            (state: "run", yields: ["pause::run"], bcet: "1ms", wcet: "1ms")]),
+        (name: "lo", period: 4, priority: 1, codels: [
+            (state: "start", yields: ["pause::run"], bcet: "3ms", wcet: "3ms"),
+            (state: "run", yields: ["pause::run"], bcet: "3ms", wcet: "3ms")])])])"#
+        )
+    };
+    let verdicts = |text: &str| -> Vec<(String, bool)> {
+        let system = load_str("ts.ron", text).unwrap();
+        let report = bip_verifier::verify(
+            &system,
+            bip_verifier::Method::Explicit,
+            &Options::default(),
+            &|_| {},
+        )
+        .unwrap();
+        assert!(
+            report.properties.iter().all(|p| p.name != "Schedulable"),
+            "no response-time analysis of a timed model"
+        );
+        report
+            .properties
+            .iter()
+            .filter(|p| p.name.contains("deadline"))
+            .map(|p| (p.name.clone(), p.verdict.fails()))
+            .collect()
+    };
+    assert_eq!(
+        verdicts(&text("2ms")),
+        [
+            ("m.hi meets its 2 ms deadline".to_string(), true),
+            ("m.lo meets its 4 ms deadline".to_string(), false)
+        ]
+    );
+    // the miss's shortest run ends at 8 ms, 3 ms after `hi`'s release at 5
+    let system = load_str("ts.ron", &text("2ms")).unwrap();
+    let report = bip_verifier::verify(
+        &system,
+        bip_verifier::Method::Explicit,
+        &Options::default(),
+        &|_| {},
+    )
+    .unwrap();
+    let hi = report
+        .properties
+        .iter()
+        .find(|p| p.name == "m.hi meets its 2 ms deadline")
+        .expect("hi's deadline");
+    let trace = hi.verdict.trace().expect("a counterexample");
+    let ticks = trace.steps.iter().filter(|s| s.step == "tick").count();
+    assert_eq!(ticks, 8);
+    // with 3 ms, `hi` responds in at most 3 ms: no miss
+    assert!(verdicts(&text("3ms")).iter().all(|(_, fails)| !fails));
+    // and the worst responses are 3 ms each, each with the run that ends in the job end
+    // that takes it; with a miss they are not given
+    let worst = |text: &str| -> Vec<(String, Option<String>, Option<String>)> {
+        let system = load_str("ts.ron", text).unwrap();
+        let report = bip_verifier::verify(
+            &system,
+            bip_verifier::Method::Explicit,
+            &Options::default(),
+            &|_| {},
+        )
+        .unwrap();
+        report
+            .properties
+            .iter()
+            .filter(|p| p.kind == bip_verifier::CheckKind::WorstResponse)
+            .map(|p| {
+                let last = p
+                    .verdict
+                    .trace()
+                    .and_then(|t| t.steps.last())
+                    .map(|s| s.step.clone());
+                let figure = p.verdict.holds().then(|| p.note.clone()).flatten();
+                (p.name.clone(), figure, last)
+            })
+            .collect()
+    };
+    let some = |s: &str| Some(s.to_string());
+    assert_eq!(
+        worst(&text("3ms")),
+        [
+            (
+                "m.hi worst response".to_string(),
+                some("3 ms"),
+                some("m_hi_done")
+            ),
+            (
+                "m.lo worst response".to_string(),
+                some("3 ms"),
+                some("m_lo_done")
+            )
+        ]
+    );
+    assert!(worst(&text("2ms"))
+        .iter()
+        .all(|(_, figure, _)| figure.is_none()));
+}

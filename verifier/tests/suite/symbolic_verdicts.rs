@@ -113,6 +113,7 @@ fn check(seed: u64, with_roles: bool) -> Result<(), TestCaseError> {
     // failures in both methods
     let opts = bip_random_systems::Options {
         responses: true,
+        advance: true,
         ..bip_random_systems::Options::verifier(with_roles)
     };
     let text = bip_random_systems::generate_with(seed, &opts).to_ron();

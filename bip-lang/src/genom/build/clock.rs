@@ -7,10 +7,11 @@
 use super::{connector, port, text, tr, var, Builder};
 use crate::diag::ModelError;
 use crate::expr::BinOp;
+use crate::expr::{Assign, Expr};
 use crate::genom::names::*;
 use crate::genom::tree::{and, assign, binary, boolean, cond, int, member};
 use crate::source::{ConstExpr, Span};
-use crate::syntax::{AtomDef, ConnectorDef, ConnectorKindDef, Role, TypeDef};
+use crate::syntax::{AtomDef, ConnectorDef, ConnectorKindDef, ExprDef, Role, TypeDef};
 
 fn gcd(a: i64, b: i64) -> i64 {
     if b == 0 {
@@ -24,6 +25,42 @@ fn gcd(a: i64, b: i64) -> i64 {
 const MAX_PHASE: i64 = 1 << 20;
 
 impl<'a, 'd> Builder<'a, 'd> {
+    /// The tick's part for module `mi`: the ports that constraints read age by one, up to
+    /// their cap, where `on_tick` holds (always if `None`).
+    pub(super) fn age_ports(
+        &self,
+        mi: usize,
+        on_tick: Option<&Expr>,
+        ports: &mut Vec<ExprDef>,
+        action: &mut Vec<Assign>,
+    ) {
+        let m = &self.layer.modules[mi];
+        let aged: Vec<(usize, i64)> = self
+            .caps
+            .iter()
+            .filter(|(p, _)| p.module == mi)
+            .map(|(p, &cap)| (p.port, cap))
+            .collect();
+        if aged.is_empty() {
+            return;
+        }
+        let c = module_component(m.name);
+        ports.push(port(&c, "tick"));
+        for (p, cap) in aged {
+            let a = member(&c, &age_var(m.ports[p]));
+            let older = cond(
+                binary(BinOp::Lt, a.clone(), int(cap)),
+                binary(BinOp::Add, a.clone(), int(1)),
+                int(cap),
+            );
+            let older = match on_tick {
+                Some(on_tick) => cond(on_tick.clone(), older, a.clone()),
+                None => older,
+            };
+            action.push(assign(a, older));
+        }
+    }
+
     /// The least common multiple of the periods of tasks that have activities; past
     /// [`MAX_PHASE`], the period of the task that took it there.
     fn phase_len(&self) -> (i64, Option<Span>) {
@@ -49,7 +86,11 @@ impl<'a, 'd> Builder<'a, 'd> {
     }
 
     pub(super) fn clock(&mut self) {
-        let (l, too_long) = self.phase_len();
+        // a timed model's phase counts time units (its cycle checked with the layer)
+        let (l, too_long) = match self.timed {
+            Some(t) => (t.hyperperiod as i64, None),
+            None => self.phase_len(),
+        };
         if let Some(span) = too_long {
             self.errors.push(
                 ModelError::new(
@@ -121,25 +162,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                     action.push(assign(paused.clone(), and(paused, off_period)));
                 }
             }
-            let aged: Vec<(usize, i64)> = self
-                .caps
-                .iter()
-                .filter(|(p, _)| p.module == mi)
-                .map(|(p, &cap)| (p.port, cap))
-                .collect();
-            if !aged.is_empty() {
-                let c = module_component(m.name);
-                ports.push(port(&c, "tick"));
-                for (p, cap) in aged {
-                    let a = member(&c, &age_var(m.ports[p]));
-                    let older = cond(
-                        binary(BinOp::Lt, a.clone(), int(cap)),
-                        binary(BinOp::Add, a.clone(), int(1)),
-                        int(cap),
-                    );
-                    action.push(assign(a, older));
-                }
-            }
+            self.age_ports(mi, None, &mut ports, &mut action);
         }
         let span = self
             .layer

@@ -12,7 +12,7 @@ use crate::expr::{Assign, Expr, ExprKind};
 use crate::genom::names::*;
 use crate::genom::recipe::{RecipeCondition, RecipeService};
 use crate::genom::tree::and;
-use crate::syntax::{ActionDef, ConnectorDef, ConnectorKindDef, ExprDef, Role, SystemDef};
+use crate::syntax::{ActionDef, ConnectorDef, ConnectorKindDef, CpuDef, ExprDef, Role, SystemDef};
 use bip_model::genom::map::Reason;
 
 impl<'a, 'd> Builder<'a, 'd> {
@@ -99,8 +99,15 @@ impl<'a, 'd> Builder<'a, 'd> {
             def: SystemDef {
                 name: def.name.clone(),
                 tick_ms: def.tick_ms.clone(),
-                // the atoms' tasks are placed on them
-                cpus: def.cpus.clone(),
+                // a timed layer's time is in the generated atoms now
+                time: None,
+                // the atoms' tasks are placed on them; their cores and scheduling are the
+                // timed layer's, expanded
+                cpus: def
+                    .cpus
+                    .iter()
+                    .map(|c| CpuDef::named(c.name.clone()))
+                    .collect(),
                 constants: def.constants.clone(),
                 atoms,
                 components,

@@ -12,6 +12,7 @@
 //! - `services.rs`: a service's request, interrupt and codel connectors, with their
 //!   conditions;
 //! - `wake.rs`: aperiodic tasks, whose paused activities wait for an event of the module;
+//! - `timed/`: a timed model's tasks, codel starts and finishes, dispatch and tick;
 //! - `finish.rs`: the core model assembled, user connectors joining generated ones;
 //! - `priorities.rs`, `properties.rs`: the generated priorities, and the properties.
 
@@ -22,6 +23,7 @@ mod module;
 mod priorities;
 mod properties;
 mod services;
+mod timed;
 mod wake;
 
 use std::collections::{BTreeMap, HashMap, HashSet};
@@ -29,6 +31,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use super::check::{Layer, PortRef, Service, ServiceRef};
 use super::names::*;
 use super::recipe::{Recipe, RecipeCondition, RecipeModule};
+use super::timed::Timed;
 use super::tree::{assign, boolean, member, name};
 use crate::diag::{Errors, ModelError};
 use crate::expr::{Assign, Expr};
@@ -107,6 +110,7 @@ fn connector(name: &str, ports: Vec<ExprDef>, role: Role) -> ConnectorDef {
         role,
         guard: None,
         action: None,
+        advance: None,
     }
 }
 
@@ -158,6 +162,11 @@ struct Builder<'a, 'd> {
     /// The modules' wake connectors, above every other step (`wake.rs`).
     wakes: Vec<String>,
     recipe: Recipe,
+    /// A timed model's durations and cores (`timed/`).
+    timed: Option<&'a Timed>,
+    /// In a timed model, what must hold for each codel to start, by (activity, codel
+    /// index): its conditions, which gate its start rather than its finish.
+    holds: HashMap<(ServiceRef, usize), Option<Expr>>,
 }
 
 /// `caps`: for each port whose age is read, its cap (one more than the largest constant
@@ -167,6 +176,7 @@ pub(super) fn build(
     def: &SystemDef,
     caps: BTreeMap<PortRef, i64>,
     user: UserTexts,
+    timed: Option<&Timed>,
 ) -> Result<Expansion, Vec<ModelError>> {
     let mut tracked = HashSet::new();
     for (mi, m) in layer.modules.iter().enumerate() {
@@ -192,6 +202,8 @@ pub(super) fn build(
         connectors: Vec::new(),
         wakes: Vec::new(),
         recipe: Recipe::default(),
+        timed,
+        holds: HashMap::new(),
     };
     for mi in 0..layer.modules.len() {
         b.recipe_module(mi);
@@ -210,7 +222,10 @@ pub(super) fn build(
             }
         }
     }
-    b.tick();
+    match timed {
+        None => b.tick(),
+        Some(t) => b.timed_tick(t),
+    }
     for mi in 0..layer.modules.len() {
         for si in 0..layer.modules[mi].services.len() {
             b.service_connectors(
@@ -221,6 +236,9 @@ pub(super) fn build(
                 &user,
             );
         }
+    }
+    if let Some(t) = timed {
+        b.timed_tasks(t);
     }
     for mi in 0..layer.modules.len() {
         b.wake(mi);
@@ -285,6 +303,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             self.recipe.modules.push(RecipeModule {
                 name: m.name.to_string(),
                 tasks: m.tasks.iter().map(|&(n, p)| (n.to_string(), p)).collect(),
+                delays: m.delays.clone(),
                 ports: m
                     .ports
                     .iter()

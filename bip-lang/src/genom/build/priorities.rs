@@ -14,6 +14,21 @@ impl<'a, 'd> Builder<'a, 'd> {
     /// declared priorities form a chain through the last activity; the core closes them
     /// transitively. Then the user's priorities.
     pub(super) fn priorities(&mut self, user: &UserTexts) -> Vec<PriorityDef> {
+        let mut out = match self.timed {
+            Some(t) => self.timed_priorities(t),
+            None => self.untimed_priorities(),
+        };
+        for (k, p) in self.def.priorities.iter().enumerate() {
+            let mut p = p.clone();
+            if let (Some(u), Some(written)) = (user.priority_whens.get(&k), &p.when) {
+                p.when = Some(u.def(written));
+            }
+            out.push(p);
+        }
+        out
+    }
+
+    fn untimed_priorities(&self) -> Vec<PriorityDef> {
         let mut levels: Vec<Vec<String>> = Vec::new(); // codel connectors per activity
         let mut requests: Vec<String> = Vec::new();
         for m in &self.recipe.modules {
@@ -59,13 +74,6 @@ impl<'a, 'd> Builder<'a, 'd> {
                     out.push(pr(low, high));
                 }
             }
-        }
-        for (k, p) in self.def.priorities.iter().enumerate() {
-            let mut p = p.clone();
-            if let (Some(u), Some(written)) = (user.priority_whens.get(&k), &p.when) {
-                p.when = Some(u.def(written));
-            }
-            out.push(p);
         }
         out
     }

@@ -129,6 +129,16 @@ impl<'a, 'd> Builder<'a, 'd> {
                 }
             });
         }
+        if let Some(t) = self.timed {
+            // a model without properties is checked for deadlocks, and the deadlines
+            // generated beside them must not take that away
+            if out.is_empty() {
+                out.push(PropertyDef::DeadlockFree {
+                    terminal: idle.map(ExprDef::Built),
+                });
+            }
+            out.extend(self.deadline_invariants(t));
+        }
         out
     }
 }

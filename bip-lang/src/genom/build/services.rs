@@ -108,7 +108,7 @@ impl<'a, 'd> Builder<'a, 'd> {
         // the codels
         let comp = self.comp(r);
         let start_is_location = s.is_location("start");
-        for c in &s.codels {
+        for (ci, c) in s.codels.iter().enumerate() {
             let mut holds = Vec::new();
             if c.state == "start" {
                 for sc in &start_conds {
@@ -136,7 +136,11 @@ impl<'a, 'd> Builder<'a, 'd> {
                     expr,
                 });
             }
-            let guard = all(holds.iter().map(|h| h.expr.clone()));
+            let mut guard = all(holds.iter().map(|h| h.expr.clone()));
+            if self.timed.is_some() {
+                // a timed codel's conditions gate its start (`timed/codel.rs`)
+                self.holds.insert((r, ci), guard.take());
+            }
             let mut ports = vec![port(&comp, c.state)];
             let mut action = Vec::new();
             let mi = r.module;

@@ -1,11 +1,11 @@
 //! Bounded response (`Response`, `Replies(within)`): a breadth-first search of the
-//! product of the stored graph with an observer that counts the ticks since the oldest
-//! trigger not yet answered (docs/verify.md, "Response and liveness"). The first product
-//! state found that takes a tick past the bound, or stops with a trigger unanswered, ends
-//! a shortest counterexample.
+//! product of the stored graph with an observer that counts the time units since the
+//! oldest trigger not yet answered, each tick its `advance` (docs/verify.md, "Response and
+//! liveness"). The first product state found that takes a tick past the bound, or stops
+//! with a trigger unanswered, ends a shortest counterexample.
 
 use super::run::Run;
-use super::watched::{at_start, on_edge, trigger_bit, Flagged, TICK};
+use super::watched::{at_start, on_edge, trigger_bit, units, Flagged, TICK};
 use crate::explore::graph::IN_ERROR;
 use crate::watch::Watch;
 
@@ -21,7 +21,7 @@ pub(crate) enum Found {
 }
 
 /// The observer: 0 when no trigger waits, `c + 1` when the oldest waiting trigger came
-/// `c` ticks ago (`c <= within`).
+/// `c` time units ago (`c <= within`).
 struct Observer<'g> {
     g: &'g Flagged,
     p: usize,
@@ -44,10 +44,12 @@ impl Observer<'_> {
     fn next(&self, o: u32, e: usize) -> Next {
         let mut o = o;
         if o > 0 && self.g.edge_data[e] & TICK != 0 {
-            if u64::from(o - 1) == self.within {
+            let after = u64::from(o - 1) + u64::from(units(self.g, e));
+            if after > self.within {
                 return Next::Late;
             }
-            o += 1;
+            // at most `within`, which the product's width holds
+            o = after as u32 + 1;
         }
         let h = on_edge(self.g, self.p, e);
         if !h.waits_after(o > 0) {
@@ -60,7 +62,7 @@ impl Observer<'_> {
     }
 }
 
-/// Searches property `p`, which must answer within `within` ticks.
+/// Searches property `p`, which must answer within `within` time units.
 pub(crate) fn search(g: &Flagged, p: usize, within: u64, watch: &Watch) -> Found {
     let obs = Observer { g, p, within };
     let trigger = trigger_bit(p);

@@ -77,6 +77,7 @@ pub(super) fn decide(
     };
     watch.rebase();
     let watching = Watching {
+        advance: system.has_advance(),
         system,
         watched: &watched,
     };
@@ -113,7 +114,7 @@ pub(super) fn decide(
         watch.rebase();
         let t = &questions[k];
         let within = t.within;
-        if let Some(f) = &g.notes[p] {
+        if let Some(f) = &g.notes.failures[p] {
             let run = Run {
                 states: vec![f.state],
                 ..Run::default()

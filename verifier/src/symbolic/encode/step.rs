@@ -9,8 +9,8 @@ use bip_model::{Assign, Label, Role, System, Target};
 use z3::ast::Bool;
 
 use crate::symbolic::term::{
-    and, and2, err_formula, err_or, err_when, ff, implies, lit, not, or, translate, tt, width,
-    Choice, Slots, Sym,
+    and, and2, err_formula, err_or, err_when, ff, implies, lit, not, or, translate,
+    translate_in_step, tt, width, Choice, Slots, Sym,
 };
 
 use super::{sym_eq, Enabling, Encoding, Frame, SlotKind};
@@ -169,10 +169,19 @@ impl Encoding<'_> {
         let mut conn_writes: Vec<Vec<(u32, Sym)>> = vec![Vec::new(); sys.interactions.len()];
         for (i, inter) in sys.interactions.iter().enumerate() {
             let Some(k) = label_of_inter[i] else { continue };
+            // a time step's advance, evaluated on the frame it leaves: at least 1
+            let advance = inter.advance.as_ref().map(|e| {
+                let a = translate(e, f, 0);
+                let below = (a.lo < 1).then(|| a.int_term().lt(1i64));
+                if let Some(e) = err_when(&sel_is(k), err_or(a.err.clone(), below)) {
+                    fire_errs.push(e);
+                }
+                a
+            });
             if inter.action.is_empty() {
                 continue;
             }
-            let (written, err) = self.run_action(&inter.action, f, 0);
+            let (written, err) = self.run_action(&inter.action, f, 0, advance.as_ref());
             if let Some(e) = err_when(&sel_is(k), err) {
                 fire_errs.push(e);
             }
@@ -253,7 +262,7 @@ impl Encoding<'_> {
                 if action.is_empty() {
                     continue;
                 }
-                let (written, err) = self.run_action(action, &pre, comp.slot + 1);
+                let (written, err) = self.run_action(action, &pre, comp.slot + 1, None);
                 let picked = tr.is(i64::from(t));
                 if let Some(e) = err_when(&picked, err) {
                     errs.push(e);
@@ -294,6 +303,7 @@ impl Encoding<'_> {
         action: &[Assign],
         view: &dyn Slots,
         base: u32,
+        advance: Option<&Sym>,
     ) -> (Vec<(u32, Sym)>, Option<Bool>) {
         let mut ov = Overlay {
             base: view,
@@ -309,7 +319,7 @@ impl Encoding<'_> {
                 Target::Local(n) => base + n,
                 Target::Slot(s) => s,
             };
-            let v = translate(&a.value, &ov, base);
+            let v = translate_in_step(&a.value, &ov, base, advance);
             let (lo, hi) = self.kinds[slot as usize].range();
             let (lo, hi) = (i128::from(lo), i128::from(hi));
             let out = (v.lo < lo || v.hi > hi).then(|| {

@@ -28,7 +28,7 @@ pub use formula::{
     and, and2, eq_num, err_formula, err_or, err_when, ff, iff, implies, ite_bool, ite_int, lit,
     not, num, or, or2, tt,
 };
-pub use translate::{translate, Slots};
+pub use translate::{translate, translate_in_step, Slots};
 
 const I64_MIN: i128 = i64::MIN as i128;
 const I64_MAX: i128 = i64::MAX as i128;

@@ -16,13 +16,25 @@ pub trait Slots {
 
 /// Translates a compiled expression evaluated with slot base `base` (for `Local` reads).
 pub fn translate(e: &Expr, slots: &dyn Slots, base: u32) -> Sym {
+    translate_in_step(e, slots, base, None)
+}
+
+/// Translates an expression of a step's action, where `advance` reads the step's time
+/// units (1 if `advance` is None).
+pub fn translate_in_step(e: &Expr, slots: &dyn Slots, base: u32, advance: Option<&Sym>) -> Sym {
     let mut bound = [0i64; MAX_QUANT_DEPTH];
-    Translator { slots, base }.expr(e, &mut bound)
+    Translator {
+        slots,
+        base,
+        advance,
+    }
+    .expr(e, &mut bound)
 }
 
 struct Translator<'a> {
     slots: &'a dyn Slots,
     base: u32,
+    advance: Option<&'a Sym>,
 }
 
 impl Translator<'_> {
@@ -68,6 +80,14 @@ impl Translator<'_> {
                 out.with_err(err)
             }
             Expr::Bound(d) => Sym::int(bound[*d as usize]),
+            // a step's advance was checked before its action runs: no error of its own
+            Expr::Advance => self.advance.map_or_else(
+                || Sym::int(1),
+                |a| Sym {
+                    err: None,
+                    ..a.clone()
+                },
+            ),
             Expr::Not(a) => {
                 let a = self.expr(a, bound);
                 let err = a.err.clone();

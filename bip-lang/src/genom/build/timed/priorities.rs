@@ -1,0 +1,81 @@
+//! A timed model's generated priorities: what takes no time comes before time passes
+//! and before requests (dispatches, codel starts, job ends, a pending activity's
+//! interrupts; a codel's finish is not among them: between its BCET and its WCET it may
+//! finish now or later, and the tick's guard keeps it from passing its WCET); a task's
+//! codels start in GenoM3's order (its machine, then its activities in declaration
+//! order); and among the ready tasks competing for a core, the higher `priority` takes
+//! it. Steps of different tasks are not ordered otherwise: they run in parallel.
+
+use super::Builder;
+use crate::genom::names::*;
+use crate::genom::timed::Timed;
+use crate::genom::tree::name;
+use crate::syntax::{ExprDef, PriorityDef};
+
+fn pr(low: &str, high: &str) -> PriorityDef {
+    PriorityDef {
+        low: ExprDef::Built(name(low)),
+        high: ExprDef::Built(name(high)),
+        when: None,
+    }
+}
+
+impl<'a, 'd> Builder<'a, 'd> {
+    pub(in super::super) fn timed_priorities(&self, t: &Timed) -> Vec<PriorityDef> {
+        let tasks = self.timed_task_list(t);
+        let mut urgent: Vec<String> = Vec::new();
+        let mut requests: Vec<String> = Vec::new();
+        for m in &self.recipe.modules {
+            for s in &m.services {
+                requests.extend(s.request.clone());
+                urgent.extend(s.interrupt.clone());
+            }
+        }
+        let mut out = Vec::new();
+        for task in &tasks {
+            let (m, name) = self.task_names(task);
+            urgent.push(dispatch_connector(m, name));
+            urgent.push(done_connector(m, name));
+            // a task's starts, activity by activity in its order
+            let levels: Vec<Vec<String>> = task
+                .activities
+                .iter()
+                .map(|&r| {
+                    let s = self.service(r);
+                    s.codels
+                        .iter()
+                        .map(|c| start_connector(m, s.name, c.state))
+                        .collect()
+                })
+                .collect();
+            for pair in levels.windows(2) {
+                for low in &pair[1] {
+                    for high in &pair[0] {
+                        out.push(pr(low, high));
+                    }
+                }
+            }
+            urgent.extend(levels.into_iter().flatten());
+        }
+        for high in &urgent {
+            out.push(pr(TICK, high));
+            for r in &requests {
+                out.push(pr(r, high));
+            }
+        }
+        // a free core goes to the most urgent ready task that may take it
+        for a in &tasks {
+            for b in &tasks {
+                let competes = a.times.cpu == b.times.cpu
+                    && a.times.core == b.times.core
+                    && a.times.priority < b.times.priority;
+                if competes {
+                    let (am, an) = self.task_names(a);
+                    let (bm, bn) = self.task_names(b);
+                    out.push(pr(&dispatch_connector(am, an), &dispatch_connector(bm, bn)));
+                }
+            }
+        }
+        out
+    }
+}

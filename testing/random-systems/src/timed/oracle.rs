@@ -1,0 +1,334 @@
+//! The timed semantics of docs/model.md ("Timed semantics"), interpreted naively: the
+//! state is exactly what the semantics stores, one unit of time passes per step, every
+//! zero-time step of every task is tried in every order, and nothing is derived that is
+//! not in the definition. Written to be read against the definition, not to be fast.
+
+use std::collections::{BTreeSet, HashMap, VecDeque};
+
+use super::{Policy, TaskSet, Yield};
+
+/// A task's job.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Stage {
+    /// No job: nothing released, or its last job is done.
+    Idle,
+    /// Released, waiting for a core.
+    Ready,
+    /// Holding a core.
+    Running,
+}
+
+/// Where a task machine is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Position {
+    /// Waiting for the task's next period boundary to run this codel (the initial
+    /// position is `Paused(0)`: `start` runs at the first boundary).
+    Paused(usize),
+    /// This codel may start in the current job.
+    Runnable(usize),
+    /// This codel holds the task's core.
+    Running(usize),
+    /// The machine is done (a codel failed): the task never has work again.
+    Ended,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct TaskState {
+    pub stage: Stage,
+    pub position: Position,
+    /// Units the running codel has held its core; 0 when no codel runs.
+    pub x: u64,
+    /// A period boundary passed while the job was ready or running (0 when idle).
+    pub late: bool,
+}
+
+/// A state of the timed semantics: all it stores.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Projected {
+    /// The time modulo the hyperperiod, in units.
+    pub n: u64,
+    /// In the task set's order.
+    pub tasks: Vec<TaskState>,
+}
+
+/// What the semantics answers for a task set.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Verdict {
+    /// No reachable state has a job past its deadline.
+    pub schedulable: bool,
+    /// Per task, the largest elapsed time of a job when it is done, in units: given only
+    /// when the set is schedulable, and None for a task none of whose jobs ever ends.
+    pub worst_response: Vec<Option<u64>>,
+    /// Per task, whether a reachable state has its job past its deadline.
+    pub can_miss: Vec<bool>,
+    /// The earliest time, in units from the start, at which a job can be past its
+    /// deadline.
+    pub earliest_miss: Option<u64>,
+    /// Every reachable state.
+    pub states: BTreeSet<Projected>,
+}
+
+/// A step of the semantics: what it leads to, whether it is the tick, and the response
+/// time it ends (a job done: (task, elapsed)).
+struct Successor {
+    to: Projected,
+    tick: bool,
+    response: Option<(usize, u64)>,
+}
+
+struct Interp<'a> {
+    set: &'a TaskSet,
+    hyper: u64,
+}
+
+impl Interp<'_> {
+    /// The elapsed time of task `t`'s job: late·P + ((n − d) mod P).
+    fn elapsed(&self, s: &Projected, t: usize) -> u64 {
+        let (p, d) = (self.set.period(t), self.set.delay(t));
+        let since = (s.n + p - d % p) % p;
+        u64::from(s.tasks[t].late) * p + since
+    }
+
+    fn misses(&self, s: &Projected, t: usize) -> bool {
+        s.tasks[t].stage != Stage::Idle && self.elapsed(s, t) > self.set.deadline(t)
+    }
+
+    /// Whether a core is free for task `t`: its pinned core runs no task, or (global)
+    /// fewer tasks of its CPU run than it has cores.
+    fn core_free(&self, s: &Projected, t: usize) -> bool {
+        let task = &self.set.tasks[t];
+        let running = |u: usize| s.tasks[u].stage == Stage::Running;
+        let sharing = |u: usize| {
+            let other = &self.set.tasks[u];
+            other.cpu == task.cpu && other.core == task.core
+        };
+        let busy = (0..s.tasks.len())
+            .filter(|&u| sharing(u) && running(u))
+            .count();
+        match task.core {
+            Some(_) => busy == 0,
+            None => busy < self.set.cpus[task.cpu].cores,
+        }
+    }
+
+    /// Whether ready task `u` comes before ready task `t` in the dispatch order of their
+    /// CPU: a higher priority, or under EDF an earlier absolute deadline (release + D, the
+    /// same as a smaller D − elapsed now), ties by declaration order.
+    fn before(&self, s: &Projected, u: usize, t: usize) -> bool {
+        match self.set.cpus[self.set.tasks[t].cpu].policy {
+            Policy::FixedPriority => self.set.tasks[u].priority > self.set.tasks[t].priority,
+            Policy::Edf => {
+                let left = |v: usize| self.set.deadline(v) as i64 - self.elapsed(s, v) as i64;
+                (left(u), u) < (left(t), t)
+            }
+        }
+    }
+
+    /// Ready task `t` takes a core: one is free, and no ready task that competes for it
+    /// (same CPU, same pinned core or both global) comes before it.
+    fn may_dispatch(&self, s: &Projected, t: usize) -> bool {
+        let task = &self.set.tasks[t];
+        s.tasks[t].stage == Stage::Ready
+            && self.core_free(s, t)
+            && !(0..s.tasks.len()).any(|u| {
+                let other = &self.set.tasks[u];
+                u != t
+                    && other.cpu == task.cpu
+                    && other.core == task.core
+                    && s.tasks[u].stage == Stage::Ready
+                    && self.before(s, u, t)
+            })
+    }
+
+    /// The task's work released: a paused codel becomes runnable and the task ready; an
+    /// ended machine has none, and the task stays idle.
+    fn release(task: &mut TaskState) {
+        if let Position::Paused(c) = task.position {
+            task.position = Position::Runnable(c);
+            task.stage = Stage::Ready;
+        }
+    }
+
+    /// Every zero-time step, of every task.
+    fn zero_time(&self, s: &Projected, out: &mut Vec<Successor>) {
+        for t in 0..s.tasks.len() {
+            let ts = s.tasks[t];
+            let mut go = |f: &dyn Fn(&mut TaskState), response: Option<(usize, u64)>| {
+                let mut to = s.clone();
+                f(&mut to.tasks[t]);
+                out.push(Successor {
+                    to,
+                    tick: false,
+                    response,
+                });
+            };
+            match (ts.stage, ts.position) {
+                (Stage::Ready, _) if self.may_dispatch(s, t) => {
+                    go(&|k| k.stage = Stage::Running, None)
+                }
+                (Stage::Running, Position::Runnable(c)) => go(
+                    &|k| {
+                        k.position = Position::Running(c);
+                        k.x = 0;
+                    },
+                    None,
+                ),
+                (Stage::Running, Position::Running(c)) => {
+                    let (bcet, _) = self.set.window(t, c);
+                    if ts.x >= bcet {
+                        for y in &self.set.tasks[t].codels[c].yields {
+                            let next = match *y {
+                                Yield::Next(n) => Position::Runnable(n),
+                                Yield::Pause(n) => Position::Paused(n),
+                            };
+                            go(
+                                &|k| {
+                                    k.position = next;
+                                    k.x = 0;
+                                },
+                                None,
+                            );
+                        }
+                        go(
+                            &|k| {
+                                k.position = Position::Ended;
+                                k.x = 0;
+                            },
+                            None,
+                        );
+                    }
+                }
+                // nothing runnable in this job: it is done
+                (Stage::Running, Position::Paused(_) | Position::Ended) => go(
+                    &|k| {
+                        k.stage = Stage::Idle;
+                        if k.late {
+                            k.late = false;
+                            Self::release(k);
+                        }
+                    },
+                    Some((t, self.elapsed(s, t))),
+                ),
+                _ => {}
+            }
+        }
+    }
+
+    /// Time may pass: no zero-time step is pending but finishes before the wcet.
+    fn may_tick(&self, s: &Projected) -> bool {
+        (0..s.tasks.len()).all(|t| {
+            let ts = s.tasks[t];
+            let at_wcet = match ts.position {
+                Position::Running(c) => ts.x == self.set.window(t, c).1,
+                _ => false,
+            };
+            let pending = match (ts.stage, ts.position) {
+                (Stage::Ready, _) => self.may_dispatch(s, t),
+                (Stage::Running, Position::Running(_)) => at_wcet,
+                (Stage::Running, _) => true,
+                (Stage::Idle, _) => false,
+            };
+            !pending
+        })
+    }
+
+    /// One unit passes, and the boundaries at the new time are handled.
+    fn tick(&self, s: &Projected) -> Projected {
+        let mut to = s.clone();
+        to.n = (s.n + 1) % self.hyper;
+        for (t, k) in to.tasks.iter_mut().enumerate() {
+            if matches!(k.position, Position::Running(_)) {
+                k.x += 1;
+            }
+            let (p, d) = (self.set.period(t), self.set.delay(t));
+            if to.n % p == d % p {
+                match k.stage {
+                    Stage::Idle => Self::release(k),
+                    Stage::Ready | Stage::Running => k.late = true,
+                }
+            }
+        }
+        to
+    }
+
+    fn successors(&self, s: &Projected) -> Vec<Successor> {
+        let mut out = Vec::new();
+        self.zero_time(s, &mut out);
+        if self.may_tick(s) {
+            out.push(Successor {
+                to: self.tick(s),
+                tick: true,
+                response: None,
+            });
+        }
+        out
+    }
+}
+
+/// Every behaviour of the task set, explored state by state from time 0 (every task idle,
+/// its machine paused before `start`). Each state is first reached at its earliest time
+/// (ticks cost one unit, other steps none), which gives [`Verdict::earliest_miss`].
+pub fn explore(set: &TaskSet) -> Verdict {
+    let interp = Interp {
+        set,
+        hyper: set.hyperperiod(),
+    };
+    let initial = Projected {
+        n: 0,
+        tasks: vec![
+            TaskState {
+                stage: Stage::Idle,
+                position: Position::Paused(0),
+                x: 0,
+                late: false,
+            };
+            set.tasks.len()
+        ],
+    };
+    let count = set.tasks.len();
+    let mut worst: Vec<Option<u64>> = vec![None; count];
+    let mut can_miss = vec![false; count];
+    let mut earliest_miss: Option<u64> = None;
+    // earliest time of each state; zero-time steps go to the front of the queue
+    let mut time: HashMap<Projected, u64> = HashMap::new();
+    let mut queue = VecDeque::from([(initial.clone(), 0u64)]);
+    time.insert(initial, 0);
+    while let Some((s, now)) = queue.pop_front() {
+        if time[&s] < now {
+            continue;
+        }
+        for (t, miss) in can_miss.iter_mut().enumerate() {
+            if interp.misses(&s, t) {
+                *miss = true;
+                earliest_miss = Some(earliest_miss.map_or(now, |e| e.min(now)));
+            }
+        }
+        for succ in interp.successors(&s) {
+            if let Some((t, r)) = succ.response {
+                worst[t] = Some(worst[t].map_or(r, |w| w.max(r)));
+            }
+            let at = now + u64::from(succ.tick);
+            if time.get(&succ.to).is_some_and(|&known| known <= at) {
+                continue;
+            }
+            time.insert(succ.to.clone(), at);
+            if succ.tick {
+                queue.push_back((succ.to, at));
+            } else {
+                queue.push_front((succ.to, at));
+            }
+        }
+    }
+    let schedulable = !can_miss.iter().any(|&m| m);
+    Verdict {
+        schedulable,
+        worst_response: if schedulable {
+            worst
+        } else {
+            vec![None; count]
+        },
+        can_miss,
+        earliest_miss,
+        states: time.into_keys().collect(),
+    }
+}

@@ -1,0 +1,333 @@
+//! The timed interpreter against task sets worked out by hand: each figure in these tests
+//! is computed in its comment from docs/model.md's "Timed semantics", not read off the
+//! interpreter.
+
+use bip_random_systems::timed::{
+    explore, generate, Codel, Cpu, Policy, Position, Projected, Stage, Task, TaskSet, TaskState,
+    Yield,
+};
+
+/// Tick and unit 1 ms: periods, delays and durations below are all in units.
+fn set(cpus: Vec<Cpu>, tasks: Vec<Task>) -> TaskSet {
+    TaskSet {
+        tick_ms: 1,
+        unit_us: Some(1000),
+        cpus,
+        tasks,
+    }
+}
+
+fn cpu(cores: usize, policy: Policy) -> Cpu {
+    Cpu { cores, policy }
+}
+
+/// A codel of exactly `wcet` units (bcet = wcet) with these yields.
+fn exact(wcet: u64, yields: Vec<Yield>) -> Codel {
+    Codel {
+        bcet_us: Some(wcet * 1000),
+        wcet_us: Some(wcet * 1000),
+        yields,
+    }
+}
+
+/// A task on CPU 0 (global), no delay, deadline its period.
+fn task(period: u64, priority: i64, codels: Vec<Codel>) -> Task {
+    Task {
+        module: 0,
+        period_ticks: period,
+        delay_ticks: 0,
+        cpu: 0,
+        core: None,
+        priority,
+        deadline_us: None,
+        codels,
+    }
+}
+
+/// A one-codel job of exactly `wcet` units each period.
+fn job(period: u64, priority: i64, wcet: u64) -> Task {
+    task(period, priority, vec![exact(wcet, vec![Yield::Pause(0)])])
+}
+
+#[test]
+fn one_task_responds_in_the_sum_of_its_wcets() {
+    // start, c1, c2 in one job, each in a window: the worst is 2 + 3 + 1 = 6, reached
+    // when every codel takes its wcet; c1 may also pause, which ends the job after 5
+    let codel = |bcet: u64, wcet: u64, yields| Codel {
+        bcet_us: Some(bcet * 1000),
+        wcet_us: Some(wcet * 1000),
+        yields,
+    };
+    let t = task(
+        10,
+        1,
+        vec![
+            codel(1, 2, vec![Yield::Next(1)]),
+            codel(0, 3, vec![Yield::Next(2), Yield::Pause(1)]),
+            codel(1, 1, vec![Yield::Pause(0)]),
+        ],
+    );
+    let v = explore(&set(vec![cpu(1, Policy::FixedPriority)], vec![t]));
+    assert!(v.schedulable);
+    assert_eq!(v.worst_response, vec![Some(6)]);
+    assert_eq!(v.can_miss, vec![false]);
+    assert_eq!(v.earliest_miss, None);
+}
+
+#[test]
+fn every_state_of_a_tiny_set() {
+    // period 2, one codel of exactly 1 unit that pauses back to itself (or fails, which
+    // ends the machine); these are all its states, by hand
+    let v = explore(&set(
+        vec![cpu(1, Policy::FixedPriority)],
+        vec![job(2, 1, 1)],
+    ));
+    let st = |n, stage, position, x| Projected {
+        n,
+        tasks: vec![TaskState {
+            stage,
+            position,
+            x,
+            late: false,
+        }],
+    };
+    use Position::{Ended, Paused, Runnable};
+    use Stage::{Idle, Ready};
+    let (busy, holds) = (Stage::Running, Position::Running(0));
+    let expected = [
+        st(0, Idle, Paused(0), 0),    // the start
+        st(1, Idle, Paused(0), 0),    // before the first boundary, and after each job
+        st(0, Ready, Runnable(0), 0), // released at the boundary 2
+        st(0, busy, Runnable(0), 0),  // dispatched
+        st(0, busy, holds, 0),        // started
+        st(1, busy, holds, 1),        // one unit: at its wcet
+        st(1, busy, Paused(0), 0),    // finished, pausing
+        st(1, busy, Ended, 0),        // finished, failing
+        st(1, Idle, Ended, 0),        // done for ever
+        st(0, Idle, Ended, 0),
+    ];
+    assert_eq!(v.states, expected.into_iter().collect());
+    assert_eq!(v.worst_response, vec![Some(1)]);
+}
+
+#[test]
+fn a_lower_priority_job_waits_for_the_higher_one() {
+    // one core, both released at 10: the high one (priority 2) runs [10, 13], the low one
+    // [13, 17]: responses 3 and 7
+    let v = explore(&set(
+        vec![cpu(1, Policy::FixedPriority)],
+        vec![job(10, 2, 3), job(10, 1, 4)],
+    ));
+    assert!(v.schedulable);
+    assert_eq!(v.worst_response, vec![Some(3), Some(7)]);
+}
+
+#[test]
+fn a_miss_at_the_time_worked_out_by_hand() {
+    // one core, both released at 5: the high one runs [5, 8], the low one [8, 11]; at 10 the
+    // low one's boundary passes while it runs (late: elapsed 5, its deadline, not yet a
+    // miss), at 11 its elapsed is 6 > 5
+    let v = explore(&set(
+        vec![cpu(1, Policy::FixedPriority)],
+        vec![job(5, 2, 3), job(5, 1, 3)],
+    ));
+    assert!(!v.schedulable);
+    assert_eq!(v.can_miss, vec![false, true]);
+    assert_eq!(v.earliest_miss, Some(11));
+    assert_eq!(
+        v.worst_response,
+        vec![None, None],
+        "none reported when it misses"
+    );
+}
+
+#[test]
+fn two_global_cores_run_two_jobs_at_once() {
+    // three jobs of 4 released at 10 on two global cores: the two highest run [10, 14],
+    // the lowest [14, 18]
+    let tasks = vec![job(10, 3, 4), job(10, 2, 4), job(10, 1, 4)];
+    let v = explore(&set(vec![cpu(2, Policy::FixedPriority)], tasks.clone()));
+    assert!(v.schedulable);
+    assert_eq!(v.worst_response, vec![Some(4), Some(4), Some(8)]);
+    // pinned to cores 0, 0, 1 instead: the middle one waits for the first
+    let pinned: Vec<Task> = tasks
+        .into_iter()
+        .zip([0, 0, 1])
+        .map(|(t, k)| Task { core: Some(k), ..t })
+        .collect();
+    let v = explore(&set(vec![cpu(2, Policy::FixedPriority)], pinned));
+    assert_eq!(v.worst_response, vec![Some(4), Some(8), Some(4)]);
+    // on one core they would need 12 of every 10
+    let one = vec![job(10, 3, 4), job(10, 2, 4), job(10, 1, 4)];
+    let v = explore(&set(vec![cpu(1, Policy::FixedPriority)], one));
+    assert!(!v.schedulable);
+    assert_eq!(v.can_miss, vec![false, false, true]);
+}
+
+#[test]
+fn a_job_done_at_its_next_release_meets_its_deadline() {
+    // period 4, a codel of exactly 4: released at 4, it holds the core until 8, when the
+    // next boundary passes first (late), then it finishes: response 4 = its deadline, not a
+    // miss; the deferred release makes it ready again at once
+    let v = explore(&set(
+        vec![cpu(1, Policy::FixedPriority)],
+        vec![job(4, 1, 4)],
+    ));
+    assert!(v.schedulable, "{:?}", v.earliest_miss);
+    assert_eq!(v.worst_response, vec![Some(4)]);
+    let late_at_wcet = Projected {
+        n: 0,
+        tasks: vec![TaskState {
+            stage: Stage::Running,
+            position: Position::Running(0),
+            x: 4,
+            late: true,
+        }],
+    };
+    assert!(v.states.contains(&late_at_wcet));
+    // with a deadline of 3 the same job misses, first at 4 + 3 + 1 = 8
+    let tight = Task {
+        deadline_us: Some(3000),
+        ..job(4, 1, 4)
+    };
+    let v = explore(&set(vec![cpu(1, Policy::FixedPriority)], vec![tight]));
+    assert!(!v.schedulable);
+    assert_eq!(v.earliest_miss, Some(8));
+}
+
+#[test]
+fn edf_meets_a_deadline_fixed_priority_misses() {
+    // one core, both released at 10: `slack` has the higher priority but deadline 10,
+    // `urgent` the lower priority but deadline 4. Fixed priority: slack [10, 13], urgent
+    // [13, 16], elapsed 6 > 4 from 15. EDF: urgent (due at 14) first [10, 13], then slack
+    // [13, 16]: responses 3 and 6.
+    let slack = job(10, 2, 3);
+    let urgent = Task {
+        deadline_us: Some(4000),
+        ..job(10, 1, 3)
+    };
+    let tasks = vec![slack, urgent];
+    let fp = explore(&set(vec![cpu(1, Policy::FixedPriority)], tasks.clone()));
+    assert!(!fp.schedulable);
+    assert_eq!(fp.can_miss, vec![false, true]);
+    assert_eq!(fp.earliest_miss, Some(15));
+    let edf = explore(&set(vec![cpu(1, Policy::Edf)], tasks));
+    assert!(edf.schedulable);
+    assert_eq!(edf.worst_response, vec![Some(6), Some(3)]);
+}
+
+#[test]
+fn delays_place_the_boundaries() {
+    // period 5, delay 2: boundaries at 2, 7, 12, …; a job of 3 is released at 2 and done at
+    // 5; a second task without delay released at 5 on the same core finds it free
+    let delayed = Task {
+        delay_ticks: 2,
+        ..job(5, 2, 3)
+    };
+    let v = explore(&set(
+        vec![cpu(1, Policy::FixedPriority)],
+        vec![delayed, job(5, 1, 2)],
+    ));
+    assert!(v.schedulable);
+    assert_eq!(v.worst_response, vec![Some(3), Some(2)]);
+}
+
+#[test]
+fn the_unit_is_derived_from_every_duration() {
+    // tick 2 ms, periods 4 and 6 ticks (8 and 12 ms), wcets 2 ms and 4 ms: the unit is 2 ms
+    let mut s = set(
+        vec![cpu(1, Policy::FixedPriority)],
+        vec![job(4, 2, 2), job(6, 1, 4)],
+    );
+    s.tick_ms = 2;
+    s.unit_us = None;
+    assert_eq!(s.unit_us(), 2000);
+    assert_eq!((s.period(0), s.period(1), s.hyperperiod()), (4, 6, 12));
+    assert_eq!(s.window(1, 0), (2, 2));
+    // a 1 ms bcet makes it 1 ms
+    s.tasks[0].codels[0].bcet_us = Some(1000);
+    assert_eq!(s.unit_us(), 1000);
+}
+
+#[test]
+fn random_sets_explore_and_render() {
+    let (mut schedulable, mut not) = (0, 0);
+    for seed in 0..200 {
+        let s = generate(seed);
+        let v = explore(&s);
+        assert!(v.states.len() > 1, "seed {seed}");
+        assert_eq!(v.schedulable, v.earliest_miss.is_none(), "seed {seed}");
+        if v.schedulable {
+            schedulable += 1;
+        } else {
+            not += 1;
+        }
+        let ron = s.to_ron();
+        assert!(ron.contains("time: Exact") && ron.contains("preemption: Job"));
+    }
+    // the generator gives both verdicts often enough for a property test to mean something
+    assert!(
+        schedulable > 40 && not > 40,
+        "{schedulable} schedulable, {not} not"
+    );
+}
+
+#[test]
+fn a_set_renders_in_the_timed_syntax() {
+    let pinned = Task {
+        delay_ticks: 1,
+        core: Some(1),
+        deadline_us: Some(1500),
+        codels: vec![
+            Codel {
+                bcet_us: Some(500),
+                wcet_us: Some(1000),
+                yields: vec![Yield::Next(1), Yield::Pause(0)],
+            },
+            Codel {
+                bcet_us: None,
+                wcet_us: None,
+                yields: vec![Yield::Pause(1)],
+            },
+        ],
+        ..job(2, 7, 1)
+    };
+    let global = Task {
+        module: 1,
+        cpu: 1,
+        ..job(3, 1, 2)
+    };
+    let mut s = set(
+        vec![cpu(2, Policy::FixedPriority), cpu(1, Policy::Edf)],
+        vec![pinned, global],
+    );
+    s.unit_us = Some(500);
+    assert_eq!(
+        s.to_ron(),
+        r#"System(
+  name: "timed",
+  tick_ms: 1,
+  time: Exact(unit: "500us"),
+  cpus: [
+    (name: "cpu0", cores: 2, policy: FixedPriority, preemption: Job),
+    (name: "cpu1", cores: 1, policy: Edf, preemption: Job),
+  ],
+  modules: [
+    (name: "m0", tasks: [
+      (name: "t0", period: 2, delay: 1, cpu: "cpu0", priority: 7, core: 1, deadline: "1500us",
+       codels: [
+         (state: "start", yields: ["c1", "pause::start"], bcet: "500us", wcet: "1ms"),
+         (state: "c1", yields: ["pause::c1"]),
+       ]),
+    ]),
+    (name: "m1", tasks: [
+      (name: "t1", period: 3, delay: 0, cpu: "cpu1",
+       codels: [
+         (state: "start", yields: ["pause::start"], bcet: "2ms", wcet: "2ms"),
+       ]),
+    ]),
+  ],
+)
+"#
+    );
+}
