@@ -118,11 +118,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             transitions: vec![tr("on", "tick", "on", None, Vec::new())],
             task: None,
         };
-        let span = self
-            .layer
-            .modules
-            .first()
-            .map_or(Span::NONE, |m| m.def.name.span);
+        let span = self.layer_span();
         self.add_atom(CLOCK_ATOM.into(), atom, span, "the clock".into());
         self.add_component(CLOCK.into(), CLOCK_ATOM.into(), span, "the clock".into());
     }
@@ -164,12 +160,26 @@ impl<'a, 'd> Builder<'a, 'd> {
             }
             self.age_ports(mi, None, &mut ports, &mut action);
         }
-        let span = self
-            .layer
+        self.push_tick(ports, None, action);
+    }
+
+    /// Where the layer's own generated names point: its first module's name.
+    pub(super) fn layer_span(&self) -> Span {
+        self.layer
             .modules
             .first()
-            .map_or(Span::NONE, |m| m.def.name.span);
-        self.claim(TICK, span, "the clock's tick".into());
+            .map_or(Span::NONE, |m| m.def.name.span)
+    }
+
+    /// The clock's tick, timed or not: the clock's broadcast to `ports`, with `guard` and
+    /// `action`.
+    pub(super) fn push_tick(
+        &mut self,
+        ports: Vec<ExprDef>,
+        guard: Option<Expr>,
+        action: Vec<Assign>,
+    ) {
+        self.claim(TICK, self.layer_span(), "the clock's tick".into());
         self.connectors.push((
             ConnectorDef {
                 kind: ConnectorKindDef::Broadcast {
@@ -177,7 +187,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 },
                 ..connector(TICK, ports, Role::Time)
             },
-            None,
+            guard,
             action,
         ));
     }

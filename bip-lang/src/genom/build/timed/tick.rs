@@ -10,10 +10,8 @@ use crate::expr::{Assign, BinOp};
 use crate::genom::names::*;
 use crate::genom::timed::Timed;
 use crate::genom::tree::{and, assign, binary, boolean, cond, int, member, not, or};
-use crate::source::Span;
-use crate::syntax::{ConnectorDef, ConnectorKindDef, Role};
 
-use super::super::{connector, port};
+use super::super::port;
 
 impl<'a, 'd> Builder<'a, 'd> {
     pub(in super::super) fn timed_tick(&mut self, t: &Timed) {
@@ -82,21 +80,7 @@ impl<'a, 'd> Builder<'a, 'd> {
         for mi in 0..self.layer.modules.len() {
             self.age_ports(mi, on_tick.as_ref(), &mut ports, &mut action);
         }
-        let span = self
-            .layer
-            .modules
-            .first()
-            .map_or(Span::NONE, |m| m.def.name.span);
-        self.claim(TICK, span, "the clock's tick".into());
-        self.connectors.push((
-            ConnectorDef {
-                kind: ConnectorKindDef::Broadcast {
-                    trigger: port(CLOCK, "tick"),
-                },
-                ..connector(TICK, ports, Role::Time)
-            },
-            self.time_may_pass(&tasks),
-            action,
-        ));
+        let guard = self.time_may_pass(&tasks);
+        self.push_tick(ports, guard, action);
     }
 }
