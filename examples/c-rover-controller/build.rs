@@ -43,13 +43,9 @@ fn main() {
         .warnings(true)
         .extra_warnings(true)
         .warnings_into_errors(true);
-    println!("cargo:rerun-if-env-changed=BIP_C_SANITIZE");
-    if let Some(sanitizer) = std::env::var_os("BIP_C_SANITIZE") {
-        let sanitizer = sanitizer.to_string_lossy();
-        build
-            .flag(format!("-fsanitize={sanitizer}"))
-            .flag("-fno-omit-frame-pointer");
-        println!("cargo:rustc-link-lib=dylib=asan");
+    // BIP_C_SANITIZE=address: the codels under AddressSanitizer (.ci/run)
+    for flag in bip_codegen::c::sanitizer_flags() {
+        build.flag(flag);
     }
     build.compile("rover_codels");
     println!("cargo:rustc-link-lib=m");

@@ -39,15 +39,9 @@ fn main() {
         .warnings(true)
         .extra_warnings(true)
         .warnings_into_errors(true);
-    // BIP_C_SANITIZE=address: the codels under AddressSanitizer (.ci/run), its runtime
-    // linked into the tests; the Rust side is left as it is
-    println!("cargo:rerun-if-env-changed=BIP_C_SANITIZE");
-    if let Some(sanitizer) = std::env::var_os("BIP_C_SANITIZE") {
-        let sanitizer = sanitizer.to_string_lossy();
-        build
-            .flag(format!("-fsanitize={sanitizer}"))
-            .flag("-fno-omit-frame-pointer");
-        println!("cargo:rustc-link-lib=dylib=asan");
+    // BIP_C_SANITIZE=address: the codels under AddressSanitizer (.ci/run)
+    for flag in bip_codegen::c::sanitizer_flags() {
+        build.flag(flag);
     }
     build.compile("counter_codels");
 }

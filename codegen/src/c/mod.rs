@@ -15,6 +15,7 @@ mod glue;
 mod glue_args;
 mod mirror;
 mod runtime;
+mod sanitize;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -26,6 +27,7 @@ use ctype::CTypes;
 use decls::{declaration, Written};
 pub use glue::{rust_glue, rust_glue_of};
 pub use mirror::rust_mirrors;
+pub use sanitize::sanitizer_flags;
 
 /// The C declarations `component` of `spec` sees, its ids struct (`{c}::ids`) among them.
 pub fn c_types(spec: &Spec, component: &Component) -> Result<CTypes, CodegenError> {
