@@ -429,6 +429,18 @@ fn a_loop_of_plain_yields_has_no_demand_bound() {
     assert_eq!(oracle(&system), vec![None, Some(300)]);
 }
 
+/// The report of `bip verify --method explicit` on a model text.
+fn explored(text: &str) -> bip_verifier::Report {
+    let system = load_str("ts.ron", text).unwrap();
+    bip_verifier::verify(
+        &system,
+        bip_verifier::Method::Explicit,
+        &Options::default(),
+        &|_| {},
+    )
+    .unwrap()
+}
+
 /// A timed model (`time: Exact`) decides its deadlines by exploration, one generated
 /// invariant per task, and has no `Schedulable` by response-time analysis: `lo` runs
 /// 3 ms from 4, 8, ... on the one core, cooperatively, so `hi` (released at 1, 5, ...,
@@ -448,14 +460,7 @@ fn a_timed_model_decides_its_deadlines_by_exploration() {
         )
     };
     let verdicts = |text: &str| -> Vec<(String, bool)> {
-        let system = load_str("ts.ron", text).unwrap();
-        let report = bip_verifier::verify(
-            &system,
-            bip_verifier::Method::Explicit,
-            &Options::default(),
-            &|_| {},
-        )
-        .unwrap();
+        let report = explored(text);
         assert!(
             report.properties.iter().all(|p| p.name != "Schedulable"),
             "no response-time analysis of a timed model"
@@ -475,14 +480,7 @@ fn a_timed_model_decides_its_deadlines_by_exploration() {
         ]
     );
     // the miss's shortest run ends at 8 ms, 3 ms after `hi`'s release at 5
-    let system = load_str("ts.ron", &text("2ms")).unwrap();
-    let report = bip_verifier::verify(
-        &system,
-        bip_verifier::Method::Explicit,
-        &Options::default(),
-        &|_| {},
-    )
-    .unwrap();
+    let report = explored(&text("2ms"));
     let hi = report
         .properties
         .iter()
@@ -496,14 +494,7 @@ fn a_timed_model_decides_its_deadlines_by_exploration() {
     // and the worst responses are 3 ms each, each with the run that ends in the job end
     // that takes it; with a miss they are not given
     let worst = |text: &str| -> Vec<(String, Option<String>, Option<String>)> {
-        let system = load_str("ts.ron", text).unwrap();
-        let report = bip_verifier::verify(
-            &system,
-            bip_verifier::Method::Explicit,
-            &Options::default(),
-            &|_| {},
-        )
-        .unwrap();
+        let report = explored(text);
         report
             .properties
             .iter()
