@@ -82,8 +82,9 @@ fn every_state_of_a_tiny_set() {
         vec![cpu(1, Policy::FixedPriority)],
         vec![job(2, 1, 1)],
     ));
-    let st = |n, stage, position, x| Projected {
+    let st = |n, stage, position, x, due| Projected {
         n,
+        due,
         tasks: vec![TaskState {
             stage,
             position,
@@ -95,16 +96,18 @@ fn every_state_of_a_tiny_set() {
     use Stage::{Idle, Ready};
     let (busy, holds) = (Stage::Running, Position::Running(0));
     let expected = [
-        st(0, Idle, Paused(0), 0),    // the start
-        st(1, Idle, Paused(0), 0),    // before the first boundary, and after each job
-        st(0, Ready, Runnable(0), 0), // released at the boundary 2
-        st(0, busy, Runnable(0), 0),  // dispatched
-        st(0, busy, holds, 0),        // started
-        st(1, busy, holds, 1),        // one unit: at its wcet
-        st(1, busy, Paused(0), 0),    // finished, pausing
-        st(1, busy, Ended, 0),        // finished, failing
-        st(1, Idle, Ended, 0),        // done for ever
-        st(0, Idle, Ended, 0),
+        st(0, Idle, Paused(0), 0, false),    // the start
+        st(1, Idle, Paused(0), 0, false),    // before the first boundary, and after each job
+        st(0, Idle, Paused(0), 0, true),     // at the boundary 2, its release due
+        st(0, Ready, Runnable(0), 0, false), // released
+        st(0, busy, Runnable(0), 0, false),  // dispatched
+        st(0, busy, holds, 0, false),        // started
+        st(1, busy, holds, 1, false),        // one unit: at its wcet
+        st(1, busy, Paused(0), 0, false),    // finished, pausing
+        st(1, busy, Ended, 0, false),        // finished, failing
+        st(1, Idle, Ended, 0, false),        // done for ever
+        st(0, Idle, Ended, 0, true),         // a boundary with nothing to release
+        st(0, Idle, Ended, 0, false),
     ];
     assert_eq!(v.states, expected.into_iter().collect());
     assert_eq!(v.worst_response, vec![Some(1)]);
@@ -132,7 +135,11 @@ fn a_miss_at_the_time_worked_out_by_hand() {
         vec![job(5, 2, 3), job(5, 1, 3)],
     ));
     assert!(!v.schedulable);
-    assert_eq!(v.can_miss, vec![false, true]);
+    // the high one can miss too, later: at 17 the low one's deferred release makes it
+    // ready, the high one runs [17, 20] and finishes exactly at its boundary 20; taken
+    // before the release there, its finish lets the low one take the core at 20, and the
+    // high one, released at 20, runs [23, 26]: elapsed 6 > 5 at 26
+    assert_eq!(v.can_miss, vec![true, true]);
     assert_eq!(v.earliest_miss, Some(11));
     assert_eq!(
         v.worst_response,
@@ -161,14 +168,20 @@ fn two_global_cores_run_two_jobs_at_once() {
     let one = vec![job(10, 3, 4), job(10, 2, 4), job(10, 1, 4)];
     let v = explore(&set(vec![cpu(1, Policy::FixedPriority)], one));
     assert!(!v.schedulable);
-    assert_eq!(v.can_miss, vec![false, false, true]);
+    // the lowest misses first ([18, 22], past 20 at 21). The middle one too: after 20 the
+    // highest runs [22, 26] and the middle one [26, 30]; it finishes exactly at the
+    // boundary 30, and taken before the release there, its finish lets the lowest (ready
+    // since its deferred release at 22) take the core; the middle one, released at 30,
+    // runs [38, 42]. The highest never waits more than one job of 4.
+    assert_eq!(v.can_miss, vec![false, true, true]);
 }
 
 #[test]
 fn a_job_done_at_its_next_release_meets_its_deadline() {
     // period 4, a codel of exactly 4: released at 4, it holds the core until 8, when the
-    // next boundary passes first (late), then it finishes: response 4 = its deadline, not a
-    // miss; the deferred release makes it ready again at once
+    // next boundary's release and its finish are due at once, in either order: released
+    // first (late), the job's end releases it again at once; finished first, the boundary
+    // finds the task idle. Either way the response is 4 = its deadline, not a miss
     let v = explore(&set(
         vec![cpu(1, Policy::FixedPriority)],
         vec![job(4, 1, 4)],
@@ -177,6 +190,7 @@ fn a_job_done_at_its_next_release_meets_its_deadline() {
     assert_eq!(v.worst_response, vec![Some(4)]);
     let late_at_wcet = Projected {
         n: 0,
+        due: false,
         tasks: vec![TaskState {
             stage: Stage::Running,
             position: Position::Running(0),
@@ -193,6 +207,69 @@ fn a_job_done_at_its_next_release_meets_its_deadline() {
     let v = explore(&set(vec![cpu(1, Policy::FixedPriority)], vec![tight]));
     assert!(!v.schedulable);
     assert_eq!(v.earliest_miss, Some(8));
+}
+
+/// One core, `Job`, fixed priorities: `hi` of period and deadline 4 ms, `lo` of period
+/// 8 ms, each codel between 0 and 4 ms. In real time: at 8 ms both are released, `hi`
+/// runs 2 ms, `lo` 4 ms from 10 to 14, and `hi`, released at 12, waits for it and runs
+/// 4 ms more, until 18: past its deadline at 16. At the 4 ms unit the same order of events
+/// is an integer run: `hi` runs 8 to 12, finishes, `lo` takes the core at 12 before the
+/// boundary's release at 12 (due, not yet applied), and `hi` waits until 16. A release
+/// applied with the tick, before the instant's other steps, would give `hi` the core at 12
+/// and miss this schedule at 4 ms.
+#[test]
+fn a_release_is_ordered_freely_among_its_instants_steps() {
+    let codel = Codel {
+        bcet_us: None,
+        wcet_us: Some(4000),
+        yields: vec![Yield::Pause(0)],
+    };
+    let hi = Task {
+        codels: vec![codel.clone()],
+        ..job(1, 2, 0)
+    };
+    let lo = Task {
+        codels: vec![codel],
+        ..job(2, 1, 0)
+    };
+    for unit_us in [4000, 2000] {
+        let mut s = set(
+            vec![cpu(1, Policy::FixedPriority)],
+            vec![hi.clone(), lo.clone()],
+        );
+        s.tick_ms = 4;
+        s.unit_us = Some(unit_us);
+        let v = explore(&s);
+        assert!(v.can_miss[0], "unit {unit_us} µs");
+    }
+}
+
+/// Integer time is exact (docs/model.md, "Why whole units are enough"): on random sets,
+/// exploring at half the unit finds no other verdict, and the same worst responses.
+#[test]
+fn a_finer_unit_finds_nothing_new() {
+    let mut compared = 0;
+    for seed in 0..300 {
+        let coarse = generate(seed);
+        let unit = coarse.unit_us();
+        let fine = TaskSet {
+            unit_us: Some(unit / 2),
+            ..coarse.clone()
+        };
+        let (c, f) = (explore(&coarse), explore(&fine));
+        assert_eq!(c.can_miss, f.can_miss, "seed {seed}");
+        let halves: Vec<Option<u64>> = c.worst_response.iter().map(|w| w.map(|u| 2 * u)).collect();
+        assert_eq!(halves, f.worst_response, "seed {seed}");
+        // the earliest miss is seen within a unit of the finer one's
+        if let (Some(ce), Some(fe)) = (c.earliest_miss, f.earliest_miss) {
+            assert!(
+                2 * ce >= fe && 2 * ce <= fe + 2,
+                "seed {seed}: {ce} vs {fe} halves"
+            );
+        }
+        compared += 1;
+    }
+    assert_eq!(compared, 300);
 }
 
 #[test]

@@ -1,7 +1,8 @@
 //! The timed semantics of docs/model.md ("Timed semantics"), interpreted naively: the
 //! state is exactly what the semantics stores, one unit of time passes per step, every
-//! zero-time step of every task is tried in every order, and nothing is derived that is
-//! not in the definition. Written to be read against the definition, not to be fast.
+//! zero-time step of every task (a period boundary's release among them) is tried in
+//! every order, and nothing is derived that is not in the definition. Written to be read
+//! against the definition, not to be fast.
 
 use std::collections::{BTreeSet, HashMap, VecDeque};
 
@@ -47,6 +48,10 @@ pub struct TaskState {
 pub struct Projected {
     /// The time modulo the hyperperiod, in units.
     pub n: u64,
+    /// The current instant is a period boundary of some tasks and their release has not
+    /// happened yet: one zero-time step for all of them, in any order among the instant's
+    /// other zero-time steps.
+    pub due: bool,
     /// In the task set's order.
     pub tasks: Vec<TaskState>,
 }
@@ -82,11 +87,19 @@ struct Interp<'a> {
 }
 
 impl Interp<'_> {
-    /// The elapsed time of task `t`'s job: late·P + ((n − d) mod P).
+    /// Whether time `n` (modulo the hyperperiod) is a period boundary of task `t`.
+    fn boundary(&self, n: u64, t: usize) -> bool {
+        let (p, d) = (self.set.period(t), self.set.delay(t));
+        n % p == d % p
+    }
+
+    /// The elapsed time of task `t`'s job: late·P + ((n − d) mod P), plus P while the
+    /// boundary at n is due and not yet released.
     fn elapsed(&self, s: &Projected, t: usize) -> u64 {
         let (p, d) = (self.set.period(t), self.set.delay(t));
         let since = (s.n + p - d % p) % p;
-        u64::from(s.tasks[t].late) * p + since
+        let due = s.due && self.boundary(s.n, t);
+        u64::from(s.tasks[t].late) * p + u64::from(due) * p + since
     }
 
     fn misses(&self, s: &Projected, t: usize) -> bool {
@@ -149,8 +162,31 @@ impl Interp<'_> {
         }
     }
 
+    /// The release at a period boundary: each task whose boundary it is has its work
+    /// released if idle, or its job marked late.
+    fn release_due(&self, s: &Projected) -> Projected {
+        let mut to = s.clone();
+        to.due = false;
+        for (t, k) in to.tasks.iter_mut().enumerate() {
+            if self.boundary(s.n, t) {
+                match k.stage {
+                    Stage::Idle => Self::release(k),
+                    Stage::Ready | Stage::Running => k.late = true,
+                }
+            }
+        }
+        to
+    }
+
     /// Every zero-time step, of every task.
     fn zero_time(&self, s: &Projected, out: &mut Vec<Successor>) {
+        if s.due {
+            out.push(Successor {
+                to: self.release_due(s),
+                tick: false,
+                response: None,
+            });
+        }
         for t in 0..s.tasks.len() {
             let ts = s.tasks[t];
             let mut go = |f: &dyn Fn(&mut TaskState), response: Option<(usize, u64)>| {
@@ -216,38 +252,33 @@ impl Interp<'_> {
 
     /// Time may pass: no zero-time step is pending but finishes before the wcet.
     fn may_tick(&self, s: &Projected) -> bool {
-        (0..s.tasks.len()).all(|t| {
-            let ts = s.tasks[t];
-            let at_wcet = match ts.position {
-                Position::Running(c) => ts.x == self.set.window(t, c).1,
-                _ => false,
-            };
-            let pending = match (ts.stage, ts.position) {
-                (Stage::Ready, _) => self.may_dispatch(s, t),
-                (Stage::Running, Position::Running(_)) => at_wcet,
-                (Stage::Running, _) => true,
-                (Stage::Idle, _) => false,
-            };
-            !pending
-        })
+        !s.due
+            && (0..s.tasks.len()).all(|t| {
+                let ts = s.tasks[t];
+                let at_wcet = match ts.position {
+                    Position::Running(c) => ts.x == self.set.window(t, c).1,
+                    _ => false,
+                };
+                let pending = match (ts.stage, ts.position) {
+                    (Stage::Ready, _) => self.may_dispatch(s, t),
+                    (Stage::Running, Position::Running(_)) => at_wcet,
+                    (Stage::Running, _) => true,
+                    (Stage::Idle, _) => false,
+                };
+                !pending
+            })
     }
 
-    /// One unit passes, and the boundaries at the new time are handled.
+    /// One unit passes; if the new time is a period boundary, its release is due.
     fn tick(&self, s: &Projected) -> Projected {
         let mut to = s.clone();
         to.n = (s.n + 1) % self.hyper;
-        for (t, k) in to.tasks.iter_mut().enumerate() {
+        for k in to.tasks.iter_mut() {
             if matches!(k.position, Position::Running(_)) {
                 k.x += 1;
             }
-            let (p, d) = (self.set.period(t), self.set.delay(t));
-            if to.n % p == d % p {
-                match k.stage {
-                    Stage::Idle => Self::release(k),
-                    Stage::Ready | Stage::Running => k.late = true,
-                }
-            }
         }
+        to.due = (0..to.tasks.len()).any(|t| self.boundary(to.n, t));
         to
     }
 
@@ -275,6 +306,7 @@ pub fn explore(set: &TaskSet) -> Verdict {
     };
     let initial = Projected {
         n: 0,
+        due: false,
         tasks: vec![
             TaskState {
                 stage: Stage::Idle,
