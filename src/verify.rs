@@ -526,7 +526,7 @@ fn text_report(
     if let Some(unit) = system.genom.as_ref().and_then(|g| g.time_unit_us) {
         let _ = writeln!(
             s,
-            "\nnote: time counted in whole units of {}; a real-time schedule whose codels end between units may differ (docs/model.md, \"What integer time leaves out\"; declare a finer unit with `time: Exact(unit: ...)` to look between them)",
+            "\nnote: time counted in whole units of {}, which the verdicts on deadlines and worst responses need no finer (docs/model.md, \"Why whole units are enough\")",
             bip_sched::show_micros(unit)
         );
     }

@@ -7,6 +7,10 @@ pub const CLOCK_ATOM: &str = "Clock";
 pub const PHASE: &str = "n";
 /// The tick connector.
 pub const TICK: &str = "tick";
+/// A timed model's release at a period boundary: the connector, the clock's port, and
+/// the clock's variable that says the current instant's release has not happened yet.
+pub const RELEASE: &str = "release";
+pub const DUE: &str = "due";
 /// Variables of an activity atom.
 pub const REQ: &str = "req";
 pub const PAUSED: &str = "paused";

@@ -2,7 +2,8 @@
 //! reachable state of the expanded system is explored, and each task's response times
 //! (its elapsed time at its job's end) and deadline misses are read from the generated
 //! task atoms, with the elapsed time derived as docs/genom.md says
-//! (`late · period + (n − delay) mod period`). Every codel may also end on its error
+//! (`late · period + (n − delay) mod period`, plus a period while the instant's boundary
+//! is due). Every codel may also end on its error
 //! path, which ends its machine: the figures include the runs where a task stops.
 
 use std::collections::{BTreeMap, BTreeSet, HashSet, VecDeque};
@@ -42,7 +43,9 @@ fn elapsed(sys: &System, s: &State, t: &Task) -> i64 {
         Some(Some(_)) => read(sys, s, "clock", "n"),
         _ => 0,
     };
-    read(sys, s, &comp, "late") * t.period + (n - t.delay).rem_euclid(t.period)
+    let since = (n - t.delay).rem_euclid(t.period);
+    let due_here = i64::from(read(sys, s, "clock", "due") != 0 && since == 0);
+    (read(sys, s, &comp, "late") + due_here) * t.period + since
 }
 
 /// Every reachable state of `text`'s expansion, with what it shows of `tasks`; also

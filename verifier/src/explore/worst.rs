@@ -2,8 +2,9 @@
 //! largest elapsed time of the task's job in a reachable state where its job end
 //! (`m_t_done`) is a step, with the run that reaches it: the shortest run to the first
 //! such state in exploration order, then the job end. The elapsed time is derived from
-//! the state as the expansion defines it (`late · period + (n − delay) mod period`, in
-//! time units, docs/genom.md, "Timed models"); it is exact while no deadline is missed,
+//! the state as the expansion defines it (`late · period + (n − delay) mod period`, plus
+//! a period while the instant's boundary is due, in time units, docs/genom.md, "Timed
+//! models"); it is exact while no deadline is missed,
 //! so the figures are given only when every deadline holds.
 
 use bip_model::{Label, OwnedStep, State, Steps, System, Verdict as TraceVerdict};
@@ -62,15 +63,15 @@ fn task_clocks(system: &System) -> Vec<TaskClock> {
     out
 }
 
-/// The clock's phase in units (0 when every period is one unit: the clock has none).
-fn phase(system: &System, s: &State) -> i64 {
+/// The clock's phase in units (0 when every period is one unit: the clock has none),
+/// and whether the release of the instant's period boundaries is due.
+fn clock(system: &System, s: &State) -> (i64, bool) {
     let Some(clock) = system.component_index("clock") else {
-        return 0;
+        return (0, false);
     };
-    match system.atom_of(clock).var_index("n") {
-        Some(n) => system.value(s, clock, n),
-        None => 0,
-    }
+    let atom = system.atom_of(clock);
+    let read = |v: &str| atom.var_index(v).map_or(0, |v| system.value(s, clock, v));
+    (read("n"), read("due") != 0)
 }
 
 /// Each task's worst response, in the order of the model's tasks; nothing for a model
@@ -129,14 +130,16 @@ pub(super) fn worst_responses(
                 system.enabled_steps(&state, &mut steps).map_err(|e| {
                     VerifyError::Internal(format!("a reachable state has a range error: {e}"))
                 })?;
-                let n = phase(system, &state);
+                let (n, due) = clock(system, &state);
                 for (t, best) in tasks.iter().zip(&mut best) {
                     let Some(step) = steps.iter().find(|s| s.label == Label::Interaction(t.done))
                     else {
                         continue;
                     };
-                    let elapsed = system.value(&state, t.task, t.late) * t.period
-                        + (n - t.delay).rem_euclid(t.period);
+                    let since = (n - t.delay).rem_euclid(t.period);
+                    let due_here = i64::from(due && since == 0);
+                    let elapsed =
+                        (system.value(&state, t.task, t.late) + due_here) * t.period + since;
                     if best.as_ref().is_none_or(|b| elapsed > b.0) {
                         *best = Some((elapsed, id, step.to_owned()));
                     }

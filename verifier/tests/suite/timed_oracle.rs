@@ -95,29 +95,34 @@ fn most_sets_are_compared() {
     assert!(compared >= 20, "only {compared} of 40 sets compared");
 }
 
-/// A real-time miss between the units of the durations' gcd (docs/model.md, "What integer
-/// time leaves out"): `hi` runs 2 ms from 8 ms, `lo` 4 ms from 10, and `hi`, released at
-/// 12 ms, runs 4 ms from 14: past its 16 ms deadline. A 2 ms unit finds it, and the
-/// interpreter at that unit agrees.
+/// A real-time miss between the units of the durations' gcd (docs/model.md, "Why whole
+/// units are enough"): `hi` runs 2 ms from 8 ms, `lo` 4 ms from 10, and `hi`, released at
+/// 12 ms, runs 4 ms from 14: past its 16 ms deadline. The durations' gcd, 4 ms, finds it
+/// as the integer run in which `hi` runs 8 to 12 and `lo` takes the core at 12 before the
+/// boundary's release there (past the deadline at 20 ms, the fifth unit); 2 ms finds the
+/// real-time run itself (at 18 ms, the ninth).
 #[test]
-fn a_miss_between_the_gcds_units_is_found_with_a_finer_unit() {
-    let text = r#"System(name: "between", tick_ms: 4, time: Exact(unit: "2ms"),
+fn a_miss_between_the_gcds_units_is_found_at_the_gcd() {
+    for (unit, ticks) in [("", 5), ("(unit: \"2ms\")", 9)] {
+        let text = format!(
+            r#"System(name: "between", tick_ms: 4, time: Exact{unit},
     cpus: [(name: "main", preemption: Job)],
     modules: [(name: "m", tasks: [
         (name: "hi", period: 1, priority: 2, codels: [
             (state: "start", yields: ["pause::start"], wcet: "4ms")]),
         (name: "lo", period: 2, priority: 1, codels: [
-            (state: "start", yields: ["pause::start"], wcet: "4ms")])])])"#;
-    let system = load_str("between.ron", text).unwrap();
-    let report = verify(&system, Method::Explicit, &Options::default(), &|_| {}).unwrap();
-    let hi = report
-        .properties
-        .iter()
-        .find(|p| p.name.starts_with("m.hi meets its"))
-        .expect("hi's deadline");
-    assert!(hi.verdict.fails(), "{:?}", hi.verdict);
-    let trace = hi.verdict.trace().expect("the miss's schedule");
-    let ticks = trace.steps.iter().filter(|s| s.step == "tick").count();
-    // the first unit past the deadline: 18 ms, in units of 2 ms
-    assert_eq!(ticks, 9);
+            (state: "start", yields: ["pause::start"], wcet: "4ms")])])])"#
+        );
+        let system = load_str("between.ron", &text).unwrap();
+        let report = verify(&system, Method::Explicit, &Options::default(), &|_| {}).unwrap();
+        let hi = report
+            .properties
+            .iter()
+            .find(|p| p.name.starts_with("m.hi meets its"))
+            .expect("hi's deadline");
+        assert!(hi.verdict.fails(), "{unit}: {:?}", hi.verdict);
+        let trace = hi.verdict.trace().expect("the miss's schedule");
+        let count = trace.steps.iter().filter(|s| s.step == "tick").count();
+        assert_eq!(count, ticks, "{unit}");
+    }
 }

@@ -101,7 +101,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 .with_help("use periods with a small least common multiple"),
             );
         }
-        let vars = if l > 1 {
+        let mut vars = if l > 1 {
             vec![var(
                 PHASE,
                 TypeDef::Int(ConstExpr::int(0), ConstExpr::int(l - 1)),
@@ -110,12 +110,21 @@ impl<'a, 'd> Builder<'a, 'd> {
         } else {
             Vec::new()
         };
+        let mut ports = vec![TICK];
+        // a timed model's boundary release is a step of its own (`timed/tick.rs`)
+        if self.timed.is_some() {
+            vars.push(var(DUE, TypeDef::Bool, Some(0)));
+            ports.push(RELEASE);
+        }
         let atom = AtomDef {
             locations: vec![text("on")],
             initial: text("on"),
-            ports: vec![text("tick")],
+            ports: ports.iter().map(|p| text(*p)).collect(),
             vars,
-            transitions: vec![tr("on", "tick", "on", None, Vec::new())],
+            transitions: ports
+                .iter()
+                .map(|p| tr("on", p, "on", None, Vec::new()))
+                .collect(),
             task: None,
         };
         let span = self.layer_span();

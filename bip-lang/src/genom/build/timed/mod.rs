@@ -11,7 +11,7 @@
 //!   end (with the release deferred by a boundary that passed while it ran);
 //! - `codel.rs`: a codel's start, its finish, and the finish that drops its outcome when
 //!   its activity was interrupted while it ran;
-//! - `tick.rs`: the tick, one time unit, with the releases at the tasks' boundaries;
+//! - `tick.rs`: the tick, one time unit, and the release at the tasks' boundaries;
 //! - `priorities.rs`: zero-time steps before time passes, a task's codels in GenoM3's
 //!   order, and the CPUs' fixed priorities;
 //! - `deadlines.rs`: each task's deadline as an invariant (`Schedulable` by exploration).
@@ -189,7 +189,8 @@ impl<'a, 'd> Builder<'a, 'd> {
 impl<'a, 'd> Builder<'a, 'd> {
     /// The time since the release of the task's job, in units: `late · period + (n −
     /// delay) mod period`, derived from the clock (a boundary that passed while the job
-    /// ran counts one period).
+    /// ran counts one period, and so does the instant's boundary while its release is
+    /// due).
     fn job_elapsed(&self, task: &TimedTaskRef) -> Expr {
         let (p, d) = (task.times.period as i64, task.times.delay as i64);
         let since_boundary = match self.timed.is_some_and(|t| t.hyperperiod > 1) {
@@ -200,10 +201,13 @@ impl<'a, 'd> Builder<'a, 'd> {
             ),
             false => int(0),
         };
-        binary(
+        let period_if = |e: Expr| crate::genom::tree::cond(e, int(p), int(0));
+        let due_here = and(member(CLOCK, DUE), self.boundary(task));
+        let periods = binary(
             BinOp::Add,
-            crate::genom::tree::cond(self.task_var(task, LATE), int(p), int(0)),
-            since_boundary,
-        )
+            period_if(self.task_var(task, LATE)),
+            period_if(due_here),
+        );
+        binary(BinOp::Add, periods, since_boundary)
     }
 }

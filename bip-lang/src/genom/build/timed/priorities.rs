@@ -1,10 +1,12 @@
 //! A timed model's generated priorities: what takes no time comes before time passes
-//! and before requests (dispatches, codel starts, job ends, a pending activity's
+//! (the boundaries' release, dispatches, codel starts, job ends, a pending activity's
 //! interrupts; a codel's finish is not among them: between its BCET and its WCET it may
 //! finish now or later, and the tick's guard keeps it from passing its WCET); a task's
 //! codels start in GenoM3's order (its machine, then its activities in declaration
 //! order); and among the ready tasks competing for a core, the higher `priority` takes
-//! it. Steps of different tasks are not ordered otherwise: they run in parallel.
+//! it. Steps of different tasks are not ordered otherwise: they run in parallel. Nor are
+//! requests: a client's request may come at any moment, between any two steps of an
+//! instant (docs/model.md, "Why whole units are enough").
 
 use super::Builder;
 use crate::genom::names::*;
@@ -24,12 +26,14 @@ impl<'a, 'd> Builder<'a, 'd> {
     pub(in super::super) fn timed_priorities(&self, t: &Timed) -> Vec<PriorityDef> {
         let tasks = self.timed_task_list(t);
         let mut urgent: Vec<String> = Vec::new();
-        let mut requests: Vec<String> = Vec::new();
         for m in &self.recipe.modules {
             for s in &m.services {
-                requests.extend(s.request.clone());
                 urgent.extend(s.interrupt.clone());
             }
+        }
+        // the boundaries' release, in any order among the instant's other zero-time steps
+        if !tasks.is_empty() {
+            urgent.push(RELEASE.to_string());
         }
         let mut out = Vec::new();
         for task in &tasks {
@@ -59,9 +63,6 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
         for high in &urgent {
             out.push(pr(TICK, high));
-            for r in &requests {
-                out.push(pr(r, high));
-            }
         }
         // a free core goes to the most urgent ready task that may take it
         for a in &tasks {

@@ -30,7 +30,6 @@ impl<'a, 'd> Builder<'a, 'd> {
             self.job_done(task);
             self.codels(task);
         }
-        self.timed_requests(&tasks);
     }
 
     fn task_atom(&mut self, task: &TimedTaskRef) {
@@ -170,26 +169,5 @@ impl<'a, 'd> Builder<'a, 'd> {
                 assign(paused.clone(), and(paused, not(when.clone())))
             })
             .collect()
-    }
-
-    /// Requests happen only where time may pass: never while a codel must finish.
-    fn timed_requests(&mut self, tasks: &[TimedTaskRef]) {
-        let Some(may_pass) = self.time_may_pass(tasks) else {
-            return;
-        };
-        let requests: Vec<String> = self
-            .recipe
-            .modules
-            .iter()
-            .flat_map(|m| m.services.iter().filter_map(|s| s.request.clone()))
-            .collect();
-        for (c, guard, _) in &mut self.connectors {
-            if requests.contains(&c.name.value) {
-                *guard = Some(match guard.take() {
-                    Some(g) => and(g, may_pass.clone()),
-                    None => may_pass.clone(),
-                });
-            }
-        }
     }
 }

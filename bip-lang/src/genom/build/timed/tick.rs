@@ -1,17 +1,25 @@
-//! A timed model's tick: one time unit passes. The clock's phase counts units modulo the
-//! common cycle of the periods; each running codel's elapsed time grows by one; at a
-//! task's period boundary (`delay + k * period`) an idle task's paused activities are
-//! released and, if it then has work, its job is ready; a busy task's boundary is
-//! deferred (`late`) to its job's end. Ports age once per tick of `tick_ms`, as in an
-//! untimed model. The tick's guard: no codel has run its WCET.
+//! A timed model's tick and release. The tick: one time unit passes, the clock's phase
+//! counts units modulo the common cycle of the periods, each running codel's elapsed
+//! time grows by one, ports age once per tick of `tick_ms` as in an untimed model, and
+//! if the new instant is a period boundary of some task, its release is due. The
+//! release, a zero-time step of its own: at each task's boundary (`delay + k * period`)
+//! an idle task's paused activities are released and, if it then has work, its job is
+//! ready; a busy task's boundary is deferred (`late`) to its job's end.
+//!
+//! The release is one step for every task whose boundary the instant is, so that a
+//! CPU's priorities decide between jobs released together; it is not ordered against
+//! the instant's other zero-time steps (a codel finishing at its WCET, a dispatch, a
+//! job's end), so that integer time is exact (docs/model.md, "Why whole units are
+//! enough"). The tick's guard: no codel has run its WCET and no release is due.
 
-use super::Builder;
-use crate::expr::{Assign, BinOp};
+use super::{Builder, TimedTaskRef};
+use crate::expr::{Assign, BinOp, Expr};
 use crate::genom::names::*;
 use crate::genom::timed::Timed;
-use crate::genom::tree::{and, assign, binary, boolean, cond, int, member, not, or};
+use crate::genom::tree::{and, assign, binary, boolean, chain, cond, int, member, not, or};
+use crate::syntax::Role;
 
-use super::super::port;
+use super::super::{connector, port};
 
 impl<'a, 'd> Builder<'a, 'd> {
     pub(in super::super) fn timed_tick(&mut self, t: &Timed) {
@@ -26,29 +34,12 @@ impl<'a, 'd> Builder<'a, 'd> {
                 binary(BinOp::Rem, next, int(t.hyperperiod as i64)),
             ));
         }
+        // the phase, once incremented, is the new instant's number modulo the cycle
+        let due = chain(BinOp::Or, tasks.iter().map(|task| self.boundary(task)));
+        action.push(assign(member(CLOCK, DUE), due.unwrap_or(boolean(false))));
         for task in &tasks {
             let comp = self.task_comp(task);
             ports.push(port(&comp, "tick"));
-            ports.extend(task.activities.iter().map(|&r| port(&self.comp(r), "tick")));
-            let (p, d) = (task.times.period, task.times.delay);
-            // the phase, once incremented, is the unit's number modulo the cycle
-            let boundary = if p == 1 {
-                boolean(true)
-            } else {
-                binary(
-                    BinOp::Eq,
-                    binary(BinOp::Rem, phase.clone(), int(p as i64)),
-                    int(d as i64),
-                )
-            };
-            let idle = self.stage_is(task, STAGE_IDLE);
-            let late = member(&comp, LATE);
-            action.push(assign(
-                late.clone(),
-                or(late, and(boundary.clone(), not(idle.clone()))),
-            ));
-            let released = and(boundary.clone(), idle.clone());
-            action.extend(self.release(task, released.clone()));
             let codel = member(&comp, RUNNING_CODEL);
             let elapsed = member(&comp, ELAPSED);
             action.push(assign(
@@ -57,15 +48,6 @@ impl<'a, 'd> Builder<'a, 'd> {
                     binary(BinOp::Eq, codel, int(0)),
                     int(0),
                     binary(BinOp::Add, elapsed, int(1)),
-                ),
-            ));
-            let stage = member(&comp, STAGE);
-            action.push(assign(
-                stage.clone(),
-                cond(
-                    and(released, self.task_has_work(task)),
-                    int(STAGE_READY),
-                    stage,
                 ),
             ));
         }
@@ -80,7 +62,63 @@ impl<'a, 'd> Builder<'a, 'd> {
         for mi in 0..self.layer.modules.len() {
             self.age_ports(mi, on_tick.as_ref(), &mut ports, &mut action);
         }
-        let guard = self.time_may_pass(&tasks);
-        self.push_tick(ports, guard, action);
+        let no_release = not(member(CLOCK, DUE));
+        let guard = match self.time_may_pass(&tasks) {
+            Some(g) => and(g, no_release),
+            None => no_release,
+        };
+        self.push_tick(ports, Some(guard), action);
+        self.timed_release(&tasks);
+    }
+
+    /// The instant (the clock's phase) is a period boundary of the task.
+    pub(super) fn boundary(&self, task: &TimedTaskRef) -> Expr {
+        let (p, d) = (task.times.period, task.times.delay);
+        if p == 1 {
+            boolean(true)
+        } else {
+            binary(
+                BinOp::Eq,
+                binary(BinOp::Rem, member(CLOCK, PHASE), int(p as i64)),
+                int(d as i64),
+            )
+        }
+    }
+
+    /// The due release of the instant's boundaries, every task's at once.
+    fn timed_release(&mut self, tasks: &[TimedTaskRef]) {
+        let due = member(CLOCK, DUE);
+        let mut ports = vec![port(CLOCK, RELEASE)];
+        let mut action = vec![assign(due.clone(), boolean(false))];
+        for task in tasks {
+            let comp = self.task_comp(task);
+            ports.push(port(&comp, "tick"));
+            ports.extend(task.activities.iter().map(|&r| port(&self.comp(r), "tick")));
+            let boundary = self.boundary(task);
+            let idle = self.stage_is(task, STAGE_IDLE);
+            let late = member(&comp, LATE);
+            action.push(assign(
+                late.clone(),
+                or(late, and(boundary.clone(), not(idle.clone()))),
+            ));
+            let released = and(boundary, idle);
+            action.extend(self.release(task, released.clone()));
+            let stage = member(&comp, STAGE);
+            action.push(assign(
+                stage.clone(),
+                cond(
+                    and(released, self.task_has_work(task)),
+                    int(STAGE_READY),
+                    stage,
+                ),
+            ));
+        }
+        self.claim(
+            RELEASE,
+            self.layer_span(),
+            "the release at the tasks' period boundaries".into(),
+        );
+        self.connectors
+            .push((connector(RELEASE, ports, Role::Progress), Some(due), action));
     }
 }
