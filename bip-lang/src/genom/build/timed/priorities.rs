@@ -31,10 +31,8 @@ impl<'a, 'd> Builder<'a, 'd> {
                 urgent.extend(s.interrupt.clone());
             }
         }
-        // the boundaries' release, in any order among the instant's other zero-time steps
-        if !tasks.is_empty() {
-            urgent.push(RELEASE.to_string());
-        }
+        // the instant's release, in any order among its other zero-time steps
+        urgent.push(RELEASE.to_string());
         let mut out = Vec::new();
         for task in &tasks {
             let (m, name) = self.task_names(task);

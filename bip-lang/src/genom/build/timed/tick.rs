@@ -1,23 +1,25 @@
 //! A timed model's tick and release. The tick: one time unit passes, the clock's phase
 //! counts units modulo the common cycle of the periods, each running codel's elapsed
-//! time grows by one, ports age once per tick of `tick_ms` as in an untimed model, and
-//! if the new instant is a period boundary of some task, its release is due. The
-//! release, a zero-time step of its own: at each task's boundary (`delay + k * period`)
-//! an idle task's paused activities are released and, if it then has work, its job is
-//! ready; a busy task's boundary is deferred (`late`) to its job's end.
+//! time grows by one, and if the new instant is a period boundary of some task, or a
+//! tick of `tick_ms` at which ports age, its release is due. The release, a zero-time
+//! step of its own: at each task's boundary (`delay + k * period`) an idle task's paused
+//! activities are released and, if it then has work, its job is ready; a busy task's
+//! boundary is deferred (`late`) to its job's end; ports age once per tick of `tick_ms`,
+//! as in an untimed model.
 //!
-//! The release is one step for every task whose boundary the instant is, so that a
-//! CPU's priorities decide between jobs released together; it is not ordered against
-//! the instant's other zero-time steps (a codel finishing at its WCET, a dispatch, a
-//! job's end), so that integer time is exact (docs/model.md, "Why whole units are
-//! enough"). The tick's guard: no codel has run its WCET and no release is due.
+//! The release is one step for everything the instant's timer does, so that a CPU's
+//! priorities decide between jobs released together; it is not ordered against the
+//! instant's other zero-time steps (a codel finishing at its WCET, a dispatch, a job's
+//! end, a codel start that reads a port's age), so that integer time is exact
+//! (docs/model.md, "Why whole units are enough"). The tick's guard: no codel has run its
+//! WCET and no release is due.
 
 use super::{Builder, TimedTaskRef};
 use crate::expr::{Assign, BinOp, Expr};
 use crate::genom::names::*;
 use crate::genom::timed::Timed;
 use crate::genom::tree::{and, assign, binary, boolean, chain, cond, int, member, not, or};
-use crate::syntax::Role;
+use crate::syntax::{ExprDef, Role};
 
 use super::super::{connector, port};
 
@@ -34,9 +36,6 @@ impl<'a, 'd> Builder<'a, 'd> {
                 binary(BinOp::Rem, next, int(t.hyperperiod as i64)),
             ));
         }
-        // the phase, once incremented, is the new instant's number modulo the cycle
-        let due = chain(BinOp::Or, tasks.iter().map(|task| self.boundary(task)));
-        action.push(assign(member(CLOCK, DUE), due.unwrap_or(boolean(false))));
         for task in &tasks {
             let comp = self.task_comp(task);
             ports.push(port(&comp, "tick"));
@@ -59,16 +58,25 @@ impl<'a, 'd> Builder<'a, 'd> {
                 int(0),
             )
         });
+        let mut aging_ports = Vec::new();
+        let mut aging = Vec::new();
         for mi in 0..self.layer.modules.len() {
-            self.age_ports(mi, on_tick.as_ref(), &mut ports, &mut action);
+            self.age_ports(mi, on_tick.as_ref(), &mut aging_ports, &mut aging);
         }
+        // the phase, once incremented, is the new instant's number modulo the cycle
+        let ages_now = (!aging.is_empty()).then(|| on_tick.clone().unwrap_or(boolean(true)));
+        let due = chain(
+            BinOp::Or,
+            tasks.iter().map(|task| self.boundary(task)).chain(ages_now),
+        );
+        action.push(assign(member(CLOCK, DUE), due.unwrap_or(boolean(false))));
         let no_release = not(member(CLOCK, DUE));
         let guard = match self.time_may_pass(&tasks) {
             Some(g) => and(g, no_release),
             None => no_release,
         };
         self.push_tick(ports, Some(guard), action);
-        self.timed_release(&tasks);
+        self.timed_release(&tasks, aging_ports, aging);
     }
 
     /// The instant (the clock's phase) is a period boundary of the task.
@@ -85,11 +93,19 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
     }
 
-    /// The due release of the instant's boundaries, every task's at once.
-    fn timed_release(&mut self, tasks: &[TimedTaskRef]) {
+    /// The due release of the instant's boundaries, every task's at once, and the aging
+    /// of ports (`aging_ports`, `aging`).
+    fn timed_release(
+        &mut self,
+        tasks: &[TimedTaskRef],
+        aging_ports: Vec<ExprDef>,
+        aging: Vec<Assign>,
+    ) {
         let due = member(CLOCK, DUE);
         let mut ports = vec![port(CLOCK, RELEASE)];
+        ports.extend(aging_ports);
         let mut action = vec![assign(due.clone(), boolean(false))];
+        action.extend(aging);
         for task in tasks {
             let comp = self.task_comp(task);
             ports.push(port(&comp, "tick"));
