@@ -23,3 +23,17 @@ mod symbolic_known_answers;
 mod symbolic_verdicts;
 mod time_progress;
 mod timed_oracle;
+
+/// The time units a trace spans: the sum of its time steps' `advance`.
+fn trace_units(system: &bip_model::System, trace: &bip_model::Trace) -> u64 {
+    let path = trace.replay(system).expect("the trace replays");
+    let mut before = system.initial_state();
+    let mut units = 0;
+    for (step, after) in path {
+        units += system
+            .time_advance(&before, step.as_step())
+            .expect("a step that fired has its advance");
+        before = after;
+    }
+    units
+}

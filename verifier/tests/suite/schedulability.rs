@@ -487,8 +487,8 @@ fn a_timed_model_decides_its_deadlines_by_exploration() {
         .find(|p| p.name == "m.hi meets its 2 ms deadline")
         .expect("hi's deadline");
     let trace = hi.verdict.trace().expect("a counterexample");
-    let ticks = trace.steps.iter().filter(|s| s.step == "tick").count();
-    assert_eq!(ticks, 8);
+    let system = load_str("timed.ron", &text("2ms")).unwrap();
+    assert_eq!(crate::trace_units(&system, trace), 8);
     // with 3 ms, `hi` responds in at most 3 ms: no miss
     assert!(verdicts(&text("3ms")).iter().all(|(_, fails)| !fails));
     // and the worst responses are 3 ms each, each with the run that ends in the job end

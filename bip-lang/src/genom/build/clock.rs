@@ -169,7 +169,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             }
             self.age_ports(mi, None, &mut ports, &mut action);
         }
-        self.push_tick(ports, None, action);
+        self.push_tick(ports, None, action, None);
     }
 
     /// Where the layer's own generated names point: its first module's name.
@@ -181,12 +181,13 @@ impl<'a, 'd> Builder<'a, 'd> {
     }
 
     /// The clock's tick, timed or not: the clock's broadcast to `ports`, with `guard` and
-    /// `action`.
+    /// `action`, standing for `advance` units (one if `None`).
     pub(super) fn push_tick(
         &mut self,
         ports: Vec<ExprDef>,
         guard: Option<Expr>,
         action: Vec<Assign>,
+        advance: Option<Expr>,
     ) {
         self.claim(TICK, self.layer_span(), "the clock's tick".into());
         self.connectors.push((
@@ -194,6 +195,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 kind: ConnectorKindDef::Broadcast {
                     trigger: port(CLOCK, "tick"),
                 },
+                advance: advance.map(ExprDef::Built),
                 ..connector(TICK, ports, Role::Time)
             },
             guard,

@@ -11,13 +11,16 @@
 //!   end (with the release deferred by a boundary that passed while it ran);
 //! - `codel.rs`: a codel's start, its finish, and the finish that drops its outcome when
 //!   its activity was interrupted while it ran;
-//! - `tick.rs`: the tick, one time unit, and the release at the tasks' boundaries;
+//! - `tick.rs`: the tick and the release at the tasks' boundaries;
+//! - `jump.rs`: how many units the tick stands for, up to the next instant at which
+//!   something may happen;
 //! - `priorities.rs`: zero-time steps before time passes, a task's codels in GenoM3's
 //!   order, and the CPUs' fixed priorities;
 //! - `deadlines.rs`: each task's deadline as an invariant (`Schedulable` by exploration).
 
 mod codel;
 mod deadlines;
+mod jump;
 mod priorities;
 mod task;
 mod tick;

@@ -1,6 +1,6 @@
-//! A timed model's tick and release. The tick: one time unit passes, the clock's phase
-//! counts units modulo the common cycle of the periods, each running codel's elapsed
-//! time grows by one, and if the new instant is a period boundary of some task, or a
+//! A timed model's tick and release. The tick: time passes to the next instant at which
+//! something may happen (`jump.rs`), the clock's phase counts units modulo the common
+//! cycle of the periods, each running codel's elapsed time grows as much, and if the new instant is a period boundary of some task, or a
 //! tick of `tick_ms` at which ports age, its release is due. The release, a zero-time
 //! step of its own: at each task's boundary (`delay + k * period`) an idle task's paused
 //! activities are released and, if it then has work, its job is ready; a busy task's
@@ -18,7 +18,7 @@ use super::{Builder, TimedTaskRef};
 use crate::expr::{Assign, BinOp, Expr};
 use crate::genom::names::*;
 use crate::genom::timed::Timed;
-use crate::genom::tree::{and, assign, binary, boolean, chain, cond, int, member, not, or};
+use crate::genom::tree::{and, assign, binary, boolean, chain, cond, int, member, name, not, or};
 use crate::syntax::{ExprDef, Role};
 
 use super::super::{connector, port};
@@ -29,8 +29,26 @@ impl<'a, 'd> Builder<'a, 'd> {
         let mut ports = vec![port(CLOCK, "tick")];
         let mut action: Vec<Assign> = Vec::new();
         let phase = member(CLOCK, PHASE);
+        // ports age once per tick of `tick_ms`, every `tick_units` units
+        let on_tick = (t.tick_units > 1).then(|| {
+            binary(
+                BinOp::Eq,
+                binary(BinOp::Rem, phase.clone(), int(t.tick_units as i64)),
+                int(0),
+            )
+        });
+        let mut aging_ports = Vec::new();
+        let mut aging = Vec::new();
+        for mi in 0..self.layer.modules.len() {
+            self.age_ports(mi, on_tick.as_ref(), &mut aging_ports, &mut aging);
+        }
+        let jump = self.time_jump(t, &tasks, !aging.is_empty());
+        let units = match jump {
+            Some(_) => name("advance"),
+            None => int(1),
+        };
         if t.hyperperiod > 1 {
-            let next = binary(BinOp::Add, phase.clone(), int(1));
+            let next = binary(BinOp::Add, phase.clone(), units.clone());
             action.push(assign(
                 phase.clone(),
                 binary(BinOp::Rem, next, int(t.hyperperiod as i64)),
@@ -46,22 +64,9 @@ impl<'a, 'd> Builder<'a, 'd> {
                 cond(
                     binary(BinOp::Eq, codel, int(0)),
                     int(0),
-                    binary(BinOp::Add, elapsed, int(1)),
+                    binary(BinOp::Add, elapsed, units.clone()),
                 ),
             ));
-        }
-        // ports age once per tick of `tick_ms`, every `tick_units` units
-        let on_tick = (t.tick_units > 1).then(|| {
-            binary(
-                BinOp::Eq,
-                binary(BinOp::Rem, phase.clone(), int(t.tick_units as i64)),
-                int(0),
-            )
-        });
-        let mut aging_ports = Vec::new();
-        let mut aging = Vec::new();
-        for mi in 0..self.layer.modules.len() {
-            self.age_ports(mi, on_tick.as_ref(), &mut aging_ports, &mut aging);
         }
         // the phase, once incremented, is the new instant's number modulo the cycle
         let ages_now = (!aging.is_empty()).then(|| on_tick.clone().unwrap_or(boolean(true)));
@@ -75,7 +80,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             Some(g) => and(g, no_release),
             None => no_release,
         };
-        self.push_tick(ports, Some(guard), action);
+        self.push_tick(ports, Some(guard), action, jump);
         self.timed_release(&tasks, aging_ports, aging);
     }
 
