@@ -28,6 +28,8 @@ pub(crate) struct Timed {
     pub hyperperiod: u64,
     /// The number of cores of each CPU (one CPU when the model declares none).
     pub cores: Vec<u32>,
+    /// Whether each CPU dispatches by earliest deadline (else by fixed priority).
+    pub edf: Vec<bool>,
     /// Per module, per task.
     pub tasks: Vec<Vec<TimedTask>>,
     /// (best, worst) execution time by (module, service, codel state) indices; a codel
@@ -256,11 +258,20 @@ fn check_in(
     } else {
         cores.iter().map(|c| c.unwrap_or(1)).collect()
     };
+    let edf = if def.cpus.is_empty() {
+        vec![false]
+    } else {
+        def.cpus
+            .iter()
+            .map(|c| c.policy.as_ref().is_some_and(|p| p.value == Policy::Edf))
+            .collect()
+    };
     Some(Timed {
         unit_us,
         tick_units: tick_us / unit_us,
         hyperperiod,
         cores,
+        edf,
         tasks,
         codels,
     })
@@ -302,18 +313,6 @@ fn cpus(def: &SystemDef, time: Span, errors: &mut Errors) {
         );
     }
     for cpu in &def.cpus {
-        if let Some(p) = cpu.policy.as_ref().filter(|p| p.value == Policy::Edf) {
-            errors.push(
-                ModelError::new(
-                    format!(
-                        "CPU `{}`: EDF scheduling is not supported in a timed model yet",
-                        cpu.name
-                    ),
-                    p.span,
-                )
-                .with_help("use `policy: FixedPriority` (the default)"),
-            );
-        }
         match &cpu.preemption {
             Some(p) if p.value != Preemption::Job => errors.push(
                 ModelError::new(

@@ -162,11 +162,6 @@ fn bad_cores_and_scheduling() {
         "0",
     );
     assert_error(
-        &bad("policy: FixedPriority", "policy: Edf"),
-        "CPU `main`: EDF scheduling is not supported in a timed model yet",
-        "Edf",
-    );
-    assert_error(
         &bad("preemption: Job),\n", "preemption: Codel),\n"),
         "CPU `main`: `preemption: Codel` is not supported in a timed model yet",
         "Codel",

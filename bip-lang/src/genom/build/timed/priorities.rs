@@ -4,7 +4,7 @@
 //! finish now or later, and the tick's guard keeps it from passing its WCET); a task's
 //! codels start in GenoM3's order (its machine, then its activities in declaration
 //! order); and among the ready tasks competing for a core, the higher `priority` takes
-//! it. Steps of different tasks are not ordered otherwise: they run in parallel. Nor are
+//! it (on an EDF CPU, the dispatch's guard orders them: `task.rs`). Steps of different tasks are not ordered otherwise: they run in parallel. Nor are
 //! requests: a client's request may come at any moment, between any two steps of an
 //! instant (docs/model.md, "Why whole units are enough").
 
@@ -62,11 +62,14 @@ impl<'a, 'd> Builder<'a, 'd> {
         for high in &urgent {
             out.push(pr(TICK, high));
         }
-        // a free core goes to the most urgent ready task that may take it
+        // a free core goes to the ready task of highest priority that may take it (EDF
+        // CPUs order their ready tasks in the dispatch's guard, `task.rs`: the order
+        // changes with time)
         for a in &tasks {
             for b in &tasks {
                 let competes = a.times.cpu == b.times.cpu
                     && a.times.core == b.times.core
+                    && !t.edf.get(a.times.cpu as usize).copied().unwrap_or(false)
                     && a.times.priority < b.times.priority;
                 if competes {
                     let (am, an) = self.task_names(a);

@@ -95,14 +95,35 @@ impl<'a, 'd> Builder<'a, 'd> {
     }
 
     /// A ready job takes a free core, in zero time; the CPU's priorities choose among
-    /// ready jobs (`priorities.rs`).
+    /// ready jobs (`priorities.rs`), or under EDF the guard: no ready job competing for
+    /// the same cores has an earlier absolute deadline (release + D, in the same order as
+    /// D − elapsed now), ties in declaration order.
     fn dispatch(&mut self, t: &Timed, task: &TimedTaskRef, tasks: &[TimedTaskRef]) {
         let comp = self.task_comp(task);
-        let ready = self.stage_is(task, STAGE_READY);
-        let guard = match self.core_free(t, task, tasks) {
-            Some(free) => and(ready, free),
-            None => ready,
-        };
+        let mut guard = self.stage_is(task, STAGE_READY);
+        if let Some(free) = self.core_free(t, task, tasks) {
+            guard = and(guard, free);
+        }
+        if t.edf.get(task.times.cpu as usize).copied().unwrap_or(false) {
+            let mine = self.time_left(task);
+            let me = (task.module, task.task);
+            for other in tasks {
+                let them = (other.module, other.task);
+                if them == me
+                    || other.times.cpu != task.times.cpu
+                    || other.times.core != task.times.core
+                {
+                    continue;
+                }
+                let theirs = self.time_left(other);
+                let before = match them < me {
+                    true => binary(BinOp::Le, theirs, mine.clone()),
+                    false => binary(BinOp::Lt, theirs, mine.clone()),
+                };
+                let first = and(self.stage_is(other, STAGE_READY), before);
+                guard = and(guard, not(first));
+            }
+        }
         let action = vec![assign(member(&comp, STAGE), int(STAGE_RUNNING))];
         let m = &self.layer.modules[task.module];
         let (name, span) = (m.tasks[task.task].0, m.def.tasks[task.task].name.span);
@@ -117,6 +138,12 @@ impl<'a, 'd> Builder<'a, 'd> {
             Some(guard),
             action,
         ));
+    }
+
+    /// The units left until the deadline of the task's job.
+    fn time_left(&self, task: &TimedTaskRef) -> Expr {
+        let deadline = int(task.times.deadline as i64);
+        binary(BinOp::Sub, deadline, self.job_elapsed(task))
     }
 
     /// The job is done once none of its task's codels runs or may start: the task frees
