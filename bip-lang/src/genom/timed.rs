@@ -13,7 +13,7 @@ use crate::compile::budgets::{duration, show_us};
 use crate::compile::Constants;
 use crate::diag::{Errors, ModelError};
 use crate::source::{ConstExpr, Span};
-use crate::syntax::{Policy, Preemption, PropertyDef, SystemDef};
+use crate::syntax::{Policy, Preemption, SystemDef};
 
 /// The common cycle of a timed model's periods is at most this many time units.
 pub(crate) const MAX_HYPERPERIOD: u64 = 1 << 20;
@@ -169,9 +169,6 @@ fn check_in(
     };
     if !errors.is_empty() {
         return None;
-    }
-    if unit_us != tick_us {
-        within_in_ticks(def, unit_us, errors);
     }
     let units = |us: u64| us / unit_us;
     let mut tasks = Vec::new();
@@ -476,31 +473,6 @@ fn rate_monotonic(tasks: &mut [Vec<TimedTask>], given: &[bool]) {
         let n = on_cpu.len() as i64;
         for (rank, t) in on_cpu.iter_mut().enumerate() {
             t.priority = n - rank as i64;
-        }
-    }
-}
-
-/// A bound `within: K` counts ticks, and a timed model's tick is one time unit: refused
-/// while the unit is not the tick (real-time bounds are not supported yet).
-fn within_in_ticks(def: &SystemDef, unit_us: u64, errors: &mut Errors) {
-    for p in &def.properties {
-        let within = match p {
-            PropertyDef::Response { within, .. } => Some(within),
-            PropertyDef::Replies { within, .. } => within.as_ref(),
-            _ => None,
-        };
-        if let Some(k) = within {
-            errors.push(
-                ModelError::new(
-                    format!(
-                        "`within` in a timed model whose time unit ({}) is not its tick is not supported yet",
-                        show_us(unit_us)
-                    ),
-                    k.span,
-                )
-                .with_label("a bound counts ticks, and in a timed model a tick is one time unit")
-                .with_help("declare the tick as the unit, `time: Exact(unit: \"<tick_ms>ms\")`, if every duration is a whole number of ticks"),
-            );
         }
     }
 }

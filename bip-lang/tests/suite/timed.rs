@@ -234,22 +234,30 @@ fn time_in_a_model_without_genom_layer() {
     );
 }
 
+/// A bound counts ticks of `tick_ms`, whatever the unit: the core's bound is in units,
+/// which the time steps count.
 #[test]
-fn a_bound_in_ticks_where_the_unit_is_not_the_tick() {
+fn a_bound_in_ticks_counts_the_units_of_its_ticks() {
     let with_response = TIMED.replacen(
         "    ],\n)",
         "    ],\n    properties: [Replies(service: \"m0.Run\", within: 3)],\n)",
         1,
     );
     assert!(with_response.contains("within: 3"));
-    assert_error(
-        &with_response,
-        "`within` in a timed model whose time unit (500 µs) is not its tick is not supported yet",
-        "3",
-    );
+    let bound = |text: &str| {
+        let system = load_str("ts.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()));
+        let units = system.genom.as_ref().and_then(|g| g.time_unit_us);
+        let within = system.properties.iter().find_map(|p| match p.kind {
+            bip_model::PropertyKind::Response { within, .. } => within,
+            _ => None,
+        });
+        (units, within)
+    };
+    // a tick of 1 ms is two units of 500 µs
+    assert_eq!(bound(&with_response), (Some(500), Some(6)));
     // with the tick as the unit, a bound counts units that are ticks
     let whole = with_response
         .replacen(r#""500us""#, r#""1ms""#, 1)
         .replacen("time: Exact,", r#"time: Exact(unit: "1ms"),"#, 1);
-    load_str("whole.ron", &whole).unwrap_or_else(|e| panic!("{}", e.summary()));
+    assert_eq!(bound(&whole), (Some(1000), Some(3)));
 }

@@ -530,3 +530,31 @@ fn a_timed_model_decides_its_deadlines_by_exploration() {
         .iter()
         .all(|(_, figure, _)| figure.is_none()));
 }
+
+/// A bound in a timed model counts ticks of `tick_ms` in real time, whatever the unit:
+/// `robots/tests/timed.ron` (unit 500 µs) runs `Log` on task `log`, period 8 ms, on one of
+/// two cores it never waits for, in 1 to 2 ms. A request that comes just after the release
+/// at a boundary waits for the next one, 8 ms later: the reply comes at most 10 ms after
+/// the request, and 10 ms after it on the worst run.
+#[test]
+fn a_timed_models_reply_bound_is_in_real_time() {
+    let text = |k: u32| {
+        include_str!("../../../robots/tests/timed.ron").replacen(
+            "    ],\n)",
+            &format!("    ],\n    properties: [Replies(service: \"nav.Log\", within: {k})],\n)"),
+            1,
+        )
+    };
+    let verdict = |k: u32| {
+        let report = explored(&text(k));
+        let p = report
+            .properties
+            .iter()
+            .find(|p| p.name.contains("Log"))
+            .expect("the bound's result")
+            .clone();
+        (k, p.verdict.holds(), p.verdict.fails())
+    };
+    assert_eq!(verdict(10), (10, true, false));
+    assert_eq!(verdict(9), (9, false, true));
+}
