@@ -1,8 +1,11 @@
 //! `bip trace show FILE TRACE`: a trace (a counterexample, a witness, a recording) in the
 //! user's terms, as text and, with `--svg`, as a sequence chart; `bip verify --trace-dir`
 //! draws the same chart beside each trace it saves. `--timeline` (and `bip simulate
-//! --svg`) draws a run along its steps, one lane per activity.
+//! --svg`) draws a run along its steps, one lane per activity; `--schedule` draws a timed
+//! model's run along time, one lane per core and per task, which `bip verify
+//! --trace-dir` also draws beside each trace of a timed model.
 
+mod schedule;
 mod timeline;
 pub(crate) mod view;
 pub(crate) mod why;
@@ -39,6 +42,10 @@ pub struct ShowArgs {
     /// Also draw the trace as a timeline into FILE (SVG): one lane per activity.
     #[arg(long, value_name = "FILE")]
     pub timeline: Option<PathBuf>,
+    /// Also draw a timed model's trace as a schedule into FILE (SVG): time across, one
+    /// lane per core and per task.
+    #[arg(long, value_name = "FILE")]
+    pub schedule: Option<PathBuf>,
     /// Show the GenoM expansion's bookkeeping variables (`req`, `paused`, the clock) too.
     #[arg(long)]
     pub all_variables: bool,
@@ -88,7 +95,18 @@ fn run_show(args: &ShowArgs) -> u8 {
             return exit::ERROR;
         }
     }
+    if let Some(path) = &args.schedule {
+        if let Err(e) = write_schedule(&system, &trace, path) {
+            eprintln!("error: {e}");
+            return exit::ERROR;
+        }
+    }
     exit::OK
+}
+
+fn write_schedule(system: &System, trace: &Trace, svg: &Path) -> Result<(), String> {
+    let picture = bip_picture::timeline::to_svg(&schedule::schedule(system, trace)?);
+    std::fs::write(svg, picture).map_err(|e| format!("cannot write {}: {e}", svg.display()))
 }
 
 /// Draws the run saved in `trace` as a timeline into `svg` (`bip simulate --svg`).
@@ -115,7 +133,7 @@ pub(crate) fn chart_svg(system: &System, trace: &Trace) -> Result<String, String
 }
 
 /// Beside each trace `bip verify` saved (`NAME.trace.ron`), its sequence chart
-/// (`NAME.svg`).
+/// (`NAME.svg`) and, in a timed model, its schedule (`NAME.schedule.svg`).
 pub fn save_charts(
     system: &System,
     report: &bip_verifier::Report,
@@ -133,12 +151,21 @@ pub fn save_charts(
         let user = view::user_trace(system, trace, false)?;
         let svg = bip_picture::chart::to_svg(&chart(system, trace, &user));
         let file = path.to_string_lossy();
-        let beside = PathBuf::from(format!(
-            "{}.svg",
-            file.strip_suffix(".trace.ron").unwrap_or(&file)
-        ));
+        let stem = file.strip_suffix(".trace.ron").unwrap_or(&file);
+        let beside = PathBuf::from(format!("{stem}.svg"));
         std::fs::write(&beside, svg)
             .map_err(|e| format!("cannot write the chart {}: {e}", beside.display()))?;
+        if system
+            .genom
+            .as_ref()
+            .is_some_and(|g| g.time_unit_us.is_some())
+        {
+            write_schedule(
+                system,
+                trace,
+                &PathBuf::from(format!("{stem}.schedule.svg")),
+            )?;
+        }
     }
     Ok(())
 }

@@ -34,8 +34,13 @@ pub struct Lane {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Timeline {
     pub title: String,
-    /// How many steps the run has.
+    /// How many positions the horizontal axis has: steps of the run, or time units.
     pub steps: usize,
+    /// What a position is, for the axis' label: `steps`, `units of 500 µs`.
+    pub axis: String,
+    /// Events and ticks are instants between positions (time), not positions (steps):
+    /// drawn on the boundary before their position rather than in its middle.
+    pub instants: bool,
     pub lanes: Vec<Lane>,
     /// The steps that are ticks.
     pub ticks: Vec<usize>,
@@ -60,7 +65,10 @@ pub fn colour(kind: &str) -> &'static str {
         "stopping" => "#b07aa1",
         "request" => "#1d5e8c",
         "done" => "#2e8b57",
-        "error" => "#c0392b",
+        "error" | "miss" => "#c0392b",
+        "ready" => "#f2c14e",
+        "release" => "#1d5e8c",
+        "job" => "#76b7b2",
         "interrupted" => "#7b3294",
         _ => "#999999",
     }
@@ -74,8 +82,11 @@ pub fn to_svg(t: &Timeline) -> String {
         .map(|l| text_width(&l.name, FONT) * 1.1)
         .fold(60.0, f64::max);
     let left = MARGIN + names + 12.0;
-    let step = (SPAN / t.steps.max(1) as f64).min(STEP_MAX);
+    // a time unit may be wider than a step: a schedule is short in units
+    let widest = if t.instants { 4.0 * STEP_MAX } else { STEP_MAX };
+    let step = (SPAN / t.steps.max(1) as f64).min(widest);
     let x = |s: usize| left + step * s as f64;
+    let mark = if t.instants { 0.0 } else { step / 2.0 };
     let top = MARGIN + 30.0;
     let bottom = top + LANE * t.lanes.len() as f64;
     let width = (x(t.steps) + MARGIN)
@@ -101,14 +112,14 @@ pub fn to_svg(t: &Timeline) -> String {
     svg.text(MARGIN, MARGIN + 10.0, &t.title, Font::new(14.0).bold());
     for &k in &t.ticks {
         svg.open("tick", None);
-        let at = x(k) + step / 2.0;
+        let at = x(k) + mark;
         svg.line(at, top - 4.0, at, bottom, Paint::stroke("#dddddd"));
         svg.close();
     }
     svg.text(
         x(t.steps),
         top - 8.0,
-        &format!("{} steps", t.steps),
+        &format!("{} {}", t.steps, t.axis),
         Font::new(FONT - 1.0).colour("#888888").anchor(Anchor::End),
     );
     for (k, lane) in t.lanes.iter().enumerate() {
@@ -126,13 +137,10 @@ pub fn to_svg(t: &Timeline) -> String {
             let (x0, x1) = (x(s.from), x(s.to.max(s.from + 1)));
             svg.open(
                 &format!("segment {}", s.kind),
-                Some(&format!(
-                    "{}: {} (steps {}–{})",
-                    lane.name,
-                    s.label,
-                    s.from + 1,
-                    s.to
-                )),
+                Some(&match t.instants {
+                    true => format!("{}: {}, from {} to {}", lane.name, s.label, s.from, s.to),
+                    false => format!("{}: {} (steps {}–{})", lane.name, s.label, s.from + 1, s.to),
+                }),
             );
             svg.rect(
                 x0,
@@ -155,13 +163,16 @@ pub fn to_svg(t: &Timeline) -> String {
             svg.close();
         }
         for e in &lane.events {
-            let at = x(e.at) + step / 2.0;
+            let at = x(e.at) + mark;
             svg.open(
                 &format!("event {}", e.kind),
-                Some(&format!("step {}: {}", e.at + 1, e.label)),
+                Some(&match t.instants {
+                    true => format!("at {}: {}", e.at, e.label),
+                    false => format!("step {}: {}", e.at + 1, e.label),
+                }),
             );
             let c = colour(&e.kind);
-            let d = if e.kind == "request" {
+            let d = if e.kind == "request" || e.kind == "release" {
                 // an arrow down onto the lane
                 format!(
                     "M{},{} L{},{} L{},{} z",
@@ -213,6 +224,8 @@ mod tests {
         let t = Timeline {
             title: "run".into(),
             steps: 10,
+            axis: "steps".into(),
+            instants: false,
             lanes: vec![Lane {
                 name: "m.S".into(),
                 segments: vec![

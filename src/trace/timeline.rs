@@ -121,6 +121,8 @@ pub fn timeline(system: &System, trace: &Trace) -> Result<Timeline, String> {
             path.len()
         ),
         steps: path.len(),
+        axis: "steps".into(),
+        instants: false,
         lanes,
         ticks,
         legend,

@@ -389,3 +389,103 @@ fn a_time_step_shows_the_units_it_stands_for() {
         "{text}"
     );
 }
+
+/// The groups of an SVG picture whose class starts with `class`, by their tooltips.
+fn groups(path: &std::path::Path, class: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let doc = roxmltree::Document::parse(&text).expect("the picture parses as XML");
+    doc.descendants()
+        .filter(|n| n.has_tag_name("g") && n.attribute("class").is_some_and(|c| c == class))
+        .map(|n| {
+            n.children()
+                .find(|c| c.has_tag_name("title"))
+                .and_then(|t| t.text())
+                .unwrap_or_default()
+                .to_string()
+        })
+        .collect()
+}
+
+/// A timed model's miss drawn as a schedule beside its trace (docs/model.md, "Why whole
+/// units are enough", its example): in units of 4 ms, `hi` runs [1, 2) and [2, 3), `lo`
+/// takes the core at 3 before `hi`'s release there, `hi` waits [3, 4), runs [4, 5) and is
+/// past its deadline at 5.
+#[test]
+fn a_timed_miss_is_drawn_as_a_schedule() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let model = dir.path().join("between.ron");
+    std::fs::write(
+        &model,
+        r#"System(name: "between", tick_ms: 4, time: Exact,
+    cpus: [(name: "main", preemption: Job)],
+    modules: [(name: "m", tasks: [
+        (name: "hi", period: 1, priority: 2, codels: [
+            (state: "start", yields: ["pause::start"], wcet: "4ms")]),
+        (name: "lo", period: 2, priority: 1, codels: [
+            (state: "start", yields: ["pause::start"], wcet: "4ms")])])])"#,
+    )
+    .expect("the model is written");
+    let traces = dir.path().join("traces");
+    let out = bip(&[
+        "verify",
+        model.to_str().expect("utf-8"),
+        "-q",
+        "--trace-dir",
+        traces.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let picture = traces.join("m_hi_meets_its_4_ms_deadline.schedule.svg");
+    assert_eq!(groups(&picture, "lane"), ["core 0", "m.hi", "m.lo"]);
+    assert_eq!(
+        groups(&picture, "segment running"),
+        [
+            "m.hi: hi.start, from 1 to 2",
+            "m.hi: hi.start, from 2 to 3",
+            "m.hi: hi.start, from 4 to 5",
+            "m.lo: lo.start, from 3 to 4",
+        ]
+    );
+    assert_eq!(
+        groups(&picture, "segment job"),
+        [
+            "core 0: m.hi, from 1 to 2",
+            "core 0: m.hi, from 2 to 3",
+            "core 0: m.lo, from 3 to 4",
+            "core 0: m.hi, from 4 to 5",
+        ]
+    );
+    assert!(groups(&picture, "segment ready")
+        .contains(&"m.hi: waits for a core, from 3 to 4".to_string()));
+    assert_eq!(
+        groups(&picture, "event miss"),
+        ["at 5: m.hi misses its deadline"]
+    );
+    // `bip trace show --schedule` draws the same
+    let again = dir.path().join("again.svg");
+    let out = bip(&[
+        "trace",
+        "show",
+        model.to_str().expect("utf-8"),
+        traces
+            .join("m_hi_meets_its_4_ms_deadline.trace.ron")
+            .to_str()
+            .expect("utf-8"),
+        "--schedule",
+        again.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(&again).expect("drawn"),
+        std::fs::read_to_string(&picture).expect("drawn")
+    );
+}
