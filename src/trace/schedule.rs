@@ -21,6 +21,9 @@ struct Task {
     starts: Vec<(u32, String)>,
 }
 
+/// A segment being drawn: where it starts, in units, and its label.
+type Open = Option<(u64, String)>;
+
 /// A job's stage in the task atom (docs/genom.md, "Timed models").
 const READY: i64 = 1;
 const RUNNING: i64 = 2;
@@ -88,7 +91,7 @@ fn core_lane(lanes: &mut Vec<((u32, u32), Lane)>, cpus: &[String], cpu: u32, k: 
 }
 
 /// Closes the segment opened at `from` (if any) at `to`.
-fn close(lane: &mut Lane, from: &mut Option<(u64, String)>, to: u64, kind: &str) {
+fn close(lane: &mut Lane, from: &mut Open, to: u64, kind: &str) {
     if let Some((start, label)) = from.take() {
         lane.segments.push(Segment {
             from: start as usize,
@@ -129,9 +132,9 @@ pub fn schedule(system: &System, trace: &Trace) -> Result<Timeline, String> {
         .collect();
     let mut cores: Vec<((u32, u32), Lane)> = Vec::new();
     // per task: waiting since, running a codel since, holding which core since
-    let mut waiting: Vec<Option<(u64, String)>> = vec![None; tasks.len()];
-    let mut running: Vec<Option<(u64, String)>> = vec![None; tasks.len()];
-    let mut holding: Vec<Option<(usize, Option<(u64, String)>)>> = vec![None; tasks.len()];
+    let mut waiting: Vec<Open> = vec![None; tasks.len()];
+    let mut running: Vec<Open> = vec![None; tasks.len()];
+    let mut holding: Vec<Option<(usize, Open)>> = vec![None; tasks.len()];
     let stage = |s: &State, t: &Task| system.value(s, t.component, t.stage);
     let mut before = system.initial_state();
     let mut now = 0u64;
