@@ -120,7 +120,7 @@ const CRATES: &[Layers] = &[
             ("explicit", &["explore"]),
             ("symbolic", &["symbolic"]),
             ("schedulability", &["schedulability"]),
-            ("auto", &["auto"]),
+            ("auto", &["auto", "time_stops"]),
         ],
     },
     Layers {

@@ -24,6 +24,7 @@ mod properties;
 mod report;
 mod schedulability;
 mod symbolic;
+mod time_stops;
 mod visited;
 mod watch;
 
@@ -63,6 +64,7 @@ pub fn verify(
         Method::Symbolic => symbolic::verify(system, options, progress),
         Method::Auto => auto::verify(system, options, progress),
     }?;
+    time_stops::qualify(system, &mut report.properties);
     report
         .properties
         .extend(schedulability::as_property(system, options, method));

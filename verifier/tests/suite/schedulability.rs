@@ -558,3 +558,55 @@ fn a_timed_models_reply_bound_is_in_real_time() {
     assert_eq!(verdict(10), (10, true, false));
     assert_eq!(verdict(9), (9, false, true));
 }
+
+/// A timed model whose task can loop on codels that take no time: time stops in that
+/// loop, the job in it never ends, and its deadline never passes. `TimeProgress` fails
+/// with the loop, and the deadline and the worst response, true of the model only because
+/// time stops, are not reported as holding.
+#[test]
+fn a_timed_models_deadlines_are_not_said_to_hold_where_time_stops() {
+    let text = |spin: &str| {
+        format!(
+            r#"System(name: "loop", tick_ms: 1, time: Exact,
+    cpus: [(name: "main", preemption: Job)],
+    modules: [(name: "m", tasks: [
+        (name: "t", period: 2, codels: [
+            (state: "start", yields: ["spin"], wcet: "1ms"),
+            (state: "spin", yields: ["{spin}"])])])])"#
+        )
+    };
+    let verdicts = |text: &str| -> Vec<(String, &'static str)> {
+        explored(text)
+            .properties
+            .iter()
+            .map(|p| {
+                let v = if p.verdict.holds() {
+                    "holds"
+                } else if p.verdict.fails() {
+                    "fails"
+                } else {
+                    "inconclusive"
+                };
+                (p.name.clone(), v)
+            })
+            .filter(|(n, _)| n.starts_with("m.t") || n == "TimeProgress")
+            .collect()
+    };
+    assert_eq!(
+        verdicts(&text("spin")),
+        [
+            ("m.t meets its 2 ms deadline".to_string(), "inconclusive"),
+            ("TimeProgress".to_string(), "fails"),
+            ("m.t worst response".to_string(), "inconclusive"),
+        ]
+    );
+    // with a pause in the loop, time passes and both hold
+    assert_eq!(
+        verdicts(&text("pause::spin")),
+        [
+            ("m.t meets its 2 ms deadline".to_string(), "holds"),
+            ("TimeProgress".to_string(), "holds"),
+            ("m.t worst response".to_string(), "holds"),
+        ]
+    );
+}
