@@ -2,12 +2,15 @@
 //! the glue `bip-codegen` generates from the component's `.gen` file (docs/codegen.md,
 //! "C codels"). [`context`] is the `genom_context` a codel takes last (its `raise` and
 //! `raised`, and the call the engine is making, which the port handles reach through it);
-//! [`events`] reads the `genom_event` a codel returns as the engine's [`bip_engine::Next`].
+//! [`events`] reads the `genom_event` a codel returns as the engine's [`bip_engine::Next`];
+//! [`owned`] holds the data of pointers (unbounded sequences and strings) that engine-owned
+//! memory keeps.
 //! A controller depends on this crate and on bip-engine; its build script calls
 //! `bip_codegen::c::write_c_bindings`.
 
 pub mod context;
 pub mod events;
+pub mod owned;
 
 pub use context::{Context, ContextIface, GenomEvent, Raised};
 
@@ -16,3 +19,4 @@ pub use context::{Context, ContextIface, GenomEvent, Raised};
 /// names the very bip-engine this crate was built with.
 pub use bip_engine;
 pub use events::Events;
+pub use owned::{GenomString, Sequence};

@@ -154,7 +154,12 @@ const CRATES: &[Layers] = &[
     },
     Layers {
         src: "genom-c/src",
-        layers: &[("context", &["context"]), ("events", &["events"])],
+        layers: &[
+            // data that owns its buffers, which the others do not read
+            ("owned", &["owned"]),
+            ("context", &["context"]),
+            ("events", &["events"]),
+        ],
     },
     Layers {
         src: "src",

@@ -5,6 +5,7 @@ mod compiles;
 mod layout;
 mod missing;
 mod outcomes;
+mod owned;
 mod property;
 mod tools;
 

@@ -1,0 +1,82 @@
+/* The codels of camera.gen, as a GenoM3 component's codels are written: its unbounded
+ * sequences grown with genom_sequence_reserve, its strings malloc'ed and freed by the
+ * codel that replaces them, as GenoM3's C mapping leaves them to the user. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "accamera.h"
+#include "camera_c_types.h"
+
+/* `text` in a new buffer from malloc, in place of the string `*s` (freed). */
+static int
+replace(char **s, const char *text)
+{
+  char *fresh = malloc(strlen(text) + 1);
+  if (!fresh) return -1;
+  strcpy(fresh, text);
+  free(*s);
+  *s = fresh;
+  return 0;
+}
+
+/* An image of width x height bytes (pixel k is (k + shots) mod 256) and its label on
+ * port frame; the first row alone on port raw; the label kept in the ids. */
+genom_event
+camera_shoot(uint32_t width, uint32_t height, const char *label, camera_ids *ids,
+             const camera_frame *frame, const camera_raw *raw,
+             const genom_context self)
+{
+  cam_image *img = frame->data(self);
+  sequence_octet *row = raw->data(self);
+  uint32_t n = width * height, k;
+
+  if (genom_sequence_reserve(&img->pixels, n)) return genom_fatal;
+  for (k = 0; k < n; k++) img->pixels._buffer[k] = (uint8_t)(k + ids->shots);
+  img->pixels._length = n;
+  img->width = width;
+  img->height = height;
+  if (replace(&img->label, label)) return genom_fatal;
+
+  if (genom_sequence_reserve(row, width)) return genom_fatal;
+  memcpy(row->_buffer, img->pixels._buffer, width);
+  row->_length = width;
+
+  if (genom_sequence_reserve(&ids->labels, ids->labels._length + 1)) return genom_fatal;
+  ids->labels._buffer[ids->labels._length] = NULL;
+  if (replace(&ids->labels._buffer[ids->labels._length], label)) return genom_fatal;
+  ids->labels._length++;
+  ids->shots++;
+
+  if (frame->write(self) || raw->write(self)) return genom_fatal;
+  return camera_ether;
+}
+
+/* "label WxH sum S" of the image the request gives. */
+genom_event
+camera_describe(const cam_image *img, char **summary, const genom_context self)
+{
+  unsigned long sum = 0;
+  uint32_t k;
+  char text[128];
+  (void)self;
+  for (k = 0; k < img->pixels._length; k++) sum += img->pixels._buffer[k];
+  snprintf(text, sizeof(text), "%s %ux%u sum %lu", img->label ? img->label : "(none)",
+           (unsigned)img->width, (unsigned)img->height, sum);
+  if (replace(summary, text)) return genom_fatal;
+  return camera_ether;
+}
+
+/* The ids' title becomes `name`; the old one's bytes are the output. */
+genom_event
+camera_rename(const char *name, sequence_octet *old, char **title,
+              const genom_context self)
+{
+  uint32_t n = *title ? (uint32_t)strlen(*title) : 0;
+  (void)self;
+  if (genom_sequence_reserve(old, n)) return genom_fatal;
+  if (n) memcpy(old->_buffer, *title, n);
+  old->_length = n;
+  if (replace(title, name)) return genom_fatal;
+  return camera_ether;
+}
