@@ -80,3 +80,26 @@ camera_rename(const char *name, sequence_octet *old, char **title,
   if (replace(title, name)) return genom_fatal;
   return camera_ether;
 }
+
+/* The mean of the image's pixels, and whether it is dark. */
+genom_event
+camera_stats(const cam_image *img, double *mean, char **verdict,
+             const genom_context self)
+{
+  double sum = 0;
+  uint32_t k;
+  (void)self;
+  for (k = 0; k < img->pixels._length; k++) sum += img->pixels._buffer[k];
+  *mean = img->pixels._length ? sum / img->pixels._length : 0;
+  if (replace(verdict, *mean < 64 ? "dark" : "lit")) return genom_fatal;
+  return camera_ether;
+}
+
+/* How many images were shot. */
+genom_event
+camera_shots(uint32_t *n, const camera_ids *ids, const genom_context self)
+{
+  (void)self;
+  *n = ids->shots;
+  return camera_ether;
+}

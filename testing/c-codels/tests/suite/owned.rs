@@ -135,6 +135,37 @@ fn the_rust_side_gives_an_image_and_a_string_and_reads_the_outputs() {
 }
 
 #[test]
+fn outputs_of_several_parameters_and_of_a_number_are_given_back() {
+    let system = system();
+    let (mut engine, _) = engine(&system);
+    let img = cam::image {
+        width: 2,
+        height: 1,
+        pixels: Sequence::from_slice(&[10, 20]),
+        ..Default::default()
+    };
+    let ticket = engine.request("camera", "Stats", img).expect("a request");
+    let (outcome, output) = reply(&mut engine, ticket);
+    assert_eq!(outcome, Outcome::Ether);
+    // an out double and an out string: the glue's struct, accepted by its name
+    let output = output.expect("an output");
+    let stats = output.get::<camera::Stats_output>().expect("Stats_output");
+    assert_eq!(stats.mean, 15.0);
+    assert_eq!(stats.verdict.to_string_lossy(), "dark");
+
+    shoot(&mut engine, 2, 2, "one");
+    shoot(&mut engine, 2, 2, "two");
+    let ticket = engine.request("camera", "Shots", ()).expect("a request");
+    let (_, output) = reply(&mut engine, ticket);
+    // an out unsigned long: the model's Int, an i64
+    assert_eq!(output.expect("an output").get::<i64>(), Some(&2));
+    engine
+        .record()
+        .replay(&system)
+        .expect("a path of the model");
+}
+
+#[test]
 fn the_model_refuses_what_the_glue_cannot_carry() {
     let system = system();
     let (mut engine, _) = engine(&system);
