@@ -10,6 +10,7 @@
 
 pub mod context;
 pub mod events;
+pub mod long_double;
 pub mod owned;
 
 pub use context::{Context, ContextIface, GenomEvent, Raised};
@@ -19,4 +20,5 @@ pub use context::{Context, ContextIface, GenomEvent, Raised};
 /// names the very bip-engine this crate was built with.
 pub use bip_engine;
 pub use events::Events;
+pub use long_double::LongDouble;
 pub use owned::{GenomString, Sequence};

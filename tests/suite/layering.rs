@@ -155,8 +155,8 @@ const CRATES: &[Layers] = &[
     Layers {
         src: "genom-c/src",
         layers: &[
-            // data that owns its buffers, which the others do not read
-            ("owned", &["owned"]),
+            // C's data of no Rust type: owning its buffers, a long double
+            ("values", &["owned", "long_double"]),
             ("context", &["context"]),
             ("events", &["events"]),
         ],

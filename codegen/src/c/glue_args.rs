@@ -8,7 +8,7 @@
 use bip_lang::genom::syntax::DataTypeDef;
 
 use super::codels::{Param, Place};
-use super::ctype::{owns_buffer, Body, CType, CTypes};
+use super::ctype::{owns_buffer, Basic, Body, CType, CTypes};
 use super::mirror::Mirrors;
 use crate::names::ident;
 use crate::CodegenError;
@@ -101,6 +101,12 @@ pub fn arg(
             ty: "*const core::ffi::c_char".into(),
             expr: format!("{place}.0.cast_const()"),
         },
+        // C passes a long double by value as Rust can pass nothing
+        (true, None) if types.fin(t) == &CType::Basic(Basic::LongDouble) => {
+            return Err(CodegenError::CMapping(
+                "an `in long double` is passed by value, which Rust cannot do (x87's calling convention): make it `inout`, or a member of a struct".into(),
+            ))
+        }
         (true, None) if by_value(types, t) => Arg {
             ty: rust,
             expr: place,
@@ -144,6 +150,8 @@ pub fn port_handle_type(port: &str) -> String {
 pub enum Conv {
     Int,
     Float,
+    /// An `f64` as bip-genom-c's `LongDouble`.
+    LongDouble,
     Bool,
     /// A `Vec` of the element mirror.
     Vec(String),
@@ -165,6 +173,9 @@ impl Conv {
     ) -> Result<Conv, CodegenError> {
         Ok(match def {
             Some(DataTypeDef::Int(..)) => Conv::Int,
+            Some(DataTypeDef::Float) if types.fin(t) == &CType::Basic(Basic::LongDouble) => {
+                Conv::LongDouble
+            }
             Some(DataTypeDef::Float) => Conv::Float,
             Some(DataTypeDef::Bool) => Conv::Bool,
             Some(DataTypeDef::Rust(path)) if path.value == "String" => match types.fin(t) {
@@ -199,7 +210,7 @@ impl Conv {
     pub fn engine_type(&self, mirror: &str) -> String {
         match self {
             Conv::Int => "i64".into(),
-            Conv::Float => "f64".into(),
+            Conv::Float | Conv::LongDouble => "f64".into(),
             Conv::Bool => "bool".into(),
             Conv::Vec(e) => format!("Vec<{e}>"),
             Conv::String | Conv::BoundedString(_) => "String".into(),
@@ -212,6 +223,7 @@ impl Conv {
     pub fn to_c(&self, r: &str, mirror: &str) -> String {
         match self {
             Conv::Int | Conv::Float => format!("*{r} as {mirror}"),
+            Conv::LongDouble => format!("bip_genom_c::LongDouble::from_f64(*{r})"),
             Conv::Bool | Conv::Mirror { copy: true } => format!("*{r}"),
             Conv::Mirror { copy: false } => format!("{r}.clone()"),
             Conv::Vec(_) => format!("bip_genom_c::Sequence::from_slice({r})"),
@@ -225,6 +237,7 @@ impl Conv {
         match self {
             Conv::Int => format!("{v} as i64"),
             Conv::Float => format!("{v} as f64"),
+            Conv::LongDouble => format!("{v}.to_f64()"),
             Conv::Bool | Conv::Mirror { copy: true } => v.into(),
             Conv::Mirror { copy: false } => format!("{v}.clone()"),
             Conv::Vec(_) => format!("{v}.to_vec()"),

@@ -312,9 +312,13 @@ fn basic(b: Basic) -> Result<&'static str, CodegenError> {
         Basic::U64 => "u64",
         Basic::Float => "f32",
         Basic::Double => "f64",
+        // its bytes, where CTypes knows its layout (16 bytes on 16)
+        Basic::LongDouble if cfg!(any(target_arch = "x86_64", target_arch = "aarch64")) => {
+            "bip_genom_c::LongDouble"
+        }
         Basic::LongDouble => {
             return Err(CodegenError::CMapping(
-                "`long double` has no Rust type of its layout".into(),
+                "`long double` has no Rust type of its layout on this target (bip's mirror is x86_64's and aarch64's)".into(),
             ))
         }
     })

@@ -102,3 +102,37 @@ fn a_sequence_the_model_names_otherwise_than_its_mirror_is_refused_by_name() {
     let m = refused("struct p { double x; };\ncomponent h {\n  port out sequence<p> ps;\n  task t { period 10 ms; codel<start> h_s(port out ps) yield ether; };\n};\n");
     assert!(m.contains("port `ps`") && m.contains("Vec<p>"), "{m}");
 }
+
+#[test]
+fn a_long_double_is_its_bytes_but_not_by_value() {
+    let text = glue("component h {\n  ids { long double x; };\n  port out long double level;\n  task t { period 10 ms; codel<start> h_s(inout x, port out level) yield ether; };\n};\n").expect("generates");
+    assert!(text.contains("pub x: bip_genom_c::LongDouble,"), "{text}");
+    assert!(
+        text.contains("let v = (*(*call).state).port_level.to_f64();"),
+        "{text}"
+    );
+    let m = refused("component h {\n  ids { long double x; };\n  task t { period 10 ms; codel<start> h_s(in x) yield ether; };\n};\n");
+    assert!(
+        m.contains("codel `h_s`") && m.contains("`x`") && m.contains("in long double"),
+        "{m}"
+    );
+}
+
+#[test]
+fn a_component_the_glue_refuses_leaves_no_file_behind() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let gen = dir.path().join("g.gen");
+    std::fs::write(
+        &gen,
+        "component h {\n  ids { long double x; };\n  task t { period 10 ms; codel<start> h_s(in x) yield ether; };\n};\n",
+    )
+    .expect("writes");
+    let spec = bip_lang::read_gen_file(&gen, &[]).unwrap_or_else(|e| panic!("{e:?}"));
+    let out = dir.path().join("out");
+    let to = bip_codegen::c::CBindings {
+        include: out.join("include"),
+        rust: out.join("g_c.rs"),
+    };
+    assert!(bip_codegen::c::write_c_bindings_of(&[&spec], &to).is_err());
+    assert!(!out.exists(), "files were written before the refusal");
+}
