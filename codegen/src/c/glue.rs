@@ -160,6 +160,11 @@ fn component_glue(
         "    static genom_fatal: [core::ffi::c_char; {}];",
         "::genom::fatal".len() + 1
     );
+    let _ = writeln!(
+        out,
+        "    static genom_syserr_id: [core::ffi::c_char; {}];\n    static bip_genom_enotconn: i32;",
+        "::genom::syserr".len() + 1
+    );
 
     // each codel's arguments, and the ports they name
     let mut calls = Vec::new();
@@ -424,7 +429,7 @@ fn port_glue(
         PortDir::In => (
             "read",
             format!(
-                "    if let Some(v) = unsafe {{ (*(*call).ctx).port::<{e}>({c:?}, {name:?}) }} {{\n        let v = {v};\n        unsafe {{ (*(*call).state).{field} = v }};\n    }}",
+                "    // connected to nothing: GenoM3's failed read, an exception (syserr ENOTCONN)\n    if !unsafe {{ (*(*call).ctx).port_is_connected({c:?}, {name:?}) }} {{\n        let code = unsafe {{ bip_genom_enotconn }}.to_ne_bytes();\n        return unsafe {{ bip_genom_c::context::throw(this, core::ptr::addr_of!(genom_syserr_id).cast(), &code) }};\n    }}\n    if let Some(v) = unsafe {{ (*(*call).ctx).port::<{e}>({c:?}, {name:?}) }} {{\n        let v = {v};\n        unsafe {{ (*(*call).state).{field} = v }};\n    }}",
                 e = conv.engine_type(&rust),
                 v = conv.to_c("v", &rust)
             ),

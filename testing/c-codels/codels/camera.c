@@ -103,3 +103,19 @@ camera_shots(uint32_t *n, const camera_ids *ids, const genom_context self)
   *n = ids->shots;
   return camera_ether;
 }
+
+/* Reads port reference: a failed read is thrown as e_noref, with the errno of the
+ * system error the read raised (-1 for another exception). */
+genom_event
+camera_compare(const camera_reference *reference, const genom_context self)
+{
+  genom_event ex = NULL;
+  const genom_syserr_detail *d;
+  camera_e_noref_detail noref;
+  if (reference->read(self)) {
+    d = self->raised(&ex, self);
+    noref.code = ex == genom_syserr_id && d ? d->code : -1;
+    return camera_e_noref(&noref, self);
+  }
+  return camera_ether;
+}

@@ -8,6 +8,7 @@ mod outcomes;
 mod owned;
 mod property;
 mod tools;
+mod unconnected;
 
 use std::sync::{Arc, Mutex};
 

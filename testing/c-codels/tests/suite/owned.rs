@@ -7,13 +7,13 @@ use bip_c_codels::camera_glue::{cam, camera};
 use bip_engine::{Engine, Event, Outcome, Output, Policy, Reply, System, Ticket, Until};
 use bip_genom_c::{GenomString, Sequence};
 
-fn system() -> System {
+pub(crate) fn system() -> System {
     bip_engine::load_file(concat!(env!("CARGO_MANIFEST_DIR"), "/camera.ron")).expect("loads")
 }
 
-type Camera = std::sync::Arc<std::sync::Mutex<camera::Component>>;
+pub(crate) type Camera = std::sync::Arc<std::sync::Mutex<camera::Component>>;
 
-fn engine(system: &System) -> (Engine, Camera) {
+pub(crate) fn engine(system: &System) -> (Engine, Camera) {
     let builder = Engine::builder(system.clone())
         .policy(Policy::Seeded(1))
         .record(4096);
@@ -22,7 +22,7 @@ fn engine(system: &System) -> (Engine, Camera) {
 }
 
 /// Runs until `ticket`'s reply: its outcome and output.
-fn reply(engine: &mut Engine, ticket: Ticket) -> (Outcome, Option<Output>) {
+pub(crate) fn reply(engine: &mut Engine, ticket: Ticket) -> (Outcome, Option<Output>) {
     engine.run_until(Until::Ticks(10)).expect("runs");
     engine
         .events()
