@@ -4,13 +4,15 @@
 //! `raised`, and the call the engine is making, which the port handles reach through it);
 //! [`events`] reads the `genom_event` a codel returns as the engine's [`bip_engine::Next`];
 //! [`owned`] holds the data of pointers (unbounded sequences and strings) that engine-owned
-//! memory keeps.
+//! memory keeps, [`long_double`] C's `long double`, [`multiple`] a multiple port's
+//! instances by name.
 //! A controller depends on this crate and on bip-engine; its build script calls
 //! `bip_codegen::c::write_c_bindings`.
 
 pub mod context;
 pub mod events;
 pub mod long_double;
+pub mod multiple;
 pub mod owned;
 
 pub use context::{Context, ContextIface, GenomEvent, Raised};
@@ -21,4 +23,5 @@ pub use context::{Context, ContextIface, GenomEvent, Raised};
 pub use bip_engine;
 pub use events::Events;
 pub use long_double::LongDouble;
+pub use multiple::Instances;
 pub use owned::{GenomString, Sequence};

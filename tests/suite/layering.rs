@@ -155,8 +155,8 @@ const CRATES: &[Layers] = &[
     Layers {
         src: "genom-c/src",
         layers: &[
-            // C's data of no Rust type: owning its buffers, a long double
-            ("values", &["owned", "long_double"]),
+            // data of C that Rust lacks: owning its buffers, a long double, a multiple port
+            ("values", &["owned", "long_double", "multiple"]),
             ("context", &["context"]),
             ("events", &["events"]),
         ],

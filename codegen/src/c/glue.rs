@@ -11,14 +11,15 @@
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
-use bip_lang::gen3::ast::{Codel, Component, Dir, PortDir, Service, Spec};
+use bip_lang::gen3::ast::{Codel, Component, Dir, Service, Spec};
 use bip_lang::genom::syntax::ModuleDef;
 
 use super::codels::{all_codels, param, within, Param, Place};
 use super::ctype::{cname, holds_native, owns_buffer, Body, CTypes};
-use super::glue_args::{arg, port_field, port_handle, port_handle_type, service_field, Conv};
+use super::glue_args::{arg, port_field, service_field, Conv};
+use super::glue_ports::{port_glue, Port};
 use super::glue_service::service_data;
-use super::mirror::{defaulted, derives, maxima, Mirrors};
+use super::mirror::{derives, maxima, Mirrors};
 use crate::CodegenError;
 
 /// The mirrors of `spec`'s types and, in each component's module, the glue of its codels,
@@ -162,7 +163,7 @@ fn component_glue(
     );
     let _ = writeln!(
         out,
-        "    static genom_syserr_id: [core::ffi::c_char; {}];\n    static bip_genom_enotconn: i32;",
+        "    static genom_syserr_id: [core::ffi::c_char; {}];\n    static bip_genom_enotconn: i32;\n    static bip_genom_enoent: i32;\n    static bip_genom_einval: i32;",
         "::genom::syserr".len() + 1
     );
 
@@ -234,6 +235,9 @@ fn component_glue(
     // the memory of the C layout: ids, services' parameters and locals, ports' data
     let ids_type = super::ctype::CType::Named(ids.clone());
     let mut state = format!("    pub ids: {},\n", m.rust(types, &ids_type, 1)?);
+    // the fields' first values: all zero (valid for every mirror), but a multiple port's
+    // instances, which are none
+    let mut firsts = vec!["ids: unsafe { core::mem::zeroed() }".to_string()];
     let mut copy = !owns_buffer(types, &ids_type);
     let mut set = maxima(types, &ids_type, "v.ids", 0);
     let mut extra = String::new();
@@ -247,11 +251,10 @@ fn component_glue(
         let data_output = data.output;
         let data = data.ty;
         let _ = writeln!(state, "    pub {}: {data},", service_field(&s.name.value));
-        let _ = writeln!(
-            set,
-            "v.{} = {data}::default();",
+        firsts.push(format!(
+            "{}: {data}::default()",
             service_field(&s.name.value)
-        );
+        ));
         starts.push((s.name.value.clone(), format!("args_{}", s.name.value)));
         if data_output {
             outputs.push((s.name.value.clone(), format!("output_{}", s.name.value)));
@@ -263,20 +266,33 @@ fn component_glue(
         };
         let t = types.ctype(&p.ty, c)?;
         let place = format!("port `{name}`");
-        if p.multiple {
-            return Err(CodegenError::CMapping(format!(
-                "{place}: a multiple port's handles (by id) are not in bip's glue"
-            )));
-        }
         if holds_native(types, &t) {
             return Err(CodegenError::CMapping(format!(
                 "{place}: its data holds a native (a pointer to the codels' own object), which the engine can neither copy nor free"
             )));
         }
-        copy &= !owns_buffer(types, &t);
         let rust = m.rust(types, &t, 1)?;
-        let _ = writeln!(state, "    pub {}: {rust},", port_field(name));
-        set.push_str(&maxima(types, &t, &format!("v.{}", port_field(name)), 0));
+        if p.multiple {
+            // its instances, each of the type's default when opened
+            copy = false;
+            let _ = writeln!(
+                state,
+                "    pub {}: bip_genom_c::Instances<{rust}>,",
+                port_field(name)
+            );
+            firsts.push(format!(
+                "{}: bip_genom_c::Instances::default()",
+                port_field(name)
+            ));
+        } else {
+            copy &= !owns_buffer(types, &t);
+            let _ = writeln!(state, "    pub {}: {rust},", port_field(name));
+            firsts.push(format!(
+                "{}: unsafe {{ core::mem::zeroed() }}",
+                port_field(name)
+            ));
+            set.push_str(&maxima(types, &t, &format!("v.{}", port_field(name)), 0));
+        }
         let ty = module
             .ports
             .iter()
@@ -284,11 +300,26 @@ fn component_glue(
             .find(|q| &q.name.value == name)
             .and_then(|q| q.ty.as_ref());
         let conv = Conv::of(m, types, &t, ty).map_err(|e| within(e, &place))?;
-        port_glue(&mut extra, m, types, c, name, p.dir, &t, conv)?;
+        let port = Port {
+            component: c,
+            name,
+            dir: p.dir,
+            multiple: p.multiple,
+        };
+        port_glue(&mut extra, m, types, &port, &t, conv)?;
     }
     state.push_str("}\n");
     let mut state = format!("/// What the component's codels share with the engine, in the C layout: its ids, each\n/// service's parameters and locals, each port's data.\n{}pub struct State {{\n{state}", derives(copy));
-    state.push_str(&defaulted("State", &set));
+    let first = format!("State {{ {} }}", firsts.join(", "));
+    let body = if set.is_empty() {
+        first
+    } else {
+        format!("let mut v = {first};\n{set}        v")
+    };
+    let _ = write!(
+        state,
+        "// (derivable for some components, not for others: written alike for all)\n#[allow(clippy::derivable_impls)]\nimpl Default for State {{\n    // every field of a C mirror is valid all zero\n    fn default() -> Self {{\n        {body}\n    }}\n}}\n"
+    );
     state.push_str("// SAFETY: the pointers a state may hold (unbounded sequences' and strings' buffers,\n// natives) are the codels' own, which only this module object's codels touch, one call\n// at a time\nunsafe impl Send for State {}\n");
     out.push_str(&state);
     out.push_str(&extra);
@@ -391,84 +422,4 @@ pub fn bind_shared(
 "#
     );
     Ok(out)
-}
-
-/// A port's handle, as the codels see it (`{c}_p` of the header): a `#[repr(C)]` struct of
-/// the functions the glue gives, and its one static value. `data` points into the
-/// module object's state; an out port's `write` hands a copy to the engine's port, an in
-/// port's `read` copies the engine's data of the port it is connected to (none yet leaves
-/// it as it was).
-#[allow(clippy::too_many_arguments)]
-fn port_glue(
-    out: &mut String,
-    m: &mut Mirrors,
-    types: &CTypes,
-    c: &str,
-    name: &str,
-    dir: PortDir,
-    t: &super::ctype::CType,
-    conv: Conv,
-) -> Result<(), CodegenError> {
-    let rust = m.rust(types, t, 1)?;
-    let element = match types.fin(t) {
-        super::ctype::CType::String(Some(_)) => "core::ffi::c_char".to_string(),
-        super::ctype::CType::Array(e, _) => m.rust(types, e, 1)?,
-        _ => rust.clone(),
-    };
-    let handle = port_handle_type(name);
-    let field = port_field(name);
-    let (verb, body) = match dir {
-        PortDir::Out => (
-            "write",
-            format!(
-                "    unsafe {{\n        let v = {v};\n        (*(*call).ctx).write_port::<{e}>({name:?}, v);\n    }}",
-                e = conv.engine_type(&rust),
-                v = conv.to_engine(&format!("(*(*call).state).{field}"))
-            ),
-        ),
-        PortDir::In => (
-            "read",
-            format!(
-                "    // connected to nothing: GenoM3's failed read, an exception (syserr ENOTCONN)\n    if !unsafe {{ (*(*call).ctx).port_is_connected({c:?}, {name:?}) }} {{\n        let code = unsafe {{ bip_genom_enotconn }}.to_ne_bytes();\n        return unsafe {{ bip_genom_c::context::throw(this, core::ptr::addr_of!(genom_syserr_id).cast(), &code) }};\n    }}\n    if let Some(v) = unsafe {{ (*(*call).ctx).port::<{e}>({c:?}, {name:?}) }} {{\n        let v = {v};\n        unsafe {{ (*(*call).state).{field} = v }};\n    }}",
-                e = conv.engine_type(&rust),
-                v = conv.to_c("v", &rust)
-            ),
-        ),
-    };
-    let _ = write!(
-        out,
-        r#"
-/// Port `{name}`'s handle as its codels see it.
-#[repr(C)]
-pub struct {handle} {{
-    data: unsafe extern "C" fn(*const bip_genom_c::ContextIface) -> *mut {element},
-    {verb}: unsafe extern "C" fn(*const bip_genom_c::ContextIface) -> bip_genom_c::GenomEvent,
-}}
-
-#[allow(non_upper_case_globals)]
-static {h}: {handle} = {handle} {{
-    data: {field}_data,
-    {verb}: {field}_{verb},
-}};
-
-unsafe extern "C" fn {field}_data(this: *const bip_genom_c::ContextIface) -> *mut {element} {{
-    // SAFETY: the context a codel passes is its module object's, whose call is a `Call`
-    match unsafe {{ bip_genom_c::context::call::<Call>(this) }} {{
-        Some(call) => unsafe {{ core::ptr::addr_of_mut!((*(*call).state).{field}).cast() }},
-        None => core::ptr::null_mut(),
-    }}
-}}
-
-unsafe extern "C" fn {field}_{verb}(this: *const bip_genom_c::ContextIface) -> bip_genom_c::GenomEvent {{
-    // SAFETY: as in `{field}_data`
-    let Some(call) = (unsafe {{ bip_genom_c::context::call::<Call>(this) }}) else {{
-        return core::ptr::addr_of!(genom_fatal).cast();
-    }};
-{body}
-    core::ptr::null()
-}}
-"#,
-        h = port_handle(name),
-    );
-    Ok(())
 }

@@ -171,7 +171,11 @@ impl Conv {
         t: &CType,
         def: Option<&DataTypeDef>,
     ) -> Result<Conv, CodegenError> {
+        let mirror = m.rust(types, t, 1)?;
         Ok(match def {
+            // the engine's own type: nothing to convert
+            Some(DataTypeDef::Int(..)) if mirror == "i64" => Conv::Mirror { copy: true },
+            Some(DataTypeDef::Float) if mirror == "f64" => Conv::Mirror { copy: true },
             Some(DataTypeDef::Int(..)) => Conv::Int,
             Some(DataTypeDef::Float) if types.fin(t) == &CType::Basic(Basic::LongDouble) => {
                 Conv::LongDouble

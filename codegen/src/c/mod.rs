@@ -13,6 +13,7 @@ pub mod ctype;
 mod decls;
 mod glue;
 mod glue_args;
+mod glue_ports;
 mod glue_service;
 mod mirror;
 mod runtime;

@@ -88,8 +88,11 @@ genom_unkex(genom_unkex_detail *d, genom_context self)
 
 /* A system call failed with errno `code`. */
 const char genom_extern_weak genom_syserr_id[] = "::genom::syserr";
-/* The errno of an in port connected to nothing, for the engine's glue to give. */
+/* The errnos the engine's port handles give with genom_syserr: an in port connected to
+ * nothing, an instance of a multiple port that is not open, an instance name of NULL. */
 const int32_t genom_extern_weak bip_genom_enotconn = ENOTCONN;
+const int32_t genom_extern_weak bip_genom_enoent = ENOENT;
+const int32_t genom_extern_weak bip_genom_einval = EINVAL;
 typedef struct genom_syserr_detail {
   int32_t code;
 } genom_syserr_detail;

@@ -33,7 +33,7 @@ fn the_glue_declares_each_codel_and_numbers_them_as_the_engine_does() {
         // the bounded sequences get their bound
         "v.ids.xs._maximum = 4;",
         // the out port: its data handed to the engine as the model's Float
-        "let v = (*(*call).state).port_level as f64;",
+        "let v = (*(*call).state).port_level;",
         // the codels' own buffers in the ids: the module object still goes to a task thread
         "unsafe impl Send for State {}",
         "pub fn bind(",
@@ -51,12 +51,19 @@ fn refused(text: &str) -> String {
 }
 
 #[test]
-fn a_multiple_port_a_codel_takes_is_refused_by_name() {
-    let m = refused("component h {\n  port multiple out double ps;\n  task t { period 10 ms; codel<start> h_s(port out ps) yield ether; };\n};\n");
-    assert!(
-        m.contains("component `h`") && m.contains("port `ps`") && m.contains("multiple"),
-        "{m}"
-    );
+fn a_multiple_ports_handle_takes_the_instance_name_first() {
+    let text = glue("component h {\n  port multiple out double ps;\n  port multiple in double qs;\n  task t { period 10 ms; codel<start> h_s(port out ps, port in qs) yield ether; };\n};\n").expect("generates");
+    for want in [
+        "pub port_ps: bip_genom_c::Instances<f64>,",
+        "pub port_qs: bip_genom_c::Instances<f64>,",
+        // GenoM3's members, in its order: data, write, open, close; data, read
+        "data: unsafe extern \"C\" fn(*const core::ffi::c_char, *const bip_genom_c::ContextIface) -> *mut f64,\n    write: unsafe extern \"C\" fn(*const core::ffi::c_char, *const bip_genom_c::ContextIface) -> bip_genom_c::GenomEvent,\n    open: unsafe extern \"C\" fn(*const core::ffi::c_char, *const bip_genom_c::ContextIface) -> bip_genom_c::GenomEvent,\n    close:",
+        "    read: unsafe extern \"C\" fn(*const core::ffi::c_char,",
+        // the multiple in port's instance is opened by its first read
+        "*(*(*call).state).port_qs.open(id) = v",
+    ] {
+        assert!(text.contains(want), "no `{want}` in\n{text}");
+    }
 }
 
 const OWNED: &str = "component h {\n  ids { string label; };\n  port out sequence<octet> raw;\n  task t { period 10 ms; codel<start> h_s(port out raw) yield ether; };\n  activity A(in string name, in long k, out string said) { task t; codel<start> h_a(in name, in k, out said, inout label) yield ether; };\n};\n";

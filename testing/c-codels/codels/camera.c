@@ -1,6 +1,7 @@
 /* The codels of camera.gen, as a GenoM3 component's codels are written: its unbounded
  * sequences grown with genom_sequence_reserve, its strings malloc'ed and freed by the
  * codel that replaces them, as GenoM3's C mapping leaves them to the user. */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -118,4 +119,44 @@ camera_compare(const camera_reference *reference, const genom_context self)
     return camera_e_noref(&noref, self);
   }
   return camera_ether;
+}
+
+/* The errno of the system error the last call raised (0 for none, -1 for another). */
+static int32_t
+syserr(genom_event e, const genom_context self)
+{
+  genom_event ex = NULL;
+  const genom_syserr_detail *d;
+  if (!e) return 0;
+  d = self->raised(&ex, self);
+  return ex == genom_syserr_id && d ? d->code : -1;
+}
+
+/* Instances of the multiple ports: levels' left and right opened and written (right
+ * last closed), gains' instance a read from levels. Each step checked: the first that
+ * fails is thrown as e_noref with its number (and the errno it raised in the tens). */
+genom_event
+camera_publish(double level, const camera_levels *levels, const camera_gains *gains,
+               const genom_context self)
+{
+  camera_e_noref_detail step = { 0 };
+  double *left, *right, *a;
+  if (levels->open("left", self) || levels->open("right", self)) step.code = 1;
+  else if (!(left = levels->data("left", self)) || !(right = levels->data("right", self)))
+    step.code = 2;
+  else if (levels->data("nowhere", self)) step.code = 3;
+  else {
+    *left = level;
+    *right = -level;
+    if (levels->write("right", self) || levels->write("left", self)) step.code = 4;
+    else if (syserr(levels->write("nowhere", self), self) != ENOENT) step.code = 5;
+    else if (levels->close("right", self)) step.code = 6;
+    else if (syserr(levels->close("right", self), self) != ENOENT) step.code = 7;
+    else if (levels->data("right", self)) step.code = 8;
+    else if (gains->data("a", self)) step.code = 9;
+    else if (gains->read("a", self)) step.code = 10 + syserr(gains->read("a", self), self) * 100;
+    else if (!(a = gains->data("a", self)) || *a != level) step.code = 11;
+    else if (syserr(levels->write(NULL, self), self) != EINVAL) step.code = 12;
+  }
+  return step.code ? camera_e_noref(&step, self) : camera_ether;
 }

@@ -4,6 +4,7 @@
 mod compiles;
 mod layout;
 mod missing;
+mod multiple;
 mod outcomes;
 mod owned;
 mod property;
