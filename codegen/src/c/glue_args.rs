@@ -155,6 +155,8 @@ pub enum Conv {
     Bool,
     /// A `Vec` of the element mirror.
     Vec(String),
+    /// A `Vec` of the element mirror as a bounded sequence of this bound (cut there).
+    BoundedVec(String, u64),
     String,
     /// A `String` as a `char[N]`.
     BoundedString(u64),
@@ -190,10 +192,13 @@ impl Conv {
                 },
             },
             Some(DataTypeDef::Rust(path)) if path.value.starts_with("Vec<") => {
-                let CType::Sequence(e, None) = types.fin(t) else {
-                    return Ok(Conv::Mirror {
-                        copy: !owns_buffer(types, t),
-                    });
+                let (e, bound) = match types.fin(t) {
+                    CType::Sequence(e, bound) => (e, *bound),
+                    _ => {
+                        return Ok(Conv::Mirror {
+                            copy: !owns_buffer(types, t),
+                        })
+                    }
                 };
                 let element = m.rust(types, e, 1)?;
                 if path.value != format!("Vec<{element}>") {
@@ -202,7 +207,10 @@ impl Conv {
                         path.value
                     )));
                 }
-                Conv::Vec(element)
+                match bound {
+                    None => Conv::Vec(element),
+                    Some(n) => Conv::BoundedVec(element, n),
+                }
             }
             _ => Conv::Mirror {
                 copy: !owns_buffer(types, t),
@@ -216,7 +224,7 @@ impl Conv {
             Conv::Int => "i64".into(),
             Conv::Float | Conv::LongDouble => "f64".into(),
             Conv::Bool => "bool".into(),
-            Conv::Vec(e) => format!("Vec<{e}>"),
+            Conv::Vec(e) | Conv::BoundedVec(e, _) => format!("Vec<{e}>"),
             Conv::String | Conv::BoundedString(_) => "String".into(),
             Conv::Mirror { .. } => mirror.into(),
         }
@@ -231,6 +239,9 @@ impl Conv {
             Conv::Bool | Conv::Mirror { copy: true } => format!("*{r}"),
             Conv::Mirror { copy: false } => format!("{r}.clone()"),
             Conv::Vec(_) => format!("bip_genom_c::Sequence::from_slice({r})"),
+            Conv::BoundedVec(_, n) => format!(
+                "{{ let mut s = {mirror}::default(); let k = {r}.len().min({n}); s._buffer[..k].copy_from_slice(&{r}[..k]); s._length = k as u32; s }}"
+            ),
             Conv::String => format!("bip_genom_c::GenomString::new({r})"),
             Conv::BoundedString(n) => format!("bip_genom_c::owned::bounded_string::<{n}>({r})"),
         }
@@ -245,6 +256,9 @@ impl Conv {
             Conv::Bool | Conv::Mirror { copy: true } => v.into(),
             Conv::Mirror { copy: false } => format!("{v}.clone()"),
             Conv::Vec(_) => format!("{v}.to_vec()"),
+            Conv::BoundedVec(_, n) => {
+                format!("(&{v}._buffer)[..({v}._length as usize).min({n})].to_vec()")
+            }
             Conv::String => format!("{v}.to_string_lossy()"),
             Conv::BoundedString(_) => format!("bip_genom_c::owned::bounded_text(&{v})"),
         }

@@ -22,12 +22,14 @@ replace(char **s, const char *text)
 }
 
 /* An image of width x height bytes (pixel k is (k + shots) mod 256) and its label on
- * port frame; the first row alone on port raw; the label kept in the ids. */
+ * port frame; the first row alone on port raw, its histogram on port hist; the label
+ * kept in the ids. */
 genom_event
 camera_shoot(uint32_t width, uint32_t height, const char *label, camera_ids *ids,
              const camera_frame *frame, const camera_raw *raw,
-             const genom_context self)
+             const camera_hist *hist, const genom_context self)
 {
+  sequence4_long *h = hist->data(self);
   cam_image *img = frame->data(self);
   sequence_octet *row = raw->data(self);
   uint32_t n = width * height, k;
@@ -49,7 +51,12 @@ camera_shoot(uint32_t width, uint32_t height, const char *label, camera_ids *ids
   ids->labels._length++;
   ids->shots++;
 
-  if (frame->write(self) || raw->write(self)) return genom_fatal;
+  /* how many pixels in each quarter of 0..255 */
+  for (k = 0; k < h->_maximum; k++) h->_buffer[k] = 0;
+  for (k = 0; k < n; k++) h->_buffer[img->pixels._buffer[k] / 64]++;
+  h->_length = h->_maximum;
+
+  if (frame->write(self) || raw->write(self) || hist->write(self)) return genom_fatal;
   return camera_ether;
 }
 
@@ -159,4 +166,15 @@ camera_publish(double level, const camera_levels *levels, const camera_gains *ga
     else if (syserr(levels->write(NULL, self), self) != EINVAL) step.code = 12;
   }
   return step.code ? camera_e_noref(&step, self) : camera_ether;
+}
+
+/* The sum of the counts the request gives. */
+genom_event
+camera_total(const sequence4_long *counts, int32_t *total, const genom_context self)
+{
+  uint32_t k;
+  (void)self;
+  *total = 0;
+  for (k = 0; k < counts->_length; k++) *total += counts->_buffer[k];
+  return camera_ether;
 }

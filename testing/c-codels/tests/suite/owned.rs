@@ -70,6 +70,10 @@ fn a_codel_grows_a_sequence_and_writes_a_string_that_the_rust_side_reads_back() 
     assert_eq!(frame.label.to_string_lossy(), "second");
     let raw: &Vec<u8> = engine.inspect().port("camera", "raw").expect("written");
     assert_eq!(raw.len(), 40);
+    // a bounded sequence<long, 4> is the model's Vec<i32> too, of its length
+    let hist: &Vec<i32> = engine.inspect().port("camera", "hist").expect("written");
+    assert_eq!(hist.iter().sum::<i32>(), 1200);
+    assert_eq!(hist.len(), 4);
     // the ids' sequence of strings, grown by one at each shot
     let module = shared.lock().expect("unpoisoned");
     let labels: Vec<String> = module
@@ -152,6 +156,11 @@ fn outputs_of_several_parameters_and_of_a_number_are_given_back() {
     let stats = output.get::<camera::Stats_output>().expect("Stats_output");
     assert_eq!(stats.mean, 15.0);
     assert_eq!(stats.verdict.to_string_lossy(), "dark");
+
+    // a bounded sequence given as the model's Vec<i32>, cut at its bound
+    let ticket = engine.request("camera", "Total", vec![1i32, 2, 3, 4, 5]);
+    let (_, output) = reply(&mut engine, ticket.expect("a request"));
+    assert_eq!(output.expect("an output").get::<i64>(), Some(&10));
 
     shoot(&mut engine, 2, 2, "one");
     shoot(&mut engine, 2, 2, "two");
