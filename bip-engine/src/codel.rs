@@ -176,6 +176,13 @@ impl Ctx<'_> {
         self.set(field, i64::from(value));
     }
 
+    /// Whether [`Ctx::port`] has data to read at `module.port`: an out port, or an in
+    /// port the model connects to one (asked without a fault, for a reader that has its
+    /// own answer to an unconnected port, as GenoM3's port handles do).
+    pub fn port_is_connected(&self, module: &str, port: &str) -> bool {
+        self.ports.index(module, port).is_some()
+    }
+
     /// The data last written on port `port` of module `module`, if any. Reading a port
     /// the model does not have, or as another type than the port's (the model's type, or
     /// the type of the data it holds), is a fault (and gives `None`).

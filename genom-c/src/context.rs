@@ -146,3 +146,13 @@ pub unsafe fn call<T>(this: *const ContextIface) -> Option<*mut T> {
     let c = unsafe { data(this) }?.call.get();
     (!c.is_null()).then_some(c as *mut T)
 }
+
+/// Raises exception `ex` with `detail` on context `this`, as a codel's throwing function
+/// does, and returns `ex`: what the glue's port functions return when they fail.
+///
+/// # Safety
+/// `this` is null or a context given by [`Context::as_ptr`], still alive.
+pub unsafe fn throw(this: *const ContextIface, ex: GenomEvent, detail: &[u8]) -> GenomEvent {
+    // SAFETY: `raise` copies the detail's bytes and keeps no pointer to them
+    unsafe { raise(ex, detail.as_ptr() as *mut c_void, detail.len(), this) }
+}

@@ -1,7 +1,8 @@
 //! Writes counter.gen's C headers into `OUT_DIR/include` and its Rust glue into
 //! `OUT_DIR/counter_c.rs` in one call, as a controller's build script does, and compiles
 //! the component's codels (codels/*.c) against the headers with the `cc` crate: a codel
-//! of another prototype than the `.gen` file gives is a compile error here. Writes the
+//! of another prototype than the `.gen` file gives is a compile error here; the same for
+//! camera.gen (`OUT_DIR/camera_c.rs`, codels/camera.c). Writes the
 //! `#[repr(C)]` mirrors of mirrors.gen's types, for the layout tests.
 
 use std::path::PathBuf;
@@ -13,6 +14,9 @@ fn main() {
         Ok(written) => written.include,
         Err(e) => panic!("C bindings of counter.gen: {e}"),
     };
+    if let Err(e) = bip_codegen::c::write_c_bindings(dir.join("camera.gen"), &[], &out) {
+        panic!("C bindings of camera.gen: {e}");
+    }
     // the Rust mirrors of mirrors.gen's C types
     let spec = match bip_lang::read_gen_file(&dir.join("mirrors.gen"), &[]) {
         Ok(spec) => spec,
@@ -29,11 +33,13 @@ fn main() {
     if let Err(e) = std::fs::write(out.join("mirrors_types.rs"), text) {
         panic!("mirrors_types.rs: {e}");
     }
-    let codels = dir.join("codels/counter.c");
-    println!("cargo:rerun-if-changed={}", codels.display());
+    let codels = [dir.join("codels/counter.c"), dir.join("codels/camera.c")];
+    for c in &codels {
+        println!("cargo:rerun-if-changed={}", c.display());
+    }
     let mut build = cc::Build::new();
     build
-        .file(&codels)
+        .files(&codels)
         .include(&include)
         .std("c11")
         .warnings(true)

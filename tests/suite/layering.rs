@@ -154,7 +154,12 @@ const CRATES: &[Layers] = &[
     },
     Layers {
         src: "genom-c/src",
-        layers: &[("context", &["context"]), ("events", &["events"])],
+        layers: &[
+            // data of C that Rust lacks: owning its buffers, a long double, a multiple port
+            ("values", &["owned", "long_double", "multiple"]),
+            ("context", &["context"]),
+            ("events", &["events"]),
+        ],
     },
     Layers {
         src: "src",

@@ -29,7 +29,8 @@ pub fn add_ids(types: &mut CTypes, comp: &Component) -> Result<String, CodegenEr
     Ok(key)
 }
 
-fn within(e: CodegenError, place: &str) -> CodegenError {
+/// `e` said of `place` (`component `loco``, `port `pose``).
+pub(super) fn within(e: CodegenError, place: &str) -> CodegenError {
     match e {
         CodegenError::CMapping(m) => CodegenError::CMapping(format!("{place}: {m}")),
         other => other,

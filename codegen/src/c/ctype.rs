@@ -578,3 +578,43 @@ fn struct_layout(members: &[(String, Layout)]) -> (Layout, Vec<u64>) {
         offsets,
     )
 }
+
+/// Whether data of type `t` holds a pointer of a kind `leaf` picks, within it.
+fn holds(types: &CTypes, t: &CType, leaf: &impl Fn(&CType) -> bool) -> bool {
+    let t = types.fin(t);
+    if leaf(t) {
+        return true;
+    }
+    match t {
+        CType::Basic(_) | CType::String(_) => false,
+        CType::Array(e, _) | CType::Sequence(e, _) | CType::Optional(e) => holds(types, e, leaf),
+        CType::Named(k) => match types.decl(k).map(|d| &d.body) {
+            Some(Body::Struct(ms)) | Some(Body::Exception(ms)) => {
+                ms.iter().any(|(_, t)| holds(types, t, leaf))
+            }
+            Some(Body::Union { switch, members }) => {
+                holds(types, switch, leaf) || members.iter().any(|(_, t)| holds(types, t, leaf))
+            }
+            _ => false,
+        },
+    }
+}
+
+/// Whether data of type `t` owns a buffer: an unbounded string or sequence within it,
+/// which its mirror's clone copies and its drop frees (bip-genom-c's `GenomString` and
+/// `Sequence`).
+pub fn owns_buffer(types: &CTypes, t: &CType) -> bool {
+    holds(types, t, &|t| {
+        matches!(t, CType::String(None) | CType::Sequence(_, None))
+    })
+}
+
+/// Whether data of type `t` holds a native, a pointer to the codels' own object, which
+/// the engine can neither copy nor free: such data cannot be handed to the engine, which
+/// keeps it past the call.
+pub fn holds_native(types: &CTypes, t: &CType) -> bool {
+    holds(types, t, &|t| match t {
+        CType::Named(k) => matches!(types.decl(k).map(|d| &d.body), Some(Body::Native)),
+        _ => false,
+    })
+}

@@ -11,16 +11,15 @@
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
-use bip_lang::gen3::ast::{Codel, Component, Dir, PortDir, Service, Spec};
-use bip_lang::genom::syntax::{DataTypeDef, ModuleDef};
+use bip_lang::gen3::ast::{Codel, Component, Dir, Service, Spec};
+use bip_lang::genom::syntax::ModuleDef;
 
-use super::codels::{all_codels, param, Param, Place};
-use super::ctype::{cname, Body, CTypes};
-use super::glue_args::{
-    arg, holds_pointer, port_field, port_handle, port_handle_type, service_field, Conv,
-};
-use super::mirror::{defaulted, maxima, Mirrors};
-use crate::names::ident;
+use super::codels::{all_codels, param, within, Param, Place};
+use super::ctype::{cname, holds_native, owns_buffer, Body, CTypes};
+use super::glue_args::{arg, port_field, service_field, Conv};
+use super::glue_ports::{port_glue, Port};
+use super::glue_service::service_data;
+use super::mirror::{derives, maxima, Mirrors};
 use crate::CodegenError;
 
 /// The mirrors of `spec`'s types and, in each component's module, the glue of its codels,
@@ -51,13 +50,6 @@ pub fn rust_glue_of(specs: &[&Spec]) -> Result<String, CodegenError> {
         }
     }
     Ok(m.text())
-}
-
-fn within(e: CodegenError, place: &str) -> CodegenError {
-    match e {
-        CodegenError::CMapping(m) => CodegenError::CMapping(format!("{place}: {m}")),
-        other => other,
-    }
 }
 
 /// A codel of the module object, as the engine numbers them: tasks' machines first, then
@@ -169,6 +161,11 @@ fn component_glue(
         "    static genom_fatal: [core::ffi::c_char; {}];",
         "::genom::fatal".len() + 1
     );
+    let _ = writeln!(
+        out,
+        "    static genom_syserr_id: [core::ffi::c_char; {}];\n    static bip_genom_enotconn: i32;\n    static bip_genom_enoent: i32;\n    static bip_genom_einval: i32;",
+        "::genom::syserr".len() + 1
+    );
 
     // each codel's arguments, and the ports they name
     let mut calls = Vec::new();
@@ -237,7 +234,11 @@ fn component_glue(
 
     // the memory of the C layout: ids, services' parameters and locals, ports' data
     let ids_type = super::ctype::CType::Named(ids.clone());
-    let mut state = format!("/// What the component's codels share with the engine, in the C layout: its ids, each\n/// service's parameters and locals, each port's data.\n#[derive(Clone, Copy)]\npub struct State {{\n    pub ids: {},\n", m.rust(types, &ids_type, 1)?);
+    let mut state = format!("    pub ids: {},\n", m.rust(types, &ids_type, 1)?);
+    // the fields' first values: all zero (valid for every mirror), but a multiple port's
+    // instances, which are none
+    let mut firsts = vec!["ids: unsafe { core::mem::zeroed() }".to_string()];
+    let mut copy = !owns_buffer(types, &ids_type);
     let mut set = maxima(types, &ids_type, "v.ids", 0);
     let mut extra = String::new();
     let mut starts = Vec::new();
@@ -246,14 +247,16 @@ fn component_glue(
         let Some(data) = service_data(m, types, comp, s, def, &mut extra)? else {
             continue;
         };
+        copy &= data.copy;
+        let data_output = data.output;
+        let data = data.ty;
         let _ = writeln!(state, "    pub {}: {data},", service_field(&s.name.value));
-        let _ = writeln!(
-            set,
-            "v.{} = {data}::default();",
+        firsts.push(format!(
+            "{}: {data}::default()",
             service_field(&s.name.value)
-        );
+        ));
         starts.push((s.name.value.clone(), format!("args_{}", s.name.value)));
-        if s.params.iter().any(|p| p.dir != Dir::In && p.ty.is_some()) {
+        if data_output {
             outputs.push((s.name.value.clone(), format!("output_{}", s.name.value)));
         }
     }
@@ -263,29 +266,60 @@ fn component_glue(
         };
         let t = types.ctype(&p.ty, c)?;
         let place = format!("port `{name}`");
-        if p.multiple {
+        if holds_native(types, &t) {
             return Err(CodegenError::CMapping(format!(
-                "{place}: a multiple port's handles (by id) are not in bip's glue"
-            )));
-        }
-        if holds_pointer(types, &t) {
-            return Err(CodegenError::CMapping(format!(
-                "{place}: its data holds a pointer (an unbounded string or sequence, a native), which the engine cannot keep"
+                "{place}: its data holds a native (a pointer to the codels' own object), which the engine can neither copy nor free"
             )));
         }
         let rust = m.rust(types, &t, 1)?;
-        let _ = writeln!(state, "    pub {}: {rust},", port_field(name));
-        set.push_str(&maxima(types, &t, &format!("v.{}", port_field(name)), 0));
+        if p.multiple {
+            // its instances, each of the type's default when opened
+            copy = false;
+            let _ = writeln!(
+                state,
+                "    pub {}: bip_genom_c::Instances<{rust}>,",
+                port_field(name)
+            );
+            firsts.push(format!(
+                "{}: bip_genom_c::Instances::default()",
+                port_field(name)
+            ));
+        } else {
+            copy &= !owns_buffer(types, &t);
+            let _ = writeln!(state, "    pub {}: {rust},", port_field(name));
+            firsts.push(format!(
+                "{}: unsafe {{ core::mem::zeroed() }}",
+                port_field(name)
+            ));
+            set.push_str(&maxima(types, &t, &format!("v.{}", port_field(name)), 0));
+        }
         let ty = module
             .ports
             .iter()
             .chain(&module.in_ports)
             .find(|q| &q.name.value == name)
             .and_then(|q| q.ty.as_ref());
-        port_glue(&mut extra, m, types, c, name, p.dir, &t, Conv::of(ty))?;
+        let conv = Conv::of(m, types, &t, ty).map_err(|e| within(e, &place))?;
+        let port = Port {
+            component: c,
+            name,
+            dir: p.dir,
+            multiple: p.multiple,
+        };
+        port_glue(&mut extra, m, types, &port, &t, conv)?;
     }
     state.push_str("}\n");
-    state.push_str(&defaulted("State", &set));
+    let mut state = format!("/// What the component's codels share with the engine, in the C layout: its ids, each\n/// service's parameters and locals, each port's data.\n{}pub struct State {{\n{state}", derives(copy));
+    let first = format!("State {{ {} }}", firsts.join(", "));
+    let body = if set.is_empty() {
+        first
+    } else {
+        format!("let mut v = {first};\n{set}        v")
+    };
+    let _ = write!(
+        state,
+        "// (derivable for some components, not for others: written alike for all)\n#[allow(clippy::derivable_impls)]\nimpl Default for State {{\n    // every field of a C mirror is valid all zero\n    fn default() -> Self {{\n        {body}\n    }}\n}}\n"
+    );
     state.push_str("// SAFETY: the pointers a state may hold (unbounded sequences' and strings' buffers,\n// natives) are the codels' own, which only this module object's codels touch, one call\n// at a time\nunsafe impl Send for State {}\n");
     out.push_str(&state);
     out.push_str(&extra);
@@ -388,231 +422,4 @@ pub fn bind_shared(
 "#
     );
     Ok(out)
-}
-
-/// The storage of service `s`'s parameters and locals (`{S}_data`), and, where the model's
-/// type of its arguments or output is a record of several or no model type, the
-/// `{S}_input` or `{S}_output` struct the engine takes; the functions that fill the storage
-/// from a request (`args_{S}`, at its `start` codel) and give the output (`output_{S}`,
-/// after each codel). `None` for a service with neither.
-fn service_data(
-    m: &mut Mirrors,
-    types: &CTypes,
-    comp: &Component,
-    s: &Service,
-    def: &bip_lang::genom::syntax::ServiceDef,
-    out: &mut String,
-) -> Result<Option<String>, CodegenError> {
-    let c = &comp.name.value;
-    let name = &s.name.value;
-    let mut fields = Vec::new();
-    for p in &s.params {
-        if let Some(ty) = &p.ty {
-            fields.push((p.dir, p.name.value.clone(), types.ctype(ty, c)?));
-        }
-    }
-    for l in &s.locals {
-        fields.push((Dir::InOut, l.name.value.clone(), types.ctype(&l.ty, c)?));
-    }
-    if fields.is_empty() || s.codels.is_empty() {
-        return Ok(None);
-    }
-    let mut rust = Vec::new();
-    for (_, n, t) in &fields {
-        rust.push((ident(n), m.rust(types, t, 1)?));
-    }
-    let data = format!("{name}_data");
-    let _ = writeln!(
-        out,
-        "\n/// Service `{name}`'s parameters and locals, in the C layout.\n#[derive(Clone, Copy)]\npub struct {data} {{"
-    );
-    for (n, t) in &rust {
-        let _ = writeln!(out, "    pub {n}: {t},");
-    }
-    out.push_str("}\n");
-    let set: String = fields
-        .iter()
-        .zip(&rust)
-        .map(|((_, _, t), (n, _))| maxima(types, t, &format!("v.{n}"), 0))
-        .collect();
-    out.push_str(&defaulted(&data, &set));
-    let locals = s.locals.len();
-    let params = &fields[..fields.len() - locals];
-    let ins: Vec<usize> = (0..params.len())
-        .filter(|&k| params[k].0 != Dir::Out)
-        .collect();
-    let outs: Vec<usize> = (0..params.len())
-        .filter(|&k| params[k].0 != Dir::In)
-        .collect();
-    // the arguments, at the start codel
-    let _ = writeln!(
-        out,
-        "/// Fills `d` for a new request of `{name}` from its arguments; false if they are missing.\n#[allow(unused_variables)]\nfn args_{name}(d: &mut {data}, ctx: &bip_genom_c::bip_engine::Ctx<'_>) -> bool {{\n    *d = {data}::default();"
-    );
-    let payload = |what: &str,
-                   chosen: &[usize],
-                   def: Option<&DataTypeDef>,
-                   out: &mut String|
-     -> Result<Option<(Conv, String, bool)>, CodegenError> {
-        match (chosen, def) {
-            ([], _) | (_, None) => Ok(None),
-            ([k], Some(d)) if !matches!(d, DataTypeDef::Rust(_)) => {
-                Ok(Some((Conv::of(Some(d)), rust[*k].1.clone(), false)))
-            }
-            (many, _) => {
-                let t = format!("{name}_{what}");
-                let _ = writeln!(out, "/// Service `{name}`'s {what} as the engine takes it.\n#[derive(Clone, Copy)]\npub struct {t} {{");
-                for &k in many {
-                    if holds_pointer(types, &fields[k].2) {
-                        return Err(CodegenError::CMapping(format!("service `{name}`: parameter `{}` holds a pointer (an unbounded string or sequence, a native), which a request cannot carry", fields[k].1)));
-                    }
-                    let _ = writeln!(out, "    pub {}: {},", rust[k].0, rust[k].1);
-                }
-                out.push_str("}\n");
-                let set: String = many
-                    .iter()
-                    .map(|&k| maxima(types, &fields[k].2, &format!("v.{}", rust[k].0), 0))
-                    .collect();
-                out.push_str(&defaulted(&t, &set));
-                Ok(Some((Conv::Mirror, t, true)))
-            }
-        }
-    };
-    let mut body = String::new();
-    match payload("input", &ins, def.args.as_ref(), &mut body)? {
-        None => {}
-        // one parameter, of the model's type
-        Some((conv, t, false)) => {
-            let f = &rust[ins[0]];
-            let _ = writeln!(
-                out,
-                "    match ctx.args::<{}>() {{\n        Some(v) => d.{} = {},\n        None => return false,\n    }}",
-                conv.engine_type(&t),
-                f.0,
-                conv.to_c("*v", &f.1)
-            );
-        }
-        // the glue's struct of them
-        Some((_, t, true)) => {
-            let _ = writeln!(
-                out,
-                "    let Some(v) = ctx.args::<{t}>() else {{\n        return false;\n    }};"
-            );
-            for &k in &ins {
-                let _ = writeln!(out, "    d.{0} = v.{0};", rust[k].0);
-            }
-        }
-    }
-    // a bounded sequence's bound is the type's, whatever the request's copy says
-    for &k in &ins {
-        out.push_str(&maxima(types, &fields[k].2, &format!("d.{}", rust[k].0), 0));
-    }
-    out.push_str("    true\n}\n");
-    // the output, after each codel
-    if !outs.is_empty() {
-        let _ = writeln!(
-            out,
-            "/// Gives `{name}`'s output (its `out` and `inout` parameters) to the engine.\n#[allow(unused_variables)]\nfn output_{name}(d: &{data}, ctx: &mut bip_genom_c::bip_engine::Ctx<'_>) {{"
-        );
-        match payload("output", &outs, def.output.as_ref(), &mut body)? {
-            None => {}
-            Some((conv, _, false)) => {
-                let _ = writeln!(
-                    out,
-                    "    ctx.set_output({});",
-                    conv.to_engine(&format!("d.{}", rust[outs[0]].0))
-                );
-            }
-            Some((_, t, true)) => {
-                let fs: Vec<String> = outs
-                    .iter()
-                    .map(|&k| format!("{0}: d.{0}", rust[k].0))
-                    .collect();
-                let _ = writeln!(out, "    ctx.set_output({t} {{ {} }});", fs.join(", "));
-            }
-        }
-        out.push_str("}\n");
-    }
-    out.push_str(&body);
-    Ok(Some(data))
-}
-
-/// A port's handle, as the codels see it (`{c}_p` of the header): a `#[repr(C)]` struct of
-/// the functions the glue gives, and its one static value. `data` points into the
-/// module object's state; an out port's `write` hands a copy to the engine's port, an in
-/// port's `read` copies the engine's data of the port it is connected to (none yet leaves
-/// it as it was).
-#[allow(clippy::too_many_arguments)]
-fn port_glue(
-    out: &mut String,
-    m: &mut Mirrors,
-    types: &CTypes,
-    c: &str,
-    name: &str,
-    dir: PortDir,
-    t: &super::ctype::CType,
-    conv: Conv,
-) -> Result<(), CodegenError> {
-    let rust = m.rust(types, t, 1)?;
-    let element = match types.fin(t) {
-        super::ctype::CType::String(Some(_)) => "core::ffi::c_char".to_string(),
-        super::ctype::CType::Array(e, _) => m.rust(types, e, 1)?,
-        _ => rust.clone(),
-    };
-    let handle = port_handle_type(name);
-    let field = port_field(name);
-    let (verb, body) = match dir {
-        PortDir::Out => (
-            "write",
-            format!(
-                "    let v = unsafe {{ (*(*call).state).{field} }};\n    unsafe {{ (*(*call).ctx).write_port::<{e}>({name:?}, {v}) }};",
-                e = conv.engine_type(&rust),
-                v = conv.to_engine("v")
-            ),
-        ),
-        PortDir::In => (
-            "read",
-            format!(
-                "    if let Some(v) = unsafe {{ (*(*call).ctx).port::<{e}>({c:?}, {name:?}) }} {{\n        let v = {v};\n        unsafe {{ (*(*call).state).{field} = v }};\n    }}",
-                e = conv.engine_type(&rust),
-                v = conv.to_c("*v", &rust)
-            ),
-        ),
-    };
-    let _ = write!(
-        out,
-        r#"
-/// Port `{name}`'s handle as its codels see it.
-#[repr(C)]
-pub struct {handle} {{
-    data: unsafe extern "C" fn(*const bip_genom_c::ContextIface) -> *mut {element},
-    {verb}: unsafe extern "C" fn(*const bip_genom_c::ContextIface) -> bip_genom_c::GenomEvent,
-}}
-
-#[allow(non_upper_case_globals)]
-static {h}: {handle} = {handle} {{
-    data: {field}_data,
-    {verb}: {field}_{verb},
-}};
-
-unsafe extern "C" fn {field}_data(this: *const bip_genom_c::ContextIface) -> *mut {element} {{
-    // SAFETY: the context a codel passes is its module object's, whose call is a `Call`
-    match unsafe {{ bip_genom_c::context::call::<Call>(this) }} {{
-        Some(call) => unsafe {{ core::ptr::addr_of_mut!((*(*call).state).{field}).cast() }},
-        None => core::ptr::null_mut(),
-    }}
-}}
-
-unsafe extern "C" fn {field}_{verb}(this: *const bip_genom_c::ContextIface) -> bip_genom_c::GenomEvent {{
-    // SAFETY: as in `{field}_data`
-    let Some(call) = (unsafe {{ bip_genom_c::context::call::<Call>(this) }}) else {{
-        return core::ptr::addr_of!(genom_fatal).cast();
-    }};
-{body}
-    core::ptr::null()
-}}
-"#,
-        h = port_handle(name),
-    );
-    Ok(())
 }

@@ -8,7 +8,7 @@
 use bip_lang::genom::syntax::DataTypeDef;
 
 use super::codels::{Param, Place};
-use super::ctype::{Body, CType, CTypes};
+use super::ctype::{owns_buffer, Basic, Body, CType, CTypes};
 use super::mirror::Mirrors;
 use crate::names::ident;
 use crate::CodegenError;
@@ -96,6 +96,17 @@ pub fn arg(
             ty: format!("*mut {e}"),
             expr: format!("core::ptr::addr_of_mut!({place}).cast::<{e}>()"),
         },
+        // a `const char *` into the string the memory owns
+        (true, None) if matches!(types.fin(t), CType::String(None)) => Arg {
+            ty: "*const core::ffi::c_char".into(),
+            expr: format!("{place}.0.cast_const()"),
+        },
+        // C passes a long double by value as Rust can pass nothing
+        (true, None) if types.fin(t) == &CType::Basic(Basic::LongDouble) => {
+            return Err(CodegenError::CMapping(
+                "an `in long double` is passed by value, which Rust cannot do (x87's calling convention): make it `inout`, or a member of a struct".into(),
+            ))
+        }
         (true, None) if by_value(types, t) => Arg {
             ty: rust,
             expr: place,
@@ -129,74 +140,127 @@ pub fn port_handle_type(port: &str) -> String {
     format!("PortHandle_{port}")
 }
 
-/// Whether data of type `t` holds a pointer (an unbounded string or sequence, a
-/// native): such data cannot be handed to the engine, which keeps it past the call.
-pub fn holds_pointer(types: &CTypes, t: &CType) -> bool {
-    match types.fin(t) {
-        CType::Basic(_) | CType::String(Some(_)) => false,
-        CType::String(None) | CType::Sequence(_, None) => true,
-        CType::Array(e, _) | CType::Sequence(e, Some(_)) | CType::Optional(e) => {
-            holds_pointer(types, e)
-        }
-        CType::Named(k) => match types.decl(k).map(|d| &d.body) {
-            Some(Body::Struct(ms)) | Some(Body::Exception(ms)) => {
-                ms.iter().any(|(_, t)| holds_pointer(types, t))
-            }
-            Some(Body::Union { switch, members }) => {
-                holds_pointer(types, switch) || members.iter().any(|(_, t)| holds_pointer(types, t))
-            }
-            Some(Body::Typedef(t)) => holds_pointer(types, t),
-            Some(Body::Native) => true,
-            _ => false,
-        },
-    }
-}
-
 /// How the engine's value of a model data type becomes the C mirror and back: an `Int`
-/// is an `i64`, a `Float` an `f64`, a `Bool` a `bool`; a record (or a port the model
-/// leaves untyped) is the mirror itself, which the engine accepts by its name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// is an `i64`, a `Float` an `f64`, a `Bool` a `bool`; an anonymous unbounded sequence of
+/// a basic type a `Vec` of it, a string (bounded or not) a `String` (as the model names
+/// them);
+/// a record, a declared type (or a port the model leaves untyped) the mirror itself, which
+/// the engine accepts by its name, cloned where it owns a buffer.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Conv {
     Int,
     Float,
+    /// An `f64` as bip-genom-c's `LongDouble`.
+    LongDouble,
     Bool,
-    Mirror,
+    /// A `Vec` of the element mirror.
+    Vec(String),
+    /// A `Vec` of the element mirror as a bounded sequence of this bound (cut there).
+    BoundedVec(String, u64),
+    String,
+    /// A `String` as a `char[N]`.
+    BoundedString(u64),
+    Mirror {
+        copy: bool,
+    },
 }
 
 impl Conv {
-    pub fn of(ty: Option<&DataTypeDef>) -> Conv {
-        match ty {
+    /// The conversion of data of C type `t` to the model's type `def`.
+    pub fn of(
+        m: &mut Mirrors,
+        types: &CTypes,
+        t: &CType,
+        def: Option<&DataTypeDef>,
+    ) -> Result<Conv, CodegenError> {
+        let mirror = m.rust(types, t, 1)?;
+        Ok(match def {
+            // the engine's own type: nothing to convert
+            Some(DataTypeDef::Int(..)) if mirror == "i64" => Conv::Mirror { copy: true },
+            Some(DataTypeDef::Float) if mirror == "f64" => Conv::Mirror { copy: true },
             Some(DataTypeDef::Int(..)) => Conv::Int,
+            Some(DataTypeDef::Float) if types.fin(t) == &CType::Basic(Basic::LongDouble) => {
+                Conv::LongDouble
+            }
             Some(DataTypeDef::Float) => Conv::Float,
             Some(DataTypeDef::Bool) => Conv::Bool,
-            _ => Conv::Mirror,
-        }
+            Some(DataTypeDef::Rust(path)) if path.value == "String" => match types.fin(t) {
+                CType::String(None) => Conv::String,
+                CType::String(Some(n)) => Conv::BoundedString(*n),
+                _ => Conv::Mirror {
+                    copy: !owns_buffer(types, t),
+                },
+            },
+            Some(DataTypeDef::Rust(path)) if path.value.starts_with("Vec<") => {
+                let (e, bound) = match types.fin(t) {
+                    CType::Sequence(e, bound) => (e, *bound),
+                    _ => {
+                        return Ok(Conv::Mirror {
+                            copy: !owns_buffer(types, t),
+                        })
+                    }
+                };
+                let element = m.rust(types, e, 1)?;
+                if path.value != format!("Vec<{element}>") {
+                    return Err(CodegenError::CMapping(format!(
+                        "the model names its data `{}`, which the engine checks by name and the glue cannot give from its mirror's `{element}` elements; give the sequence a struct of its own",
+                        path.value
+                    )));
+                }
+                match bound {
+                    None => Conv::Vec(element),
+                    Some(n) => Conv::BoundedVec(element, n),
+                }
+            }
+            _ => Conv::Mirror {
+                copy: !owns_buffer(types, t),
+            },
+        })
     }
 
     /// The engine's Rust type for a value whose mirror is `mirror`.
-    pub fn engine_type(self, mirror: &str) -> String {
+    pub fn engine_type(&self, mirror: &str) -> String {
         match self {
             Conv::Int => "i64".into(),
-            Conv::Float => "f64".into(),
+            Conv::Float | Conv::LongDouble => "f64".into(),
             Conv::Bool => "bool".into(),
-            Conv::Mirror => mirror.into(),
+            Conv::Vec(e) | Conv::BoundedVec(e, _) => format!("Vec<{e}>"),
+            Conv::String | Conv::BoundedString(_) => "String".into(),
+            Conv::Mirror { .. } => mirror.into(),
         }
     }
 
-    /// `v` (an engine value) as the mirror `mirror`.
-    pub fn to_c(self, v: &str, mirror: &str) -> String {
+    /// The mirror `mirror` of the engine's value that `r` (an expression of a reference)
+    /// refers to.
+    pub fn to_c(&self, r: &str, mirror: &str) -> String {
         match self {
-            Conv::Int | Conv::Float => format!("{v} as {mirror}"),
-            Conv::Bool | Conv::Mirror => v.into(),
+            Conv::Int | Conv::Float => format!("*{r} as {mirror}"),
+            Conv::LongDouble => format!("bip_genom_c::LongDouble::from_f64(*{r})"),
+            Conv::Bool | Conv::Mirror { copy: true } => format!("*{r}"),
+            Conv::Mirror { copy: false } => format!("{r}.clone()"),
+            Conv::Vec(_) => format!("bip_genom_c::Sequence::from_slice({r})"),
+            Conv::BoundedVec(_, n) => format!(
+                "{{ let mut s = {mirror}::default(); let k = {r}.len().min({n}); s._buffer[..k].copy_from_slice(&{r}[..k]); s._length = k as u32; s }}"
+            ),
+            Conv::String => format!("bip_genom_c::GenomString::new({r})"),
+            Conv::BoundedString(n) => format!("bip_genom_c::owned::bounded_string::<{n}>({r})"),
         }
     }
 
-    /// `v` (a mirror's value) as the engine's.
-    pub fn to_engine(self, v: &str) -> String {
+    /// The engine's value of the mirror at place `v`, a copy that owns its buffers.
+    pub fn to_engine(&self, v: &str) -> String {
         match self {
             Conv::Int => format!("{v} as i64"),
             Conv::Float => format!("{v} as f64"),
-            Conv::Bool | Conv::Mirror => v.into(),
+            Conv::LongDouble => format!("{v}.to_f64()"),
+            Conv::Bool | Conv::Mirror { copy: true } => v.into(),
+            Conv::Mirror { copy: false } => format!("{v}.clone()"),
+            Conv::Vec(_) => format!("{v}.to_vec()"),
+            Conv::BoundedVec(_, n) => {
+                format!("(&{v}._buffer)[..({v}._length as usize).min({n})].to_vec()")
+            }
+            Conv::String => format!("{v}.to_string_lossy()"),
+            Conv::BoundedString(_) => format!("bip_genom_c::owned::bounded_text(&{v})"),
         }
     }
 }

@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 
 use bip_lang::gen3::ast::Spec;
 
-use super::ctype::{Basic, Body, CType, CTypes};
+use super::ctype::{owns_buffer, Basic, Body, CType, CTypes};
 use crate::names::ident;
 use crate::CodegenError;
 
@@ -78,7 +78,7 @@ fn split(key: &str) -> (Vec<String>, String) {
 }
 
 const ZEROED: &str =
-    "// every field of a C mirror is valid all zero (numbers, bool, pointers, Option<fn>)";
+    "// every field of a C mirror is valid all zero (numbers, bool, pointers, Option<fn>, empty\n// sequences and strings)";
 
 impl Mirrors {
     /// The mirrors of every type of the components of `specs`, each once: the files of
@@ -124,6 +124,11 @@ impl Mirrors {
                 .record(types, &format!("{name}_detail"), ms, depth)
                 .map_err(|e| prefix(e, key))?,
             Body::Union { switch, members } => {
+                if members.iter().any(|(_, t)| owns_buffer(types, t)) {
+                    return Err(CodegenError::CMapping(format!(
+                        "`{key}`: a union member holds an unbounded string or sequence, which no one could free (which member is live is the data's)"
+                    )));
+                }
                 let d = self.rust(types, switch, depth).map_err(|e| prefix(e, key))?;
                 let mut u = format!("#[repr(C)]\n#[derive(Clone, Copy)]\npub union {name}_u {{\n");
                 for (m, t) in members {
@@ -155,7 +160,8 @@ impl Mirrors {
         members: &[(String, CType)],
         depth: usize,
     ) -> Result<String, CodegenError> {
-        let mut s = format!("#[repr(C)]\n#[derive(Clone, Copy)]\npub struct {name} {{\n");
+        let copy = !members.iter().any(|(_, t)| owns_buffer(types, t));
+        let mut s = format!("#[repr(C)]\n{}pub struct {name} {{\n", derives(copy));
         for (m, t) in members {
             let t = self.rust(types, t, depth)?;
             let _ = writeln!(s, "    pub {}: {t},", ident(m));
@@ -179,7 +185,7 @@ impl Mirrors {
         let up = "super::".repeat(depth);
         Ok(match t {
             CType::Basic(b) => basic(*b)?.to_string(),
-            CType::String(None) => "*mut core::ffi::c_char".into(),
+            CType::String(None) => "bip_genom_c::GenomString".into(),
             CType::String(Some(n)) => format!("[core::ffi::c_char; {n}]"),
             CType::Array(e, n) => format!("[{}; {n}]", self.rust(types, e, depth)?),
             CType::Sequence(..) | CType::Optional(_) => {
@@ -208,10 +214,13 @@ impl Mirrors {
 
     fn template(&mut self, types: &CTypes, t: &CType, name: &str) -> Result<String, CodegenError> {
         let body = match t {
-            CType::Sequence(e, None) => format!(
-                "    pub _maximum: u32,\n    pub _length: u32,\n    pub _buffer: *mut {},\n    pub _release: Option<unsafe extern \"C\" fn(*mut core::ffi::c_void)>,\n",
+            // bip-genom-c's, which owns its buffer and its elements
+            CType::Sequence(e, None) => {
+                return Ok(format!(
+                "#[allow(non_camel_case_types)]\npub type {name} = bip_genom_c::Sequence<{}>;\n",
                 self.rust(types, e, 0)?
-            ),
+            ))
+            }
             CType::Sequence(e, Some(n)) => format!(
                 "    pub _maximum: u32,\n    pub _length: u32,\n    pub _buffer: [{}; {n}],\n",
                 self.rust(types, e, 0)?
@@ -223,9 +232,20 @@ impl Mirrors {
             _ => String::new(),
         };
         Ok(format!(
-            "#[allow(non_camel_case_types)]\n#[repr(C)]\n#[derive(Clone, Copy)]\npub struct {name} {{\n{body}}}\n{}",
+            "#[allow(non_camel_case_types)]\n#[repr(C)]\n{}pub struct {name} {{\n{body}}}\n{}",
+            derives(!owns_buffer(types, t)),
             defaulted(name, &maxima(types, t, "v", 0))
         ))
+    }
+}
+
+/// The derives of a mirror: `Copy` too unless it owns a buffer (an unbounded string or
+/// sequence within it, which its clone copies and its drop frees).
+pub(super) fn derives(copy: bool) -> &'static str {
+    if copy {
+        "#[derive(Clone, Copy)]\n"
+    } else {
+        "#[derive(Clone)]\n"
     }
 }
 
@@ -292,9 +312,13 @@ fn basic(b: Basic) -> Result<&'static str, CodegenError> {
         Basic::U64 => "u64",
         Basic::Float => "f32",
         Basic::Double => "f64",
+        // its bytes, where CTypes knows its layout (16 bytes on 16)
+        Basic::LongDouble if cfg!(any(target_arch = "x86_64", target_arch = "aarch64")) => {
+            "bip_genom_c::LongDouble"
+        }
         Basic::LongDouble => {
             return Err(CodegenError::CMapping(
-                "`long double` has no Rust type of its layout".into(),
+                "`long double` has no Rust type of its layout on this target (bip's mirror is x86_64's and aarch64's)".into(),
             ))
         }
     })

@@ -13,6 +13,8 @@ pub mod ctype;
 mod decls;
 mod glue;
 mod glue_args;
+mod glue_ports;
+mod glue_service;
 mod mirror;
 mod runtime;
 mod sanitize;
@@ -171,12 +173,19 @@ pub fn write_c_layer_bindings(
 /// Writes the headers of `specs` under `to.include` and their Rust glue to `to.rust`, each
 /// only if its text changed: what [`write_c_layer_bindings`] does once the files are read,
 /// and `bip codegen --c DIR` (the headers in `DIR`, the glue in `DIR/{stem}_c.rs`).
+///
+/// Every text is made before any file is written: a component the glue refuses leaves no
+/// headers behind.
 pub fn write_c_bindings_of(specs: &[&Spec], to: &CBindings) -> Result<(), CodegenError> {
+    let mut headers = Vec::new();
     for spec in specs {
-        write_c_headers_of(spec, &to.include)?;
+        headers.extend(c_headers(spec)?);
     }
     let text = rust_glue_of(specs)?;
     let text = crate::rustfmt(&text).unwrap_or(text);
+    for (rel, header) in headers {
+        write_if_changed(&to.include.join(rel), &header)?;
+    }
     write_if_changed(&to.rust, &text)
 }
 

@@ -81,3 +81,23 @@ counter_ids_layout(int what)
     default: return (size_t)-1;
   }
 }
+
+/* Test hooks of bip_genom_c::LongDouble, no part of the component: long doubles as gcc
+ * writes them, and whether one is exactly the double `want`. */
+void counter_test_long_doubles(long double out[4]);
+int counter_test_long_double_is(const long double *x, double want);
+
+void
+counter_test_long_doubles(long double out[4])
+{
+  out[0] = 1.0L;
+  out[1] = -2.5L;
+  out[2] = 1.0L / 3;
+  out[3] = 1e300L;
+}
+
+int
+counter_test_long_double_is(const long double *x, double want)
+{
+  return *x == (long double)want;
+}

@@ -2,8 +2,8 @@
 //! the engine"): `build.rs` writes counter.gen's C headers and its Rust glue
 //! (`bip_codegen::c::write_c_bindings`) and compiles codels/counter.c against the headers;
 //! [`counter`] is the generated glue (the mirrors of its types, its codels' declarations,
-//! `CODELS`, `bind`), on the runtime of `bip-genom-c`; [`hooks`] are the tests' handles on
-//! the C file.
+//! `CODELS`, `bind`), on the runtime of `bip-genom-c`; [`camera_glue`] is camera.gen's,
+//! whose data hold pointers; [`hooks`] are the tests' handles on the C file.
 
 pub mod hooks;
 
@@ -13,6 +13,12 @@ pub mod glue {
 }
 
 pub use glue::{counter, place};
+
+/// camera.gen's generated glue: data of pointers (an image's unbounded sequence of bytes,
+/// strings), owned by the module object's memory and the engine's copies.
+pub mod camera_glue {
+    include!(concat!(env!("OUT_DIR"), "/camera_c.rs"));
+}
 
 /// The mirrors of mirrors.gen's types: one of each kind, for the layout tests.
 pub mod mirrors_types {

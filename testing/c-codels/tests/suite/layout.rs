@@ -75,7 +75,28 @@ fn every_kind_of_mirror_has_the_c_layout() {
         tag,
         on,
         big,
+        wide,
         limits
     );
     layout!("mirrors::ids::limits_s", m::mirrors::ids_::limits_s, lo, hi);
+}
+
+extern "C" {
+    fn counter_test_long_doubles(out: *mut bip_genom_c::LongDouble);
+    fn counter_test_long_double_is(x: *const bip_genom_c::LongDouble, want: f64) -> i32;
+}
+
+#[test]
+fn a_long_double_is_read_and_written_as_gcc_lays_it() {
+    let mut got = [bip_genom_c::LongDouble::default(); 4];
+    // SAFETY: the C function writes four long doubles, the mirror's layout (checked above)
+    unsafe { counter_test_long_doubles(got.as_mut_ptr()) };
+    let want = [1.0, -2.5, 1.0 / 3.0, 1e300];
+    let read: Vec<f64> = got.iter().map(bip_genom_c::LongDouble::to_f64).collect();
+    assert_eq!(read, want);
+    for x in want.into_iter().chain([0.0, -5e-324, f64::MAX]) {
+        let ld = bip_genom_c::LongDouble::from_f64(x);
+        // SAFETY: a pointer to one long double
+        assert_eq!(unsafe { counter_test_long_double_is(&ld, x) }, 1, "{x}");
+    }
 }

@@ -4,9 +4,12 @@
 mod compiles;
 mod layout;
 mod missing;
+mod multiple;
 mod outcomes;
+mod owned;
 mod property;
 mod tools;
+mod unconnected;
 
 use std::sync::{Arc, Mutex};
 
