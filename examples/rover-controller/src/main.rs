@@ -57,7 +57,9 @@ fn request(
         |r| println!("{r}"),
     )?;
     match replies.last() {
-        Some(bip_zenoh::ServiceReply::Error { .. }) => Err("the request was not made".into()),
+        Some(
+            bip_zenoh::ServiceReply::Error { .. } | bip_zenoh::ServiceReply::Unavailable { .. },
+        ) => Err("the request was not made".into()),
         _ => Ok(()),
     }
 }
