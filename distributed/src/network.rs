@@ -43,6 +43,22 @@ impl Network {
         }
     }
 
+    /// A launched module process's network, from the environment its launcher set
+    /// ([`crate::ENV_CONNECT`], [`crate::ENV_PREFIX`]); `None` when not launched so.
+    pub fn from_env() -> Option<Network> {
+        let connect = std::env::var(crate::ENV_CONNECT).ok()?;
+        let prefix = std::env::var(crate::ENV_PREFIX).ok()?;
+        Some(Network {
+            listen: Vec::new(),
+            connect: connect
+                .split(',')
+                .filter(|e| !e.is_empty())
+                .map(String::from)
+                .collect(),
+            prefix,
+        })
+    }
+
     /// Opens the zenoh session.
     pub fn open(&self) -> Result<zenoh::Session, NetworkError> {
         if zenoh::key_expr::KeyExpr::try_from(self.prefix.as_str()).is_err()

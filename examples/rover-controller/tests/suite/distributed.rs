@@ -217,33 +217,50 @@ fn a_client_in_another_process_sends_typed_requests_and_reads_their_replies() {
         "{out}"
     );
 
-    // malformed requests are refused with a message, and the engine goes on
+    // malformed requests are refused with a message: by the client, against the model,
+    // before anything is sent
     let (ok, out) = client(&network, "rflex.TrackSpeed", Some("\"fast\""), 5_000);
     assert!(
-        !ok && out
-            .contains("error: the arguments of rflex.TrackSpeed (\"fast\") are not of its type"),
+        !ok && out.contains(
+            "error: the arguments of rflex.TrackSpeed (`\"fast\"`) are not of its type Float"
+        ),
         "{out}"
     );
     let (ok, out) = client(&network, "rflex.Fly", None, 5_000);
     assert!(
-        !ok && out.contains("names no service of the layer"),
+        !ok && out.contains("module `rflex` has no service `Fly`"),
         "{out}"
     );
     let (ok, out) = client(&network, "rflex.Init", Some("3"), 5_000);
     assert!(!ok && out.contains("takes no arguments"), "{out}");
-    let raw = request_bytes(
-        &session,
-        &network.prefix,
-        "rflex",
-        "Init",
-        b"{not json".to_vec(),
-        Duration::from_secs(5),
-        |_| {},
-    )
-    .expect("an answer");
-    assert!(
-        matches!(raw.as_slice(), [ServiceReply::Error { message }] if message.contains("is not `{\"args\": ...}` in JSON")),
-        "{raw:?}"
+    // and by the engine's server, for clients that do not check (another language's)
+    let raw = |service: &str, payload: &[u8]| {
+        request_bytes(
+            &session,
+            &network.prefix,
+            "rflex",
+            service,
+            payload.to_vec(),
+            Duration::from_secs(5),
+            |_| {},
+        )
+        .expect("an answer")
+    };
+    let refused = |replies: Vec<ServiceReply>, why: &str| {
+        assert!(
+            matches!(replies.as_slice(), [ServiceReply::Error { message }] if message.contains(why)),
+            "{replies:?}"
+        )
+    };
+    refused(
+        raw("TrackSpeed", br#"{"args": "fast"}"#),
+        "the arguments of rflex.TrackSpeed (\"fast\") are not of its type",
+    );
+    refused(raw("Fly", b""), "names no service of the layer");
+    refused(raw("Init", br#"{"args": 3}"#), "takes no arguments");
+    refused(
+        raw("Init", b"{not json"),
+        "is not `{\"args\": ...}` in JSON",
     );
     let (ok, out) = client(&network, "antenna.Communicate", Some("3"), 1_500);
     assert!(ok && out.contains("accepted"), "{out}");
