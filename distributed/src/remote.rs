@@ -117,12 +117,31 @@ impl RemoteModules {
         codels: &[CodelSignature],
         timeout: Duration,
     ) -> Result<(), RemoteError> {
-        let key = keys::run(&self.prefix, module);
-        let start = Instant::now();
-        let want: Vec<String> = codels
+        let want = codels
             .iter()
             .map(|c| format!("{}.{}", c.service, c.codel))
             .collect();
+        self.wait_for_codels(module, want, timeout)
+    }
+
+    /// [`RemoteModules::wait_for`], the codels numbered as the model declares them.
+    pub fn wait_for_model(&self, module: &str, timeout: Duration) -> Result<(), RemoteError> {
+        let want = self
+            .model_codels(module)?
+            .iter()
+            .map(|c| c.name.clone())
+            .collect();
+        self.wait_for_codels(module, want, timeout)
+    }
+
+    fn wait_for_codels(
+        &self,
+        module: &str,
+        want: Vec<String>,
+        timeout: Duration,
+    ) -> Result<(), RemoteError> {
+        let key = keys::run(&self.prefix, module);
+        let start = Instant::now();
         while start.elapsed() < timeout {
             let left = timeout.saturating_sub(start.elapsed());
             let answer = query(
@@ -160,21 +179,44 @@ impl RemoteModules {
         codels: &'static [CodelSignature],
         types: &'static ModuleTypes,
     ) -> Result<EngineBuilder, RemoteError> {
+        let mut proxy = self.proxy(module)?;
+        Ok(builder
+            .typed_as(module, types)
+            .module(module, codels, move |k, ctx| proxy.run(k, ctx)))
+    }
+
+    /// Binds module `module` of `builder` to its process without generated bindings:
+    /// each of its codels, as the model declares them (`bip run`, a layer whose module
+    /// processes are programs of their own).
+    pub fn bind_model(
+        &self,
+        builder: EngineBuilder,
+        module: &str,
+    ) -> Result<EngineBuilder, RemoteError> {
+        let proxy = Arc::new(std::sync::Mutex::new(self.proxy(module)?));
+        let codels = self.model_codels(module)?;
+        let mut builder = builder;
+        for (k, c) in codels.into_iter().enumerate() {
+            let proxy = Arc::clone(&proxy);
+            let state = c.name.rsplit_once('.').map_or("", |x| x.1).to_string();
+            // the engine calls one codel of a module at a time: the lock is never
+            // contended
+            builder = builder.codel((module, &c.service, &state), move |ctx| {
+                proxy.lock().unwrap_or_else(|p| p.into_inner()).run(k, ctx)
+            });
+        }
+        Ok(builder)
+    }
+
+    /// The codels of `module` as the model declares them (services, then their codels).
+    fn model_codels(&self, module: &str) -> Result<Vec<RemoteCodel>, RemoteError> {
         let map = self
             .system
             .genom
             .as_ref()
             .and_then(|g| g.module(module))
             .ok_or_else(|| RemoteError::NoSuchModule(module.into()))?;
-        let fields: Vec<String> = map.ids.iter().map(|f| f.name.clone()).collect();
-        self.presence.expect(
-            module,
-            codels
-                .iter()
-                .map(|c| format!("{}.{}", c.service, c.codel))
-                .collect(),
-        );
-        let remote: Vec<RemoteCodel> = map
+        Ok(map
             .services
             .iter()
             .flat_map(|s| {
@@ -184,23 +226,34 @@ impl RemoteModules {
                     deadline: self.options.deadline + Duration::from_micros(c.wcet_us.unwrap_or(0)),
                 })
             })
-            .collect();
-        let mut proxy = Proxy {
+            .collect())
+    }
+
+    /// The proxy of module `module`'s process.
+    fn proxy(&self, module: &str) -> Result<Proxy, RemoteError> {
+        let map = self
+            .system
+            .genom
+            .as_ref()
+            .and_then(|g| g.module(module))
+            .ok_or_else(|| RemoteError::NoSuchModule(module.into()))?;
+        let fields: Vec<String> = map.ids.iter().map(|f| f.name.clone()).collect();
+        let codels = self.model_codels(module)?;
+        self.presence
+            .expect(module, codels.iter().map(|c| c.name.clone()).collect());
+        Ok(Proxy {
             session: self.session.clone(),
             key: keys::run(&self.prefix, module),
             module: module.to_string(),
             types: Arc::clone(&self.types),
             fields,
-            codels: remote,
+            codels,
             seen: HashMap::new(),
             clock: self.options.virtual_clock.clone(),
             presence: self.presence.clone(),
             epoch: None,
             _watch: Arc::clone(&self.watch),
-        };
-        Ok(builder
-            .typed_as(module, types)
-            .module(module, codels, move |k, ctx| proxy.run(k, ctx)))
+        })
     }
 }
 
