@@ -26,7 +26,7 @@ fn module_program() -> PathBuf {
 
 #[test]
 fn a_layer_runs_from_its_deployment_file_and_answers_typed_requests() {
-    let system = bip_engine::load_file(&model()).expect("the model");
+    let system = bip_engine::load_file(model()).expect("the model");
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|l| l.local_addr())
         .expect("a free port")
