@@ -7,14 +7,7 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 
 use crate::deploy::{DeployError, Deployment, Process};
-
-/// The environment variable that names a launched module process's process (its name in
-/// the deployment file).
-pub const ENV_PROCESS: &str = "BIP_LAYER_PROCESS";
-/// The endpoints it connects to, separated by commas.
-pub const ENV_CONNECT: &str = "BIP_LAYER_CONNECT";
-/// The layer's key prefix.
-pub const ENV_PREFIX: &str = "BIP_LAYER_PREFIX";
+use crate::network::{ENV_CONNECT, ENV_PREFIX, ENV_PROCESS};
 
 /// The module processes started, killed (and reaped) when dropped.
 pub struct Launched(Vec<Child>);

@@ -66,13 +66,15 @@ pub fn run_layer(
         deadline: options.deadline,
         virtual_clock: None,
     };
+    types().check(system).map_err(RemoteError::Types)?;
+    // started first, so that they are killed last, after the engine stopped listening
+    let _launched = deployment.launch(file, |_| None)?;
     let remote = RemoteModules::new(
         &deployment.engine_network(),
         system,
         types(),
         remote_options,
     )?;
-    let _launched = deployment.launch(file, |_| None)?;
     let mut builder = Engine::builder(system.clone());
     for m in deployment.processes.iter().flat_map(|p| &p.modules) {
         remote.wait_for_model(m, options.wait)?;

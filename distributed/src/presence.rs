@@ -148,7 +148,7 @@ impl Watch {
                     std::thread::sleep(PROBE_EVERY);
                     for (module, codels) in presence.absent_modules() {
                         let key = keys::run(&prefix, &module);
-                        match crate::remote::query(&session, &key, &Message::Hello, PROBE_EVERY) {
+                        match crate::network::query(&session, &key, &Message::Hello, PROBE_EVERY) {
                             Ok(Answer::Hello { codels: c, .. }) if c == codels => {
                                 presence.mark_present(&module)
                             }

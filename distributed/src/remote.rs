@@ -8,10 +8,9 @@ use std::time::{Duration, Instant};
 
 use bip_engine::{CodelSignature, Ctx, EngineBuilder, ModuleTypes, Next, System, VirtualClock};
 use serde_json::Value;
-use zenoh::Wait;
 
 use crate::codec::Types;
-use crate::network::{Network, NetworkError};
+use crate::network::{query, Network, NetworkError};
 use crate::presence::{Presence, Watch};
 use crate::wire::{keys, Answer, Message, PortData, RunEnd, RunGrant, RunResult};
 
@@ -255,38 +254,6 @@ impl RemoteModules {
             _watch: Arc::clone(&self.watch),
         })
     }
-}
-
-/// Sends a query and reads its one answer.
-pub(crate) fn query(
-    session: &zenoh::Session,
-    key: &str,
-    message: &Message,
-    timeout: Duration,
-) -> Result<Answer, String> {
-    let replies = session
-        .get(key)
-        .payload(message.to_bytes())
-        .timeout(timeout)
-        .wait()
-        .map_err(|e| format!("cannot query `{key}`: {e}"))?;
-    let reply = match replies.recv_timeout(timeout) {
-        Ok(Some(r)) => r,
-        _ => {
-            return Err(format!(
-                "no answer on `{key}` within {} ms",
-                timeout.as_millis()
-            ))
-        }
-    };
-    let sample = reply.result().map_err(|e| {
-        format!(
-            "an error on `{key}`: {}",
-            e.payload().try_to_string().unwrap_or_default()
-        )
-    })?;
-    serde_json::from_slice(&sample.payload().to_bytes())
-        .map_err(|e| format!("an unreadable answer on `{key}`: {e}"))
 }
 
 /// The closure of one remote module.
