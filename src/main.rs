@@ -19,6 +19,8 @@ mod memory_guard;
 mod names;
 mod replay;
 mod report;
+mod request;
+mod run;
 mod sched;
 mod simulate;
 mod startup;
@@ -103,6 +105,14 @@ enum Command {
     /// outcomes, per module a trait of its codels; docs/codegen.md) to a file, or with
     /// `--c` the C headers a GenoM3 component's codels include.
     Codegen(codegen::Args),
+    /// Run a layer on this machine from its deployment file: start its module processes,
+    /// gate their codels here, serve requests on the network (zenoh), print the events,
+    /// until Ctrl-C or --for. Exit code 0: it ran, 2: model, deployment or start-up error.
+    Run(run::Args),
+    /// Send a request to a service of a running layer and print its replies; its
+    /// arguments are checked against the model first. Exit code 0: the request was made,
+    /// 2: it was not (malformed, refused by the layer, no engine answered).
+    Request(request::Args),
     /// Explore the model's states in a web browser: fire steps, go back and forward,
     /// step through a counterexample (a local server on 127.0.0.1; Ctrl-C stops it).
     Explore(explore::Args),
@@ -130,6 +140,8 @@ fn main() -> ExitCode {
         Command::Trace(args) => trace::run(&args),
         Command::Codegen(args) => codegen::run(&args),
         Command::Explore(args) => explore::run(&args),
+        Command::Run(args) => run::run(&args),
+        Command::Request(args) => request::run(&args),
     };
     ExitCode::from(code)
 }

@@ -76,6 +76,7 @@ pub(crate) enum CtxFault {
         expected: String,
         given: &'static str,
     },
+    Remote(String),
 }
 
 impl From<CtxFault> for crate::event::FaultKind {
@@ -94,6 +95,7 @@ impl From<CtxFault> for crate::event::FaultKind {
                 expected,
                 given,
             },
+            CtxFault::Remote(why) => FaultKind::Remote(why),
         }
     }
 }
@@ -136,6 +138,15 @@ impl Ctx<'_> {
     /// The codel state being run (`"start"`, `"main"`, ...).
     pub fn state(&self) -> &str {
         &self.info.state
+    }
+
+    /// Makes this run a fault of its own kind, [`crate::FaultKind::Remote`]: the codel
+    /// was to run in another process, which did not run it (gone, hung, cut off, or it
+    /// refused the run). For the proxies of modules in other processes (bip-zenoh); what
+    /// the proxy returns after it is not looked at.
+    #[cold]
+    pub fn remote_fault(&self, why: String) {
+        self.fault(CtxFault::Remote(why));
     }
 
     /// Notes what the codel did wrong, if it did nothing wrong before.

@@ -291,6 +291,9 @@ pub enum FaultKind {
         expected: String,
         given: &'static str,
     },
+    /// The codel was to run in its module's process, which did not run it within the
+    /// run's deadline or refused it (the process is gone, hung or cut off): why.
+    Remote(String),
     /// The error path taken because a replayed trace takes it (the trace does not say
     /// whether an exception or a fault led there).
     Replayed,
@@ -328,6 +331,7 @@ impl fmt::Display for FaultKind {
                 expected,
                 given,
             } => write!(f, "{what} with a `{given}`, where the model has {expected}"),
+            FaultKind::Remote(why) => write!(f, "was not run by its module's process: {why}"),
             FaultKind::Replayed => f.write_str("took its error path (replayed)"),
             FaultKind::NotAllowed => f.write_str("its outcome has no step in the model here"),
         }

@@ -30,6 +30,10 @@ pub struct Deployment {
 pub struct Process {
     pub name: String,
     pub modules: Vec<String>,
+    /// The program and its arguments that run it (`["target/release/drive"]`), started by
+    /// [`Deployment::launch`]; empty: the launcher's default.
+    #[serde(default)]
+    pub command: Vec<String>,
 }
 
 fn default_prefix() -> String {

@@ -67,6 +67,8 @@ impl ModuleHost {
     /// Answers runs until `stop` is set (checked every 50 ms).
     pub fn serve(self, stop: Arc<AtomicBool>) -> Result<(), RemoteError> {
         let mut threads = Vec::new();
+        // the engine hears that the process is there, and when it is gone
+        let mut tokens = Vec::new();
         for served in self.modules {
             let key = keys::run(&self.prefix, &served.name);
             let queryable = self
@@ -74,6 +76,14 @@ impl ModuleHost {
                 .declare_queryable(key.as_str())
                 .wait()
                 .map_err(|e| crate::NetworkError::Open(format!("cannot serve `{key}`: {e}")))?;
+            let alive = keys::alive(&self.prefix, &served.name);
+            let token = self
+                .session
+                .liveliness()
+                .declare_token(alive.as_str())
+                .wait()
+                .map_err(|e| crate::NetworkError::Open(format!("cannot declare `{alive}`: {e}")))?;
+            tokens.push(token);
             let types = Arc::clone(&self.types);
             let clock = self.clock.clone();
             let stop = Arc::clone(&stop);
@@ -97,6 +107,7 @@ impl ModuleHost {
         for t in threads {
             let _ = t.join();
         }
+        drop(tokens);
         Ok(())
     }
 }

@@ -11,7 +11,7 @@
 //! - Module side: [`ModuleHost`] serves the runs of the modules a process holds, bound as
 //!   in one process ([`bip_engine::HostedModule`]).
 //! - Requests from other processes: [`RequestServer`] in the engine's process, [`request`]
-//!   in a client's.
+//!   in a client's, [`ClientRequest`] from the command line (checked against the model).
 //! - [`Types`]: how the model's data cross the network (JSON, one codec per Rust type).
 //! - [`Deployment`]: which module runs in which process, from a RON file.
 //! - [`Network`]: the zenoh session (peer mode, TCP on loopback by default).
@@ -19,18 +19,26 @@
 //! docs/distributed.md is the guide: the key expressions, the messages, faults, the
 //! rover split over three module processes.
 
+mod client;
 mod codec;
 mod deploy;
 mod host;
+mod launch;
+mod layer;
 mod network;
+mod presence;
 mod remote;
 mod requests;
 mod wire;
 
+pub use client::ClientRequest;
 pub use codec::{Codec, Types};
 pub use deploy::{DeployError, Deployment, Process};
 pub use host::ModuleHost;
-pub use network::{Network, NetworkError};
+pub use launch::Launched;
+pub use layer::{run_layer, LayerError, LayerOptions};
+pub use network::{Network, NetworkError, ENV_CONNECT, ENV_PREFIX, ENV_PROCESS};
+pub use presence::{Presence, PROBE_EVERY};
 pub use remote::{RemoteError, RemoteModules, RemoteOptions};
 pub use requests::{request, request_bytes, RequestServer, ServiceReply, ServiceRequest};
 pub use wire::{keys, Answer, Message, PortData, RunEnd, RunGrant, RunResult};

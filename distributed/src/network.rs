@@ -2,7 +2,19 @@
 //! off (the peers are named), and the key prefix of the layer, so that two layers on one
 //! network (two tests at once) never see each other.
 
+use std::time::Duration;
+
 use zenoh::Wait;
+
+use crate::wire::{Answer, Message};
+
+/// The environment variable that names a launched module process's process (its name in
+/// the deployment file).
+pub const ENV_PROCESS: &str = "BIP_LAYER_PROCESS";
+/// The endpoints it connects to, separated by commas.
+pub const ENV_CONNECT: &str = "BIP_LAYER_CONNECT";
+/// The layer's key prefix.
+pub const ENV_PREFIX: &str = "BIP_LAYER_PREFIX";
 
 /// Where a process listens and whom it connects to, and the layer's key prefix.
 #[derive(Clone, Debug)]
@@ -43,6 +55,22 @@ impl Network {
         }
     }
 
+    /// A launched module process's network, from the environment its launcher set
+    /// ([`ENV_CONNECT`], [`ENV_PREFIX`]); `None` when not launched so.
+    pub fn from_env() -> Option<Network> {
+        let connect = std::env::var(ENV_CONNECT).ok()?;
+        let prefix = std::env::var(ENV_PREFIX).ok()?;
+        Some(Network {
+            listen: Vec::new(),
+            connect: connect
+                .split(',')
+                .filter(|e| !e.is_empty())
+                .map(String::from)
+                .collect(),
+            prefix,
+        })
+    }
+
     /// Opens the zenoh session.
     pub fn open(&self) -> Result<zenoh::Session, NetworkError> {
         if zenoh::key_expr::KeyExpr::try_from(self.prefix.as_str()).is_err()
@@ -69,4 +97,36 @@ impl Network {
             .wait()
             .map_err(|e| NetworkError::Open(e.to_string()))
     }
+}
+
+/// Sends a query and reads its one answer.
+pub(crate) fn query(
+    session: &zenoh::Session,
+    key: &str,
+    message: &Message,
+    timeout: Duration,
+) -> Result<Answer, String> {
+    let replies = session
+        .get(key)
+        .payload(message.to_bytes())
+        .timeout(timeout)
+        .wait()
+        .map_err(|e| format!("cannot query `{key}`: {e}"))?;
+    let reply = match replies.recv_timeout(timeout) {
+        Ok(Some(r)) => r,
+        _ => {
+            return Err(format!(
+                "no answer on `{key}` within {} ms",
+                timeout.as_millis()
+            ))
+        }
+    };
+    let sample = reply.result().map_err(|e| {
+        format!(
+            "an error on `{key}`: {}",
+            e.payload().try_to_string().unwrap_or_default()
+        )
+    })?;
+    serde_json::from_slice(&sample.payload().to_bytes())
+        .map_err(|e| format!("an unreadable answer on `{key}`: {e}"))
 }

@@ -8,10 +8,10 @@ use std::time::{Duration, Instant};
 
 use bip_engine::{CodelSignature, Ctx, EngineBuilder, ModuleTypes, Next, System, VirtualClock};
 use serde_json::Value;
-use zenoh::Wait;
 
 use crate::codec::Types;
-use crate::network::{Network, NetworkError};
+use crate::network::{query, Network, NetworkError};
+use crate::presence::{Presence, Watch};
 use crate::wire::{keys, Answer, Message, PortData, RunEnd, RunGrant, RunResult};
 
 /// How long the engine waits for a module process.
@@ -60,6 +60,9 @@ pub struct RemoteModules {
     types: Arc<Types>,
     system: System,
     options: RemoteOptions,
+    presence: Presence,
+    /// Held by every proxy too, so that the watch lasts as long as the engine's modules.
+    watch: Arc<Watch>,
 }
 
 /// What the closure of a remote module knows of its codels.
@@ -80,18 +83,29 @@ impl RemoteModules {
         options: RemoteOptions,
     ) -> Result<RemoteModules, RemoteError> {
         types.check(system).map_err(RemoteError::Types)?;
+        let session = network.open()?;
+        let presence = Presence::default();
+        let watch = Arc::new(Watch::start(&session, &network.prefix, &presence)?);
         Ok(RemoteModules {
-            session: network.open()?,
+            session,
             prefix: network.prefix.clone(),
             types: Arc::new(types),
             system: system.clone(),
             options,
+            presence,
+            watch,
         })
     }
 
     /// The engine's zenoh session (for a [`crate::RequestServer`] beside the modules).
     pub fn session(&self) -> &zenoh::Session {
         &self.session
+    }
+
+    /// Which module processes are there: a [`crate::RequestServer`] given it refuses
+    /// requests to a module whose process is not.
+    pub fn presence(&self) -> &Presence {
+        &self.presence
     }
 
     /// Waits until the process of `module` answers, and checks that it numbers the
@@ -102,12 +116,31 @@ impl RemoteModules {
         codels: &[CodelSignature],
         timeout: Duration,
     ) -> Result<(), RemoteError> {
-        let key = keys::run(&self.prefix, module);
-        let start = Instant::now();
-        let want: Vec<String> = codels
+        let want = codels
             .iter()
             .map(|c| format!("{}.{}", c.service, c.codel))
             .collect();
+        self.wait_for_codels(module, want, timeout)
+    }
+
+    /// [`RemoteModules::wait_for`], the codels numbered as the model declares them.
+    pub fn wait_for_model(&self, module: &str, timeout: Duration) -> Result<(), RemoteError> {
+        let want = self
+            .model_codels(module)?
+            .iter()
+            .map(|c| c.name.clone())
+            .collect();
+        self.wait_for_codels(module, want, timeout)
+    }
+
+    fn wait_for_codels(
+        &self,
+        module: &str,
+        want: Vec<String>,
+        timeout: Duration,
+    ) -> Result<(), RemoteError> {
+        let key = keys::run(&self.prefix, module);
+        let start = Instant::now();
         while start.elapsed() < timeout {
             let left = timeout.saturating_sub(start.elapsed());
             let answer = query(
@@ -123,6 +156,7 @@ impl RemoteModules {
                         difference: format!("it runs {codels:?}, the engine expects {want:?}"),
                     });
                 }
+                self.presence.mark_present(module);
                 return Ok(());
             }
             std::thread::sleep(Duration::from_millis(20));
@@ -144,14 +178,44 @@ impl RemoteModules {
         codels: &'static [CodelSignature],
         types: &'static ModuleTypes,
     ) -> Result<EngineBuilder, RemoteError> {
+        let mut proxy = self.proxy(module)?;
+        Ok(builder
+            .typed_as(module, types)
+            .module(module, codels, move |k, ctx| proxy.run(k, ctx)))
+    }
+
+    /// Binds module `module` of `builder` to its process without generated bindings:
+    /// each of its codels, as the model declares them (`bip run`, a layer whose module
+    /// processes are programs of their own).
+    pub fn bind_model(
+        &self,
+        builder: EngineBuilder,
+        module: &str,
+    ) -> Result<EngineBuilder, RemoteError> {
+        let proxy = Arc::new(std::sync::Mutex::new(self.proxy(module)?));
+        let codels = self.model_codels(module)?;
+        let mut builder = builder;
+        for (k, c) in codels.into_iter().enumerate() {
+            let proxy = Arc::clone(&proxy);
+            let state = c.name.rsplit_once('.').map_or("", |x| x.1).to_string();
+            // the engine calls one codel of a module at a time: the lock is never
+            // contended
+            builder = builder.codel((module, &c.service, &state), move |ctx| {
+                proxy.lock().unwrap_or_else(|p| p.into_inner()).run(k, ctx)
+            });
+        }
+        Ok(builder)
+    }
+
+    /// The codels of `module` as the model declares them (services, then their codels).
+    fn model_codels(&self, module: &str) -> Result<Vec<RemoteCodel>, RemoteError> {
         let map = self
             .system
             .genom
             .as_ref()
             .and_then(|g| g.module(module))
             .ok_or_else(|| RemoteError::NoSuchModule(module.into()))?;
-        let fields: Vec<String> = map.ids.iter().map(|f| f.name.clone()).collect();
-        let remote: Vec<RemoteCodel> = map
+        Ok(map
             .services
             .iter()
             .flat_map(|s| {
@@ -161,53 +225,35 @@ impl RemoteModules {
                     deadline: self.options.deadline + Duration::from_micros(c.wcet_us.unwrap_or(0)),
                 })
             })
-            .collect();
-        let mut proxy = Proxy {
+            .collect())
+    }
+
+    /// The proxy of module `module`'s process.
+    fn proxy(&self, module: &str) -> Result<Proxy, RemoteError> {
+        let map = self
+            .system
+            .genom
+            .as_ref()
+            .and_then(|g| g.module(module))
+            .ok_or_else(|| RemoteError::NoSuchModule(module.into()))?;
+        let fields: Vec<String> = map.ids.iter().map(|f| f.name.clone()).collect();
+        let codels = self.model_codels(module)?;
+        self.presence
+            .expect(module, codels.iter().map(|c| c.name.clone()).collect());
+        Ok(Proxy {
             session: self.session.clone(),
             key: keys::run(&self.prefix, module),
             module: module.to_string(),
             types: Arc::clone(&self.types),
             fields,
-            codels: remote,
+            codels,
             seen: HashMap::new(),
             clock: self.options.virtual_clock.clone(),
-        };
-        Ok(builder
-            .typed_as(module, types)
-            .module(module, codels, move |k, ctx| proxy.run(k, ctx)))
+            presence: self.presence.clone(),
+            epoch: None,
+            _watch: Arc::clone(&self.watch),
+        })
     }
-}
-
-/// Sends a query and reads its one answer.
-fn query(
-    session: &zenoh::Session,
-    key: &str,
-    message: &Message,
-    timeout: Duration,
-) -> Result<Answer, String> {
-    let replies = session
-        .get(key)
-        .payload(message.to_bytes())
-        .timeout(timeout)
-        .wait()
-        .map_err(|e| format!("cannot query `{key}`: {e}"))?;
-    let reply = match replies.recv_timeout(timeout) {
-        Ok(Some(r)) => r,
-        _ => {
-            return Err(format!(
-                "no answer on `{key}` within {} ms",
-                timeout.as_millis()
-            ))
-        }
-    };
-    let sample = reply.result().map_err(|e| {
-        format!(
-            "an error on `{key}`: {}",
-            e.payload().try_to_string().unwrap_or_default()
-        )
-    })?;
-    serde_json::from_slice(&sample.payload().to_bytes())
-        .map_err(|e| format!("an unreadable answer on `{key}`: {e}"))
 }
 
 /// The closure of one remote module.
@@ -222,23 +268,55 @@ struct Proxy {
     /// are sent.
     seen: HashMap<(String, String), Value>,
     clock: Option<VirtualClock>,
+    presence: Presence,
+    /// The presence's epoch of the module when `seen` was last right.
+    epoch: Option<u64>,
+    _watch: Arc<Watch>,
+}
+
+/// Why a remote run did not give an outcome.
+enum NotRun {
+    /// The process did not run the codel (gone, hung, cut off, refused the run, answered
+    /// something unreadable): [`bip_engine::FaultKind::Remote`].
+    Remote(String),
+    /// The codel ran and was faulty in its process (its words).
+    Codel(String),
 }
 
 impl Proxy {
     fn run(&mut self, k: usize, ctx: &mut Ctx<'_>) -> Next {
         match self.try_run(k, ctx) {
             Ok(next) => next,
+            Err(NotRun::Remote(why)) => {
+                ctx.remote_fault(why);
+                // not looked at: the run is the fault just noted
+                Next::Declared(0)
+            }
             // the engine makes it the codel's fault, with this message, without the
             // panic hook's noise
-            Err(why) => std::panic::resume_unwind(Box::new(why)),
+            Err(NotRun::Codel(why)) => std::panic::resume_unwind(Box::new(why)),
         }
     }
 
-    fn try_run(&mut self, k: usize, ctx: &mut Ctx<'_>) -> Result<Next, String> {
+    fn try_run(&mut self, k: usize, ctx: &mut Ctx<'_>) -> Result<Next, NotRun> {
         let codel = self
             .codels
             .get(k)
-            .ok_or_else(|| format!("module `{}` has no codel {k}", self.module))?;
+            .ok_or_else(|| NotRun::Remote(format!("module `{}` has no codel {k}", self.module)))?;
+        if let Some(why) = self.presence.absent(&self.module) {
+            self.seen.clear();
+            return Err(NotRun::Remote(format!(
+                "the process of module `{}` is absent: {why}",
+                self.module
+            )));
+        }
+        // a process that may have changed since (restarted, back from a cut) may have
+        // lost the port data it had
+        let epoch = self.presence.epoch(&self.module);
+        if self.epoch != Some(epoch) {
+            self.seen.clear();
+            self.epoch = Some(epoch);
+        }
         let ids = self
             .fields
             .iter()
@@ -279,28 +357,51 @@ impl Proxy {
             Ok(Answer::Refused { reason }) => {
                 // what it holds is unknown now: send every port again next time
                 self.seen.clear();
-                return Err(format!(
+                return Err(NotRun::Remote(format!(
                     "the process of module `{}` refused the run: {reason}",
                     self.module
-                ));
+                )));
             }
             Ok(Answer::Hello { .. }) => {
-                return Err("a module process answered a run with its codels".into())
+                self.seen.clear();
+                return Err(NotRun::Remote(
+                    "a module process answered a run with its codels".into(),
+                ));
             }
             Err(e) => {
                 self.seen.clear();
-                return Err(format!(
+                let why = format!(
                     "the process of module `{}` did not run the codel (deadline {} ms): {e}",
                     self.module,
                     deadline.as_millis()
-                ));
+                );
+                // its next runs fail at once, until it answers again
+                self.presence.mark_absent(&self.module, e);
+                return Err(NotRun::Remote(why));
             }
         };
-        self.apply(ctx, &codel.service.clone(), result)
+        let service = codel.service.clone();
+        match self.apply(ctx, &service, result) {
+            Ok(Ok(next)) => Ok(next),
+            Ok(Err(codel_fault)) => Err(NotRun::Codel(codel_fault)),
+            Err(unreadable) => {
+                self.seen.clear();
+                Err(NotRun::Remote(format!(
+                    "the process of module `{}` answered what the engine cannot take: {unreadable}",
+                    self.module
+                )))
+            }
+        }
     }
 
-    /// Does in the engine's context what the codel did in its process.
-    fn apply(&mut self, ctx: &mut Ctx<'_>, service: &str, r: RunResult) -> Result<Next, String> {
+    /// Does in the engine's context what the codel did in its process: the codel's end
+    /// (its outcome or its fault in its process), or why the answer cannot be taken.
+    fn apply(
+        &mut self,
+        ctx: &mut Ctx<'_>,
+        service: &str,
+        r: RunResult,
+    ) -> Result<Result<Next, String>, String> {
         if let Some(clock) = &self.clock {
             clock.advance(r.virtual_us);
         }
@@ -331,9 +432,9 @@ impl Proxy {
                 .ok_or_else(|| format!("no codec for the output of `{}.{service}`", self.module))?;
             codec.set_output(ctx, &v)?;
         }
-        match r.end {
+        Ok(match r.end {
             RunEnd::Outcome(k) => Ok(Next::Declared(k)),
             RunEnd::Fault(why) => Err(why),
-        }
+        })
     }
 }

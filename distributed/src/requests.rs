@@ -15,6 +15,7 @@ use zenoh::Wait;
 
 use crate::codec::Types;
 use crate::network::NetworkError;
+use crate::presence::Presence;
 use crate::wire::keys;
 
 /// A client's request: the arguments, absent for a service that takes none.
@@ -53,6 +54,11 @@ pub enum ServiceReply {
     Error {
         message: String,
     },
+    /// The request was not made: the process of the service's module is absent (gone,
+    /// hung, cut off), why.
+    Unavailable {
+        reason: String,
+    },
 }
 
 impl ServiceReply {
@@ -88,6 +94,7 @@ impl std::fmt::Display for ServiceReply {
                 output: Some(v),
             } => write!(f, "#{ticket} done: {outcome}, output {v}"),
             ServiceReply::Error { message } => write!(f, "error: {message}"),
+            ServiceReply::Unavailable { reason } => write!(f, "refused: {reason}"),
         }
     }
 }
@@ -98,14 +105,25 @@ pub struct RequestServer {
     thread: Option<JoinHandle<()>>,
 }
 
-/// What the server knows of a service: (module, service, its refusal conditions in
-/// words).
-type Services = Vec<(String, String, Vec<String>)>;
+/// What the server knows of a service.
+struct Service {
+    module: String,
+    name: String,
+    /// Its refusal conditions in words.
+    refusals: Vec<String>,
+    /// Whether it runs codels (it needs its module's process).
+    codels: bool,
+}
+
+type Services = Vec<Service>;
 
 impl RequestServer {
     /// Serves requests to the services of `system` on `session` (keys
     /// `<prefix>/service/<module>/<Service>`), sending them to the engine through
-    /// `handle`; a request's replies are followed for at most `follow`.
+    /// `handle`; a request's replies are followed for at most `follow`. Given the
+    /// engine's `presence` ([`crate::RemoteModules::presence`]), a request to a service
+    /// with codels whose module's process is absent is refused with the reason
+    /// ([`ServiceReply::Unavailable`]) and never reaches the engine.
     pub fn start(
         session: &zenoh::Session,
         prefix: &str,
@@ -113,6 +131,7 @@ impl RequestServer {
         types: Types,
         handle: Handle,
         follow: Duration,
+        presence: Option<&Presence>,
     ) -> Result<RequestServer, NetworkError> {
         let key = keys::service(prefix, "**");
         let queryable = session
@@ -124,14 +143,17 @@ impl RequestServer {
             .iter()
             .flat_map(|g| &g.modules)
             .flat_map(|m| {
-                m.services.iter().map(|s| {
-                    let refusals = s.refusals.iter().map(ToString::to_string).collect();
-                    (m.name.clone(), s.name.clone(), refusals)
+                m.services.iter().map(|s| Service {
+                    module: m.name.clone(),
+                    name: s.name.clone(),
+                    refusals: s.refusals.iter().map(ToString::to_string).collect(),
+                    codels: !s.codels.is_empty(),
                 })
             })
             .collect();
         let services = Arc::new(services);
         let types = Arc::new(types);
+        let presence = presence.cloned();
         let prefix = prefix.to_string();
         let stop = Arc::new(AtomicBool::new(false));
         let stopped = Arc::clone(&stop);
@@ -140,13 +162,16 @@ impl RequestServer {
                 let Ok(Some(query)) = queryable.recv_timeout(Duration::from_millis(50)) else {
                     continue;
                 };
-                let (handle, types, services) =
-                    (handle.clone(), Arc::clone(&types), Arc::clone(&services));
-                let prefix = prefix.clone();
+                let server = Server {
+                    prefix: prefix.clone(),
+                    handle: handle.clone(),
+                    types: Arc::clone(&types),
+                    services: Arc::clone(&services),
+                    presence: presence.clone(),
+                    follow,
+                };
                 // each request follows its own replies
-                std::thread::spawn(move || {
-                    serve(&query, &prefix, &handle, &types, &services, follow)
-                });
+                std::thread::spawn(move || server.serve(&query));
             }
         });
         Ok(RequestServer {
@@ -165,62 +190,131 @@ impl Drop for RequestServer {
     }
 }
 
-fn serve(
-    query: &zenoh::query::Query,
-    prefix: &str,
-    handle: &Handle,
-    types: &Types,
-    services: &Services,
+/// What a request's thread needs.
+struct Server {
+    prefix: String,
+    handle: Handle,
+    types: Arc<Types>,
+    services: Arc<Services>,
+    presence: Option<Presence>,
     follow: Duration,
-) {
-    let key = query.key_expr().as_str().to_string();
-    let say = |r: &ServiceReply| {
-        let bytes = serde_json::to_vec(r).unwrap_or_default();
-        if let Err(e) = query.reply(key.as_str(), bytes).wait() {
-            tracing::warn!(target: "bip_zenoh", "cannot reply on `{key}`: {e}");
-        }
-    };
-    let pending = match send(query, &key, prefix, handle, types, services) {
-        Ok(p) => p,
-        Err(message) => return say(&ServiceReply::Error { message }),
-    };
-    let (m, s) = module_service(&key, prefix);
-    let refusals = services
-        .iter()
-        .find(|x| x.0 == m && x.1 == s)
-        .map(|x| x.2.as_slice())
-        .unwrap_or_default();
-    let end = Instant::now() + follow;
-    while let Some((ticket, reply)) = pending.next(end.saturating_duration_since(Instant::now())) {
-        let ticket = ticket.0;
-        let r = match reply {
-            Reply::Accepted => ServiceReply::Accepted { ticket },
-            Reply::Started => ServiceReply::Started { ticket },
-            Reply::Refused(Refusal::Conditions(reasons)) => ServiceReply::Refused {
-                ticket,
-                reasons: reasons
-                    .iter()
-                    .filter_map(|k| refusals.get(k).cloned())
-                    .collect(),
-            },
-            Reply::Refused(Refusal::NotEnabled) => ServiceReply::Refused {
-                ticket,
-                reasons: Vec::new(),
-            },
-            Reply::Done { outcome, output } => {
-                let output =
-                    output.and_then(|o| types.output_codec(m, s).and_then(|c| c.output(&o)));
-                ServiceReply::Done {
-                    ticket,
-                    outcome: outcome.to_string(),
-                    output,
-                }
+}
+
+impl Server {
+    fn serve(&self, query: &zenoh::query::Query) {
+        let key = query.key_expr().as_str().to_string();
+        let say = |r: &ServiceReply| {
+            let bytes = serde_json::to_vec(r).unwrap_or_default();
+            if let Err(e) = query.reply(key.as_str(), bytes).wait() {
+                tracing::warn!(target: "bip_zenoh", "cannot reply on `{key}`: {e}");
             }
         };
-        let last = r.is_last();
-        say(&r);
-        if last {
-            return;
+        let (m, s) = module_service(&key, &self.prefix);
+        let pending = match self.send(query, &key, m, s) {
+            Ok(p) => p,
+            Err(r) => return say(&r),
+        };
+        let refusals = self
+            .services
+            .iter()
+            .find(|x| x.module == m && x.name == s)
+            .map(|x| x.refusals.as_slice())
+            .unwrap_or_default();
+        let end = Instant::now() + self.follow;
+        while let Some((ticket, reply)) =
+            pending.next(end.saturating_duration_since(Instant::now()))
+        {
+            let ticket = ticket.0;
+            let r = match reply {
+                Reply::Accepted => ServiceReply::Accepted { ticket },
+                Reply::Started => ServiceReply::Started { ticket },
+                Reply::Refused(Refusal::Conditions(reasons)) => ServiceReply::Refused {
+                    ticket,
+                    reasons: reasons
+                        .iter()
+                        .filter_map(|k| refusals.get(k).cloned())
+                        .collect(),
+                },
+                Reply::Refused(Refusal::NotEnabled) => ServiceReply::Refused {
+                    ticket,
+                    reasons: Vec::new(),
+                },
+                Reply::Done { outcome, output } => {
+                    let output = output
+                        .and_then(|o| self.types.output_codec(m, s).and_then(|c| c.output(&o)));
+                    ServiceReply::Done {
+                        ticket,
+                        outcome: outcome.to_string(),
+                        output,
+                    }
+                }
+            };
+            let last = r.is_last();
+            say(&r);
+            if last {
+                return;
+            }
+        }
+    }
+
+    /// Reads the query and sends its request to the engine; the one reply to it if it
+    /// was not made.
+    fn send(
+        &self,
+        query: &zenoh::query::Query,
+        key: &str,
+        module: &str,
+        service: &str,
+    ) -> Result<bip_engine::PendingReply, ServiceReply> {
+        let error = |message| ServiceReply::Error { message };
+        let Some(known) = self
+            .services
+            .iter()
+            .find(|x| x.module == module && x.name == service)
+        else {
+            return Err(error(format!(
+                "`{key}` names no service of the layer: requests go to `{}`",
+                keys::service(&self.prefix, "<module>/<Service>")
+            )));
+        };
+        let payload = query
+            .payload()
+            .map(|p| p.to_bytes().to_vec())
+            .unwrap_or_default();
+        let request: ServiceRequest = if payload.iter().all(u8::is_ascii_whitespace) {
+            ServiceRequest::default()
+        } else {
+            serde_json::from_slice(&payload).map_err(|e| {
+                error(format!(
+                    "the request to {module}.{service} is not `{{\"args\": ...}}` in JSON: {e}"
+                ))
+            })?
+        };
+        // a service whose codels cannot run now is not requested: the engine would accept
+        // it, and its first codel run would fail
+        if let Some(why) = self
+            .presence
+            .as_ref()
+            .filter(|_| known.codels)
+            .and_then(|p| p.absent(module))
+        {
+            return Err(ServiceReply::Unavailable {
+                reason: format!("the process of module `{module}` is absent: {why}"),
+            });
+        }
+        let handle = &self.handle;
+        match (request.args, self.types.args_codec(module, service)) {
+            (None, _) => handle
+                .request(module, service, ())
+                .map_err(|e| error(e.to_string())),
+            (Some(v), Some(codec)) => codec.request(handle, module, service, &v).map_err(|e| {
+                error(format!(
+                    "the arguments of {module}.{service} ({v}) are not of its type: {e}"
+                ))
+            }),
+            (Some(v), None) => Err(error(format!(
+                "{module}.{service} takes no arguments, yet was sent {v}"
+            ))),
         }
     }
 }
@@ -231,46 +325,6 @@ fn module_service<'a>(key: &'a str, prefix: &str) -> (&'a str, &'a str) {
         .get(keys::service(prefix, "").len()..)
         .unwrap_or_default();
     rest.split_once('/').unwrap_or((rest, ""))
-}
-
-/// Reads the query and sends its request to the engine.
-fn send(
-    query: &zenoh::query::Query,
-    key: &str,
-    prefix: &str,
-    handle: &Handle,
-    types: &Types,
-    services: &Services,
-) -> Result<bip_engine::PendingReply, String> {
-    let (module, service) = module_service(key, prefix);
-    if !services.iter().any(|x| x.0 == module && x.1 == service) {
-        return Err(format!(
-            "`{key}` names no service of the layer: requests go to `{}`",
-            keys::service(prefix, "<module>/<Service>")
-        ));
-    }
-    let payload = query
-        .payload()
-        .map(|p| p.to_bytes().to_vec())
-        .unwrap_or_default();
-    let request: ServiceRequest = if payload.iter().all(u8::is_ascii_whitespace) {
-        ServiceRequest::default()
-    } else {
-        serde_json::from_slice(&payload).map_err(|e| {
-            format!("the request to {module}.{service} is not `{{\"args\": ...}}` in JSON: {e}")
-        })?
-    };
-    match (request.args, types.args_codec(module, service)) {
-        (None, _) => handle
-            .request(module, service, ())
-            .map_err(|e| e.to_string()),
-        (Some(v), Some(codec)) => codec.request(handle, module, service, &v).map_err(|e| {
-            format!("the arguments of {module}.{service} ({v}) are not of its type: {e}")
-        }),
-        (Some(v), None) => Err(format!(
-            "{module}.{service} takes no arguments, yet was sent {v}"
-        )),
-    }
 }
 
 /// Sends a request to `module.service` of the layer under `prefix` and calls `each`

@@ -13,6 +13,12 @@ pub mod keys {
         format!("{prefix}/module/{module}/run")
     }
 
+    /// The liveliness token of module `module`'s process (`<prefix>/alive/<module>`),
+    /// there while the process is.
+    pub fn alive(prefix: &str, module: &str) -> String {
+        format!("{prefix}/alive/{module}")
+    }
+
     /// Where the engine answers requests to services (`<prefix>/service/<module>/<Service>`;
     /// `rest` is `<module>/<Service>`, or a pattern such as `**`).
     pub fn service(prefix: &str, rest: &str) -> String {

@@ -98,7 +98,11 @@ const CRATES: &[Layers] = &[
         src: "distributed/src",
         layers: &[
             ("wire", &["network", "wire", "codec", "deploy"]),
-            ("sides", &["remote", "host", "requests"]),
+            (
+                "sides",
+                &["presence", "remote", "host", "requests", "launch", "client"],
+            ),
+            ("layer", &["layer"]),
         ],
     },
     Layers {
@@ -181,8 +185,8 @@ const CRATES: &[Layers] = &[
             (
                 "commands",
                 &[
-                    "check", "codegen", "expand", "explore", "export", "import", "replay", "sched",
-                    "simulate", "verify",
+                    "check", "codegen", "expand", "explore", "export", "import", "replay",
+                    "request", "run", "sched", "simulate", "verify",
                 ],
             ),
         ],

@@ -11,6 +11,7 @@ mod aperiodic;
 mod check;
 mod codegen;
 mod common;
+mod distributed;
 mod docs;
 mod engine;
 mod explore;

@@ -22,44 +22,26 @@ fn value(args: &[String], flag: &str) -> Option<String> {
         .and_then(|k| args.get(k + 1).cloned())
 }
 
-/// A client's request to a service of a layer (`--request module.Service [--args JSON]`):
-/// prints each reply as it comes.
+/// A client's request to a service of a layer (`--request module.Service [--args JSON]`),
+/// its arguments read against the model: prints each reply as it comes.
 fn request(
+    model: &std::path::Path,
     network: &Network,
     target: &str,
     args: Option<String>,
     timeout_ms: Option<String>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let (module, service) = target
-        .split_once('.')
-        .ok_or_else(|| format!("`{target}` is not `module.Service`"))?;
-    let args = match args {
-        Some(a) => {
-            Some(serde_json::from_str(&a).map_err(|e| format!("--args `{a}` is not JSON: {e}"))?)
-        }
-        None => None,
-    };
+    let system = bip_engine::load_file(model)?;
+    let request = bip_zenoh::ClientRequest::parse(&system, target, args.as_deref())?;
     let timeout_ms: u64 = match timeout_ms {
         Some(t) => t
             .parse()
             .map_err(|_| format!("--timeout-ms `{t}` is not a number"))?,
         None => 5_000,
     };
-    let session = network.open()?;
     let timeout = std::time::Duration::from_millis(timeout_ms);
-    let replies = bip_zenoh::request(
-        &session,
-        &network.prefix,
-        module,
-        service,
-        args,
-        timeout,
-        |r| println!("{r}"),
-    )?;
-    match replies.last() {
-        Some(bip_zenoh::ServiceReply::Error { .. }) => Err("the request was not made".into()),
-        _ => Ok(()),
-    }
+    request.send(network, timeout, |r| println!("{r}"))?;
+    Ok(())
 }
 
 /// The network the flags give (`--listen`, `--connect`, `--prefix`).
@@ -68,19 +50,6 @@ fn network_of(args: &[String], _engine: bool) -> Network {
         listen: value(args, "--listen").into_iter().collect(),
         connect: value(args, "--connect").into_iter().collect(),
         prefix: value(args, "--prefix").unwrap_or_else(|| "bip/rover".into()),
-    }
-}
-
-/// The module processes of a deployment, killed when dropped (they also end when their
-/// standard input closes, as this process dies).
-struct Children(Vec<std::process::Child>);
-
-impl Drop for Children {
-    fn drop(&mut self) {
-        for c in &mut self.0 {
-            let _ = c.kill();
-            let _ = c.wait();
-        }
     }
 }
 
@@ -122,19 +91,18 @@ fn layer(
     let say = &mut |line| println!("{line}");
     match (deployment, deploy_file) {
         (Some(d), Some(file)) => {
-            // one command: the module processes, then the engine
-            let mut children = Children(Vec::new());
-            for p in &d.processes {
-                let child = std::process::Command::new(std::env::current_exe()?)
-                    .args(["--module-process", &p.name, "--until-stdin-closes"])
+            // one command: the module processes (this binary, unless the file names
+            // another), then the engine
+            let me = std::env::current_exe()?;
+            let launched = d.launch(&file, |p| {
+                let mut c = std::process::Command::new(&me);
+                c.args(["--module-process", &p.name, "--until-stdin-closes"])
                     .arg("--deploy")
-                    .arg(&file)
-                    .stdin(std::process::Stdio::piped())
-                    .spawn()?;
-                children.0.push(child);
-            }
+                    .arg(&file);
+                Some(c)
+            })?;
             supervisor::run_on(model, real_time, Some(&d.engine_network()), say)?;
-            drop(children);
+            drop(launched);
         }
         _ if args.iter().any(|a| a == "--engine") => {
             supervisor::run_on(model, real_time, Some(&network_of(args, true)), say)?;
@@ -160,6 +128,7 @@ fn main() {
     let result = if let Some(target) = value(&args, "--request") {
         let network = network_of(&args, false);
         request(
+            &model,
             &network,
             &target,
             value(&args, "--args"),

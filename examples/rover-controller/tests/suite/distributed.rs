@@ -11,7 +11,7 @@ use bip_zenoh::{Deployment, Network};
 
 /// Module processes, killed (and reaped) when dropped; they also end when their standard
 /// input closes, should this process die without dropping them.
-pub struct Processes(Vec<Child>);
+pub struct Processes(pub Vec<Child>);
 
 impl Drop for Processes {
     fn drop(&mut self) {
@@ -24,9 +24,15 @@ impl Drop for Processes {
 
 impl Processes {
     pub fn spawn_one(&mut self, process: &str, network: &Network) {
+        self.spawn_connecting(process, network, &network.listen[0]);
+    }
+
+    /// Spawns module process `process` of `network`, connecting to `endpoint` (the
+    /// engine's, or a relay's).
+    pub fn spawn_connecting(&mut self, process: &str, network: &Network, endpoint: &str) {
         let child = Command::new(env!("CARGO_BIN_EXE_bip-rover-controller"))
             .args(["--module-process", process, "--until-stdin-closes"])
-            .args(["--connect", &network.listen[0]])
+            .args(["--connect", endpoint])
             .args(["--prefix", &network.prefix])
             .stdin(Stdio::piped())
             .stdout(Stdio::null())
@@ -39,6 +45,16 @@ impl Processes {
     pub fn kill(&mut self, k: usize) {
         let _ = self.0[k].kill();
         let _ = self.0[k].wait();
+    }
+
+    /// Sends signal `signal` (`STOP`, `CONT`) to the `k`-th process spawned.
+    pub fn signal(&self, k: usize, signal: &str) {
+        let status = Command::new("kill")
+            .arg(format!("-{signal}"))
+            .arg(self.0[k].id().to_string())
+            .status()
+            .expect("kill runs");
+        assert!(status.success(), "kill -{signal}");
     }
 }
 
@@ -58,11 +74,17 @@ pub fn network(name: &str) -> Network {
 
 /// The module processes of the rover's deployment file, on `network`.
 pub fn spawn_all(network: &Network) -> Processes {
+    spawn_all_but(network, None)
+}
+
+/// The module processes of the rover's deployment file, on `network`, those of `skip`
+/// left out.
+pub fn spawn_all_but(network: &Network, skip: Option<&str>) -> Processes {
     let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/rover.ron");
     let system = bip_engine::load_file(&model).expect("the rover");
     let d = Deployment::load(&default_deployment_file(), &system).expect("deploy.ron");
     let mut p = Processes(Vec::new());
-    for process in &d.processes {
+    for process in d.processes.iter().filter(|p| Some(p.name.as_str()) != skip) {
         p.spawn_one(&process.name, network);
     }
     p
@@ -101,113 +123,14 @@ fn the_rover_split_over_three_module_processes_runs_as_in_one() {
     assert_eq!(split.trace, one.trace);
 }
 
-/// The recording is a path of the model along which every invariant holds.
-fn check_recording(system: &bip_engine::System, trace: &bip_engine::Trace) {
-    use bip_engine::bip_model::PropertyKind;
-    let path = trace.replay(system).expect("the recording replays");
-    for (_, state) in &path {
-        for p in &system.properties {
-            if let PropertyKind::Invariant(e) = &p.kind {
-                assert!(
-                    system.holds(e, state, &p.name).expect("evaluates"),
-                    "invariant {} fails",
-                    p.name
-                );
-            }
-        }
-    }
-}
-
-/// The events of `ticks` ticks, as lines.
-fn run_ticks(engine: &mut bip_engine::Engine, ticks: u64) -> Vec<String> {
-    engine
-        .run_until(bip_engine::Until::Ticks(ticks))
-        .expect("the engine runs");
-    engine.events().map(|e| e.to_string()).collect()
-}
-
-#[test]
-fn a_killed_module_process_fails_its_activity_and_rejoins_when_restarted() {
-    use bip_engine::{Engine, VirtualClock};
-    use bip_rover_controller::rover::{pom, rflex};
-    use bip_zenoh::{RemoteModules, RemoteOptions};
-    use std::time::{Duration, Instant};
-
-    let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/rover.ron");
-    let system = bip_engine::load_file(&model).expect("the rover");
-    let network = network("fault");
-    let mut processes = spawn_all(&network);
-    let clock = VirtualClock::new();
-    let deadline = Duration::from_millis(300);
-    let options = RemoteOptions {
-        deadline,
-        virtual_clock: Some(clock.clone()),
-    };
-    let types = bip_rover_controller::distributed::types(&system);
-    let remote = RemoteModules::new(&network, &system, types, options).expect("the session");
-    let builder = Engine::builder(system.clone()).record(10_000).clock(clock);
-    let mut engine = bip_rover_controller::distributed::bind_remote(builder, &remote)
-        .expect("every module process answers")
-        .build()
-        .expect("the engine");
-    rflex::request_init(&mut engine).expect("a request");
-    let drive = rflex::request_track_speed(&mut engine, 0.5).expect("a request");
-    let track = pom::request_track(&mut engine).expect("a request");
-    let before = run_ticks(&mut engine, 5);
-    assert!(
-        before
-            .iter()
-            .any(|e| e.contains("rflex.TrackSpeed: started")),
-        "{before:?}"
-    );
-    assert!(before.iter().all(|e| !e.contains("fault")), "{before:?}");
-
-    // the drive process (rflex among its modules) dies with TrackSpeed running
-    processes.kill(0);
-    let t0 = Instant::now();
-    let during = run_ticks(&mut engine, 3);
-    // one run waited for its deadline, then the activity took its error path
-    assert!(t0.elapsed() < deadline * 3 + Duration::from_secs(2));
-    let ended = format!(
-        "#{} rflex.TrackSpeed: done: fault: codel rflex.TrackSpeed.track",
-        drive.0 .0
-    );
-    assert!(
-        during
-            .iter()
-            .any(|e| e.starts_with(&ended) && e.contains("did not run the codel")),
-        "{during:?}"
-    );
-    // the other processes' modules go on: pom.Track is still running, without a fault
-    assert_eq!(engine.inspect().stats().faults, 1, "{during:?}");
-    assert!(
-        during
-            .iter()
-            .all(|e| !e.contains(&format!("#{}", track.0 .0))),
-        "{during:?}"
-    );
-
-    // restarted, the process rejoins: TrackSpeed runs there again
-    processes.spawn_one("drive", &network);
-    remote
-        .wait_for("rflex", rflex::CODELS, Duration::from_secs(20))
-        .expect("the restarted process answers");
-    rflex::request_track_speed(&mut engine, 0.2).expect("a request");
-    let after = run_ticks(&mut engine, 5);
-    assert!(
-        after
-            .iter()
-            .any(|e| e.contains("rflex.TrackSpeed: started")),
-        "{after:?}"
-    );
-    assert_eq!(engine.inspect().stats().faults, 1, "{after:?}");
-    // nothing the model forbids happened: the whole run replays, every invariant holds
-    check_recording(&system, &engine.record());
-}
-
 /// Runs the controller's binary as a client: `--request target [--args args]`; its exit
 /// status and its lines.
-fn client(network: &Network, target: &str, args: Option<&str>, timeout_ms: u64) -> (bool, String) {
+pub fn client(
+    network: &Network,
+    target: &str,
+    args: Option<&str>,
+    timeout_ms: u64,
+) -> (bool, String) {
     let mut c = Command::new(env!("CARGO_BIN_EXE_bip-rover-controller"));
     c.args(["--request", target])
         .args(["--connect", &network.listen[0]])
@@ -250,6 +173,7 @@ fn a_client_in_another_process_sends_typed_requests_and_reads_their_replies() {
         types,
         engine.handle(),
         Duration::from_secs(10),
+        None,
     )
     .expect("the server");
     let stop = Arc::new(AtomicBool::new(false));
@@ -293,33 +217,50 @@ fn a_client_in_another_process_sends_typed_requests_and_reads_their_replies() {
         "{out}"
     );
 
-    // malformed requests are refused with a message, and the engine goes on
+    // malformed requests are refused with a message: by the client, against the model,
+    // before anything is sent
     let (ok, out) = client(&network, "rflex.TrackSpeed", Some("\"fast\""), 5_000);
     assert!(
-        !ok && out
-            .contains("error: the arguments of rflex.TrackSpeed (\"fast\") are not of its type"),
+        !ok && out.contains(
+            "error: the arguments of rflex.TrackSpeed (`\"fast\"`) are not of its type Float"
+        ),
         "{out}"
     );
     let (ok, out) = client(&network, "rflex.Fly", None, 5_000);
     assert!(
-        !ok && out.contains("names no service of the layer"),
+        !ok && out.contains("module `rflex` has no service `Fly`"),
         "{out}"
     );
     let (ok, out) = client(&network, "rflex.Init", Some("3"), 5_000);
     assert!(!ok && out.contains("takes no arguments"), "{out}");
-    let raw = request_bytes(
-        &session,
-        &network.prefix,
-        "rflex",
-        "Init",
-        b"{not json".to_vec(),
-        Duration::from_secs(5),
-        |_| {},
-    )
-    .expect("an answer");
-    assert!(
-        matches!(raw.as_slice(), [ServiceReply::Error { message }] if message.contains("is not `{\"args\": ...}` in JSON")),
-        "{raw:?}"
+    // and by the engine's server, for clients that do not check (another language's)
+    let raw = |service: &str, payload: &[u8]| {
+        request_bytes(
+            &session,
+            &network.prefix,
+            "rflex",
+            service,
+            payload.to_vec(),
+            Duration::from_secs(5),
+            |_| {},
+        )
+        .expect("an answer")
+    };
+    let refused = |replies: Vec<ServiceReply>, why: &str| {
+        assert!(
+            matches!(replies.as_slice(), [ServiceReply::Error { message }] if message.contains(why)),
+            "{replies:?}"
+        )
+    };
+    refused(
+        raw("TrackSpeed", br#"{"args": "fast"}"#),
+        "the arguments of rflex.TrackSpeed (\"fast\") are not of its type",
+    );
+    refused(raw("Fly", b""), "names no service of the layer");
+    refused(raw("Init", br#"{"args": 3}"#), "takes no arguments");
+    refused(
+        raw("Init", b"{not json"),
+        "is not `{\"args\": ...}` in JSON",
     );
     let (ok, out) = client(&network, "antenna.Communicate", Some("3"), 1_500);
     assert!(ok && out.contains("accepted"), "{out}");

@@ -3,6 +3,8 @@
 //! holds (the controller checks that itself and fails otherwise).
 
 mod distributed;
+mod faults;
+mod relay;
 
 use bip_rover_controller::rover::ndd;
 
