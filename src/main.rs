@@ -19,7 +19,9 @@ mod memory_guard;
 mod names;
 mod replay;
 mod report;
+#[cfg(feature = "distributed")]
 mod request;
+#[cfg(feature = "distributed")]
 mod run;
 mod sched;
 mod simulate;
@@ -108,10 +110,12 @@ enum Command {
     /// Run a layer on this machine from its deployment file: start its module processes,
     /// gate their codels here, serve requests on the network (zenoh), print the events,
     /// until Ctrl-C or --for. Exit code 0: it ran, 2: model, deployment or start-up error.
+    #[cfg(feature = "distributed")]
     Run(run::Args),
     /// Send a request to a service of a running layer and print its replies; its
     /// arguments are checked against the model first. Exit code 0: the request was made,
     /// 2: it was not (malformed, refused by the layer, no engine answered).
+    #[cfg(feature = "distributed")]
     Request(request::Args),
     /// Explore the model's states in a web browser: fire steps, go back and forward,
     /// step through a counterexample (a local server on 127.0.0.1; Ctrl-C stops it).
@@ -140,7 +144,9 @@ fn main() -> ExitCode {
         Command::Trace(args) => trace::run(&args),
         Command::Codegen(args) => codegen::run(&args),
         Command::Explore(args) => explore::run(&args),
+        #[cfg(feature = "distributed")]
         Command::Run(args) => run::run(&args),
+        #[cfg(feature = "distributed")]
         Command::Request(args) => request::run(&args),
     };
     ExitCode::from(code)

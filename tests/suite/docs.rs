@@ -186,7 +186,8 @@ fn docs_transcripts() {
 }
 
 /// The transcripts of runs that take minutes in a debug build; `.ci/run` runs them in
-/// release (`cargo test --release --test suite docs_transcripts_in_release -- --ignored`).
+/// release (`cargo test --release --no-default-features --test suite docs_transcripts_in_release
+/// -- --ignored`, as `.ci/run` does).
 #[test]
 #[ignore = "minutes in a debug build: .ci/run runs it in release"]
 fn docs_transcripts_in_release() {

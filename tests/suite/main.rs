@@ -11,6 +11,7 @@ mod aperiodic;
 mod check;
 mod codegen;
 mod common;
+#[cfg(feature = "distributed")]
 mod distributed;
 mod docs;
 mod engine;
