@@ -177,6 +177,19 @@ impl EngineBuilder {
         {
             return Err(BuildError::Timed);
         }
+        if let Some(genom) = &system.genom {
+            for m in &genom.modules {
+                for s in &m.services {
+                    if let Some(c) = s.codels.iter().find(|c| c.apart.is_some()) {
+                        return Err(BuildError::Async(
+                            m.name.clone(),
+                            s.name.clone(),
+                            c.state.clone(),
+                        ));
+                    }
+                }
+            }
+        }
         let mut t = Tables::new(&system)?;
         if !self.bindings.is_empty() && system.genom.is_none() {
             return Err(BuildError::NoGenomLayer);

@@ -311,6 +311,17 @@ pub struct CodelMap {
     pub wcet_us: Option<u64>,
     /// Its best-case execution time in microseconds, if declared.
     pub bcet_us: Option<u64>,
+    /// An async codel's start and return (docs/genom.md, "Async codels"); its outcome
+    /// is then [`CodelMap::run`] or [`CodelMap::fail`], at its task's next cycle.
+    pub apart: Option<Apart>,
+}
+
+/// The steps of an async codel besides its outcome: it starts apart from its task (its
+/// conditions gate this step) and returns, whenever the world lets it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Apart {
+    pub start: u32,
+    pub returned: u32,
 }
 
 /// An ids field a codel writes (docs/genom.md, "Codels that write ids").
