@@ -470,6 +470,11 @@ impl CodelMap {
         Some(t)
     }
 
+    /// The interaction its conditions gate: an async codel's start, or its run.
+    pub fn gated(&self) -> u32 {
+        self.apart.map_or(self.run, |a| a.start)
+    }
+
     /// The yield a transition of the activity's atom takes.
     pub fn yield_of(&self, transition: u32) -> Option<&YieldMap> {
         self.yields
