@@ -171,11 +171,7 @@ pub struct CodelDef {
     pub bcet: Option<ConstExpr>,
     /// GenoM3's `async` codel: it runs apart from its task, which goes on with its other
     /// activities meanwhile (docs/genom.md, "Async codels").
-    #[serde(
-        default,
-        rename = "async",
-        skip_serializing_if = "std::ops::Not::not"
-    )]
+    #[serde(default, rename = "async", skip_serializing_if = "std::ops::Not::not")]
     pub asynchronous: bool,
 }
 

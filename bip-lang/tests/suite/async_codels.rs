@@ -111,12 +111,13 @@ fn an_async_codel_in_a_timed_model_is_refused_at_its_place() {
 
 // ---- random activities against a naive interpreter ----
 
-/// Activity `A` of task `t` (period `period`) with codels `start` (maybe async), `s1`
+/// Activity `A` of task `t` (period `period`, aperiodic for 0) with codels `start` (maybe async), `s1`
 /// (async) and maybe `stop` (maybe async), and activity `B` of the same task, whose
 /// `start` ends at once. `A` may interrupt itself: its request while it runs takes it to
 /// its stop path.
 #[derive(Clone, Debug)]
 struct Layer {
+    /// 0: aperiodic, and then no codel pauses (no sleeper, so no wake-ups).
     period: i64,
     start_async: bool,
     /// `start` yields `s1` through a pause.
@@ -130,7 +131,7 @@ struct Layer {
 
 fn layer() -> impl Strategy<Value = Layer> {
     (
-        1i64..=3,
+        0i64..=3,
         any::<bool>(),
         any::<bool>(),
         any::<bool>(),
@@ -141,8 +142,8 @@ fn layer() -> impl Strategy<Value = Layer> {
             |(period, start_async, start_pauses, s1_loops, stop, self_interrupt)| Layer {
                 period,
                 start_async,
-                start_pauses,
-                s1_loops,
+                start_pauses: start_pauses && period > 0,
+                s1_loops: s1_loops && period > 0,
                 stop,
                 self_interrupt,
             },
@@ -169,8 +170,12 @@ fn model(l: &Layer) -> String {
     } else {
         ""
     };
+    let task = match l.period {
+        0 => r#"(name: "t")"#.to_string(),
+        p => format!(r#"(name: "t", period: {p})"#),
+    };
     format!(
-        r#"System(name: "apart", modules: [(name: "m", tasks: [(name: "t", period: {})],
+        r#"System(name: "apart", modules: [(name: "m", tasks: [{task}],
             services: [
                 (name: "A", kind: Activity, task: "t", {interrupts}codels: [
                     (state: "start", yields: ["{start}"]{}),
@@ -178,7 +183,6 @@ fn model(l: &Layer) -> String {
                 (name: "B", kind: Activity, task: "t", codels: [(state: "start", yields: ["ether"])]),
             ])],
         properties: [DeadlockFree])"#,
-        l.period,
         asynchronous(l.start_async),
     )
 }
@@ -234,8 +238,11 @@ fn number(l: &Layer, k: u8) -> u8 {
 /// activity still waits for it, its outcome waits for the task's next period boundary
 /// and is then the codel's normal outcome or error path; elsewhere it is dropped. A
 /// request of a self-interrupting `A` while it runs takes it to `stop` (or `ether`),
-/// dropping an outcome that waits, never the running codel.
+/// dropping an outcome that waits, never the running codel. An aperiodic task has no
+/// boundaries: what a periodic one leaves for its next boundary (a start, a queued
+/// restart, a stop path, an outcome) is ready at once.
 fn reference_successors(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
+    let periodic = l.period > 0;
     let mut codels = Vec::new();
     let outcome = |codels: &mut Vec<(String, RefState)>, label: String, k: u8, base: RefState| {
         for (to, pauses) in yields(l, k) {
@@ -248,7 +255,7 @@ fn reference_successors(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
                 None => {
                     n.a = None;
                     n.stopping = false;
-                    n.paused = n.req;
+                    n.paused = n.req && periodic;
                 }
             }
             codels.push((label.clone(), n));
@@ -256,7 +263,7 @@ fn reference_successors(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
         let mut n = base;
         n.a = None;
         n.stopping = false;
-        n.paused = n.req;
+        n.paused = n.req && periodic;
         codels.push((format!("{label}_fail"), n));
     };
     // A's codel at `k`, from `ether` (its start) or its location
@@ -296,7 +303,7 @@ fn reference_successors(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
         return codels;
     }
     let mut out = Vec::new();
-    let phase = (s.phase + 1) % l.period;
+    let phase = (s.phase + 1) % l.period.max(1);
     out.push((
         "tick".to_string(),
         RefState {
@@ -311,7 +318,7 @@ fn reference_successors(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
             "B_request".into(),
             RefState {
                 b_req: true,
-                b_paused: true,
+                b_paused: periodic,
                 ..*s
             },
         ));
@@ -321,7 +328,7 @@ fn reference_successors(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
             "A_request".into(),
             RefState {
                 req: true,
-                paused: true,
+                paused: periodic,
                 ..*s
             },
         )),
@@ -330,12 +337,15 @@ fn reference_successors(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
             let mut n = RefState { req: true, ..*s };
             if l.stop == 0 {
                 n.a = None;
-                n.paused = true;
+                n.paused = periodic;
                 n.returned = false;
-            } else if !s.stopping {
-                n.a = Some(2);
-                n.stopping = true;
-                n.returned = false;
+            } else {
+                if !s.stopping {
+                    n.a = Some(2);
+                    n.stopping = true;
+                    n.returned = false;
+                }
+                n.paused &= periodic;
             }
             out.push(("A_request".into(), n));
         }
@@ -348,7 +358,7 @@ fn reference_successors(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
         let mut n = RefState { busy: 0, ..*s };
         if s.a == Some(k) {
             n.returned = true;
-            n.paused = true;
+            n.paused = periodic;
         }
         out.push((format!("A_{}_return", CODELS[k as usize]), n));
     }

@@ -108,7 +108,11 @@ impl<'a, 'd> Builder<'a, 'd> {
             format!("the start of async codel `{state}` of `{m}.{}`", s.name),
         );
         self.connectors.push((
-            connector(&start, vec![port(&comp, &start_port(state))], Role::Progress),
+            connector(
+                &start,
+                vec![port(&comp, &start_port(state))],
+                Role::Progress,
+            ),
             guard,
             Vec::new(),
         ));
