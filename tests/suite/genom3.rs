@@ -298,7 +298,10 @@ fn an_async_codel_shows_its_start_return_and_outcome() {
     let traces_arg = traces.display().to_string();
     let out = bip(&["verify", &model, "--trace-dir", &traces_arg]);
     assert_eq!(out.status.code(), Some(1), "the invariant fails");
-    let trace = traces.join("never_published.trace.ron").display().to_string();
+    let trace = traces
+        .join("never_published.trace.ron")
+        .display()
+        .to_string();
     let out = bip(&["trace", "show", &model, &trace]);
     let shown = String::from_utf8_lossy(&out.stdout);
     let at = |what: &str| {

@@ -100,6 +100,53 @@ fn an_async_codel_lets_its_task_run_another_activity() {
     assert!(!outcome_without_return, "an outcome came before the return");
 }
 
+/// The codel's conditions gate its start, never its outcome; `yield(m.S.s)` names the
+/// outcome and `m.S@start` the activity waiting for an async `start`.
+#[test]
+fn constraints_gate_the_start_and_names_reach_the_outcome() {
+    let text = r#"System(name: "plan", modules: [(name: "m", tasks: [(name: "t", period: 2)],
+        services: [
+            (name: "Plan", kind: Activity, task: "t", codels: [
+                (state: "start", yields: ["ether"], async: true)]),
+            (name: "Map", kind: Activity, task: "t", codels: [
+                (state: "start", yields: ["pause::start", "ether"])]),
+        ])],
+        constraints: [Requires(service: "m.Plan", active: ["m.Map"])],
+        properties: [
+            Reachable(name: "planning", expr: "m.Plan@start && !active(m.Map)"),
+            Response(name: "planned", trigger: "request(m.Plan)", response: "yield(m.Plan.start, ether)", within: 9),
+        ])"#;
+    let sys = load(text);
+    let map_active = |s: &State| {
+        let c = sys.component_index("m_Map").expect("Map");
+        sys.location_name(s, c) != "ether"
+    };
+    let mut seen = std::collections::HashSet::from([sys.initial_state()]);
+    let mut queue = vec![sys.initial_state()];
+    let (mut started, mut outcome_without_map) = (0, false);
+    while let Some(s) = queue.pop() {
+        for (step, next) in sys.successors(&s).expect("no range error") {
+            match interaction_name(&sys, step.label) {
+                "m_Plan_start_start" => {
+                    assert!(map_active(&s), "the start was not gated");
+                    started += 1;
+                }
+                "m_Plan_start" => outcome_without_map |= !map_active(&s),
+                _ => {}
+            }
+            if seen.insert(next.clone()) {
+                queue.push(next);
+            }
+        }
+    }
+    assert!(started > 0, "the async start never ran");
+    assert!(outcome_without_map, "the outcome was gated too");
+    let map = sys.genom.as_ref().expect("a map");
+    let plan = map.codel("m", "Plan", "start").expect("the codel");
+    assert_eq!(plan.gated(), plan.apart.expect("async").start);
+    assert_eq!(plan.holds.len(), 1, "{:?}", plan.holds);
+}
+
 #[test]
 fn an_async_codel_in_a_timed_model_is_refused_at_its_place() {
     let text = r#"System(name: "t", tick_ms: 10, time: Exact, cpus: [(name: "main", cores: 1, preemption: Job)],
