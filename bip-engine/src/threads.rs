@@ -131,7 +131,11 @@ fn task_of(t: &Tables, codel: usize) -> String {
     s.task.clone().unwrap_or_else(|| s.name.clone())
 }
 
-fn serve(mut codels: Vec<(CodelInfo, CodelFn)>, jobs: Receiver<Job>, done: SyncSender<Job>) {
+pub(crate) fn serve(
+    mut codels: Vec<(CodelInfo, CodelFn)>,
+    jobs: Receiver<Job>,
+    done: SyncSender<Job>,
+) {
     while let Ok(mut job) = jobs.recv() {
         let result = match codels.get_mut(job.local) {
             Some((info, f)) => {

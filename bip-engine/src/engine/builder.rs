@@ -177,6 +177,7 @@ impl EngineBuilder {
         {
             return Err(BuildError::Timed);
         }
+        #[cfg(not(feature = "std"))]
         if let Some(genom) = &system.genom {
             for m in &genom.modules {
                 for s in &m.services {
@@ -311,6 +312,18 @@ impl EngineBuilder {
         );
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
         let activities = t.activities.len();
+        // an async codel runs on a thread of its own, beside its module's other codels
+        #[cfg(feature = "std")]
+        let apart = {
+            let module_apart = out
+                .iter()
+                .enumerate()
+                .any(|(k, b)| matches!(b, Body::Module { .. }) && t.codels[k].map.apart.is_some());
+            if module_apart {
+                crate::threads::share_modules(&mut out, core::mem::take(&mut modules));
+            }
+            super::apart::Apart::spawn(&t, &mut out)
+        };
         #[cfg(feature = "std")]
         let workers = if self.threads {
             crate::threads::share_modules(&mut out, core::mem::take(&mut modules));
@@ -394,6 +407,8 @@ impl EngineBuilder {
             monitor,
             #[cfg(feature = "std")]
             remote: None,
+            #[cfg(feature = "std")]
+            apart,
         })
     }
 }

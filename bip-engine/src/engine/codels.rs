@@ -46,21 +46,33 @@ impl Engine {
             .activity
             .as_ref()
             .is_some_and(|a| self.gate.state().slots()[a.loc_slot as usize] == i64::from(a.ether));
-        let t0 = self.time.clock.now_us();
-        let default = matches!(self.runner.bodies[ck], Body::Default);
-        let end = match &self.runner.bodies[ck] {
-            Body::Default => self.default_end(ck, forced),
-            _ => {
-                let result = self.call_codel(ck, service, starting, t0);
-                self.classify(ck, result)
+        #[cfg(feature = "std")]
+        let apart = self.apart_end(ck, forced);
+        #[cfg(not(feature = "std"))]
+        let apart: Option<(CodelEnd, u64, u64)> = None;
+        // an async codel ran apart: its time is its own, not its task's
+        let of_task = apart.is_none();
+        let (end, t0, took) = match apart {
+            Some(ended) => ended,
+            None => {
+                let t0 = self.time.clock.now_us();
+                let default = matches!(self.runner.bodies[ck], Body::Default);
+                let end = match &self.runner.bodies[ck] {
+                    Body::Default => self.default_end(ck, forced),
+                    _ => {
+                        let result = self.call_codel(ck, service, starting, t0);
+                        self.classify(ck, result)
+                    }
+                };
+                let simulated = if default {
+                    self.simulated_time(ck)
+                } else {
+                    None
+                };
+                let took = simulated.unwrap_or_else(|| self.time.clock.now_us().saturating_sub(t0));
+                (end, t0, took)
             }
         };
-        let simulated = if default {
-            self.simulated_time(ck)
-        } else {
-            None
-        };
-        let took = simulated.unwrap_or_else(|| self.time.clock.now_us().saturating_sub(t0));
         let period_us = self.t.codels[ck]
             .period_ticks
             .saturating_mul(self.time.tick_us);
@@ -107,8 +119,8 @@ impl Engine {
             return Err(StepAsError::Diverged);
         }
         self.stats.codels += 1;
-        self.check_budgets(ck, t0, took);
-        if took > period_us {
+        self.check_budgets(ck, t0, took, of_task);
+        if of_task && took > period_us {
             self.stats.overruns += 1;
             let i = &self.t.codels[ck].info;
             tracing::warn!(target: "bip_engine", module = i.module.as_str(),
@@ -409,7 +421,7 @@ impl Engine {
     /// Records codel `ck`'s run of `took` µs from `t0`, and reports a run past its WCET
     /// and a period's work past its task's deadline (the reports are cold, out of line).
     #[inline]
-    fn check_budgets(&mut self, ck: usize, t0: u64, took: u64) {
+    fn check_budgets(&mut self, ck: usize, t0: u64, took: u64, of_task: bool) {
         let times = &mut self.budgets.times[ck];
         times.record(took);
         let (wcet, task) = (self.t.codels[ck].map.wcet_us, self.t.codels[ck].task);
@@ -417,7 +429,7 @@ impl Engine {
             times.over_wcet += 1;
             self.report_over_wcet(ck, took, wcet_us);
         }
-        let Some(k) = task.map(|k| k as usize) else {
+        let Some(k) = task.map(|k| k as usize).filter(|_| of_task) else {
             return;
         };
         if let Some(cpus) = &mut self.budgets.cpus {

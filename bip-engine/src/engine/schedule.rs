@@ -75,6 +75,11 @@ impl Engine {
         }
         #[cfg(feature = "std")]
         self.drain_remote();
+        // an async codel that has returned: its return, when the model allows it
+        #[cfg(feature = "std")]
+        if self.apart.live != 0 && self.return_apart()? {
+            return Ok(Stepped::Other);
+        }
         // 1. a due tick
         if self.time.clock.now_us() >= self.time.next_tick_us {
             if let Some(i) = self.enabled_time() {
@@ -92,6 +97,13 @@ impl Engine {
                     // without a forced step a codel run never diverges or is refused
                     _ => EngineError::Stopped(self.internal_error()),
                 }),
+                #[cfg(feature = "std")]
+                Candidate::Start(c) => self.start_apart(c, false).map_err(|e| match e {
+                    StepAsError::Engine(e) => e,
+                    _ => EngineError::Stopped(self.internal_error()),
+                }),
+                #[cfg(not(feature = "std"))]
+                Candidate::Start(_) => Err(EngineError::Stopped(self.internal_error())),
                 Candidate::Step(label, k) => {
                     self.choose_kth(label, k);
                     self.commit(self.progress_cause(label))?;
@@ -305,13 +317,17 @@ fn collect_progress(
                     out.push(Candidate::Codel(codel));
                 }
             }
+            InterKind::Start { codel } => out.push(Candidate::Start(codel)),
             InterKind::Progress => {
                 let n = enabled.steps_of(i).count() as u32;
                 for k in 0..n {
                     out.push(Candidate::Step(Label::Interaction(i), k));
                 }
             }
-            InterKind::Request { .. } | InterKind::Time | InterKind::Environment => {}
+            InterKind::Return { .. }
+            | InterKind::Request { .. }
+            | InterKind::Time
+            | InterKind::Environment => {}
         }
     }
 }

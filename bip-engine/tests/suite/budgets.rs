@@ -207,23 +207,3 @@ fn a_timed_model_is_refused() {
         .build();
     assert!(matches!(built, Err(bip_engine::BuildError::Timed)));
 }
-
-/// An async codel runs apart from its task in the model (docs/genom.md, "Async codels"),
-/// which the engine does not do yet: it refuses the model, naming the codel, rather than
-/// take the codel's start and return as steps of its own with no codel run.
-#[test]
-fn a_model_with_an_async_codel_is_refused() {
-    let model = r#"System(name: "apart", tick_ms: 1,
-        modules: [(name: "m", tasks: [(name: "t", period: 2)],
-            services: [(name: "S", kind: Activity, task: "t", codels: [
-                (state: "start", yields: ["grab"]),
-                (state: "grab", yields: ["ether"], async: true)])])])"#;
-    let system = load_str("apart.ron", model).expect("loads");
-    let built = Engine::builder(system)
-        .default_codels(DefaultCodels::FirstYield)
-        .build();
-    let Err(bip_engine::BuildError::Async(m, s, c)) = built else {
-        panic!("not refused as async");
-    };
-    assert_eq!((m.as_str(), s.as_str(), c.as_str()), ("m", "S", "grab"));
-}
