@@ -28,7 +28,7 @@ pub enum BuildError {
     NoThreads,
     #[error("a timed model (`time: Exact`) cannot be run by the engine yet: its codels' starts, finishes and time units are not bound to the engine's clock; verify it with `bip verify`")]
     Timed,
-    #[error("codel ({0}, {1}, {2}) is async, which the engine does not run yet: it would have to run the codel apart from its task; verify the model with `bip verify`, or make the codel synchronous to run it")]
+    #[error("codel ({0}, {1}, {2}) is async: the engine runs an async codel on a thread of its own, which needs bip-engine's `std` feature; enable it, or make the codel synchronous")]
     Async(String, String, String),
 }
 

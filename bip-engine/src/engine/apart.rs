@@ -4,8 +4,9 @@
 //! takes what the run left. While it runs apart the codel works on copies, taken at the
 //! start, of its module's ids and of the ports; its writes take effect at its outcome.
 
-use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
+use std::sync::mpsc::{channel, sync_channel, Receiver, Sender, SyncSender};
 use std::thread::JoinHandle;
+use std::time::Duration;
 
 #[allow(unused_imports)]
 use crate::prelude::*;
@@ -17,7 +18,7 @@ use crate::bind::Tables;
 use crate::codel::{Body, CodelFn};
 use crate::error::{EngineError, StepAsError};
 use crate::event::Ticket;
-use crate::threads::{serve, Job};
+use crate::threads::{run_job, Job};
 
 /// The async codels' threads and runs.
 #[derive(Default)]
@@ -25,6 +26,8 @@ pub(super) struct Apart {
     /// Per codel (empty if no codel is async): its run, from its start to its outcome.
     runs: Vec<Option<Run>>,
     threads: Vec<ApartThread>,
+    /// The runs that returned, with their codel, from every thread.
+    returns: Option<Receiver<(usize, Job)>>,
     /// Runs started whose return is not committed yet.
     pub(super) live: usize,
 }
@@ -45,7 +48,6 @@ pub(super) struct Run {
 
 struct ApartThread {
     to: SyncSender<Job>,
-    from: Receiver<Job>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -57,6 +59,8 @@ impl Apart {
             return apart;
         }
         apart.runs = t.codels.iter().map(|_| None).collect();
+        let (returned, returns) = channel::<(usize, Job)>();
+        apart.returns = Some(returns);
         for (k, body) in bodies.iter_mut().enumerate() {
             if t.codels[k].map.apart.is_none() || !matches!(body, Body::Bound(_)) {
                 continue;
@@ -65,19 +69,19 @@ impl Apart {
             let Body::Bound(f) = core::mem::replace(body, Body::Apart { thread }) else {
                 continue;
             };
-            let info = t.codels[k].info.clone();
-            let codels: Vec<(crate::codel::CodelInfo, CodelFn)> = vec![(info, f)];
+            let mut codels: Vec<(crate::codel::CodelInfo, CodelFn)> =
+                vec![(t.codels[k].info.clone(), f)];
             let (to, jobs) = sync_channel::<Job>(1);
-            let (done, from) = sync_channel::<Job>(1);
+            let returned = returned.clone();
             let name = format!(
                 "{}.{}.{}",
                 t.codels[k].info.module, t.codels[k].info.service, t.codels[k].info.state
             );
             let thread = std::thread::Builder::new()
                 .name(name)
-                .spawn(move || serve(codels, jobs, done))
+                .spawn(move || serve(k, &mut codels, jobs, returned))
                 .ok();
-            apart.threads.push(ApartThread { to, from, thread });
+            apart.threads.push(ApartThread { to, thread });
         }
         apart
     }
@@ -119,6 +123,21 @@ impl Engine {
             None => self.default_end(ck, forced),
         };
         Some((end, run.t0, took))
+    }
+}
+
+/// An async codel's thread: runs each job sent, and sends it back with its codel.
+fn serve(
+    codel: usize,
+    codels: &mut [(crate::codel::CodelInfo, CodelFn)],
+    jobs: Receiver<Job>,
+    returned: Sender<(usize, Job)>,
+) {
+    while let Ok(mut job) = jobs.recv() {
+        run_job(codels, &mut job);
+        if returned.send((codel, job)).is_err() {
+            return;
+        }
     }
 }
 
@@ -222,42 +241,77 @@ impl Engine {
     }
 
     /// Whether the run of codel `ck` has returned (and its return is not committed);
-    /// with `wait`, waits for it.
+    /// with `wait`, waits for it (a thread gone ends the run: a fault at its outcome).
     fn poll_run(&mut self, ck: usize, wait: bool) -> bool {
-        let Some(Some(run)) = self.apart.runs.get_mut(ck) else {
-            return false;
-        };
-        if run.returned {
-            return false;
+        loop {
+            match self.apart.runs.get(ck) {
+                Some(Some(run)) if !run.returned => {
+                    if run.took.is_some() {
+                        return true;
+                    }
+                }
+                _ => return false,
+            }
+            let got = if wait {
+                self.receive_return(None)
+            } else {
+                self.receive_return(Some(Duration::ZERO))
+            };
+            if !got {
+                if wait {
+                    let now = self.time.clock.now_us();
+                    if let Some(Some(run)) = self.apart.runs.get_mut(ck) {
+                        run.took = Some(now.saturating_sub(run.t0));
+                    }
+                    return true;
+                }
+                return false;
+            }
         }
-        if run.took.is_some() {
-            return true;
-        }
-        let Body::Apart { thread } = self.runner.bodies[ck] else {
+    }
+
+    /// Takes in a run that returned, waiting at most `timeout` (`None`: until one does);
+    /// false if none did.
+    fn receive_return(&mut self, timeout: Option<Duration>) -> bool {
+        let Some(returns) = &self.apart.returns else {
             return false;
         };
-        let Some(w) = self.apart.threads.get(thread) else {
-            return false;
+        let got = match timeout {
+            None => returns.recv().ok(),
+            Some(Duration::ZERO) => returns.try_recv().ok(),
+            Some(t) => returns.recv_timeout(t).ok(),
         };
-        let job = if wait {
-            w.from.recv().ok()
-        } else {
-            w.from.try_recv().ok()
+        let Some((ck, job)) = got else {
+            return false;
         };
         let now = self.time.clock.now_us();
-        match job {
-            Some(job) => {
-                run.job = Some(job);
-                run.took = Some(now.saturating_sub(run.t0));
-                true
-            }
-            None if wait => {
-                // the thread is gone: the run ends as a fault at its outcome
-                run.took = Some(now.saturating_sub(run.t0));
-                true
-            }
-            None => false,
+        if let Some(Some(run)) = self.apart.runs.get_mut(ck) {
+            run.took = Some(now.saturating_sub(run.t0));
+            run.job = Some(job);
         }
+        true
+    }
+
+    /// Waits for a run apart to return (nothing to wait for if none runs); true if one
+    /// did. The engine waits so when it is idle, before time `t`: on a virtual clock for
+    /// at most a tick's time, before it moves to the next tick (so that virtual time does
+    /// not run ahead of a codel running apart), on a real clock until `t`.
+    pub(super) fn wait_apart(&mut self, t: u64) -> bool {
+        let wait_us = if self.time.clock.is_virtual() {
+            self.time.tick_us
+        } else {
+            t.saturating_sub(self.time.clock.now_us())
+        };
+        wait_us > 0 && self.wait_for_return(Duration::from_micros(wait_us))
+    }
+
+    fn wait_for_return(&mut self, timeout: Duration) -> bool {
+        let running = self
+            .apart
+            .runs
+            .iter()
+            .any(|r| r.as_ref().is_some_and(|r| r.took.is_none()));
+        running && self.receive_return(Some(timeout))
     }
 
     /// Commits the return step chosen (or forced) for codel `ck`'s run.

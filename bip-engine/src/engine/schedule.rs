@@ -61,7 +61,7 @@ impl Engine {
             next_tick_us: Some(t),
         } = stepped
         {
-            if self.time.clock.is_virtual() {
+            if self.time.clock.is_virtual() && !self.returned_meanwhile(t) {
                 self.time.clock.sleep_until(t);
             }
         }
@@ -168,12 +168,30 @@ impl Engine {
     /// Waits until the clock reaches `t` (a virtual clock jumps there), taking in requests
     /// from handles meanwhile.
     pub fn wait_until(&mut self, t: u64) {
+        if self.returned_meanwhile(t) {
+            return;
+        }
         #[cfg(feature = "std")]
         if self.remote.is_some() {
             self.wait_remote(t);
             return;
         }
         self.time.clock.sleep_until(t);
+    }
+
+    /// Whether an async codel running apart returned while the engine waited for time
+    /// `t` (then the clock stays: its return is the next step).
+    #[inline]
+    fn returned_meanwhile(&mut self, t: u64) -> bool {
+        #[cfg(feature = "std")]
+        {
+            self.apart.live != 0 && self.wait_apart(t)
+        }
+        #[cfg(not(feature = "std"))]
+        {
+            let _ = t;
+            false
+        }
     }
 
     /// The first enabled time interaction.

@@ -115,6 +115,11 @@ fn an_async_codel_blocks_apart_while_its_task_runs_its_other_activity() {
         "Tune ran {before} times while the grab was blocked"
     );
     assert_eq!(end_of(&events, grab), None);
+    // running apart is progress, not a codel held
+    assert!(
+        !events.iter().any(|e| matches!(e, Event::Held { .. })),
+        "{events:?}"
+    );
     // nothing of the grab's writes shows while it runs
     assert_eq!(e.inspect().ids("m", "frames"), Some(0));
     assert_eq!(e.inspect().port::<i64>("m", "image"), None);
