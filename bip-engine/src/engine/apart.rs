@@ -92,14 +92,29 @@ impl Apart {
 }
 
 impl Engine {
+    /// Takes async codel `c`'s outcome: judges what its run left and commits the step
+    /// it names, as [`Engine::run_codel`] for a synchronous codel.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn run_outcome(&mut self, c: u32, forced: bool) -> Result<Stepped, StepAsError> {
+        let ck = c as usize;
+        self.stage_ids(ck);
+        let (end, t0, took) = self.apart_end(ck, forced);
+        self.commit_codel(c, end, t0, took, forced, false)
+    }
+
     /// The end of async codel `ck`'s run, at its outcome, with when it started and how
-    /// long it took (`None` if `ck` is not async): what a bound codel left, its writes
-    /// committed (the ids staged for the step, the ports it writes, its output); a
-    /// default codel's outcome.
-    #[inline]
-    pub(super) fn apart_end(&mut self, ck: usize, forced: bool) -> Option<(CodelEnd, u64, u64)> {
-        self.t.codels[ck].map.apart?;
-        let mut run = self.apart.take(ck)?;
+    /// long it took: what a bound codel left, its writes committed (the ids staged for
+    /// the step, the ports it writes, its output); a default codel's outcome. Out of
+    /// line: the synchronous codels' path does not carry it.
+    #[cold]
+    #[inline(never)]
+    fn apart_end(&mut self, ck: usize, forced: bool) -> (CodelEnd, u64, u64) {
+        let now = self.time.clock.now_us();
+        let Some(mut run) = self.apart.take(ck) else {
+            // an outcome with no run: a replayed trace that starts after the start
+            return (self.default_end(ck, forced), now, 0);
+        };
         let took = run.took.unwrap_or(0);
         let end = match run.job.take() {
             Some(mut job) => {
@@ -122,7 +137,7 @@ impl Engine {
             None if run.bound => self.classify(ck, Err("the codel's thread is gone".into())),
             None => self.default_end(ck, forced),
         };
-        Some((end, run.t0, took))
+        (end, run.t0, took)
     }
 }
 
@@ -225,6 +240,7 @@ impl Engine {
 
     /// Commits the return of an async codel that has returned, if the model allows it
     /// now; false if there is none to commit.
+    #[inline(never)]
     pub(super) fn return_apart(&mut self) -> Result<bool, EngineError> {
         for ck in 0..self.apart.runs.len() {
             let Some(a) = self.t.codels[ck].map.apart else {

@@ -33,7 +33,33 @@ impl Engine {
     pub(super) fn run_codel(&mut self, c: u32, forced: bool) -> Result<Stepped, StepAsError> {
         let ck = c as usize;
         let service = self.t.codels[ck].service as usize;
-        // stage the module's ids
+        self.stage_ids(ck);
+        let starting = self.t.services[service]
+            .activity
+            .as_ref()
+            .is_some_and(|a| self.gate.state().slots()[a.loc_slot as usize] == i64::from(a.ether));
+        let t0 = self.time.clock.now_us();
+        let default = matches!(self.runner.bodies[ck], Body::Default);
+        let end = match &self.runner.bodies[ck] {
+            Body::Default => self.default_end(ck, forced),
+            _ => {
+                let result = self.call_codel(ck, service, starting, t0);
+                self.classify(ck, result)
+            }
+        };
+        let simulated = if default {
+            self.simulated_time(ck)
+        } else {
+            None
+        };
+        let took = simulated.unwrap_or_else(|| self.time.clock.now_us().saturating_sub(t0));
+        self.commit_codel(c, end, t0, took, forced, true)
+    }
+
+    /// Stages the module's ids for codel `ck`: what it sees and writes, committed by
+    /// its step.
+    #[inline(always)]
+    pub(super) fn stage_ids(&mut self, ck: usize) {
         self.runner.ids.clear();
         for f in &self.t.codels[ck].info.fields {
             self.runner
@@ -42,37 +68,22 @@ impl Engine {
         }
         self.runner.written = 0;
         self.runner.fault = None;
-        let starting = self.t.services[service]
-            .activity
-            .as_ref()
-            .is_some_and(|a| self.gate.state().slots()[a.loc_slot as usize] == i64::from(a.ether));
-        #[cfg(feature = "std")]
-        let apart = self.apart_end(ck, forced);
-        #[cfg(not(feature = "std"))]
-        let apart: Option<(CodelEnd, u64, u64)> = None;
-        // an async codel ran apart: its time is its own, not its task's
-        let of_task = apart.is_none();
-        let (end, t0, took) = match apart {
-            Some(ended) => ended,
-            None => {
-                let t0 = self.time.clock.now_us();
-                let default = matches!(self.runner.bodies[ck], Body::Default);
-                let end = match &self.runner.bodies[ck] {
-                    Body::Default => self.default_end(ck, forced),
-                    _ => {
-                        let result = self.call_codel(ck, service, starting, t0);
-                        self.classify(ck, result)
-                    }
-                };
-                let simulated = if default {
-                    self.simulated_time(ck)
-                } else {
-                    None
-                };
-                let took = simulated.unwrap_or_else(|| self.time.clock.now_us().saturating_sub(t0));
-                (end, t0, took)
-            }
-        };
+    }
+
+    /// Commits the step the end of codel `c`'s run (from `t0`, `took` µs) names, and
+    /// accounts for its time: as its task's work (`of_task`), or as an async codel's
+    /// own (checked against its WCET only).
+    #[inline(always)]
+    pub(super) fn commit_codel(
+        &mut self,
+        c: u32,
+        end: CodelEnd,
+        t0: u64,
+        took: u64,
+        forced: bool,
+        of_task: bool,
+    ) -> Result<Stepped, StepAsError> {
+        let ck = c as usize;
         let period_us = self.t.codels[ck]
             .period_ticks
             .saturating_mul(self.time.tick_us);
@@ -245,6 +256,9 @@ impl Engine {
         }
     }
 
+    /// (Inlined into the step: a call more costs the synchronous path; the async codels'
+    /// out-of-line outcome calls it too.)
+    #[inline(always)]
     pub(super) fn classify(&mut self, ck: usize, result: Result<Next, String>) -> CodelEnd {
         let c = &mut self.t.codels[ck];
         let next = match result {
@@ -334,6 +348,7 @@ impl Engine {
     /// Chooses a step of the codel's run interaction that takes
     /// yield `yield_k` and writes the staged ids, chosen by the policy if several (with
     /// `forced`, the forced step if it is one); false if there is none.
+    #[inline(always)]
     pub(super) fn take_run_step(&mut self, ck: usize, yield_k: usize, forced: bool) -> bool {
         let c = &self.t.codels[ck];
         // steps from a table entry, and no ids to match: the step may be the one found last
@@ -420,7 +435,7 @@ impl Engine {
 impl Engine {
     /// Records codel `ck`'s run of `took` µs from `t0`, and reports a run past its WCET
     /// and a period's work past its task's deadline (the reports are cold, out of line).
-    #[inline]
+    #[inline(always)]
     fn check_budgets(&mut self, ck: usize, t0: u64, took: u64, of_task: bool) {
         let times = &mut self.budgets.times[ck];
         times.record(took);

@@ -54,6 +54,10 @@ impl Engine {
         };
         self.chosen.set_copied(step);
         match kind {
+            #[cfg(feature = "std")]
+            InterKind::Codel { codel, .. } if self.t.codels[codel as usize].map.apart.is_some() => {
+                self.run_outcome(codel, true)
+            }
             InterKind::Codel { codel, .. } => self.run_codel(codel, true),
             #[cfg(feature = "std")]
             InterKind::Start { codel } => self.start_apart(codel, true),

@@ -195,8 +195,9 @@ struct EventQueue {
 #[derive(Clone, Copy, Debug)]
 enum Candidate {
     Codel(u32),
-    /// An async codel's start.
+    /// An async codel's start, and its outcome.
     Start(u32),
+    Outcome(u32),
     /// The `k`-th enabled step with this label.
     Step(Label, u32),
 }

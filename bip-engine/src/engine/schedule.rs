@@ -102,8 +102,15 @@ impl Engine {
                     StepAsError::Engine(e) => e,
                     _ => EngineError::Stopped(self.internal_error()),
                 }),
+                #[cfg(feature = "std")]
+                Candidate::Outcome(c) => self.run_outcome(c, false).map_err(|e| match e {
+                    StepAsError::Engine(e) => e,
+                    _ => EngineError::Stopped(self.internal_error()),
+                }),
                 #[cfg(not(feature = "std"))]
-                Candidate::Start(_) => Err(EngineError::Stopped(self.internal_error())),
+                Candidate::Start(_) | Candidate::Outcome(_) => {
+                    Err(EngineError::Stopped(self.internal_error()))
+                }
                 Candidate::Step(label, k) => {
                     self.choose_kth(label, k);
                     self.commit(self.progress_cause(label))?;
@@ -167,6 +174,7 @@ impl Engine {
 
     /// Waits until the clock reaches `t` (a virtual clock jumps there), taking in requests
     /// from handles meanwhile.
+    #[inline]
     pub fn wait_until(&mut self, t: u64) {
         if self.returned_meanwhile(t) {
             return;
@@ -181,7 +189,7 @@ impl Engine {
 
     /// Whether an async codel running apart returned while the engine waited for time
     /// `t` (then the clock stays: its return is the next step).
-    #[inline]
+    #[inline(always)]
     fn returned_meanwhile(&mut self, t: u64) -> bool {
         #[cfg(feature = "std")]
         {
@@ -209,6 +217,7 @@ impl Engine {
         Ok(())
     }
 
+    #[inline(always)]
     pub(super) fn count_tick(&mut self) {
         self.stats.ticks += 1;
         // a period begins when its tick was due
@@ -332,7 +341,12 @@ fn collect_progress(
             InterKind::Codel { codel, .. } => {
                 if stamp[codel as usize] != epoch {
                     stamp[codel as usize] = epoch;
-                    out.push(Candidate::Codel(codel));
+                    // (candidates are kept per state: this is not looked at each step)
+                    out.push(if t.codels[codel as usize].map.apart.is_some() {
+                        Candidate::Outcome(codel)
+                    } else {
+                        Candidate::Codel(codel)
+                    });
                 }
             }
             InterKind::Start { codel } => out.push(Candidate::Start(codel)),
