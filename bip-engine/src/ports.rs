@@ -14,6 +14,7 @@ use bip_model::genom::map::DataType;
 /// A port's data: any `Clone` type, so that an async codel can take its own copy of the
 /// ports when it starts (docs/engine.md, "Async codels").
 pub(crate) trait PortData: Any + Send {
+    #[cfg_attr(not(feature = "std"), allow(dead_code))]
     fn copy(&self) -> Box<dyn PortData>;
     fn as_any(&self) -> &dyn Any;
     fn as_any_mut(&mut self) -> &mut dyn Any;
@@ -134,6 +135,7 @@ impl PortStore {
     }
 
     /// A copy of the store: each port's data cloned (what an async codel works on).
+    #[cfg(feature = "std")]
     pub fn copy(&self) -> PortStore {
         PortStore {
             names: self.names.clone(),
@@ -148,6 +150,7 @@ impl PortStore {
     }
 
     /// Moves the data of port `k` of `from` here (an async codel's write, committed).
+    #[cfg(feature = "std")]
     pub fn take_from(&mut self, from: &mut PortStore, k: usize) {
         if let (Some(to), Some(Some(v))) = (
             self.values.get_mut(k),

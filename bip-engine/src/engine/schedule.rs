@@ -108,7 +108,9 @@ impl Engine {
                     _ => EngineError::Stopped(self.internal_error()),
                 }),
                 #[cfg(not(feature = "std"))]
-                Candidate::Start(_) | Candidate::Outcome(_) => {
+                // (without `std` no model with an async codel is built)
+                Candidate::Start(c) | Candidate::Outcome(c) => {
+                    let _ = c;
                     Err(EngineError::Stopped(self.internal_error()))
                 }
                 Candidate::Step(label, k) => {
