@@ -200,7 +200,8 @@ impl Ctx<'_> {
     ///
     /// Port data is written in place: the model restarts the port's age only on a normal
     /// outcome, so a reader that checks `age` (a `Fresh` constraint) never relies on data
-    /// a failed codel left half written.
+    /// a failed codel left half written. It is `Clone`: an async codel works on a copy of
+    /// the ports taken at its start (docs/engine.md, "Threads").
     pub fn port_mut<T: Any + Send + Clone + Default>(&mut self, port: &str) -> Option<&mut T> {
         let slot = self
             .info
