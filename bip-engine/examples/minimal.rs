@@ -51,7 +51,7 @@ pub fn main() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 /// The data of port `rflex.odo`: rover.ron declares it a record `Odometry`.
-#[derive(Default)]
+#[derive(Clone, Default)]
 struct Odometry {
     x: f64,
     travelled: f64,

@@ -21,6 +21,10 @@ use crate::types::Args;
 pub(crate) enum InterKind {
     /// A codel's normal outcomes (`fail: false`) or error path (`fail: true`).
     Codel { codel: u32, fail: bool },
+    /// An async codel's start: it then runs apart (docs/genom.md, "Async codels").
+    Start { codel: u32 },
+    /// An async codel's return: committed when its run apart has ended.
+    Return { codel: u32 },
     /// A service's request, sent by the engine on behalf of a client.
     Request { service: u32 },
     /// A `Time` step: fired once per tick.
@@ -294,6 +298,10 @@ impl Tables {
                         codel: cid,
                         fail: true,
                     };
+                    if let Some(a) = c.apart {
+                        kind[a.start as usize] = InterKind::Start { codel: cid };
+                        kind[a.returned as usize] = InterKind::Return { codel: cid };
+                    }
                     let ids_field: Vec<usize> = c
                         .ids
                         .iter()
@@ -367,7 +375,10 @@ impl Tables {
     fn finish(mut self, system: &System, kind: Vec<InterKind>) -> Tables {
         self.progress_mask = vec![0; kind.len().div_ceil(64)];
         for (i, k) in kind.iter().enumerate() {
-            if matches!(k, InterKind::Codel { .. } | InterKind::Progress) {
+            if matches!(
+                k,
+                InterKind::Codel { .. } | InterKind::Start { .. } | InterKind::Progress
+            ) {
                 self.progress_mask[i / 64] |= 1 << (i % 64);
             }
             if *k == InterKind::Time {
@@ -485,7 +496,10 @@ fn activity_table(
             "tick" => Some(PortKind::Tick),
             other => match other.strip_suffix("_fail").and_then(codel_by_state) {
                 Some(k) => Some(PortKind::Fail(k)),
-                None => codel_by_state(other).map(PortKind::Run),
+                // an async codel's start takes up the request as its run would
+                None => codel_by_state(other)
+                    .or_else(|| other.strip_suffix("_start").and_then(codel_by_state))
+                    .map(PortKind::Run),
             },
         })
         .collect();

@@ -218,8 +218,9 @@ impl Ctx<'_> {
     ///
     /// Port data is written in place: the model restarts the port's age only on a normal
     /// outcome, so a reader that checks `age` (a `Fresh` constraint) never relies on data
-    /// a failed codel left half written.
-    pub fn port_mut<T: Any + Send + Default>(&mut self, port: &str) -> Option<&mut T> {
+    /// a failed codel left half written. It is `Clone`: an async codel works on a copy of
+    /// the ports taken at its start (docs/engine.md, "Threads").
+    pub fn port_mut<T: Any + Send + Clone + Default>(&mut self, port: &str) -> Option<&mut T> {
         let slot = self
             .info
             .ports
@@ -242,7 +243,7 @@ impl Ctx<'_> {
     }
 
     /// Replaces the data of an out port this codel writes (see [`Ctx::port_mut`]).
-    pub fn write_port<T: Any + Send + Default>(&mut self, port: &str, value: T) {
+    pub fn write_port<T: Any + Send + Clone + Default>(&mut self, port: &str, value: T) {
         if let Some(p) = self.port_mut::<T>(port) {
             *p = value;
         }
@@ -309,6 +310,11 @@ pub(crate) enum Body {
     Thread {
         worker: usize,
         local: usize,
+    },
+    /// An async codel on a thread of its own (`engine::apart`).
+    #[cfg(feature = "std")]
+    Apart {
+        thread: usize,
     },
 }
 

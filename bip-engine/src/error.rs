@@ -28,6 +28,8 @@ pub enum BuildError {
     NoThreads,
     #[error("a timed model (`time: Exact`) cannot be run by the engine yet: its codels' starts, finishes and time units are not bound to the engine's clock; verify it with `bip verify`")]
     Timed,
+    #[error("codel ({0}, {1}, {2}) is async: the engine runs an async codel on a thread of its own, which needs bip-engine's `std` feature; enable it, or make the codel synchronous")]
+    Async(String, String, String),
 }
 
 /// The engine cannot go on: the model computed a value outside a range (which `bip

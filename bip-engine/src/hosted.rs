@@ -133,7 +133,7 @@ impl HostedModule {
 
     /// Sets the data of out port `module.port`, as the engine holds it; an error (in the
     /// engine's words) if the model has no such port or it takes another type.
-    pub fn set_port<T: Any + Send + Default>(
+    pub fn set_port<T: Any + Send + Clone + Default>(
         &mut self,
         module: &str,
         port: &str,

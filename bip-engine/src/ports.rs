@@ -11,6 +11,27 @@ use crate::prelude::*;
 
 use bip_model::genom::map::DataType;
 
+/// A port's data: any `Clone` type, so that an async codel can take its own copy of the
+/// ports when it starts (docs/engine.md, "Async codels").
+pub(crate) trait PortData: Any + Send {
+    #[cfg_attr(not(feature = "std"), allow(dead_code))]
+    fn copy(&self) -> Box<dyn PortData>;
+    fn as_any(&self) -> &dyn Any;
+    fn as_any_mut(&mut self) -> &mut dyn Any;
+}
+
+impl<T: Any + Send + Clone> PortData for T {
+    fn copy(&self) -> Box<dyn PortData> {
+        Box::new(self.clone())
+    }
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}
+
 #[derive(Default)]
 pub(crate) struct PortStore {
     /// (module, port) names, in the GenoM map's order.
@@ -18,7 +39,7 @@ pub(crate) struct PortStore {
     /// The declared type of each.
     types: Vec<Option<DataType>>,
     /// The value of each, and its Rust type's name.
-    values: Vec<Option<(Box<dyn Any + Send>, &'static str)>>,
+    values: Vec<Option<(Box<dyn PortData>, &'static str)>>,
     /// (module, in port, entry) per connected in port: reading it reads that entry.
     links: Vec<(String, String, usize)>,
 }
@@ -63,14 +84,14 @@ impl PortStore {
 
     pub fn get<T: Any>(&self, module: &str, port: &str) -> Option<&T> {
         let k = self.index(module, port)?;
-        self.values[k].as_ref()?.0.downcast_ref()
+        (*self.values[k].as_ref()?.0).as_any().downcast_ref()
     }
 
     /// The value at `k` as a `T`: `None` if it has none yet; an error if it holds another
     /// type, or if a `T` is not of the port's declared type.
     pub fn read<T: Any>(&self, k: usize) -> Result<Option<&T>, WrongType> {
         match &self.values[k] {
-            Some((v, held)) => match v.downcast_ref() {
+            Some((v, held)) => match (**v).as_any().downcast_ref() {
                 Some(v) => Ok(Some(v)),
                 None => Err(self.wrong::<T>(k, held)),
             },
@@ -83,7 +104,7 @@ impl PortStore {
 
     /// The value at `k` as a `T`, created with `T::default()` on first use (if a `T` is of
     /// the port's declared type); an error if it holds another type.
-    pub fn get_mut_or_default<T: Any + Send + Default>(
+    pub fn get_mut_or_default<T: Any + Send + Clone + Default>(
         &mut self,
         k: usize,
     ) -> Result<&mut T, WrongType> {
@@ -95,19 +116,48 @@ impl PortStore {
             }
             self.values[k] = Some((Box::new(T::default()), type_name::<T>()));
         }
-        if !self.values[k].as_ref().is_some_and(|v| v.0.is::<T>()) {
+        if !self.values[k]
+            .as_ref()
+            .is_some_and(|v| (*v.0).as_any().is::<T>())
+        {
             let held = self.values[k].as_ref().map_or("", |v| v.1);
             return Err(self.wrong::<T>(k, held));
         }
         // (a `T`, as just asked)
         self.values[k]
             .as_mut()
-            .and_then(|v| v.0.downcast_mut())
+            .and_then(|v| (*v.0).as_any_mut().downcast_mut())
             .ok_or_else(|| WrongType {
                 port: String::new(),
                 expected: String::new(),
                 given: type_name::<T>(),
             })
+    }
+
+    /// A copy of the store: each port's data cloned (what an async codel works on).
+    #[cfg(feature = "std")]
+    pub fn copy(&self) -> PortStore {
+        PortStore {
+            names: self.names.clone(),
+            types: self.types.clone(),
+            values: self
+                .values
+                .iter()
+                .map(|v| v.as_ref().map(|(d, held)| ((**d).copy(), *held)))
+                .collect(),
+            links: self.links.clone(),
+        }
+    }
+
+    /// Moves the data of port `k` of `from` here (an async codel's write, committed).
+    #[cfg(feature = "std")]
+    pub fn take_from(&mut self, from: &mut PortStore, k: usize) {
+        if let (Some(to), Some(Some(v))) = (
+            self.values.get_mut(k),
+            from.values.get_mut(k).map(Option::take),
+        ) {
+            *to = Some(v);
+        }
     }
 
     /// What port `k` takes, against a `T` given: its declared type, else the type it

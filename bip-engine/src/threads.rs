@@ -133,26 +133,31 @@ fn task_of(t: &Tables, codel: usize) -> String {
 
 fn serve(mut codels: Vec<(CodelInfo, CodelFn)>, jobs: Receiver<Job>, done: SyncSender<Job>) {
     while let Ok(mut job) = jobs.recv() {
-        let result = match codels.get_mut(job.local) {
-            Some((info, f)) => {
-                let mut ctx = Ctx {
-                    info,
-                    ids: &mut job.ids,
-                    written: &mut job.written,
-                    fault: core::cell::Cell::from_mut(&mut job.fault),
-                    ports: &mut job.ports,
-                    args: job.args.as_deref(),
-                    output: Some(&mut job.output),
-                    now_us: job.now_us,
-                    tick: job.tick,
-                };
-                call_guarded(&mut ctx, &mut **f)
-            }
-            None => Err("no such codel on this thread".into()),
-        };
-        job.result = Some(result);
+        run_job(&mut codels, &mut job);
         if done.send(job).is_err() {
             return;
         }
     }
+}
+
+/// Calls the job's codel among `codels`, leaving its result in the job.
+pub(crate) fn run_job(codels: &mut [(CodelInfo, CodelFn)], job: &mut Job) {
+    let result = match codels.get_mut(job.local) {
+        Some((info, f)) => {
+            let mut ctx = Ctx {
+                info,
+                ids: &mut job.ids,
+                written: &mut job.written,
+                fault: core::cell::Cell::from_mut(&mut job.fault),
+                ports: &mut job.ports,
+                args: job.args.as_deref(),
+                output: Some(&mut job.output),
+                now_us: job.now_us,
+                tick: job.tick,
+            };
+            call_guarded(&mut ctx, &mut **f)
+        }
+        None => Err("no such codel on this thread".into()),
+    };
+    job.result = Some(result);
 }

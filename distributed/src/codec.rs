@@ -52,7 +52,7 @@ struct Typed<T> {
     _t: PhantomData<fn() -> T>,
 }
 
-impl<T: Any + Send + Sync + Default> Convert for Typed<T> {
+impl<T: Any + Send + Sync + Clone + Default> Convert for Typed<T> {
     fn type_name(&self) -> &'static str {
         type_name::<T>()
     }
@@ -103,7 +103,7 @@ impl<T: Any + Send + Sync + Default> Convert for Typed<T> {
 
 impl Codec {
     /// A type that serde serializes: JSON as serde_json writes it.
-    pub fn serde<T: Serialize + DeserializeOwned + Any + Send + Sync + Default>() -> Codec {
+    pub fn serde<T: Serialize + DeserializeOwned + Any + Send + Sync + Clone + Default>() -> Codec {
         Codec::with::<T>(
             |t| serde_json::to_value(t).unwrap_or(Value::Null),
             |v| T::deserialize(v).map_err(|e| e.to_string()),
@@ -112,7 +112,7 @@ impl Codec {
 
     /// A type converted by two functions (for a type without serde, such as the records
     /// bip-codegen generates).
-    pub fn with<T: Any + Send + Sync + Default>(
+    pub fn with<T: Any + Send + Sync + Clone + Default>(
         to: fn(&T) -> Value,
         from: fn(&Value) -> Result<T, String>,
     ) -> Codec {

@@ -50,6 +50,10 @@ pub fn graph(def: &SystemDef, name: &str) -> Result<Graph, String> {
         )
         .fill("#eef5ff");
         let mut notes = Vec::new();
+        if codel.asynchronous {
+            // docs/genom.md, "Async codels"
+            notes.push("async: runs apart from its task".to_string());
+        }
         if !codel.writes.is_empty() {
             let ports: Vec<&str> = codel.writes.iter().map(|p| p.as_str()).collect();
             notes.push(format!("writes {}", ports.join(", ")));

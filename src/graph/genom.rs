@@ -273,6 +273,10 @@ fn connector_edges(
             for codel in &service.codels {
                 owner.insert(codel.run, name.clone());
                 owner.insert(codel.fail, name.clone());
+                if let Some(apart) = codel.apart {
+                    owner.insert(apart.start, name.clone());
+                    owner.insert(apart.returned, name.clone());
+                }
             }
             if let Some(c) = service.component {
                 activity.insert(c, name.clone());

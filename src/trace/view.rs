@@ -54,6 +54,12 @@ enum Role<'m> {
         service: String,
         codel: &'m str,
     },
+    /// An async codel's start apart from its task, or its return.
+    Apart {
+        service: String,
+        codel: &'m str,
+        returns: bool,
+    },
 }
 
 /// The trace replayed on `system` and named in the user's terms; `all` shows the
@@ -198,6 +204,18 @@ fn roles(map: &GenomMap) -> BTreeMap<u32, Role<'_>> {
                         codel: &codel.state,
                     },
                 );
+                if let Some(apart) = codel.apart {
+                    for (i, returns) in [(apart.start, false), (apart.returned, true)] {
+                        out.insert(
+                            i,
+                            Role::Apart {
+                                service: service.clone(),
+                                codel: &codel.state,
+                                returns,
+                            },
+                        );
+                    }
+                }
             }
         }
     }
@@ -213,6 +231,14 @@ fn describe(system: &System, step: &OwnedStep, role: Option<&Role>) -> (String, 
         Some(Role::Request { service }) => (format!("request {service}"), Kind::Step, None),
         Some(Role::Fail { service, codel }) => {
             (format!("{service}: {codel} throws"), Kind::Step, None)
+        }
+        Some(Role::Apart {
+            service,
+            codel,
+            returns,
+        }) => {
+            let what = if *returns { "returns" } else { "starts apart" };
+            (format!("{service}: {codel} {what}"), Kind::Step, None)
         }
         Some(Role::Codel {
             service,

@@ -268,3 +268,95 @@ fn bip_graph_shows_an_error_in_a_gen_file() {
     assert!(stderr.contains("c.gen:3:"), "{stderr}");
     assert!(stderr.contains("nowhere"), "{stderr}");
 }
+
+/// An async codel (docs/genom.md, "Async codels") in the pictures and traces: the
+/// activity's picture marks it, and a trace names its start apart from the task, its
+/// return, and then its outcome, with ticks between them; `bip replay` and `bip simulate`
+/// run it through the engine.
+#[test]
+fn an_async_codel_shows_its_start_return_and_outcome() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let camera = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("robots/tests/genom3/camera.gen")
+        .display()
+        .to_string();
+    let model = dir.path().join("camera.ron");
+    std::fs::write(
+        &model,
+        format!(
+            r#"System(name: "camera", tick_ms: 10, modules: [Gen({camera:?})],
+            properties: [Invariant(name: "never_published", expr: "!camera.Capture@publish")])"#
+        ),
+    )
+    .expect("writes");
+    let model = model.display().to_string();
+    let picture = graph(&model, &["--activity", "camera.Capture", "--format", "dot"]);
+    assert!(
+        picture.contains(r#"label="wait\nasync: runs apart from its task""#),
+        "{picture}"
+    );
+    let traces = dir.path().join("traces");
+    let traces_arg = traces.display().to_string();
+    let out = bip(&["verify", &model, "--trace-dir", &traces_arg]);
+    assert_eq!(out.status.code(), Some(1), "the invariant fails");
+    let trace = traces
+        .join("never_published.trace.ron")
+        .display()
+        .to_string();
+    let out = bip(&["trace", "show", &model, &trace]);
+    let shown = String::from_utf8_lossy(&out.stdout);
+    let at = |what: &str| {
+        shown
+            .find(what)
+            .unwrap_or_else(|| panic!("{what} in\n{shown}"))
+    };
+    let (start, ret, outcome) = (
+        at("camera.Capture: wait starts apart"),
+        at("camera.Capture: wait returns"),
+        at("camera.Capture: wait → publish"),
+    );
+    assert!(start < ret && ret < outcome, "{shown}");
+    assert!(shown[start..outcome].contains("tick"), "{shown}");
+    // the engine runs it: the counterexample replays to its failure, and a simulation's
+    // recording (starts, returns and outcomes of the grab among them) replays whole
+    let out = bip(&["replay", &model, &trace]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    // (a model without the invariant, which a simulation would find failing)
+    let plain = dir.path().join("plain.ron");
+    std::fs::write(
+        &plain,
+        format!(r#"System(name: "camera", tick_ms: 10, modules: [Gen({camera:?})])"#),
+    )
+    .expect("writes");
+    let model = plain.display().to_string();
+    let run = dir.path().join("run.ron").display().to_string();
+    let out = bip(&[
+        "simulate", &model, "--steps", "3000", "--seed", "1", "--trace", &run,
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let recorded = std::fs::read_to_string(&run).expect("the recording");
+    for step in [
+        "camera_Capture_wait_start",
+        "camera_Capture_wait_return",
+        "camera_Capture_wait\"",
+    ] {
+        assert!(recorded.contains(step), "{step} in the recording");
+    }
+    let out = bip(&["replay", &model, &run]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+}

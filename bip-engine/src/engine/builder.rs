@@ -177,6 +177,20 @@ impl EngineBuilder {
         {
             return Err(BuildError::Timed);
         }
+        #[cfg(not(feature = "std"))]
+        if let Some(genom) = &system.genom {
+            for m in &genom.modules {
+                for s in &m.services {
+                    if let Some(c) = s.codels.iter().find(|c| c.apart.is_some()) {
+                        return Err(BuildError::Async(
+                            m.name.clone(),
+                            s.name.clone(),
+                            c.state.clone(),
+                        ));
+                    }
+                }
+            }
+        }
         let mut t = Tables::new(&system)?;
         if !self.bindings.is_empty() && system.genom.is_none() {
             return Err(BuildError::NoGenomLayer);
@@ -298,6 +312,18 @@ impl EngineBuilder {
         );
         let max_fields = t.codels.iter().map(|c| c.info.fields.len()).max();
         let activities = t.activities.len();
+        // an async codel runs on a thread of its own, beside its module's other codels
+        #[cfg(feature = "std")]
+        let apart = {
+            let module_apart = out
+                .iter()
+                .enumerate()
+                .any(|(k, b)| matches!(b, Body::Module { .. }) && t.codels[k].map.apart.is_some());
+            if module_apart {
+                crate::threads::share_modules(&mut out, core::mem::take(&mut modules));
+            }
+            super::apart::Apart::spawn(&t, &mut out)
+        };
         #[cfg(feature = "std")]
         let workers = if self.threads {
             crate::threads::share_modules(&mut out, core::mem::take(&mut modules));
@@ -381,6 +407,8 @@ impl EngineBuilder {
             monitor,
             #[cfg(feature = "std")]
             remote: None,
+            #[cfg(feature = "std")]
+            apart,
         })
     }
 }

@@ -33,15 +33,7 @@ impl Engine {
     pub(super) fn run_codel(&mut self, c: u32, forced: bool) -> Result<Stepped, StepAsError> {
         let ck = c as usize;
         let service = self.t.codels[ck].service as usize;
-        // stage the module's ids
-        self.runner.ids.clear();
-        for f in &self.t.codels[ck].info.fields {
-            self.runner
-                .ids
-                .push(self.gate.state().slots()[f.slot as usize]);
-        }
-        self.runner.written = 0;
-        self.runner.fault = None;
+        self.stage_ids(ck);
         let starting = self.t.services[service]
             .activity
             .as_ref()
@@ -61,6 +53,37 @@ impl Engine {
             None
         };
         let took = simulated.unwrap_or_else(|| self.time.clock.now_us().saturating_sub(t0));
+        self.commit_codel(c, end, t0, took, forced, true)
+    }
+
+    /// Stages the module's ids for codel `ck`: what it sees and writes, committed by
+    /// its step.
+    #[inline(always)]
+    pub(super) fn stage_ids(&mut self, ck: usize) {
+        self.runner.ids.clear();
+        for f in &self.t.codels[ck].info.fields {
+            self.runner
+                .ids
+                .push(self.gate.state().slots()[f.slot as usize]);
+        }
+        self.runner.written = 0;
+        self.runner.fault = None;
+    }
+
+    /// Commits the step the end of codel `c`'s run (from `t0`, `took` µs) names, and
+    /// accounts for its time: as its task's work (`of_task`), or as an async codel's
+    /// own (checked against its WCET only).
+    #[inline(always)]
+    pub(super) fn commit_codel(
+        &mut self,
+        c: u32,
+        end: CodelEnd,
+        t0: u64,
+        took: u64,
+        forced: bool,
+        of_task: bool,
+    ) -> Result<Stepped, StepAsError> {
+        let ck = c as usize;
         let period_us = self.t.codels[ck]
             .period_ticks
             .saturating_mul(self.time.tick_us);
@@ -107,8 +130,8 @@ impl Engine {
             return Err(StepAsError::Diverged);
         }
         self.stats.codels += 1;
-        self.check_budgets(ck, t0, took);
-        if took > period_us {
+        self.check_budgets(ck, t0, took, of_task);
+        if of_task && took > period_us {
             self.stats.overruns += 1;
             let i = &self.t.codels[ck].info;
             tracing::warn!(target: "bip_engine", module = i.module.as_str(),
@@ -233,6 +256,9 @@ impl Engine {
         }
     }
 
+    /// (Inlined into the step: a call more costs the synchronous path; the async codels'
+    /// out-of-line outcome calls it too.)
+    #[inline(always)]
     pub(super) fn classify(&mut self, ck: usize, result: Result<Next, String>) -> CodelEnd {
         let c = &mut self.t.codels[ck];
         let next = match result {
@@ -322,6 +348,7 @@ impl Engine {
     /// Chooses a step of the codel's run interaction that takes
     /// yield `yield_k` and writes the staged ids, chosen by the policy if several (with
     /// `forced`, the forced step if it is one); false if there is none.
+    #[inline(always)]
     pub(super) fn take_run_step(&mut self, ck: usize, yield_k: usize, forced: bool) -> bool {
         let c = &self.t.codels[ck];
         // steps from a table entry, and no ids to match: the step may be the one found last
@@ -408,8 +435,8 @@ impl Engine {
 impl Engine {
     /// Records codel `ck`'s run of `took` µs from `t0`, and reports a run past its WCET
     /// and a period's work past its task's deadline (the reports are cold, out of line).
-    #[inline]
-    fn check_budgets(&mut self, ck: usize, t0: u64, took: u64) {
+    #[inline(always)]
+    fn check_budgets(&mut self, ck: usize, t0: u64, took: u64, of_task: bool) {
         let times = &mut self.budgets.times[ck];
         times.record(took);
         let (wcet, task) = (self.t.codels[ck].map.wcet_us, self.t.codels[ck].task);
@@ -417,7 +444,7 @@ impl Engine {
             times.over_wcet += 1;
             self.report_over_wcet(ck, took, wcet_us);
         }
-        let Some(k) = task.map(|k| k as usize) else {
+        let Some(k) = task.map(|k| k as usize).filter(|_| of_task) else {
             return;
         };
         if let Some(cpus) = &mut self.budgets.cpus {

@@ -54,7 +54,19 @@ impl Engine {
         };
         self.chosen.set_copied(step);
         match kind {
+            #[cfg(feature = "std")]
+            InterKind::Codel { codel, .. } if self.t.codels[codel as usize].map.apart.is_some() => {
+                self.run_outcome(codel, true)
+            }
             InterKind::Codel { codel, .. } => self.run_codel(codel, true),
+            #[cfg(feature = "std")]
+            InterKind::Start { codel } => self.start_apart(codel, true),
+            #[cfg(feature = "std")]
+            InterKind::Return { codel } => self.force_return(codel),
+            #[cfg(not(feature = "std"))]
+            InterKind::Start { .. } | InterKind::Return { .. } => {
+                Err(EngineError::Stopped(self.internal_error()).into())
+            }
             InterKind::Request { service } => {
                 let ticket = self.new_ticket();
                 self.accept_request(ticket, service, None)?;
@@ -91,7 +103,10 @@ impl Engine {
                 accepted: true,
             },
             InterKind::Time => Stepped::Tick,
-            InterKind::Progress | InterKind::Environment => Stepped::Other,
+            InterKind::Start { .. }
+            | InterKind::Return { .. }
+            | InterKind::Progress
+            | InterKind::Environment => Stepped::Other,
         }
     }
 

@@ -125,8 +125,9 @@ impl Engine {
         let cm = &self.t.codels[c as usize].map;
         // codels are higher than the tick in every GenoM layer, so the set evaluates them
         // always (`None`, never evaluated, cannot happen here)
-        if self.gate.enabled().has_steps_before_priorities(cm.run) != Some(false)
-            || self.gate.enabled().has_steps_before_priorities(cm.fail) != Some(false)
+        // (an async codel's start, or its return while it runs apart, is its progress)
+        let can = |i: u32| self.gate.enabled().has_steps_before_priorities(i) != Some(false);
+        if can(cm.run) || can(cm.fail) || cm.apart.is_some_and(|p| can(p.start) || can(p.returned))
         {
             return Ok(None); // it can run; it may only wait for its turn
         }

@@ -40,6 +40,8 @@ use crate::policy::{Chooser, Rng};
 use crate::ports::PortStore;
 use crate::record::{Recording, Window};
 
+#[cfg(feature = "std")]
+mod apart;
 mod builder;
 mod codels;
 mod commit;
@@ -115,6 +117,9 @@ pub struct Engine {
     monitor: monitor::Monitor,
     #[cfg(feature = "std")]
     remote: Option<crate::handle::Remote>,
+    /// The async codels' threads and runs.
+    #[cfg(feature = "std")]
+    apart: apart::Apart,
 }
 
 /// How the codels run, and what a run leaves behind for its step.
@@ -190,6 +195,9 @@ struct EventQueue {
 #[derive(Clone, Copy, Debug)]
 enum Candidate {
     Codel(u32),
+    /// An async codel's start, and its outcome.
+    Start(u32),
+    Outcome(u32),
     /// The `k`-th enabled step with this label.
     Step(Label, u32),
 }

@@ -61,7 +61,7 @@ impl Engine {
             next_tick_us: Some(t),
         } = stepped
         {
-            if self.time.clock.is_virtual() {
+            if self.time.clock.is_virtual() && !self.returned_meanwhile(t) {
                 self.time.clock.sleep_until(t);
             }
         }
@@ -75,6 +75,11 @@ impl Engine {
         }
         #[cfg(feature = "std")]
         self.drain_remote();
+        // an async codel that has returned: its return, when the model allows it
+        #[cfg(feature = "std")]
+        if self.apart.live != 0 && self.return_apart()? {
+            return Ok(Stepped::Other);
+        }
         // 1. a due tick
         if self.time.clock.now_us() >= self.time.next_tick_us {
             if let Some(i) = self.enabled_time() {
@@ -92,6 +97,22 @@ impl Engine {
                     // without a forced step a codel run never diverges or is refused
                     _ => EngineError::Stopped(self.internal_error()),
                 }),
+                #[cfg(feature = "std")]
+                Candidate::Start(c) => self.start_apart(c, false).map_err(|e| match e {
+                    StepAsError::Engine(e) => e,
+                    _ => EngineError::Stopped(self.internal_error()),
+                }),
+                #[cfg(feature = "std")]
+                Candidate::Outcome(c) => self.run_outcome(c, false).map_err(|e| match e {
+                    StepAsError::Engine(e) => e,
+                    _ => EngineError::Stopped(self.internal_error()),
+                }),
+                #[cfg(not(feature = "std"))]
+                // (without `std` no model with an async codel is built)
+                Candidate::Start(c) | Candidate::Outcome(c) => {
+                    let _ = c;
+                    Err(EngineError::Stopped(self.internal_error()))
+                }
                 Candidate::Step(label, k) => {
                     self.choose_kth(label, k);
                     self.commit(self.progress_cause(label))?;
@@ -155,13 +176,32 @@ impl Engine {
 
     /// Waits until the clock reaches `t` (a virtual clock jumps there), taking in requests
     /// from handles meanwhile.
+    #[inline]
     pub fn wait_until(&mut self, t: u64) {
+        if self.returned_meanwhile(t) {
+            return;
+        }
         #[cfg(feature = "std")]
         if self.remote.is_some() {
             self.wait_remote(t);
             return;
         }
         self.time.clock.sleep_until(t);
+    }
+
+    /// Whether an async codel running apart returned while the engine waited for time
+    /// `t` (then the clock stays: its return is the next step).
+    #[inline(always)]
+    fn returned_meanwhile(&mut self, t: u64) -> bool {
+        #[cfg(feature = "std")]
+        {
+            self.apart.live != 0 && self.wait_apart(t)
+        }
+        #[cfg(not(feature = "std"))]
+        {
+            let _ = t;
+            false
+        }
     }
 
     /// The first enabled time interaction.
@@ -179,6 +219,7 @@ impl Engine {
         Ok(())
     }
 
+    #[inline(always)]
     pub(super) fn count_tick(&mut self) {
         self.stats.ticks += 1;
         // a period begins when its tick was due
@@ -302,16 +343,25 @@ fn collect_progress(
             InterKind::Codel { codel, .. } => {
                 if stamp[codel as usize] != epoch {
                     stamp[codel as usize] = epoch;
-                    out.push(Candidate::Codel(codel));
+                    // (candidates are kept per state: this is not looked at each step)
+                    out.push(if t.codels[codel as usize].map.apart.is_some() {
+                        Candidate::Outcome(codel)
+                    } else {
+                        Candidate::Codel(codel)
+                    });
                 }
             }
+            InterKind::Start { codel } => out.push(Candidate::Start(codel)),
             InterKind::Progress => {
                 let n = enabled.steps_of(i).count() as u32;
                 for k in 0..n {
                     out.push(Candidate::Step(Label::Interaction(i), k));
                 }
             }
-            InterKind::Request { .. } | InterKind::Time | InterKind::Environment => {}
+            InterKind::Return { .. }
+            | InterKind::Request { .. }
+            | InterKind::Time
+            | InterKind::Environment => {}
         }
     }
 }

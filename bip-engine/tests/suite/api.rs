@@ -320,7 +320,7 @@ fn request_arguments_are_checked_against_the_declared_type() {
 /// the fault names the port or service and both types.
 #[test]
 fn port_data_and_outputs_of_another_type_are_faults() {
-    #[derive(Default)]
+    #[derive(Clone, Default)]
     struct Odometry {
         x: f64,
     }

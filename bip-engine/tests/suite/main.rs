@@ -4,6 +4,7 @@
 //! differential property test.
 
 mod api;
+mod async_codels;
 mod bounded;
 mod budgets;
 mod common;

@@ -289,6 +289,7 @@ fn codel_defs(
                 wcet: wcet.clone(),
                 // GenoM3 declares a WCET only
                 bcet: None,
+                asynchronous: codel.asynchronous,
             })
         })
         .collect()

@@ -20,6 +20,11 @@ pub const DONE: &str = "done";
 /// a pause) until the module's wake-up has delivered it, and the port of that wake-up.
 pub const WOKE: &str = "woke";
 pub const WAKE: &str = "wake";
+/// An activity's variables for its async codels: which one runs apart from the task (0:
+/// none, else its number from 1 in codel order), and whether the one at the activity's
+/// state has returned, its outcome waiting for the task.
+pub const BUSY: &str = "busy";
+pub const RETURNED: &str = "returned";
 
 /// The connector that wakes module `m`'s sleeping aperiodic activities.
 pub fn wake_connector(m: &str) -> String {
@@ -77,6 +82,23 @@ pub fn fail_port(state: &str) -> String {
     format!("{state}_fail")
 }
 
+/// The port of async codel `state` in its activity atom by which it starts apart from
+/// its task (its connector is [`start_connector`]).
+pub fn start_port(state: &str) -> String {
+    format!("{state}_start")
+}
+
+/// The port of async codel `state` in its activity atom by which it returns.
+pub fn return_port(state: &str) -> String {
+    format!("{state}_return")
+}
+
+/// The connector by which async codel `state` of activity `m.s` returns (its outcome is
+/// then applied by [`codel_connector`] or [`fail_connector`] at its task's next cycle).
+pub fn return_connector(m: &str, s: &str, state: &str) -> String {
+    format!("{m}_{s}_{state}_return")
+}
+
 /// The age variable of port `p` in its module's atom.
 pub fn age_var(p: &str) -> String {
     format!("age_{p}")
@@ -120,8 +142,9 @@ pub fn done_connector(m: &str, t: &str) -> String {
     format!("{m}_{t}_done")
 }
 
-/// The connector that starts codel `state` of activity `m.s` on its task's core (its
-/// finish is [`codel_connector`]).
+/// The connector that starts codel `state` of activity `m.s`: on its task's core in a
+/// timed model (its finish is [`codel_connector`]), apart from its task for an async
+/// codel in an untimed one.
 pub fn start_connector(m: &str, s: &str, state: &str) -> String {
     format!("{m}_{s}_{state}_start")
 }

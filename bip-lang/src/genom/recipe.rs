@@ -73,6 +73,8 @@ pub(crate) struct RecipeCodel {
     pub ids: Vec<String>,
     pub ids_port: Option<String>,
     pub holds: Vec<RecipeCondition>,
+    /// An async codel's start and return connectors.
+    pub apart: Option<(String, String)>,
 }
 
 #[derive(Clone, Debug)]
@@ -256,6 +258,13 @@ impl Recipe {
                         holds,
                         wcet_us: self.timing.wcets.get(&codel_key).copied(),
                         bcet_us: self.timing.bcets.get(&codel_key).copied(),
+                        apart: match &c.apart {
+                            Some((start, ret)) => Some(Apart {
+                                start: interaction(start)?,
+                                returned: interaction(ret)?,
+                            }),
+                            None => None,
+                        },
                     });
                 }
                 services.push(ServiceMap {

@@ -169,6 +169,10 @@ pub struct CodelDef {
     /// Best-case execution time of one run, at most the WCET; by default 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bcet: Option<ConstExpr>,
+    /// GenoM3's `async` codel: it runs apart from its task, which goes on with its other
+    /// activities meanwhile (docs/genom.md, "Async codels").
+    #[serde(default, rename = "async", skip_serializing_if = "std::ops::Not::not")]
+    pub asynchronous: bool,
 }
 
 /// A connection: module `m`'s in port `p` reads module `n`'s out port `q`

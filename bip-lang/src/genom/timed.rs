@@ -338,9 +338,24 @@ fn cpus(def: &SystemDef, time: Span, errors: &mut Errors) {
     }
 }
 
-/// The tasks a timed model does not schedule yet: aperiodic ones, and atoms' tasks.
+/// The tasks a timed model does not schedule yet: aperiodic ones, atoms' tasks, and
+/// tasks with `async` codels.
 fn unsupported_tasks(def: &SystemDef, layer: &Layer<'_>, errors: &mut Errors) {
     for m in &layer.modules {
+        for s in &m.services {
+            for c in s.codels.iter().filter(|c| c.def.asynchronous) {
+                errors.push(
+                    ModelError::new(
+                        format!(
+                            "codel `{}` of `{}.{}` is async, which a timed model does not support yet",
+                            c.state, m.name, s.name
+                        ),
+                        c.def.state.span,
+                    )
+                    .with_help("leave `time` out (an untimed model runs async codels apart from their task), or make the codel synchronous"),
+                );
+            }
+        }
         for (ti, t) in m.def.tasks.iter().enumerate() {
             if m.tasks[ti].1.is_none() {
                 errors.push(

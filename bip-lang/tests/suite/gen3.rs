@@ -620,6 +620,7 @@ fn malformed_input_of_each_construct_is_an_error_at_its_place() {
         ("component c { activity a() { codel<start> g(); }; };", "expected `yield` and the codel's next states, found `;`", 1, 46),
         ("component c { activity a() { codel<start> g() yield pause:: ; }; };", "expected a state after `pause::`, found `;`", 1, 61),
         ("component c { activity a() { codel g() yield ether; }; };", "a codel that yields needs its states", 1, 40),
+        ("component c { activity a() { async g() yield ether; }; };", "expected `codel`, found `g`", 1, 36),
         ("component c { activity a() { colour red; }; };", "expected a service property", 1, 30),
         ("component c { activity a() { local x; }; };", "expected a name, found `;`", 1, 37),
         ("component c { task t { period 1 s; }; activity a() { task t; throw e_none; codel<start> s() yield ether; }; };", "exception `e_none` is not declared", 1, 68),

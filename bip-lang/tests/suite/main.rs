@@ -5,6 +5,7 @@
 //! (`robustness`) and mutated example models through the loader (`fuzz`).
 
 mod aperiodic;
+mod async_codels;
 mod connections;
 mod data_types;
 mod diagnostics;

@@ -311,6 +311,17 @@ pub struct CodelMap {
     pub wcet_us: Option<u64>,
     /// Its best-case execution time in microseconds, if declared.
     pub bcet_us: Option<u64>,
+    /// An async codel's start and return (docs/genom.md, "Async codels"); its outcome
+    /// is then [`CodelMap::run`] or [`CodelMap::fail`], at its task's next cycle.
+    pub apart: Option<Apart>,
+}
+
+/// The steps of an async codel besides its outcome: it starts apart from its task (its
+/// conditions gate this step) and returns, whenever the world lets it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Apart {
+    pub start: u32,
+    pub returned: u32,
 }
 
 /// An ids field a codel writes (docs/genom.md, "Codels that write ids").
@@ -457,6 +468,11 @@ impl CodelMap {
             t += (v - f.lo) as u32 * f.stride;
         }
         Some(t)
+    }
+
+    /// The interaction its conditions gate: an async codel's start, or its run.
+    pub fn gated(&self) -> u32 {
+        self.apart.map_or(self.run, |a| a.start)
     }
 
     /// The yield a transition of the activity's atom takes.

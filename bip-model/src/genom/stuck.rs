@@ -104,7 +104,7 @@ impl GenomMap {
                         s.module == m.name && s.service == svc.name && s.codel == codel.state
                     };
                     if out.iter().any(listed)
-                        || !system.participant_ready(state, codel.run, activity)?
+                        || !system.participant_ready(state, codel.gated(), activity)?
                     {
                         continue;
                     }

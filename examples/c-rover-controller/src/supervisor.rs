@@ -165,7 +165,8 @@ pub fn run(say: &mut dyn FnMut(String)) -> Result<Report, String> {
         &|e| e.request("nav", "GoTo", goal(1.5, 4.0)),
         say,
     )?;
-    step(&mut engine, &mut report, 3, say)?;
+    // the async planner's outcome comes at the plan task's next cycle after it returns
+    step(&mut engine, &mut report, 6, say)?;
     say("Stop the wheels".into());
     request(
         &mut engine,

@@ -50,10 +50,11 @@ fn longest_chain(service: &ServiceMap) -> Option<u64> {
     let mut cost = vec![0u64; codels.len()];
     for &k in order.iter().rev() {
         let next = graph.neighbors(k).map(|t| cost[t.index()]).max();
-        cost[k.index()] = codels[k.index()]
+        // an async codel runs apart from its task: it costs the task nothing
+        let own = codels[k.index()]
             .wcet_us
-            .unwrap_or(0)
-            .saturating_add(next.unwrap_or(0));
+            .filter(|_| codels[k.index()].apart.is_none());
+        cost[k.index()] = own.unwrap_or(0).saturating_add(next.unwrap_or(0));
     }
     Some(entries.into_iter().map(|e| cost[e]).max().unwrap_or(0))
 }

@@ -111,14 +111,15 @@ impl TaskTable {
                         .iter()
                         .filter(|s| s.task == Some(ti))
                         .flat_map(|s| &s.codels)
-                        .any(|c| c.wcet_us.is_some());
+                        .any(|c| c.wcet_us.is_some() && c.apart.is_none());
                     self.aperiodic.push((name, budgeted));
                     continue;
                 };
                 let index = self.tasks.len();
                 let mut unbudgeted = Vec::new();
                 for service in module.services.iter().filter(|s| s.task == Some(ti)) {
-                    for codel in &service.codels {
+                    // an async codel runs apart from its task: not its demand
+                    for codel in service.codels.iter().filter(|c| c.apart.is_none()) {
                         let wcet = match codel.wcet_us {
                             Some(w) => w,
                             None => {

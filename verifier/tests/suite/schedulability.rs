@@ -609,4 +609,23 @@ fn a_timed_models_deadlines_are_not_said_to_hold_where_time_stops() {
             ("m.t worst response".to_string(), "holds"),
         ]
     );
+
+/// An async codel runs in a thread of its own (docs/genom.md, "Async codels"): its WCET is
+/// not its task's demand, exact or bounded, whatever the synchronous codels around it do.
+#[test]
+fn an_async_codels_wcet_is_not_its_tasks_demand() {
+    let text = r#"System(name: "grab", tick_ms: 10,
+    modules: [(name: "m", tasks: [(name: "t", period: 1)],
+        services: [(name: "A", kind: Activity, task: "t", codels: [
+            (state: "start", yields: ["grab"], wcet: "1ms"),
+            (state: "grab", yields: ["pause::show", "ether"], wcet: "8ms", async: true),
+            (state: "show", yields: ["grab"], wcet: "2ms")])])],
+)"#;
+    let system = load_str("grab.ron", text).unwrap();
+    let (exact, method) = demands(&system, DemandChoice::Exact);
+    assert!(matches!(method, DemandMethod::Exact { .. }), "{method:?}");
+    // `show` then `grab`'s start, or `start`: never the grab's 8 ms
+    assert_eq!(exact, [Some(2000)]);
+    let (bound, _) = demands(&system, DemandChoice::Bound);
+    assert_eq!(bound, [Some(2000)]);
 }

@@ -2,6 +2,7 @@
 //! request, interrupt and abort paths (through `stop` if the activity has one), the tick,
 //! and one transition per yield of each codel with its error path beside it.
 
+use super::async_codels::{async_vars, none_apart, start_and_return};
 use super::{set, text, tr, var, Builder};
 use crate::expr::{Assign, Expr};
 use crate::genom::check::{ServiceRef, Yield, ETHER};
@@ -49,6 +50,16 @@ impl<'a, 'd> Builder<'a, 'd> {
         if tracked {
             vars.push(var(DONE, TypeDef::Bool, Some(0)));
         }
+        // async codels run apart from the task (`async_codels.rs`)
+        let apart = s.async_codels().count();
+        vars.extend(async_vars(apart));
+        // leaving a location drops an outcome that waits for the task
+        let leave = |mut action: Vec<Assign>| {
+            if apart > 0 {
+                action.push(set(RETURNED, false));
+            }
+            action
+        };
         let mut ports = Vec::new();
         let mut t = Vec::new();
         // requests
@@ -71,7 +82,10 @@ impl<'a, 'd> Builder<'a, 'd> {
                         "request",
                         "stop",
                         Some(not(name(STOPPING))),
-                        unpause(aperiodic, vec![set(STOPPING, true), set(REQ, true)]),
+                        leave(unpause(
+                            aperiodic,
+                            vec![set(STOPPING, true), set(REQ, true)],
+                        )),
                     ));
                     t.push(tr(
                         l,
@@ -86,7 +100,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         "request",
                         ETHER,
                         None,
-                        vec![set(REQ, true), set(PAUSED, !aperiodic)],
+                        leave(vec![set(REQ, true), set(PAUSED, !aperiodic)]),
                     ));
                 }
             }
@@ -111,7 +125,10 @@ impl<'a, 'd> Builder<'a, 'd> {
                         port,
                         "stop",
                         Some(not(name(STOPPING))),
-                        unpause(aperiodic, vec![set(STOPPING, true), set(REQ, false)]),
+                        leave(unpause(
+                            aperiodic,
+                            vec![set(STOPPING, true), set(REQ, false)],
+                        )),
                     ));
                     let stopping = match requested {
                         true => and(name(STOPPING), name(REQ)),
@@ -130,7 +147,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         port,
                         ETHER,
                         None,
-                        vec![set(REQ, false), set(PAUSED, false)],
+                        leave(vec![set(REQ, false), set(PAUSED, false)]),
                     ));
                 }
             }
@@ -155,21 +172,37 @@ impl<'a, 'd> Builder<'a, 'd> {
             t.push(tr(l, "tick", l, None, Vec::new()));
         }
         // codels: one transition per yield, from each place the codel runs from
-        for c in &s.codels {
+        for (ci, c) in s.codels.iter().enumerate() {
             ports.push(text(c.state));
             // every codel has an error path: a declared exception, or what the engine does
             // with a codel that panics, yields something undeclared or leaves a range
             ports.push(text(fail_port(c.state)));
             let mut sources: Vec<(&str, Expr, Vec<Assign>)> = Vec::new();
-            if c.state == "start" {
+            let number = s.async_number(ci);
+            if let Some(n) = number {
+                // its outcome, once it has returned and its task has taken it up
+                start_and_return(c.state, n, &locs, aperiodic, &mut ports, &mut t);
                 sources.push((
-                    ETHER,
-                    and(name(REQ), not(name(PAUSED))),
-                    vec![set(REQ, false)],
+                    c.state,
+                    and(name(RETURNED), not(name(PAUSED))),
+                    vec![set(RETURNED, false)],
                 ));
-            }
-            if locs.contains(&c.state) {
-                sources.push((c.state, not(name(PAUSED)), Vec::new()));
+            } else {
+                // no codel of the activity runs while one of its async codels does
+                let idle = |g: Expr| match apart {
+                    0 => g,
+                    _ => and(g, none_apart()),
+                };
+                if c.state == "start" {
+                    sources.push((
+                        ETHER,
+                        idle(and(name(REQ), not(name(PAUSED)))),
+                        vec![set(REQ, false)],
+                    ));
+                }
+                if locs.contains(&c.state) {
+                    sources.push((c.state, idle(not(name(PAUSED))), Vec::new()));
+                }
             }
             let mut end = Vec::new();
             if has_stop {

@@ -9,6 +9,7 @@
 //! - `clock.rs`: the clock atom and the tick connector (the tasks' common cycle);
 //! - `module.rs`: a module's atom (functions, ages, ids written by codels);
 //! - `activity.rs`: an activity's atom (requests, interrupts, abort, codels);
+//! - `async_codels.rs`: async codels, which run apart from their task;
 //! - `services.rs`: a service's request, interrupt and codel connectors, with their
 //!   conditions;
 //! - `wake.rs`: aperiodic tasks, whose paused activities wait for an event of the module;
@@ -17,6 +18,7 @@
 //! - `priorities.rs`, `properties.rs`: the generated priorities, and the properties.
 
 mod activity;
+mod async_codels;
 mod clock;
 mod finish;
 mod module;

@@ -7,8 +7,9 @@ use crate::genom::tree::name;
 use crate::syntax::{ExprDef, PriorityDef};
 
 impl<'a, 'd> Builder<'a, 'd> {
-    /// Codels are urgent (the tick is below every codel step), requests wait for the
-    /// functional layer to be quiescent (below every codel step), and codels of different
+    /// Codels are urgent (the tick is below every codel step), requests and the returns
+    /// of async codels wait for the functional layer to be quiescent (below every codel
+    /// step), and codels of different
     /// activities run in declaration order (earlier activities above later ones); the
     /// modules' wake-ups are above all of them. The
     /// declared priorities form a chain through the last activity; the core closes them
@@ -41,6 +42,12 @@ impl<'a, 'd> Builder<'a, 'd> {
                     for c in &s.codels {
                         level.push(c.run.clone());
                         level.push(c.fail.clone());
+                        // an async codel starts as a codel runs, and returns when the
+                        // world lets it, as a request comes
+                        if let Some((start, ret)) = &c.apart {
+                            level.push(start.clone());
+                            requests.push(ret.clone());
+                        }
                     }
                     levels.push(level);
                 }

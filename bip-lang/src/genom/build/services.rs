@@ -141,6 +141,11 @@ impl<'a, 'd> Builder<'a, 'd> {
                 // a timed codel's conditions gate its start (`timed/codel.rs`)
                 self.holds.insert((r, ci), guard.take());
             }
+            // so do an async codel's (`async_codels.rs`)
+            let apart = c
+                .def
+                .asynchronous
+                .then(|| self.async_connectors(r, c.state, c.def.state.span, guard.take()));
             let mut ports = vec![port(&comp, c.state)];
             let mut action = Vec::new();
             let mi = r.module;
@@ -203,6 +208,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                     .collect(),
                 ids_port: (!c.ids.is_empty()).then(|| ids_port(s.name, c.state)),
                 holds,
+                apart,
             });
         }
         let recipe_module = self.recipe_module(r.module);

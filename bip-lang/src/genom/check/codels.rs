@@ -190,7 +190,14 @@ pub(super) fn codels<'d>(
             }
         }
     }
-    if let Some(k) = out.stop {
+    // an async codel's activity stays at its state while the codel runs apart
+    let running_apart = out
+        .codels
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.def.asynchronous)
+        .map(|(k, _)| k);
+    for k in out.stop.into_iter().chain(running_apart) {
         if !locations.contains(&k) {
             locations.push(k);
         }

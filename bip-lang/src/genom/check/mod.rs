@@ -102,8 +102,10 @@ pub struct Service<'d> {
     pub after: Vec<usize>,
     /// The codels of an activity, in the order written.
     pub codels: Vec<Codel<'d>>,
-    /// Codel states that are locations of the activity's atom: the targets of yields, and
-    /// `stop` (where an interrupt leads). `start` is one only if a codel yields to it.
+    /// Codel states that are locations of the activity's atom: the targets of yields,
+    /// `stop` (where an interrupt leads) and the states of async codels (where the
+    /// activity waits while one runs). `start` is one only if a codel yields to it or it
+    /// is async.
     pub locations: Vec<usize>,
     /// The declared types of a request's arguments and of the output.
     pub args: Option<DataType>,
@@ -116,6 +118,23 @@ pub struct Service<'d> {
 }
 
 impl Service<'_> {
+    /// The async codels, numbered from 1 in codel order: the values of the activity's
+    /// `busy` (docs/genom.md, "Async codels").
+    pub fn async_codels(&self) -> impl Iterator<Item = (i64, &Codel<'_>)> {
+        self.codels
+            .iter()
+            .filter(|c| c.def.asynchronous)
+            .zip(1..)
+            .map(|(c, n)| (n, c))
+    }
+
+    /// The number of codel `c` among the async codels, if it is one.
+    pub fn async_number(&self, c: usize) -> Option<i64> {
+        self.async_codels()
+            .find(|(_, a)| std::ptr::eq(*a, &self.codels[c]))
+            .map(|(n, _)| n)
+    }
+
     pub fn is_activity(&self) -> bool {
         self.kind == ServiceKind::Activity
     }
