@@ -609,6 +609,7 @@ fn a_timed_models_deadlines_are_not_said_to_hold_where_time_stops() {
             ("m.t worst response".to_string(), "holds"),
         ]
     );
+}
 
 /// An async codel runs in a thread of its own (docs/genom.md, "Async codels"): its WCET is
 /// not its task's demand, exact or bounded, whatever the synchronous codels around it do.
