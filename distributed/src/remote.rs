@@ -6,6 +6,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use bip_engine::bip_model::genom::ModuleMap;
 use bip_engine::{CodelSignature, Ctx, EngineBuilder, ModuleTypes, Next, System, VirtualClock};
 use serde_json::Value;
 
@@ -207,15 +208,19 @@ impl RemoteModules {
         Ok(builder)
     }
 
-    /// The codels of `module` as the model declares them (services, then their codels).
-    fn model_codels(&self, module: &str) -> Result<Vec<RemoteCodel>, RemoteError> {
-        let map = self
-            .system
+    /// The model's map of `module`.
+    fn module_map(&self, module: &str) -> Result<&ModuleMap, RemoteError> {
+        self.system
             .genom
             .as_ref()
             .and_then(|g| g.module(module))
-            .ok_or_else(|| RemoteError::NoSuchModule(module.into()))?;
-        Ok(map
+            .ok_or_else(|| RemoteError::NoSuchModule(module.into()))
+    }
+
+    /// The codels of `module` as the model declares them (services, then their codels).
+    fn model_codels(&self, module: &str) -> Result<Vec<RemoteCodel>, RemoteError> {
+        Ok(self
+            .module_map(module)?
             .services
             .iter()
             .flat_map(|s| {
@@ -230,12 +235,7 @@ impl RemoteModules {
 
     /// The proxy of module `module`'s process.
     fn proxy(&self, module: &str) -> Result<Proxy, RemoteError> {
-        let map = self
-            .system
-            .genom
-            .as_ref()
-            .and_then(|g| g.module(module))
-            .ok_or_else(|| RemoteError::NoSuchModule(module.into()))?;
+        let map = self.module_map(module)?;
         let fields: Vec<String> = map.ids.iter().map(|f| f.name.clone()).collect();
         let codels = self.model_codels(module)?;
         self.presence
