@@ -25,6 +25,15 @@ fn gcd(a: i64, b: i64) -> i64 {
 const MAX_PHASE: i64 = 1 << 20;
 
 impl<'a, 'd> Builder<'a, 'd> {
+    /// The ports of module `mi` that constraints read, each with the cap of its age.
+    pub(super) fn aged_ports(&self, mi: usize) -> Vec<(usize, i64)> {
+        self.caps
+            .iter()
+            .filter(|(p, _)| p.module == mi)
+            .map(|(p, &cap)| (p.port, cap))
+            .collect()
+    }
+
     /// The tick's part for module `mi`: the ports that constraints read age by one, up to
     /// their cap, where `on_tick` holds (always if `None`).
     pub(super) fn age_ports(
@@ -35,12 +44,7 @@ impl<'a, 'd> Builder<'a, 'd> {
         action: &mut Vec<Assign>,
     ) {
         let m = &self.layer.modules[mi];
-        let aged: Vec<(usize, i64)> = self
-            .caps
-            .iter()
-            .filter(|(p, _)| p.module == mi)
-            .map(|(p, &cap)| (p.port, cap))
-            .collect();
+        let aged = self.aged_ports(mi);
         if aged.is_empty() {
             return;
         }

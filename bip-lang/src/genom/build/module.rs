@@ -37,12 +37,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             }
             transitions.push(tr("on", s.name, "on", None, action));
         }
-        let aged: Vec<(usize, i64)> = self
-            .caps
-            .iter()
-            .filter(|(p, _)| p.module == mi)
-            .map(|(p, &cap)| (p.port, cap))
-            .collect();
+        let aged = self.aged_ports(mi);
         for &(p, cap) in &aged {
             let a = age_var(m.ports[p]);
             vars.push(var(
