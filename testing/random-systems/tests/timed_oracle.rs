@@ -248,7 +248,6 @@ fn a_release_is_ordered_freely_among_its_instants_steps() {
 /// exploring at half the unit finds no other verdict, and the same worst responses.
 #[test]
 fn a_finer_unit_finds_nothing_new() {
-    let mut compared = 0;
     for seed in 0..300 {
         let coarse = generate(seed);
         let unit = coarse.unit_us();
@@ -267,9 +266,7 @@ fn a_finer_unit_finds_nothing_new() {
                 "seed {seed}: {ce} vs {fe} halves"
             );
         }
-        compared += 1;
     }
-    assert_eq!(compared, 300);
 }
 
 #[test]
