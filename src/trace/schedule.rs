@@ -136,20 +136,21 @@ pub fn schedule(system: &System, trace: &Trace) -> Result<Timeline, String> {
     let mut running: Vec<Open> = vec![None; tasks.len()];
     let mut holding: Vec<Option<(usize, Open)>> = vec![None; tasks.len()];
     let stage = |s: &State, t: &Task| system.value(s, t.component, t.stage);
-    let mut before = system.initial_state();
+    let initial = system.initial_state();
+    let mut before = &initial;
     let mut now = 0u64;
     for (step, after) in &path {
         let units = system
-            .time_advance(&before, step.as_step())
+            .time_advance(before, step.as_step())
             .map_err(|e| format!("the trace does not fit the model: {e}"))?;
         let at = now + units;
         let Label::Interaction(i) = step.label else {
-            before = after.clone();
+            before = after;
             now = at;
             continue;
         };
         for (k, t) in tasks.iter().enumerate() {
-            let (was, is) = (stage(&before, t), stage(after, t));
+            let (was, is) = (stage(before, t), stage(after, t));
             let lane = &mut lanes[k];
             if is == READY && was != READY {
                 if was == 0 {
@@ -167,7 +168,7 @@ pub fn schedule(system: &System, trace: &Trace) -> Result<Timeline, String> {
             if let Some((_, label)) = t.starts.iter().find(|(s, _)| *s == i) {
                 running[k] = Some((at, label.clone()));
             }
-            let codel_before = system.value(&before, t.component, t.codel);
+            let codel_before = system.value(before, t.component, t.codel);
             if codel_before != 0 && system.value(after, t.component, t.codel) == 0 {
                 close(lane, &mut running[k], at, "running");
             }
@@ -196,7 +197,7 @@ pub fn schedule(system: &System, trace: &Trace) -> Result<Timeline, String> {
                 }
             }
         }
-        before = after.clone();
+        before = after;
         now = at;
     }
     // what is still going on at the end is drawn up to it
