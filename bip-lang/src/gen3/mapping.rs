@@ -212,6 +212,7 @@ fn service(
         codels,
         args: types.payload(c, s, false),
         output: types.payload(c, s, true),
+        validate: None,
         machine: false,
     }
 }

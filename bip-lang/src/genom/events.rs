@@ -5,8 +5,10 @@
 //! core's step forms `fires(…)` and `changes(…, …)`; `Replies` and `Terminates` become a
 //! trigger and a response.
 
-use super::check::{Layer, Service, ServiceRef, Yield, ETHER};
-use super::names::{activity_component, codel_connector, request_connector, PAUSED, REQ};
+use super::check::{Layer, Service, ServiceRef, Yield, ETHER, VALIDATE};
+use super::names::{
+    activity_component, codel_connector, fail_connector, request_connector, PAUSED, REQ,
+};
 use super::tree::{and, at, boolean, member, not, or};
 use crate::compile::{disjuncts, one_of};
 use crate::diag::ModelError;
@@ -47,7 +49,7 @@ pub(super) fn event(layer: &Layer<'_>, e: &Expr) -> Result<Option<Expr>, ModelEr
 pub(super) fn replies(layer: &Layer<'_>, r: ServiceRef, span: Span) -> (Expr, Expr) {
     let module = &layer.modules[r.module];
     let s = &module.services[r.service];
-    let request = placed(fires(&request_connector(module.name, s.name)), span);
+    let request = placed(accepted(module.name, s), span);
     let response = if s.is_activity() {
         let c = activity_component(module.name, s.name);
         placed(and(at(&c, ETHER), not(member(&c, REQ))), span)
@@ -104,7 +106,7 @@ fn one_event(layer: &Layer<'_>, e: &Expr) -> Result<Expr, ModelError> {
             };
             let (m, s) = service(layer, arg).ok_or_else(wrong_args)??;
             not_machine(m, s, arg.span)?;
-            fires(&request_connector(m, s.name))
+            accepted(m, s)
         }
         "reply" => {
             let [arg] = args.as_slice() else {
@@ -122,7 +124,7 @@ fn one_event(layer: &Layer<'_>, e: &Expr) -> Result<Expr, ModelError> {
                     changes(and(at(&c, ETHER), member(&c, REQ)), rest),
                 )
             } else {
-                fires(&request_connector(m, s.name))
+                accepted(m, s)
             }
         }
         _ => {
@@ -135,6 +137,9 @@ fn one_event(layer: &Layer<'_>, e: &Expr) -> Result<Expr, ModelError> {
                 return Err(wrong_args());
             };
             let (m, s) = service(layer, base).ok_or_else(wrong_args)??;
+            if let Some(step) = at_request(m, s, codel, target)? {
+                return Ok(placed(step, e.span));
+            }
             if !s.is_activity() {
                 return Err(not_activity(m, s, base.span));
             }
@@ -236,8 +241,54 @@ fn service<'l, 'd>(
 }
 
 fn not_activity(m: &str, s: &Service<'_>, span: Span) -> ModelError {
-    ModelError::new(format!("`{m}.{}` is not an activity", s.name), span)
-        .with_help("functions and attributes have no codels")
+    ModelError::new(format!("`{m}.{}` is not an activity", s.name), span).with_help(
+        "a function or attribute has one codel, `start`, and a service may have a `validate` codel",
+    )
+}
+
+/// A request of `m.s` is accepted: its step, or, when a function's codel fails, that
+/// step (the request is accepted, its reply an exception).
+fn accepted(m: &str, s: &Service<'_>) -> Expr {
+    let request = fires(&request_connector(m, s.name));
+    match &s.function {
+        Some(c) => or(request, fires(&fail_connector(m, s.name, c.state))),
+        None => request,
+    }
+}
+
+/// `yield(m.S.validate)` (the request passed its validation) and `yield(m.F.start)`,
+/// `yield(m.F.start, ether)` (a function's codel succeeded): the request's step; `None`
+/// if `codel` is neither.
+fn at_request(
+    m: &str,
+    s: &Service<'_>,
+    codel: &Ident,
+    target: Option<&Expr>,
+) -> Result<Option<Expr>, ModelError> {
+    let validates = s.validate.is_some() && codel.name == VALIDATE;
+    let function = s.function.as_ref().is_some_and(|c| c.state == codel.name);
+    if !validates && !function {
+        return Ok(None);
+    }
+    match target {
+        None => {}
+        Some(t) if function && matches!(&t.kind, ExprKind::Name(n) if n == ETHER) => {}
+        Some(t) => {
+            return Err(ModelError::new(
+                format!(
+                    "codel `{}` of `{m}.{}` does not yield this",
+                    codel.name, s.name
+                ),
+                t.span,
+            )
+            .with_help(if function {
+                "a function's codel yields `ether`"
+            } else {
+                "a `validate` codel yields nothing: `yield(m.S.validate)` is its success"
+            }))
+        }
+    }
+    Ok(Some(fires(&request_connector(m, s.name))))
 }
 
 fn is_event(e: &Expr) -> bool {

@@ -34,6 +34,7 @@ pub(super) fn as_activities(def: &SystemDef) -> Cow<'_, SystemDef> {
                 after: Vec::new(),
                 before: Vec::new(),
                 codels: t.codels.clone(),
+                validate: None,
                 args: None,
                 output: None,
                 machine: true,

@@ -72,6 +72,13 @@ pub fn ids_port(s: &str, state: &str) -> String {
     format!("write_{s}_{state}")
 }
 
+/// The port of the module atom by which codel `codel` that runs at a request of `s` (its
+/// `validate`, or a function's codel) fails: the request refused, or the function's reply
+/// an exception (its connector is [`fail_connector`]).
+pub fn request_fail_port(s: &str, codel: &str) -> String {
+    format!("fail_{s}_{codel}")
+}
+
 /// The connector of codel `state` ending with one of its exceptions.
 pub fn fail_connector(m: &str, s: &str, state: &str) -> String {
     format!("{m}_{s}_{state}_fail")

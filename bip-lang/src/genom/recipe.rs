@@ -52,6 +52,9 @@ pub(crate) struct RecipeService {
     pub refusals: Vec<RecipeCondition>,
     pub interrupts: Vec<String>,
     pub codels: Vec<RecipeCodel>,
+    /// A function's codel and a `validate` codel, whose success is the request.
+    pub function: Option<RecipeCodel>,
+    pub validate: Option<RecipeCodel>,
     pub args: Option<DataType>,
     pub output: Option<DataType>,
 }
@@ -220,29 +223,8 @@ impl Recipe {
                             matom.transitions_from(0, Some(port))
                         }
                     };
-                    let mut ids: Vec<IdsWrite> = Vec::new();
-                    for x in &c.ids {
-                        let var = matom.var_index(x).ok_or_else(|| missing(x))?;
-                        let (lo, hi) = matom.vars[var as usize].ty.range();
-                        ids.push(IdsWrite {
-                            name: x.clone(),
-                            var,
-                            slot: system.components[mc as usize].var_slot(var),
-                            lo,
-                            hi,
-                            stride: 1,
-                        });
-                    }
-                    // the last field varies fastest
-                    let mut stride = 1u32;
-                    for f in ids.iter_mut().rev() {
-                        f.stride = stride;
-                        let values = u32::try_from(i128::from(f.hi) - i128::from(f.lo) + 1).ok();
-                        stride = values
-                            .and_then(|n| stride.checked_mul(n))
-                            .ok_or_else(|| missing("the transitions that write ids"))?;
-                    }
-                    if !ids.is_empty() && stride as usize != ids_transitions.len() {
+                    let ids = ids_writes(system, mc, &c.ids)?;
+                    if !ids.is_empty() && written_values(&ids)? as usize != ids_transitions.len() {
                         return Err(missing("the transitions that write ids"));
                     }
                     let codel_key = (m.name.clone(), s.name.clone(), c.state.clone());
@@ -267,7 +249,44 @@ impl Recipe {
                         },
                     });
                 }
+                let at_request = |c: &RecipeCodel| -> Result<CodelMap, MissingName> {
+                    let matom = system.atom_of(mc);
+                    let port = |p: &str| matom.port_index(p).ok_or_else(|| missing(p));
+                    // the function's normal outcomes: its port's transitions (one per
+                    // combination of the ids values it writes)
+                    let ok = match c.yields.is_empty() {
+                        true => 0..0,
+                        false => matom.transitions_from(0, Some(port(&s.name)?)),
+                    };
+                    let ids = ids_writes(system, mc, &c.ids)?;
+                    if !ids.is_empty() && written_values(&ids)? as usize != ok.len() {
+                        return Err(missing("the transitions that write ids"));
+                    }
+                    Ok(CodelMap {
+                        state: c.state.clone(),
+                        run: interaction(&c.run)?,
+                        fail: interaction(&c.fail)?,
+                        yields: c
+                            .yields
+                            .iter()
+                            .map(|y| YieldMap {
+                                target: y.clone(),
+                                transitions: ok.clone().collect(),
+                            })
+                            .collect(),
+                        throws: c.throws.clone(),
+                        writes: c.writes.clone(),
+                        ids,
+                        ids_transitions: if c.ids.is_empty() { 0..0 } else { ok.clone() },
+                        holds: Vec::new(),
+                        wcet_us: None,
+                        bcet_us: None,
+                        apart: None,
+                    })
+                };
                 services.push(ServiceMap {
+                    function: s.function.as_ref().map(at_request).transpose()?,
+                    validate: s.validate.as_ref().map(at_request).transpose()?,
                     name: s.name.clone(),
                     kind: s.kind,
                     task: s.task,
@@ -331,4 +350,51 @@ impl Recipe {
             idle,
         })
     }
+}
+
+/// The ids fields `names` of module component `mc` that a codel writes, with their strides
+/// (the last field varies fastest).
+fn ids_writes(system: &System, mc: u32, names: &[String]) -> Result<Vec<IdsWrite>, MissingName> {
+    let matom = system.atom_of(mc);
+    let mut ids: Vec<IdsWrite> = Vec::new();
+    for x in names {
+        let var = matom.var_index(x).ok_or_else(|| MissingName(x.clone()))?;
+        let (lo, hi) = matom.vars[var as usize].ty.range();
+        ids.push(IdsWrite {
+            name: x.clone(),
+            var,
+            slot: system.components[mc as usize].var_slot(var),
+            lo,
+            hi,
+            stride: 1,
+        });
+    }
+    let mut stride = 1u32;
+    for f in ids.iter_mut().rev() {
+        f.stride = stride;
+        stride = f
+            .stride
+            .checked_mul(values(f).ok_or_else(too_many)?)
+            .ok_or_else(too_many)?;
+    }
+    Ok(ids)
+}
+
+/// How many combinations of values the written fields `ids` take.
+fn written_values(ids: &[IdsWrite]) -> Result<u32, MissingName> {
+    match ids.first() {
+        None => Ok(1),
+        Some(f) => f
+            .stride
+            .checked_mul(values(f).ok_or_else(too_many)?)
+            .ok_or_else(too_many),
+    }
+}
+
+fn values(f: &IdsWrite) -> Option<u32> {
+    u32::try_from(i128::from(f.hi) - i128::from(f.lo) + 1).ok()
+}
+
+fn too_many() -> MissingName {
+    MissingName("the transitions that write ids".to_string())
 }

@@ -135,8 +135,15 @@ pub struct ServiceDef {
     /// `after`, in effect).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub before: Vec<Text>,
+    /// An activity's codel automaton; a function's or attribute's one codel (at state
+    /// `start`, yielding `ether`), which runs when its request is accepted
+    /// (docs/genom.md, "Codels at the request").
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub codels: Vec<CodelDef>,
+    /// GenoM3's `validate` codel: it checks a request's arguments before the request is
+    /// accepted, and refuses it with one of its exceptions.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub validate: Option<ValidateDef>,
     /// The type of a request's arguments (docs/model.md, "Data types").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub args: Option<DataTypeDef>,
@@ -147,6 +154,14 @@ pub struct ServiceDef {
     /// task's machine (`genom::machines`).
     #[serde(skip)]
     pub machine: bool,
+}
+
+/// A service's `validate` codel: the exceptions with which it refuses a request.
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ValidateDef {
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub throws: Vec<Text>,
 }
 
 /// One codel state of an activity: the codel it runs and where it may go next.

@@ -135,7 +135,7 @@ fn bad_types_are_errors_with_their_place() {
             "(name: \"Stop\", kind: Function,",
             "(name: \"Stop\", kind: Function, args: Bool,",
         ),
-        "`Stop` is not an activity; it has no codel for arguments",
+        "`Stop` is not an activity and has no codel for arguments",
         "Stop",
     );
 }

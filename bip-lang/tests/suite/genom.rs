@@ -159,11 +159,17 @@ fn codel_automaton_errors() {
             "no task `navi`",
             "navi",
         ),
-        // functions have no codels or tasks
+        // a function has one codel, at `start`, yielding `ether`, and no task
         (
             r#"(name: "Init", kind: Function)"#,
-            r#"(name: "Init", kind: Function, codels: [(state: "start", yields: ["ether"])])"#,
-            "not an activity; it has no codel states",
+            r#"(name: "Init", kind: Function, codels: [(state: "main", yields: ["ether"])])"#,
+            "not an activity; it has one codel, at `start`, yielding `ether`",
+            "main",
+        ),
+        (
+            r#"(name: "Init", kind: Function)"#,
+            r#"(name: "Init", kind: Function, codels: [(state: "start", yields: ["ether"], async: true)])"#,
+            "the codel of `Init` cannot be async",
             "start",
         ),
         // a written port (or ids field) that does not exist

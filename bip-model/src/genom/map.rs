@@ -154,6 +154,17 @@ pub struct ServiceMap {
     /// Services (of the same module) a request interrupts.
     pub interrupts: Vec<String>,
     pub codels: Vec<CodelMap>,
+    /// A function's or attribute's codel, which runs when its request arrives
+    /// (docs/genom.md, "Codels at the request"): its normal outcome is a step of
+    /// [`ServiceMap::request`] (whose module pick is among the `ether` yield's
+    /// `transitions`, of the module's component, or [`CodelMap::ids_transition`] when it
+    /// writes ids), its exceptions and faults a step of [`CodelMap::fail`]: the request
+    /// accepted, its reply an error.
+    pub function: Option<CodelMap>,
+    /// The service's `validate` codel, which runs when a request arrives that the model
+    /// would accept: its success is the request's step, its exceptions and faults a step
+    /// of [`CodelMap::fail`], which refuses the request (it has no yields).
+    pub validate: Option<CodelMap>,
     /// The type of a request's arguments, if the model declares one.
     pub args: Option<DataType>,
     /// The type of the service's output, if the model declares one.

@@ -56,10 +56,28 @@ impl<'a, 'd> Builder<'a, 'd> {
         for (k, c) in def.connectors.iter().enumerate() {
             by_name.entry(c.name.as_str()).or_insert(k);
         }
+        // a request's other outcomes (its function's codel fails, its `validate` codel
+        // refuses it) are extended as the request is: whoever sends it takes part
+        let outcomes: HashMap<String, String> = self
+            .recipe
+            .modules
+            .iter()
+            .flat_map(|m| &m.services)
+            .flat_map(|s| {
+                let request = s.request.clone();
+                s.function
+                    .iter()
+                    .chain(&s.validate)
+                    .filter_map(move |c| Some((c.fail.clone(), request.clone()?)))
+            })
+            .collect();
         let mut extended = HashSet::new();
         let mut generated = std::mem::take(&mut self.connectors);
         for (g, guard, action) in &mut generated {
-            let Some(&k) = by_name.get(g.name.as_str()) else {
+            let request = outcomes
+                .get(g.name.as_str())
+                .map_or(g.name.as_str(), |r| r.as_str());
+            let Some(&k) = by_name.get(request) else {
                 continue;
             };
             extended.insert(k);

@@ -7,7 +7,7 @@
 use super::{set, text, tr, var, Builder};
 use crate::diag::ModelError;
 use crate::expr::{Assign, Expr};
-use crate::genom::check::{Module, ServiceRef};
+use crate::genom::check::{Module, ServiceRef, VALIDATE};
 use crate::genom::names::*;
 use crate::genom::tree::{assign, boolean, int, name};
 use crate::source::{ConstExpr, Span};
@@ -25,17 +25,35 @@ impl<'a, 'd> Builder<'a, 'd> {
                 continue;
             }
             ports.push(text(s.name));
-            let mut action = Vec::new();
+            let mut done = Vec::new();
             if self.tracked.contains(&ServiceRef {
                 module: mi,
                 service: si,
             }) {
                 let d = done_var(s.name);
                 vars.push(var(&d, TypeDef::Bool, Some(0)));
-                action.push(set(&d, true));
+                done.push(set(&d, true));
                 reserved.push((d, s.def.name.span));
             }
-            transitions.push(tr("on", s.name, "on", None, action));
+            // its codel's normal outcome: a transition per combination of the ids values
+            // it may write
+            let written = s.function.as_ref().map_or(&[][..], |c| &c.ids[..]);
+            for mut action in ids_writes(m, written) {
+                action.extend(done.iter().cloned());
+                transitions.push(tr("on", s.name, "on", None, action));
+            }
+        }
+        // the failures of the codels that run at a request
+        for s in &m.services {
+            let codels = [
+                s.function.as_ref().map(|c| c.state),
+                s.validate.as_ref().map(|_| VALIDATE),
+            ];
+            for codel in codels.into_iter().flatten() {
+                let port = request_fail_port(s.name, codel);
+                ports.push(text(&port));
+                transitions.push(tr("on", &port, "on", None, Vec::new()));
+            }
         }
         let aged = self.aged_ports(mi);
         for &(p, cap) in &aged {
@@ -62,43 +80,13 @@ impl<'a, 'd> Builder<'a, 'd> {
             }
         }
         // a codel that writes ids: one transition per combination of the values it may
-        // write, the last field varying fastest (docs/genom.md, "Codels that write ids")
+        // write (docs/genom.md, "Codels that write ids")
         for s in m.services.iter().filter(|s| s.is_activity()) {
             for c in s.codels.iter().filter(|c| !c.ids.is_empty()) {
                 let port = ids_port(s.name, c.state);
-                let fields: Vec<(&str, i64, i64)> = c
-                    .ids
-                    .iter()
-                    .filter_map(|&k| m.ids[k].1.map(|(lo, hi)| (m.ids[k].0, lo, hi)))
-                    .collect();
-                if fields.len() != c.ids.len() {
-                    continue; // a bound is not constant: the core reports it
-                }
                 ports.push(text(&port));
-                let mut values: Vec<i64> = fields.iter().map(|f| f.1).collect();
-                loop {
-                    let action: Vec<Assign> = fields
-                        .iter()
-                        .zip(&values)
-                        .map(|(f, v)| assign(name(f.0), ids_literal(m, f.0, *v)))
-                        .collect();
+                for action in ids_writes(m, &c.ids) {
                     transitions.push(tr("on", &port, "on", None, action));
-                    // advance the odometer, last field fastest
-                    let mut k = fields.len();
-                    loop {
-                        if k == 0 {
-                            break;
-                        }
-                        k -= 1;
-                        if values[k] < fields[k].2 {
-                            values[k] += 1;
-                            break;
-                        }
-                        values[k] = fields[k].1;
-                    }
-                    if values.iter().zip(&fields).all(|(v, f)| *v == f.1) {
-                        break;
-                    }
                 }
             }
         }
@@ -127,6 +115,46 @@ impl<'a, 'd> Builder<'a, 'd> {
             m.def.name.span,
             what,
         );
+    }
+}
+
+/// The assignments of each combination of the values the ids fields `written` may take,
+/// the last field varying fastest; one empty combination if it writes none (or a bound is
+/// not constant: the core reports it).
+fn ids_writes(m: &Module, written: &[usize]) -> Vec<Vec<Assign>> {
+    let fields: Vec<(&str, i64, i64)> = written
+        .iter()
+        .filter_map(|&k| m.ids[k].1.map(|(lo, hi)| (m.ids[k].0, lo, hi)))
+        .collect();
+    if fields.is_empty() || fields.len() != written.len() {
+        return vec![Vec::new()];
+    }
+    let mut out = Vec::new();
+    let mut values: Vec<i64> = fields.iter().map(|f| f.1).collect();
+    loop {
+        out.push(
+            fields
+                .iter()
+                .zip(&values)
+                .map(|(f, v)| assign(name(f.0), ids_literal(m, f.0, *v)))
+                .collect(),
+        );
+        // advance the odometer, last field fastest
+        let mut k = fields.len();
+        loop {
+            if k == 0 {
+                break;
+            }
+            k -= 1;
+            if values[k] < fields[k].2 {
+                values[k] += 1;
+                break;
+            }
+            values[k] = fields[k].1;
+        }
+        if values.iter().zip(&fields).all(|(v, f)| *v == f.1) {
+            return out;
+        }
     }
 }
 

@@ -35,6 +35,9 @@ impl<'a, 'd> Builder<'a, 'd> {
         for m in &self.recipe.modules {
             for s in &m.services {
                 requests.extend(s.request.clone());
+                // a request's other outcomes: its function's codel fails, or its
+                // `validate` codel refuses it
+                requests.extend(s.function.iter().chain(&s.validate).map(|c| c.fail.clone()));
                 if s.component.is_some() {
                     // a pending request's interrupts are urgent too: they come before the
                     // tick that could start what they interrupt

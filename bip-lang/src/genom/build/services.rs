@@ -6,8 +6,9 @@
 //! codel held.
 
 use super::{connector, port, Builder, Cond, UserTexts};
-use crate::expr::{BinOp, Expr};
-use crate::genom::check::{ConstraintKind, PortRef, ServiceRef, ETHER};
+use crate::diag::ModelError;
+use crate::expr::{Assign, BinOp, Expr};
+use crate::genom::check::{ConstraintKind, PortRef, ServiceRef, ETHER, VALIDATE};
 use crate::genom::names::*;
 use crate::genom::recipe::{RecipeCodel, RecipeCondition, RecipeService};
 use crate::genom::tree::{all, and, assign, at, binary, chain, cond, int, member, not, or};
@@ -87,6 +88,10 @@ impl<'a, 'd> Builder<'a, 'd> {
         // the request (a task's machine has none: it starts with the component)
         let request = (!s.machine).then(|| self.request_connector(r, &run_conds));
         let interrupt = self.interrupt_connector(r);
+        let (function, validate) = match &request {
+            Some((name, _)) => self.request_codels(r, name),
+            None => (None, None),
+        };
         let mut service = RecipeService {
             name: s.name.to_string(),
             kind: s.kind,
@@ -97,6 +102,8 @@ impl<'a, 'd> Builder<'a, 'd> {
             owned_by_model: false,
             refusals: request.map(|(_, refusals)| refusals).unwrap_or_default(),
             codels: Vec::new(),
+            function,
+            validate,
             args: s.args.clone(),
             output: s.output.clone(),
             interrupts: s
@@ -147,17 +154,8 @@ impl<'a, 'd> Builder<'a, 'd> {
                 .asynchronous
                 .then(|| self.async_connectors(r, c.state, c.def.state.span, guard.take()));
             let mut ports = vec![port(&comp, c.state)];
-            let mut action = Vec::new();
             let mi = r.module;
-            for &w in &c.writes {
-                if self.caps.contains_key(&PortRef {
-                    module: mi,
-                    port: w,
-                }) {
-                    let age = age_var(self.layer.modules[mi].ports[w]);
-                    action.push(assign(member(&module_component(m), &age), int(0)));
-                }
-            }
+            let action = self.age_resets(mi, &c.writes);
             if !c.ids.is_empty() {
                 ports.push(port(&module_component(m), &ids_port(s.name, c.state)));
             } else if !action.is_empty() {
@@ -335,14 +333,125 @@ impl<'a, 'd> Builder<'a, 'd> {
             s.def.name.span,
             format!("requests of `{m}.{}`", s.name),
         );
-        self.connectors.push((
-            connector(&name, ports, Role::Environment),
-            guard,
-            Vec::new(),
-        ));
+        // a function's codel fails: the same request, its reply an exception (the module
+        // port that marks a success is the failure's instead)
+        if let Some(c) = &s.function {
+            let mut fail_ports = ports.clone();
+            fail_ports[0] = port(&module_component(m), &request_fail_port(s.name, c.state));
+            let fail = fail_connector(m, s.name, c.state);
+            self.claim(
+                &fail,
+                c.def.state.span,
+                format!("error path of the codel of `{m}.{}`", s.name),
+            );
+            self.connectors.push((
+                connector(&fail, fail_ports, Role::Environment),
+                guard.clone(),
+                Vec::new(),
+            ));
+        }
+        // a `validate` codel refuses the request: nothing else happens, and only where
+        // the request could be accepted
+        if s.validate.is_some() {
+            let refuse = fail_connector(m, s.name, VALIDATE);
+            self.claim(
+                &refuse,
+                s.def.name.span,
+                format!("refusals of `{m}.{}` by its `validate` codel", s.name),
+            );
+            let ports = vec![port(
+                &module_component(m),
+                &request_fail_port(s.name, VALIDATE),
+            )];
+            let refused = all(refusals.iter().map(|c| c.expr.clone()));
+            self.connectors.push((
+                connector(&refuse, ports, Role::Environment),
+                refused,
+                Vec::new(),
+            ));
+        }
+        let mut action = Vec::new();
+        if let Some(c) = &s.function {
+            action = self.age_resets(r.module, &c.writes);
+        }
+        self.connectors
+            .push((connector(&name, ports, Role::Environment), guard, action));
         (
             name,
             refusals.into_iter().map(RecipeCondition::from).collect(),
         )
+    }
+
+    /// `m.age_p = 0` for each port of `written` whose age is tracked.
+    fn age_resets(&self, mi: usize, written: &[usize]) -> Vec<Assign> {
+        let m = self.layer.modules[mi].name;
+        written
+            .iter()
+            .filter(|&&w| {
+                self.caps.contains_key(&PortRef {
+                    module: mi,
+                    port: w,
+                })
+            })
+            .map(|&w| {
+                let age = age_var(self.layer.modules[mi].ports[w]);
+                assign(member(&module_component(m), &age), int(0))
+            })
+            .collect()
+    }
+
+    /// The recipe of the codels that run at a request of `r`: a function's codel (its
+    /// normal outcome is the request connector `request`) and a `validate` codel (its
+    /// success is the request, its failure a refusal).
+    fn request_codels(
+        &mut self,
+        r: ServiceRef,
+        request: &str,
+    ) -> (Option<RecipeCodel>, Option<RecipeCodel>) {
+        let s = self.service(r);
+        let m = self.module_name(r);
+        if self.timed.is_some() && (s.function.is_some() || s.validate.is_some()) {
+            self.errors.push(
+                ModelError::new(
+                    format!("a timed model cannot have `{m}.{}`'s codel that runs at its request yet", s.name),
+                    s.def.name.span,
+                )
+                .with_help("leave `time: Exact` out, or the function's codel and the `validate` codel (docs/genom.md, \"Codels at the request\")"),
+            );
+        }
+        let module = &self.layer.modules[r.module];
+        let function = s.function.as_ref().map(|c| RecipeCodel {
+            state: c.state.to_string(),
+            run: request.to_string(),
+            fail: fail_connector(m, s.name, c.state),
+            yields: vec![ETHER.to_string()],
+            from_ether: false,
+            from_location: false,
+            throws: c.throws.iter().map(|t| t.to_string()).collect(),
+            writes: c
+                .writes
+                .iter()
+                .map(|&w| module.ports[w].to_string())
+                .collect(),
+            ids: c.ids.iter().map(|&k| module.ids[k].0.to_string()).collect(),
+            ids_port: (!c.ids.is_empty()).then(|| s.name.to_string()),
+            holds: Vec::new(),
+            apart: None,
+        });
+        let validate = s.validate.as_ref().map(|throws| RecipeCodel {
+            state: VALIDATE.to_string(),
+            run: request.to_string(),
+            fail: fail_connector(m, s.name, VALIDATE),
+            yields: Vec::new(),
+            from_ether: false,
+            from_location: false,
+            throws: throws.iter().map(|t| t.to_string()).collect(),
+            writes: Vec::new(),
+            ids: Vec::new(),
+            ids_port: None,
+            holds: Vec::new(),
+            apart: None,
+        });
+        (function, validate)
     }
 }

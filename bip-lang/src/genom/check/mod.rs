@@ -30,6 +30,9 @@ use module::module;
 
 /// The name of the final state of every activity (GenoM's `ether`).
 pub const ETHER: &str = "ether";
+/// The name of a service's `validate` codel, as the engine binds it and properties name
+/// it (`yield(m.S.validate)`).
+pub const VALIDATE: &str = "validate";
 /// The prefix of a yield that waits for the task's next period.
 pub const PAUSE: &str = "pause::";
 /// Port names of a generated activity atom that codel states may not take.
@@ -102,6 +105,11 @@ pub struct Service<'d> {
     pub after: Vec<usize>,
     /// The codels of an activity, in the order written.
     pub codels: Vec<Codel<'d>>,
+    /// A function's or attribute's codel (at `start`, yielding `ether`), run when its
+    /// request is accepted.
+    pub function: Option<Codel<'d>>,
+    /// The exceptions of the service's `validate` codel, if it has one.
+    pub validate: Option<Vec<&'d str>>,
     /// Codel states that are locations of the activity's atom: the targets of yields,
     /// `stop` (where an interrupt leads) and the states of async codels (where the
     /// activity waits while one runs). `start` is one only if a codel yields to it or it

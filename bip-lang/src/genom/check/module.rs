@@ -6,7 +6,7 @@ use std::collections::HashMap;
 
 use super::codels::codels;
 use super::types::data_type;
-use super::{InPort, Module, Service, MODULE_PORTS};
+use super::{InPort, Module, Service, ETHER, MODULE_PORTS, VALIDATE};
 use crate::compile::{check_name, one_of, unique, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::syntax::{ModuleDef, ServiceDef, ServiceKind, TaskDef, Text, TypeDef};
@@ -104,6 +104,26 @@ pub(super) fn module<'d>(errors: &mut Errors, consts: &Constants, m: &'d ModuleD
                     )
                     .with_note(c.def.state.span, "this codel writes ids through that port")
                     .with_help("docs/genom.md, \"Codels that write ids\""),
+                );
+            }
+        }
+    }
+    // so must the port through which a codel run at a request fails
+    for s in &services {
+        let codels = [
+            s.function.as_ref().map(|c| (c.state, c.def.state.span)),
+            s.def.validate.as_ref().map(|_| (VALIDATE, s.def.name.span)),
+        ];
+        for (codel, span) in codels.into_iter().flatten() {
+            let port = crate::genom::names::request_fail_port(s.name, codel);
+            if let Some(f) = services.iter().find(|f| !f.is_activity() && f.name == port) {
+                errors.push(
+                    ModelError::new(
+                        format!("a function or attribute cannot be named `{port}`"),
+                        f.def.name.span,
+                    )
+                    .with_note(span, "this codel fails through that port")
+                    .with_help("docs/genom.md, \"Codels at the request\""),
                 );
             }
         }
@@ -218,13 +238,14 @@ fn machine_names(errors: &mut Errors, m: &ModuleDef) {
     }
 }
 
-/// The types of a service's arguments and output. A function or attribute has no codel
-/// to read arguments or give an output, so it may declare neither.
+/// The types of a service's arguments and output. A function or attribute without a codel
+/// has nothing to read arguments (but a `validate` codel) or give an output.
 fn service_types(errors: &mut Errors, consts: &Constants, s: &mut Service<'_>) {
     let def = s.def;
     for (what, ty) in [("arguments", &def.args), ("an output", &def.output)] {
         let Some(ty) = ty else { continue };
-        if !s.is_activity() {
+        let read = s.function.is_some() || (what == "arguments" && s.validate.is_some());
+        if !s.is_activity() && !read {
             let field = if what == "arguments" {
                 "args"
             } else {
@@ -233,14 +254,14 @@ fn service_types(errors: &mut Errors, consts: &Constants, s: &mut Service<'_>) {
             errors.push(
                 ModelError::new(
                     format!(
-                        "`{}` is not an activity; it has no codel for {what}",
+                        "`{}` is not an activity and has no codel for {what}",
                         s.name
                     ),
                     def.name.span,
                 )
                 .with_label(format!("has `{field}`"))
                 .with_help(
-                    "only an activity's codels read a request's arguments and give an output",
+                    "an activity's codels, a function's codel and a `validate` codel read a request's arguments; an activity's or a function's codels give an output",
                 ),
             );
             continue;
@@ -358,6 +379,8 @@ fn service<'d>(
         interrupts,
         after,
         codels: Vec::new(),
+        function: None,
+        validate: None,
         locations: Vec::new(),
         stop: None,
         args: None,
@@ -374,15 +397,8 @@ fn service<'d>(
                 .with_help("functions and attributes run in the control task"),
             );
         }
-        if let Some(c) = s.codels.first() {
-            errors.push(
-                ModelError::new(
-                    format!("`{}` is not an activity; it has no codel states", s.name),
-                    c.state.span,
-                )
-                .with_help("a function or attribute runs at once when requested; declare it `kind: Activity` to give it codels"),
-            );
-        }
+        function_codel(errors, ports, ids, s, &mut out);
+        validate(errors, s, &mut out);
         return out;
     }
     match &s.task {
@@ -399,5 +415,67 @@ fn service<'d>(
         },
     }
     codels(errors, ports, ids, s, &mut out);
+    validate(errors, s, &mut out);
     out
+}
+
+/// A function's or attribute's codel, which runs when its request is accepted: one codel,
+/// at `start`, yielding `ether` (GenoM3's function codel has no states).
+fn function_codel<'d>(
+    errors: &mut Errors,
+    ports: &[&str],
+    ids: &[(&str, Option<(i64, i64)>)],
+    s: &'d ServiceDef,
+    out: &mut Service<'d>,
+) {
+    if s.codels.is_empty() {
+        return;
+    }
+    let shape = s.codels.len() == 1
+        && s.codels[0].state.as_str() == "start"
+        && s.codels[0].yields.len() == 1
+        && s.codels[0].yields[0].as_str() == ETHER;
+    if !shape {
+        let at = s.codels.get(1).unwrap_or(&s.codels[0]).state.span;
+        errors.push(
+            ModelError::new(
+                format!("`{}` is not an activity; it has one codel, at `start`, yielding `ether`", s.name),
+                at,
+            )
+            .with_help("a function or attribute runs its codel at once when requested: `codels: [(state: \"start\", yields: [\"ether\"])]`; declare it `kind: Activity` to give it codel states"),
+        );
+        return;
+    }
+    if s.codels[0].asynchronous {
+        errors.push(
+            ModelError::new(
+                format!("the codel of `{}` cannot be async", s.name),
+                s.codels[0].state.span,
+            )
+            .with_help("a function's codel runs in the control task when the request arrives; an activity's codel may run apart"),
+        );
+        return;
+    }
+    codels(errors, ports, ids, s, out);
+    out.function = out.codels.pop();
+    out.codels.clear();
+}
+
+/// A service's `validate` codel: its exceptions.
+fn validate<'d>(errors: &mut Errors, s: &'d ServiceDef, out: &mut Service<'d>) {
+    let Some(v) = &s.validate else { return };
+    unique(errors, v.throws.iter(), "exception");
+    for t in &v.throws {
+        check_name(errors, t, "exception");
+    }
+    if let Some(c) = s.codels.iter().find(|c| c.state.as_str() == VALIDATE) {
+        errors.push(
+            ModelError::new(
+                format!("`{}` has a `validate` codel, and a codel state of that name", s.name),
+                c.state.span,
+            )
+            .with_help("`validate` names the codel that checks a request (docs/genom.md, \"Codels at the request\"): rename the codel state"),
+        );
+    }
+    out.validate = Some(v.throws.iter().map(|t| t.as_str()).collect());
 }
