@@ -19,6 +19,7 @@ mod genom;
 mod genom_random;
 mod genom_terms;
 mod interrupts;
+mod request_codels;
 mod response;
 mod robustness;
 mod support;
