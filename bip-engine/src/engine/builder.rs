@@ -177,6 +177,21 @@ impl EngineBuilder {
         {
             return Err(BuildError::Timed);
         }
+        // the request's step is the codel's success: taking it without running the codel
+        // would say the codel succeeded
+        if let Some(genom) = &system.genom {
+            for m in &genom.modules {
+                for s in &m.services {
+                    if let Some(c) = s.validate.as_ref().or(s.function.as_ref()) {
+                        return Err(BuildError::AtRequest(
+                            m.name.clone(),
+                            s.name.clone(),
+                            c.state.clone(),
+                        ));
+                    }
+                }
+            }
+        }
         #[cfg(not(feature = "std"))]
         if let Some(genom) = &system.genom {
             for m in &genom.modules {
