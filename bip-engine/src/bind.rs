@@ -27,6 +27,10 @@ pub(crate) enum InterKind {
     Return { codel: u32 },
     /// A service's request, sent by the engine on behalf of a client.
     Request { service: u32 },
+    /// The error path of a codel that runs at a request (docs/genom.md, "Codels at the
+    /// request"): a function's failed reply, or a validation's refusal; taken only by the
+    /// engine serving the request.
+    AtRequestFail { codel: u32 },
     /// A `Time` step: fired once per tick.
     Time,
     /// Progress the model takes by itself (connectors of yours, model-owned requests).
@@ -71,6 +75,9 @@ pub(crate) struct CodelTable {
     /// The run step last taken from a step table entry of its run interaction (see
     /// [`RunStep`]).
     pub run_step: Option<RunStep>,
+    /// It runs at a request (a function's codel, a `validate` codel): it reads the
+    /// request's arguments before the request is accepted.
+    pub at_request: bool,
 }
 
 /// A codel's run step found among the steps of a step table entry: when its run
@@ -116,6 +123,9 @@ pub(crate) struct ServiceTable {
     /// What its requests' arguments may be.
     pub args: Args,
     pub activity: Option<ActivityTable>,
+    /// Its `validate` codel and a function's codel, which run when it is requested.
+    pub validate: Option<u32>,
+    pub function: Option<u32>,
 }
 
 pub(crate) struct ActivityTable {
@@ -284,12 +294,6 @@ impl Tables {
                 }
                 for c in &s.codels {
                     let cid = t.codels.len() as u32;
-                    if c.holds.len() > 64 {
-                        return Err(BuildError::TooMany(
-                            format!("codel ({}, {}, {})", m.name, s.name, c.state),
-                            "hold conditions",
-                        ));
-                    }
                     kind[c.run as usize] = InterKind::Codel {
                         codel: cid,
                         fail: false,
@@ -302,49 +306,24 @@ impl Tables {
                         kind[a.start as usize] = InterKind::Start { codel: cid };
                         kind[a.returned as usize] = InterKind::Return { codel: cid };
                     }
-                    let ids_field: Vec<usize> = c
-                        .ids
-                        .iter()
-                        .map(|f| fields.iter().position(|x| x.slot == f.slot).unwrap_or(0))
-                        .collect();
-                    let writable = ids_field.iter().fold(0u64, |acc, &k| acc | 1 << k);
-                    let ports = c
-                        .writes
-                        .iter()
-                        .filter_map(|w| {
-                            m.ports
-                                .iter()
-                                .position(|p| &p.name == w)
-                                .map(|k| (port_base + k, w.clone()))
-                        })
-                        .collect();
+                    let k = codel_table(m, s, c, sid, &fields, port_base, period_ticks, cid)?;
                     t.codels.push(CodelTable {
-                        name: Arc::new(Codel {
-                            id: CodelId(cid),
-                            module: m.name.clone(),
-                            service: s.name.clone(),
-                            state: c.state.clone(),
-                            holds: c.holds.iter().map(ToString::to_string).collect(),
-                        }),
-                        map: c.clone(),
-                        service: sid,
-                        module_component: m.component,
-                        throws: c.throws.iter().map(|x| Arc::from(x.as_str())).collect(),
-                        info: CodelInfo {
-                            module: m.name.clone(),
-                            service: s.name.clone(),
-                            state: c.state.clone(),
-                            fields: fields.clone(),
-                            writable,
-                            ports,
-                            output: s.output.clone(),
-                        },
-                        ids_field,
-                        period_ticks,
                         task: s.task.map(|k| task_base + k as u32),
-                        last_yield: None,
-                        run_step: None,
+                        ..k
                     });
+                }
+                // the codels at a request: their success is the request's step
+                let mut at_request = [None, None];
+                for (slot, c) in at_request.iter_mut().zip([&s.validate, &s.function]) {
+                    let Some(c) = c else { continue };
+                    let cid = t.codels.len() as u32;
+                    kind[c.fail as usize] = InterKind::AtRequestFail { codel: cid };
+                    let k = codel_table(m, s, c, sid, &fields, port_base, period_ticks, cid)?;
+                    t.codels.push(CodelTable {
+                        at_request: true,
+                        ..k
+                    });
+                    *slot = Some(cid);
                 }
                 t.services.push(ServiceTable {
                     name_ref: Arc::new(Service {
@@ -362,9 +341,11 @@ impl Tables {
                     args: Args {
                         service: format!("{}.{}", m.name, s.name),
                         ty: s.args.clone(),
-                        has_codels: !s.codels.is_empty(),
+                        has_codels: !s.codels.is_empty() || at_request.iter().any(Option::is_some),
                     },
                     activity,
+                    validate: at_request[0],
+                    function: at_request[1],
                 });
             }
         }
@@ -530,6 +511,72 @@ fn activity_table(
         current_args: None,
         pending_args: None,
         output: None,
+    })
+}
+
+/// What the engine keeps of codel `c` of service `s` of module `m` (numbered `cid`):
+/// its names, exceptions, ids fields and written ports; no task, and not at a request
+/// (the caller says).
+#[allow(clippy::too_many_arguments)]
+fn codel_table(
+    m: &bip_model::genom::ModuleMap,
+    s: &bip_model::genom::ServiceMap,
+    c: &CodelMap,
+    sid: u32,
+    fields: &[Field],
+    port_base: usize,
+    period_ticks: u64,
+    cid: u32,
+) -> Result<CodelTable, BuildError> {
+    if c.holds.len() > 64 {
+        return Err(BuildError::TooMany(
+            format!("codel ({}, {}, {})", m.name, s.name, c.state),
+            "hold conditions",
+        ));
+    }
+    let ids_field: Vec<usize> = c
+        .ids
+        .iter()
+        .map(|f| fields.iter().position(|x| x.slot == f.slot).unwrap_or(0))
+        .collect();
+    let writable = ids_field.iter().fold(0u64, |acc, &k| acc | 1 << k);
+    let ports = c
+        .writes
+        .iter()
+        .filter_map(|w| {
+            m.ports
+                .iter()
+                .position(|p| &p.name == w)
+                .map(|k| (port_base + k, w.clone()))
+        })
+        .collect();
+    Ok(CodelTable {
+        name: Arc::new(Codel {
+            id: CodelId(cid),
+            module: m.name.clone(),
+            service: s.name.clone(),
+            state: c.state.clone(),
+            holds: c.holds.iter().map(ToString::to_string).collect(),
+        }),
+        map: c.clone(),
+        service: sid,
+        module_component: m.component,
+        throws: c.throws.iter().map(|x| Arc::from(x.as_str())).collect(),
+        info: CodelInfo {
+            module: m.name.clone(),
+            service: s.name.clone(),
+            state: c.state.clone(),
+            fields: fields.to_vec(),
+            writable,
+            ports,
+            output: s.output.clone(),
+        },
+        ids_field,
+        period_ticks,
+        task: None,
+        last_yield: None,
+        run_step: None,
+        at_request: false,
     })
 }
 

@@ -30,7 +30,7 @@ pub enum BuildError {
     Timed,
     #[error("codel ({0}, {1}, {2}) is async: the engine runs an async codel on a thread of its own, which needs bip-engine's `std` feature; enable it, or make the codel synchronous")]
     Async(String, String, String),
-    #[error("codel ({0}, {1}, {2}) runs at a request (a function's codel or a `validate` codel), which the engine does not run yet: it would take the request's step without running the codel; verify the model with `bip verify`, or leave the codel out to run it")]
+    #[error("codel ({0}, {1}, {2}) runs at a request (a function's codel or a `validate` codel) that a component of the model sends: the engine cannot run it before the model's step; let the environment send the request, or leave the codel out")]
     AtRequest(String, String, String),
 }
 

@@ -230,7 +230,7 @@ impl fmt::Debug for Output {
 }
 
 /// Why a request was refused.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Refusal {
     /// These conditions of the service's `refusals` fail (`already requested or active`,
     /// `after ...`, a constraint on a function): [`Service::refusals`] says them.
@@ -238,6 +238,10 @@ pub enum Refusal {
     /// Every listed condition holds, yet the request interaction is not enabled: the guard
     /// or a port of a connector of yours that extends it, or a priority, forbids it now.
     NotEnabled,
+    /// The service's `validate` codel refused it: the exception it threw, or a fault (a
+    /// return it does not declare, a panic), which refuses it too (docs/genom.md, "Codels
+    /// at the request").
+    Validation(Outcome),
 }
 
 /// How an activity ended.
@@ -369,6 +373,7 @@ impl fmt::Display for Refusal {
             Refusal::NotEnabled => f.write_str(
                 "refused: its conditions hold, but a connector or a priority of the model forbids it now",
             ),
+            Refusal::Validation(o) => write!(f, "refused by its validate codel: {o}"),
         }
     }
 }

@@ -27,7 +27,7 @@ pub(crate) fn difference(signature: &[CodelSignature], module: &ModuleMap) -> Op
     let mut codels = module
         .services
         .iter()
-        .flat_map(|s| s.codels.iter().map(move |c| (s, c)));
+        .flat_map(|s| s.every_codel().map(move |c| (s, c)));
     for (k, sig) in signature.iter().enumerate() {
         let Some((s, c)) = codels.next() else {
             return Some(format!(

@@ -239,6 +239,10 @@ impl Server {
                     ticket,
                     reasons: Vec::new(),
                 },
+                Reply::Refused(refusal @ Refusal::Validation(_)) => ServiceReply::Refused {
+                    ticket,
+                    reasons: vec![refusal.to_string()],
+                },
                 Reply::Done { outcome, output } => {
                     let output = output
                         .and_then(|o| self.types.output_codec(m, s).and_then(|c| c.output(&o)));

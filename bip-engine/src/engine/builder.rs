@@ -177,11 +177,11 @@ impl EngineBuilder {
         {
             return Err(BuildError::Timed);
         }
-        // the request's step is the codel's success: taking it without running the codel
-        // would say the codel succeeded
+        // a request that a component of the model sends takes its step without the
+        // engine, which could not run its codels at the request first
         if let Some(genom) = &system.genom {
             for m in &genom.modules {
-                for s in &m.services {
+                for s in m.services.iter().filter(|s| s.owned_by_model) {
                     if let Some(c) = s.validate.as_ref().or(s.function.as_ref()) {
                         return Err(BuildError::AtRequest(
                             m.name.clone(),
@@ -389,6 +389,8 @@ impl EngineBuilder {
                 }),
                 #[cfg(feature = "std")]
                 workers,
+                request_args: None,
+                request_output: None,
             },
             time: Time {
                 clock,

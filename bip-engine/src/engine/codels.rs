@@ -145,10 +145,24 @@ impl Engine {
             });
         }
         let failed = error.is_some();
-        match &error {
-            // a replayed error path is what the trace says, not a fault seen now
-            Some(Outcome::Fault(f)) if f.kind == FaultKind::Replayed => {}
-            Some(Outcome::Fault(f)) => {
+        // without an error, the codel's ids writes are part of the step: the module pick
+        // set them
+        if let Some(e) = &error {
+            self.report_error(ck, e);
+        }
+        self.commit(Cause::Codel { error })?;
+        Ok(Stepped::Codel {
+            codel: CodelId(c),
+            failed,
+        })
+    }
+
+    /// Counts and reports the error path codel `ck` takes: an exception, or a fault (one a
+    /// replay takes as its trace says is no fault seen now).
+    pub(super) fn report_error(&mut self, ck: usize, error: &Outcome) {
+        match error {
+            Outcome::Fault(f) if f.kind == FaultKind::Replayed => {}
+            Outcome::Fault(f) => {
                 self.stats.faults += 1;
                 let i = &self.t.codels[ck].info;
                 tracing::warn!(target: "bip_engine", module = i.module.as_str(),
@@ -156,15 +170,8 @@ impl Engine {
                     fault = %f.kind, "codel fault: its error path is taken");
                 self.emit(Event::Fault(f.clone()));
             }
-            Some(_) => self.stats.exceptions += 1,
-            // the codel's ids writes are part of the step: the module pick set them
-            None => {}
+            _ => self.stats.exceptions += 1,
         }
-        self.commit(Cause::Codel { error })?;
-        Ok(Stepped::Codel {
-            codel: CodelId(c),
-            failed,
-        })
     }
 
     /// Calls a bound codel (here or on its task's thread).
@@ -177,20 +184,26 @@ impl Engine {
     ) -> Result<Next, String> {
         let tick = self.stats.ticks;
         let activity = self.t.services[service].activity.as_mut();
+        // a codel at a request reads the request's arguments before it is accepted
+        let (args_slot, output_slot) = match activity {
+            _ if self.t.codels[ck].at_request => (
+                Some(&mut self.runner.request_args),
+                Some(&mut self.runner.request_output),
+            ),
+            Some(a) => {
+                let slot = if starting {
+                    &mut a.pending_args
+                } else {
+                    &mut a.current_args
+                };
+                (Some(slot), Some(&mut a.output))
+            }
+            None => (None, None),
+        };
         #[cfg(feature = "std")]
         if let Body::Thread { worker, local } = self.runner.bodies[ck] {
             // the request's arguments and output move to the thread and back
-            let (mut args_slot, mut output_slot) = match activity {
-                Some(a) => {
-                    let slot = if starting {
-                        &mut a.pending_args
-                    } else {
-                        &mut a.current_args
-                    };
-                    (Some(slot), Some(&mut a.output))
-                }
-                None => (None, None),
-            };
+            let (mut args_slot, mut output_slot) = (args_slot, output_slot);
             let Some(workers) = self.runner.workers.as_mut() else {
                 return Err("no task threads".into());
             };
@@ -224,17 +237,8 @@ impl Engine {
             }
             return job.result.unwrap_or_else(|| Err("no result".into()));
         }
-        let (args, output): (Option<&(dyn Any + Send)>, _) = match activity {
-            Some(a) => {
-                let args = if starting {
-                    a.pending_args.as_deref()
-                } else {
-                    a.current_args.as_deref()
-                };
-                (args, Some(&mut a.output))
-            }
-            None => (None, None),
-        };
+        let args: Option<&(dyn Any + Send)> = args_slot.and_then(|s| s.as_deref());
+        let output = output_slot;
         let mut ctx = Ctx {
             info: &self.t.codels[ck].info,
             ids: &mut self.runner.ids,
@@ -363,10 +367,11 @@ impl Engine {
                 return true;
             }
         }
-        let Some(activity) = self.t.services[c.service as usize].activity.as_ref() else {
-            return false;
+        // the yield's transitions: the activity's, or a function's on its module
+        let comp = match self.t.services[c.service as usize].activity.as_ref() {
+            Some(activity) => activity.component,
+            None => c.module_component,
         };
-        let comp = activity.component;
         let want_ids = if c.map.ids.is_empty() {
             None
         } else {
@@ -436,7 +441,7 @@ impl Engine {
     /// Records codel `ck`'s run of `took` µs from `t0`, and reports a run past its WCET
     /// and a period's work past its task's deadline (the reports are cold, out of line).
     #[inline(always)]
-    fn check_budgets(&mut self, ck: usize, t0: u64, took: u64, of_task: bool) {
+    pub(super) fn check_budgets(&mut self, ck: usize, t0: u64, took: u64, of_task: bool) {
         let times = &mut self.budgets.times[ck];
         times.record(took);
         let (wcet, task) = (self.t.codels[ck].map.wcet_us, self.t.codels[ck].task);

@@ -67,6 +67,15 @@ impl Engine {
             InterKind::Start { .. } | InterKind::Return { .. } => {
                 Err(EngineError::Stopped(self.internal_error()).into())
             }
+            InterKind::Request { service } if self.has_codels_at_request(service) => {
+                let ticket = self.new_ticket();
+                self.serve_at_request(ticket, service, None, true)
+            }
+            InterKind::AtRequestFail { codel } => {
+                let ticket = self.new_ticket();
+                let service = self.t.codels[codel as usize].service;
+                self.serve_at_request(ticket, service, None, true)
+            }
             InterKind::Request { service } => {
                 let ticket = self.new_ticket();
                 self.accept_request(ticket, service, None)?;
@@ -101,6 +110,12 @@ impl Engine {
             InterKind::Request { .. } => Stepped::Request {
                 ticket: Ticket(self.requests.next_ticket),
                 accepted: true,
+            },
+            // a validation's failure refuses the request; a function's accepts it
+            InterKind::AtRequestFail { codel } => Stepped::Request {
+                ticket: Ticket(self.requests.next_ticket),
+                accepted: self.t.services[self.t.codels[codel as usize].service as usize].validate
+                    != Some(codel),
             },
             InterKind::Time => Stepped::Tick,
             InterKind::Start { .. }

@@ -42,6 +42,7 @@ use crate::record::{Recording, Window};
 
 #[cfg(feature = "std")]
 mod apart;
+mod at_request;
 mod builder;
 mod codels;
 mod commit;
@@ -139,6 +140,10 @@ struct Runner {
     rng: Rng,
     #[cfg(feature = "std")]
     workers: Option<crate::threads::Workers>,
+    /// The arguments of the request being served and the output its function's codel
+    /// gives, while its codels at the request run (`at_request`).
+    request_args: Option<Box<dyn core::any::Any + Send>>,
+    request_output: Option<crate::event::Output>,
 }
 
 struct Time {

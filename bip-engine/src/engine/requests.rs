@@ -10,8 +10,8 @@ use crate::prelude::*;
 
 use super::replies::Cause;
 use super::{Engine, Stepped};
-use crate::error::{EngineError, RequestError};
-use crate::event::{Event, Outcome, Reasons, Refusal, Reply, Ticket};
+use crate::error::{EngineError, RequestError, StepAsError};
+use crate::event::{Event, Outcome, Output, Reasons, Refusal, Reply, Ticket};
 
 impl Engine {
     /// Queues a request for `module.service` with arguments its codels can read
@@ -71,6 +71,15 @@ impl Engine {
         // `request_target` queues no request for a task's machine, which has none
         let request = self.t.services[service as usize].request;
         if let Some(i) = request.filter(|&i| self.gate.enabled().is_enabled(i)) {
+            if self.has_codels_at_request(service) {
+                return self
+                    .serve_at_request(ticket, service, args, false)
+                    .map_err(|e| match e {
+                        StepAsError::Engine(e) => e,
+                        // not forced: no step to diverge from
+                        _ => EngineError::Stopped(self.internal_error()),
+                    });
+            }
             self.take_step_of(i);
             self.accept_request(ticket, service, args)?;
             return Ok(Stepped::Request {
@@ -106,6 +115,19 @@ impl Engine {
         service: u32,
         args: Option<Box<dyn Any + Send>>,
     ) -> Result<(), EngineError> {
+        self.accept_with(ticket, service, args, Outcome::Ether, None)
+    }
+
+    /// Commits the chosen request step and replies; a function or attribute is done at
+    /// once, with `outcome` and `output` (its codel's).
+    pub(super) fn accept_with(
+        &mut self,
+        ticket: Ticket,
+        service: u32,
+        args: Option<Box<dyn Any + Send>>,
+        outcome: Outcome,
+        output: Option<Output>,
+    ) -> Result<(), EngineError> {
         self.stats.requests_accepted += 1;
         self.emit(Event::Reply {
             ticket,
@@ -122,7 +144,7 @@ impl Engine {
             self.emit(Event::Reply {
                 ticket,
                 service: Arc::clone(&self.t.services[service as usize].name_ref),
-                reply: Reply::done(Outcome::Ether),
+                reply: Reply::Done { outcome, output },
             });
         }
         Ok(())

@@ -360,6 +360,7 @@ fn collect_progress(
             }
             InterKind::Return { .. }
             | InterKind::Request { .. }
+            | InterKind::AtRequestFail { .. }
             | InterKind::Time
             | InterKind::Environment => {}
         }

@@ -207,34 +207,3 @@ fn a_timed_model_is_refused() {
         .build();
     assert!(matches!(built, Err(bip_engine::BuildError::Timed)));
 }
-
-/// A function's codel and a `validate` codel are steps of the model at a request
-/// (docs/genom.md, "Codels at the request"), which the engine does not run yet: it
-/// refuses the model rather than take a request's step, the codel's success, without
-/// running the codel.
-#[test]
-fn a_codel_at_a_request_is_refused() {
-    for (service, codel) in [
-        (
-            r#"(name: "F", kind: Function, codels: [(state: "start", yields: ["ether"])])"#,
-            "start",
-        ),
-        (
-            r#"(name: "F", kind: Function, validate: (throws: ["e"]))"#,
-            "validate",
-        ),
-    ] {
-        let model = format!(
-            r#"System(name: "f", tick_ms: 1, modules: [(name: "m", tasks: [(name: "t", period: 1)],
-            services: [{service}])])"#
-        );
-        let system = load_str("at_request.ron", &model).expect("loads");
-        let built = Engine::builder(system)
-            .default_codels(DefaultCodels::FirstYield)
-            .build();
-        let Err(bip_engine::BuildError::AtRequest(m, s, c)) = built else {
-            panic!("{service}: not refused")
-        };
-        assert_eq!((m.as_str(), s.as_str(), c.as_str()), ("m", "F", codel));
-    }
-}

@@ -5,6 +5,7 @@
 
 mod api;
 mod async_codels;
+mod at_request;
 mod bounded;
 mod budgets;
 mod common;

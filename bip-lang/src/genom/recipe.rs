@@ -253,8 +253,9 @@ impl Recipe {
                     let matom = system.atom_of(mc);
                     let port = |p: &str| matom.port_index(p).ok_or_else(|| missing(p));
                     // the function's normal outcomes: its port's transitions (one per
-                    // combination of the ids values it writes)
-                    let ok = match c.yields.is_empty() {
+                    // combination of the ids values it writes); a validation's success
+                    // is any step of the request
+                    let ok = match c.state == super::check::VALIDATE {
                         true => 0..0,
                         false => matom.transitions_from(0, Some(port(&s.name)?)),
                     };

@@ -313,7 +313,8 @@ fn the_map_has_the_request_codels_and_their_steps() {
     let v = a.validate.as_ref().expect("A's validation");
     assert_eq!(Some(v.run), a.request);
     assert_eq!(name(v.fail), "m_A_validate_fail");
-    assert!(v.yields.is_empty());
+    assert_eq!(v.yields.len(), 1);
+    assert!(v.yields[0].target == "ether" && v.yields[0].transitions.is_empty());
     assert!(
         map.codel("m", "A", "validate").is_none(),
         "not a codel state"

@@ -162,8 +162,9 @@ pub struct ServiceMap {
     /// accepted, its reply an error.
     pub function: Option<CodelMap>,
     /// The service's `validate` codel, which runs when a request arrives that the model
-    /// would accept: its success is the request's step, its exceptions and faults a step
-    /// of [`CodelMap::fail`], which refuses the request (it has no yields).
+    /// would accept: its success, its one yield `ether` (with no transitions: any step),
+    /// is the request's step, its exceptions and faults a step of [`CodelMap::fail`],
+    /// which refuses the request.
     pub validate: Option<CodelMap>,
     /// The type of a request's arguments, if the model declares one.
     pub args: Option<DataType>,
@@ -463,6 +464,18 @@ impl GenomMap {
             .codels
             .iter()
             .find(|c| c.state == state)
+    }
+}
+
+impl ServiceMap {
+    /// Its codels, then its codels at a request (its `validate`, then a function's): the
+    /// order in which the engine numbers a module's codels, and a module object's codels
+    /// are numbered.
+    pub fn every_codel(&self) -> impl Iterator<Item = &CodelMap> {
+        self.codels
+            .iter()
+            .chain(self.validate.as_ref())
+            .chain(self.function.as_ref())
     }
 }
 

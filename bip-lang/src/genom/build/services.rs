@@ -442,7 +442,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             state: VALIDATE.to_string(),
             run: request.to_string(),
             fail: fail_connector(m, s.name, VALIDATE),
-            yields: Vec::new(),
+            yields: vec![ETHER.to_string()],
             from_ether: false,
             from_location: false,
             throws: throws.iter().map(|t| t.to_string()).collect(),
