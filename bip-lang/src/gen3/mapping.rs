@@ -11,7 +11,9 @@ use super::ast::{Codel, Component, Kind, Port, PortDir, Service, Source, Spec, T
 use super::params;
 use super::types::Types;
 use crate::diag::{Errors, ModelError};
-use crate::genom::syntax::{CodelDef, ModuleDef, PortDef, ServiceDef, ServiceKind, TaskDef};
+use crate::genom::syntax::{
+    CodelDef, ModuleDef, PortDef, ServiceDef, ServiceKind, TaskDef, ValidateDef,
+};
 use crate::source::{ConstExpr, ConstValue, Span, Spanned, Text};
 
 /// The modules of a file's components; `tick_us` is the model's tick in microseconds.
@@ -200,7 +202,22 @@ fn service(
         Kind::Function => ServiceKind::Function,
         Kind::Activity => ServiceKind::Activity,
     };
-    let codels = codel_defs(c, Some(s), &s.codels, &throws);
+    let mut codels = codel_defs(c, Some(s), &s.codels, &throws);
+    // a function's codel has no states: it runs at the request (`start`, yielding `ether`)
+    if s.kind != Kind::Activity {
+        codels.extend(s.simple.iter().map(|codel| {
+            let at = |v: &str| Text::new(v.to_string(), codel.function.span);
+            CodelDef {
+                state: at("start"),
+                yields: vec![at("ether")],
+                throws: throws.clone(),
+                writes: writes(c, Some(s), codel),
+                wcet: wcet(codel),
+                bcet: None,
+                asynchronous: codel.asynchronous,
+            }
+        }));
+    }
     ServiceDef {
         name: s.name.clone(),
         kind,
@@ -212,7 +229,9 @@ fn service(
         codels,
         args: types.payload(c, s, false),
         output: types.payload(c, s, true),
-        validate: None,
+        validate: s.validate.as_ref().map(|_| ValidateDef {
+            throws: throws.clone(),
+        }),
         machine: false,
     }
 }
@@ -276,12 +295,7 @@ fn codel_defs(
         .iter()
         .flat_map(|codel| {
             let writes = writes(c, s, codel);
-            // with its unit: a bare number below 100 µs reads as a slip for milliseconds
-            let wcet = codel.wcet.map(|(us, span)| Spanned {
-                value: ConstValue::Expr(format!("{us}us")),
-                span,
-                verbatim: false,
-            });
+            let wcet = wcet(codel);
             codel.states.iter().map(move |state| CodelDef {
                 state: state.clone(),
                 yields: codel.yields.clone(),
@@ -294,6 +308,16 @@ fn codel_defs(
             })
         })
         .collect()
+}
+
+/// A codel's WCET, with its unit: a bare number below 100 µs reads as a slip for
+/// milliseconds.
+fn wcet(codel: &Codel) -> Option<ConstExpr> {
+    codel.wcet.map(|(us, span)| Spanned {
+        value: ConstValue::Expr(format!("{us}us")),
+        span,
+        verbatim: false,
+    })
 }
 
 /// The out ports a codel writes: its `out` and `inout` parameters that name one (`port out

@@ -167,7 +167,11 @@ impl<'s> Types<'s> {
     /// field without one, an anonymous array), the Rust path `<component>::<Service>_input`.
     /// Functions and attributes have none: the model gives them no codel to read them.
     pub fn payload(&self, c: &Component, s: &Service, output: bool) -> Option<DataTypeDef> {
-        if s.kind != Kind::Activity {
+        // a function's codel reads its arguments and gives its output; a validation reads
+        // the arguments
+        let read =
+            s.kind == Kind::Activity || !s.simple.is_empty() || (!output && s.validate.is_some());
+        if !read {
             return None;
         }
         let wanted = |d: Dir| if output { d != Dir::In } else { d != Dir::Out };

@@ -299,10 +299,12 @@ fn a_component_becomes_a_module_of_the_genom_layer() {
     );
     let reset = &m.services[1];
     assert_eq!(reset.interrupts[0].value, "Run");
-    assert!(
-        reset.codels.is_empty(),
-        "a function's codel is not modelled"
-    );
+    // a function's codel runs at its request: `start`, yielding `ether`
+    let [codel] = reset.codels.as_slice() else {
+        panic!("{:?}", reset.codels)
+    };
+    assert_eq!((codel.state.as_str(), codel.yields.len()), ("start", 1));
+    assert_eq!(codel.yields[0].as_str(), "ether");
     let run = &m.services[2];
     assert_eq!(run.task.as_ref().map(|t| t.value.as_str()), Some("main"));
     assert_eq!(run.after[0].value, "Reset");

@@ -219,8 +219,9 @@ fn each_kind_of_idl_type_becomes_its_data_type() {
         )
     );
     assert_eq!(service("Nothing"), (None, None));
-    // functions and attributes have no codel that reads arguments or gives an output
-    assert_eq!(service("F"), (None, None));
+    // a function's codel reads its arguments and gives its output; an attribute without
+    // a codel has none
+    assert_eq!(service("F"), (Some(DataType::Float), Some(DataType::Float)));
     assert_eq!(service("A"), (None, None));
 }
 

@@ -11,7 +11,7 @@
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
-use bip_lang::gen3::ast::{Codel, Component, Dir, Service, Spec};
+use bip_lang::gen3::ast::{Codel, Component, Dir, Kind, Service, Spec};
 use bip_lang::genom::syntax::ModuleDef;
 
 use super::codels::{all_codels, param, within, Param, Place};
@@ -53,14 +53,19 @@ pub fn rust_glue_of(specs: &[&Spec]) -> Result<String, CodegenError> {
 }
 
 /// A codel of the module object, as the engine numbers them: tasks' machines first, then
-/// the services' codels, each state of each codel once.
+/// the services' codels, each state of each codel once, then each service's codels at a
+/// request (its `validate`, a function's codel).
 struct Numbered<'a> {
     service: Option<&'a Service>,
     /// The service's name, or the task's.
     owner: &'a str,
     state: &'a str,
     codel: &'a Codel,
+    /// Its yields as the model writes them (`ether` for a codel at a request).
+    yields: Vec<String>,
     throws: Vec<String>,
+    /// It runs at a request, and GenoM3's `genom_ok` is its success.
+    at_request: bool,
 }
 
 fn last(name: &str) -> String {
@@ -68,6 +73,13 @@ fn last(name: &str) -> String {
 }
 
 fn numbered(comp: &Component) -> Vec<Numbered<'_>> {
+    let yields = |codel: &Codel| {
+        codel
+            .yields
+            .iter()
+            .map(|y| y.value.replace(' ', ""))
+            .collect()
+    };
     let tasks = comp.tasks.iter().flat_map(|t| {
         t.codels.iter().flat_map(move |codel| {
             codel.states.iter().map(move |st| Numbered {
@@ -75,20 +87,44 @@ fn numbered(comp: &Component) -> Vec<Numbered<'_>> {
                 owner: &t.name.value,
                 state: &st.value,
                 codel,
+                yields: yields(codel),
                 throws: t.throws.iter().map(|e| last(&e.value)).collect(),
+                at_request: false,
             })
         })
     });
     let services = comp.services.iter().flat_map(|s| {
-        s.codels.iter().flat_map(move |codel| {
+        let throws = || s.throws.iter().map(|e| last(&e.value)).collect();
+        let states = s.codels.iter().flat_map(move |codel| {
             codel.states.iter().map(move |st| Numbered {
                 service: Some(s),
                 owner: &s.name.value,
                 state: &st.value,
                 codel,
-                throws: s.throws.iter().map(|e| last(&e.value)).collect(),
+                yields: yields(codel),
+                throws: throws(),
+                at_request: false,
             })
-        })
+        });
+        // as the model has them (docs/genom.md, "Codels at the request")
+        let function = (s.kind != Kind::Activity)
+            .then_some(&s.simple[..])
+            .unwrap_or_default();
+        let at_request = s
+            .validate
+            .iter()
+            .map(|codel| ("validate", codel))
+            .chain(function.iter().map(|codel| ("start", codel)))
+            .map(move |(state, codel)| Numbered {
+                service: Some(s),
+                owner: &s.name.value,
+                state,
+                codel,
+                yields: vec!["ether".to_string()],
+                throws: throws(),
+                at_request: true,
+            });
+        states.chain(at_request)
     });
     tasks.chain(services).collect()
 }
@@ -112,18 +148,12 @@ fn component_glue(
     // the module object's codels, as the engine checks them against the model
     out.push_str("/// The module object's codels as the engine numbers them (tasks' machines, then the\n/// services' codels), with their outcomes as the model declares them.\npub const CODELS: &[bip_genom_c::bip_engine::CodelSignature] = &[\n");
     for n in &codels {
-        let yields: Vec<String> = n
-            .codel
-            .yields
-            .iter()
-            .map(|y| y.value.replace(' ', ""))
-            .collect();
         let _ = writeln!(
             out,
             "    bip_genom_c::bip_engine::CodelSignature {{ service: {:?}, codel: {:?}, yields: {}, throws: {} }},",
             n.owner,
             n.state,
-            quoted(&yields),
+            quoted(&n.yields),
             quoted(&n.throws)
         );
     }
@@ -329,8 +359,18 @@ fn component_glue(
     out.push_str("/// Runs codel `k` on `s`; `None` if its arguments are missing.\n///\n/// # Safety\n/// `s` and `ctx` are valid for the call, `this` is the module object's context.\n#[allow(unused_variables)]\nunsafe fn call(\n    k: usize,\n    s: *mut State,\n    ctx: *mut bip_genom_c::bip_engine::Ctx<'static>,\n    this: *const bip_genom_c::ContextIface,\n) -> Option<bip_genom_c::GenomEvent> {\n    unsafe {\n        Some(match k {\n");
     for (k, (n, call)) in codels.iter().zip(&calls).enumerate() {
         let owner = n.owner;
+        // GenoM3's `genom_ok` (NULL) is a codel at a request's success: its `ether`
+        let call = &match n.at_request {
+            true => format!(
+                "{{ let ev = {call}; if ev.is_null() {{ core::ptr::addr_of!({}).cast() }} else {{ ev }} }}",
+                cname(&format!("{c}::ether"))
+            ),
+            false => call.clone(),
+        };
+        // the arguments, read by the codel that starts an activity or checks a request
+        let reads_args = n.state == "start" || n.state == "validate" && n.at_request;
         let start = match starts.iter().find(|(s, _)| s == owner) {
-            Some((_, f)) if n.state == "start" => {
+            Some((_, f)) if reads_args => {
                 format!(
                     "if !{f}(&mut (*s).{}, &*ctx) {{ return None; }} ",
                     service_field(owner)
@@ -338,7 +378,11 @@ fn component_glue(
             }
             _ => String::new(),
         };
-        let body = match outputs.iter().find(|(s, _)| s == owner) {
+        // a validation gives no output
+        let gives = outputs
+            .iter()
+            .find(|(s, _)| s == owner && !(n.at_request && n.state == "validate"));
+        let body = match gives {
             Some((_, f)) => format!(
                 "let ev = {call}; {f}(&(*s).{}, &mut *ctx); ev",
                 service_field(owner)

@@ -74,7 +74,8 @@ pub fn service_data(
             c: t,
         });
     }
-    if fields.is_empty() || s.codels.is_empty() {
+    let has_codels = !s.codels.is_empty() || !s.simple.is_empty() || s.validate.is_some();
+    if fields.is_empty() || !has_codels {
         return Ok(None);
     }
     let data = format!("{name}_data");

@@ -66,6 +66,33 @@ counter_idle_start(double gain, const genom_context self)
   return gain >= 0 ? counter_ether : counter_e_stray(self);
 }
 
+/* SetGain's validation: a negative gain is refused with e_limit (its detail the gain,
+ * truncated). */
+genom_event
+counter_set_gain_check(double g, const genom_context self)
+{
+  counter_e_limit_detail limit;
+  if (g >= 0) return genom_ok;
+  limit.at = (int32_t)g;
+  return counter_e_limit(&limit, self);
+}
+
+/* SetGain: gives back the gain it replaces; above 100, e_limit and nothing changes;
+ * exactly 42, an event of no component (which the engine takes as a fault). */
+genom_event
+counter_set_gain(double g, double *was, double *gain, const genom_context self)
+{
+  counter_e_limit_detail limit;
+  if (g == 42) return stray_event;
+  if (g > 100) {
+    limit.at = (int32_t)g;
+    return counter_e_limit(&limit, self);
+  }
+  *was = *gain;
+  *gain = g;
+  return genom_ok;
+}
+
 /* The ids' layout as gcc lays it out, for the tests to compare with the Rust mirror:
  * 0 the size, 1 the alignment, 2.. each member's offset. */
 size_t

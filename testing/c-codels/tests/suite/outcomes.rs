@@ -118,7 +118,7 @@ fn codels_numbered_otherwise_than_the_model_do_not_bind() {
             bip_engine::Next::ETHER
         });
     let err = builder.build().err().expect("refused").to_string();
-    assert!(err.contains("they have 2 codels, the model 4"), "{err}");
+    assert!(err.contains("they have 2 codels, the model 6"), "{err}");
 }
 
 #[test]
