@@ -36,7 +36,7 @@ pub(crate) fn bindings(
 }
 
 fn has_codels(m: &ModuleMap) -> bool {
-    m.services.iter().any(|s| !s.codels.is_empty())
+    m.services.iter().any(|s| s.every_codel().next().is_some())
 }
 
 /// The names one Rust scope has taken, and what took them.
@@ -85,7 +85,8 @@ fn module(
     )?;
     let mut codels = Vec::new();
     for s in &m.services {
-        for c in &s.codels {
+        // in the engine's order: a service's codels, then those at its request
+        for c in s.every_codel() {
             let what = format!("codel `{}` of `{}.{}`", c.state, m.name, s.name);
             let ty = format!("{}{}", camel(&s.name), camel(&c.state));
             let context = format!("{ty}Ctx");

@@ -50,7 +50,8 @@ impl RequestNames {
 /// The exceptions a service's codels may throw, each once, in declaration order.
 fn exceptions(s: &ServiceMap) -> Vec<&str> {
     let mut all: Vec<&str> = Vec::new();
-    for c in &s.codels {
+    // a function's codel ends its request too; a validation's exception refuses it
+    for c in s.codels.iter().chain(&s.function) {
         for e in &c.throws {
             if !all.contains(&e.as_str()) {
                 all.push(e);

@@ -260,6 +260,12 @@ impl arm::Codels for Arm {{
     fn move_main(&mut self, _ctx: arm::MoveMainCtx<'_, '_>) -> arm::MoveMain {{
         arm::MoveMain::Ether
     }}
+    fn calibrate_validate(&mut self, _ctx: arm::CalibrateValidateCtx<'_, '_>) -> arm::CalibrateValidate {{
+        arm::CalibrateValidate::Ether
+    }}
+    fn calibrate_start(&mut self, _ctx: arm::CalibrateStartCtx<'_, '_>) -> arm::CalibrateStart {{
+        arm::CalibrateStart::Ether
+    }}
 }}
 "
         )

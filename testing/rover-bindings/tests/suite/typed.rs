@@ -1,7 +1,8 @@
 //! `models/typed.ron` run through its bindings: the model types the rover does not use
 //! cross the typed contexts as the model declares them (ids of a range and a `Bool`
 //! field, an `Int` port, a record with an `Int` field, an `Int`'s arguments and output),
-//! and what the engine holds is what the codels gave. The run is a path of the model.
+//! and what the engine holds is what the codels gave; a function's codel and a
+//! validation run at the request, typed alike. The run is a path of the model.
 
 use crate::{assert_clean_path, end_of};
 use bip_engine::{Bounded, Engine};
@@ -52,6 +53,29 @@ impl arm::Codels for Arm {
         } else {
             arm::MoveMain::PauseMain
         }
+    }
+
+    /// Refuses a calibration to 0.
+    fn calibrate_validate(
+        &mut self,
+        ctx: arm::CalibrateValidateCtx<'_, '_>,
+    ) -> arm::CalibrateValidate {
+        match ctx.args().map(|a| a.get()) {
+            Some(0) => arm::CalibrateValidate::EZero,
+            _ => arm::CalibrateValidate::Ether,
+        }
+    }
+
+    /// Sets the gear to the argument less 2 and gives the gear it replaces; busy at 5.
+    fn calibrate_start(&mut self, mut ctx: arm::CalibrateStartCtx<'_, '_>) -> arm::CalibrateStart {
+        let a = ctx.args().map_or(0, |a| a.get());
+        if a == 5 {
+            return arm::CalibrateStart::EBusy;
+        }
+        let was = ctx.ids_gear();
+        ctx.set_ids_gear(Bounded::saturating(a - 2));
+        ctx.set_output(was);
+        arm::CalibrateStart::Ether
     }
 }
 
@@ -106,6 +130,15 @@ fn the_readers_give_what_the_writers_gave() {
         fn move_main(&mut self, ctx: arm::MoveMainCtx<'_, '_>) -> arm::MoveMain {
             self.0.lock().expect("not poisoned").move_main(ctx)
         }
+        fn calibrate_validate(
+            &mut self,
+            ctx: arm::CalibrateValidateCtx<'_, '_>,
+        ) -> arm::CalibrateValidate {
+            self.0.lock().expect("not poisoned").calibrate_validate(ctx)
+        }
+        fn calibrate_start(&mut self, ctx: arm::CalibrateStartCtx<'_, '_>) -> arm::CalibrateStart {
+            self.0.lock().expect("not poisoned").calibrate_start(ctx)
+        }
     }
     let mut engine = typed::bind(Engine::builder(system), Shared(arm.clone()))
         .build()
@@ -144,4 +177,41 @@ fn an_int_out_of_range_cannot_be_requested_and_the_engine_still_refuses_it_untyp
         .request("arm", "Move", 91i64)
         .expect_err("out of Int(-90, 90)");
     assert!(err.to_string().contains("Int(-90, 90)"), "{err}");
+}
+
+#[test]
+fn a_function_codel_and_a_validation_run_typed_at_the_request() {
+    let system = system();
+    let mut engine = typed::bind(Engine::builder(system.clone()).record(1000), Arm::default())
+        .build()
+        .expect("every codel is bound");
+    // 4: the gear goes to 2, and the one it replaces (0) is the output
+    let t = arm::request_calibrate(&mut engine, Bounded::of::<4>()).expect("queued");
+    let end = end_of(&mut engine, 1, |tk, r| t.end(tk, r));
+    assert_eq!(end, Some(arm::CalibrateEnd::Done(Some(Bounded::of::<0>()))));
+    assert_eq!(engine.inspect().ids("arm", "gear"), Some(2));
+    // 5: busy, the gear unchanged
+    let t = arm::request_calibrate(&mut engine, Bounded::of::<5>()).expect("queued");
+    let end = end_of(&mut engine, 1, |tk, r| t.end(tk, r));
+    assert_eq!(
+        end,
+        Some(arm::CalibrateEnd::Exception(
+            arm::CalibrateException::EBusy,
+            None
+        ))
+    );
+    assert_eq!(engine.inspect().ids("arm", "gear"), Some(2));
+    // 0: refused by the validation, with its exception
+    arm::request_calibrate(&mut engine, Bounded::of::<0>()).expect("queued");
+    engine
+        .run_until(bip_engine::Until::Quiescent)
+        .expect("runs");
+    let refused = engine.events().any(|ev| {
+        matches!(ev, bip_engine::Event::Reply {
+            reply: bip_engine::Reply::Refused(bip_engine::Refusal::Validation(bip_engine::Outcome::Exception(e))),
+            ..
+        } if &*e == "e_zero")
+    });
+    assert!(refused);
+    assert_clean_path(&mut engine, &system);
 }
