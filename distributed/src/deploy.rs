@@ -93,7 +93,7 @@ impl Deployment {
             .genom
             .iter()
             .flat_map(|g| &g.modules)
-            .filter(|m| m.services.iter().any(|s| !s.codels.is_empty()))
+            .filter(|m| m.services.iter().any(|s| s.every_codel().next().is_some()))
             .map(|m| m.name.as_str())
             .collect();
         let mut seen: Vec<(&str, &str)> = Vec::new();

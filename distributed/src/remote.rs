@@ -217,14 +217,15 @@ impl RemoteModules {
             .ok_or_else(|| RemoteError::NoSuchModule(module.into()))
     }
 
-    /// The codels of `module` as the model declares them (services, then their codels).
+    /// The codels of `module` as the model declares them (services, then their codels,
+    /// those at a request last), as the engine numbers them.
     fn model_codels(&self, module: &str) -> Result<Vec<RemoteCodel>, RemoteError> {
         Ok(self
             .module_map(module)?
             .services
             .iter()
             .flat_map(|s| {
-                s.codels.iter().map(|c| RemoteCodel {
+                s.every_codel().map(|c| RemoteCodel {
                     name: format!("{}.{}", s.name, c.state),
                     service: s.name.clone(),
                     deadline: self.options.deadline + Duration::from_micros(c.wcet_us.unwrap_or(0)),

@@ -147,7 +147,7 @@ impl RequestServer {
                     module: m.name.clone(),
                     name: s.name.clone(),
                     refusals: s.refusals.iter().map(ToString::to_string).collect(),
-                    codels: !s.codels.is_empty(),
+                    codels: s.every_codel().next().is_some(),
                 })
             })
             .collect();

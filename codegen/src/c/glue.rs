@@ -107,9 +107,11 @@ fn numbered(comp: &Component) -> Vec<Numbered<'_>> {
             })
         });
         // as the model has them (docs/genom.md, "Codels at the request")
-        let function = (s.kind != Kind::Activity)
-            .then_some(&s.simple[..])
-            .unwrap_or_default();
+        let function: &[Codel] = if s.kind != Kind::Activity {
+            &s.simple
+        } else {
+            &[]
+        };
         let at_request = s
             .validate
             .iter()
