@@ -199,3 +199,28 @@ fn an_interrupt_during_the_async_run_drops_its_outcome() {
     assert_eq!(e.inspect().port::<i64>("m", "image"), None);
     assert_replays(&e);
 }
+
+#[test]
+fn dropping_the_engine_does_not_wait_for_a_codel_that_never_returns() {
+    let (started_tx, started) = channel();
+    // held to the end: the grab never returns while the engine lives
+    let (release, release_rx) = channel();
+    let mut e = engine(started_tx, release_rx, Arc::new(AtomicU32::new(0)));
+    e.request("m", "Grab", ()).expect("sent");
+    for _ in 0..20 {
+        e.step().expect("steps");
+    }
+    started
+        .recv_timeout(Duration::from_secs(10))
+        .expect("the grab started");
+    let (dropped_tx, dropped) = channel();
+    std::thread::spawn(move || {
+        drop(e);
+        let _ = dropped_tx.send(());
+    });
+    dropped
+        .recv_timeout(Duration::from_secs(10))
+        .expect("the engine was dropped while its codel ran");
+    // the codel's thread, left detached, ends when its codel returns
+    drop(release);
+}
