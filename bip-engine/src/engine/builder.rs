@@ -98,7 +98,9 @@ impl EngineBuilder {
     /// says otherwise. This is how generated bindings bind a module (docs/codegen.md): one
     /// object serves all its codels, with no lock, since the engine calls one codel at a
     /// time. With [`EngineBuilder::threads`], a module whose codels run on several tasks
-    /// is called from their threads one at a time, behind a lock.
+    /// is called from their threads one at a time, behind a lock; so is an object that runs
+    /// an async codel itself, whose other codels then wait while it runs (bind it with
+    /// [`EngineBuilder::apart`] instead).
     pub fn module(
         mut self,
         module: &str,
