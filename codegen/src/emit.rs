@@ -196,26 +196,35 @@ fn module(
     for (_, n) in &apart {
         let _ = writeln!(out, "        let mut {m} = codels.{m}();", m = n.method);
     }
-    let _ = write!(
-        out,
-        "        builder\n            .typed_as(\"{m}\", &TYPES)\n            .module(\"{m}\", CODELS, move |codel, ctx| match codel {{",
-        m = m.name
-    );
-    for (k, n) in codels.iter().enumerate() {
-        if n.codel.apart.is_none() {
-            let _ = write!(
-                out,
-                "\n                {k} => codels.{}({} {{ ctx }}).into(),",
-                n.method, n.context
-            );
+    if apart.len() == codels.len() {
+        // every codel runs apart: the object is asked to run none
+        let _ = write!(
+            out,
+            "        builder\n            .typed_as(\"{m}\", &TYPES)\n            .module(\"{m}\", CODELS, |codel, _| {{\n                unreachable!(\"module `{m}` runs its codel {{codel}} apart\")\n            }})",
+            m = m.name
+        );
+    } else {
+        let _ = write!(
+            out,
+            "        builder\n            .typed_as(\"{m}\", &TYPES)\n            .module(\"{m}\", CODELS, move |codel, ctx| match codel {{",
+            m = m.name
+        );
+        for (k, n) in codels.iter().enumerate() {
+            if n.codel.apart.is_none() {
+                let _ = write!(
+                    out,
+                    "\n                {k} => codels.{}({} {{ ctx }}).into(),",
+                    n.method, n.context
+                );
+            }
         }
+        let _ = write!(
+            out,
+            "\n                // the engine calls the module's codels only, by their index, and its\n                // async codels apart\n                _ => unreachable!(\"module `{}` has {} codels\"),\n            }})",
+            m.name,
+            codels.len()
+        );
     }
-    let _ = write!(
-        out,
-        "\n                // the engine calls the module's codels only, by their index, and its\n                // async codels apart\n                _ => unreachable!(\"module `{}` has {} codels\"),\n            }})",
-        m.name,
-        codels.len()
-    );
     for (k, n) in &apart {
         let _ = write!(
             out,

@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use bip_engine::{Bounded, Engine, Event, Ticket};
-use bip_rover_bindings::apart::{self, cam};
+use bip_rover_bindings::apart::{self, cam, drv};
 
 /// Module `cam`'s codels: the grab's ends of the test's channels, and Tune's count.
 struct Cam {
@@ -40,6 +40,17 @@ impl cam::Codels for Cam {
     fn tune_start(&mut self, _: cam::TuneStartCtx<'_, '_>) -> cam::TuneStart {
         self.tunes.fetch_add(1, Ordering::SeqCst);
         cam::TuneStart::PauseStart
+    }
+}
+
+/// Module `drv`, whose one codel is async.
+struct Drv;
+
+impl drv::Codels for Drv {
+    fn wait_start(
+        &mut self,
+    ) -> impl FnMut(drv::WaitStartCtx<'_, '_>) -> drv::WaitStart + Send + 'static {
+        |_| drv::WaitStart::Ether
     }
 }
 
@@ -98,9 +109,10 @@ fn the_async_codel_blocks_apart_while_its_module_object_runs_another_codel() {
         tunes: tunes.clone(),
     };
     let builder = Engine::builder(system.clone()).record(100_000);
-    let mut engine = apart::bind(builder, codels).build().expect("builds");
+    let mut engine = apart::bind(builder, codels, Drv).build().expect("builds");
     let grab = cam::request_grab(&mut engine).expect("queued");
     cam::request_tune(&mut engine).expect("queued");
+    drv::request_wait(&mut engine).expect("queued");
     let (mut engine, events) = steps(engine, 300);
     started
         .recv_timeout(Duration::from_secs(10))
