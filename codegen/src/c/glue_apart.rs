@@ -77,7 +77,7 @@ pub fn apart_glue(
     apart: &[Apart],
     storages: &[String],
 ) -> Result<(), CodegenError> {
-    out.push_str("/// Gives the object's memory `s` what async codel `k`'s run on the copy `a` may have\n/// written (its service's storage, its `out` and `inout` ids members, the ports it\n/// writes), leaving the rest of `a` to be dropped.\n///\n/// # Safety\n/// `s` and `a` are valid and distinct.\n#[allow(unused_variables)]\nunsafe fn write_back(k: usize, s: *mut State, a: *mut State) {\n    unsafe {\n        match k {\n");
+    out.push_str("/// Gives the object's memory `s` what async codel `k`'s run on the copy `a` may have\n/// written (its service's storage, its `out` and `inout` ids members, the ports it\n/// writes), leaving the rest of `a` to be dropped.\n///\n/// # Safety\n/// `s` and `a` are valid and distinct.\n// (a match for every component, whatever the number of its async codels)\n#[allow(unused_variables, clippy::single_match)]\nunsafe fn write_back(k: usize, s: *mut State, a: *mut State) {\n    unsafe {\n        match k {\n");
     for a in apart {
         let has_storage = a.service.as_ref().is_some_and(|s| storages.contains(s));
         let _ = writeln!(
@@ -108,6 +108,8 @@ impl Apart {
         Apart { k, module: std::sync::Arc::clone(module), context, events: events() }
     }
 
+    // (the state is `Copy` for some components, not for others: written alike for all)
+    #[allow(clippy::clone_on_copy)]
     fn run(&mut self, ctx: &mut bip_genom_c::bip_engine::Ctx<'_>) -> bip_genom_c::bip_engine::Next {
         let Ok(mut copy) = self.module.lock().map(|m| m.state.clone()) else {
             return bip_genom_c::bip_engine::Next::Declared(u16::MAX);
