@@ -224,3 +224,62 @@ fn dropping_the_engine_does_not_wait_for_a_codel_that_never_returns() {
     // the codel's thread, left detached, ends when its codel returns
     drop(release);
 }
+
+/// Module `m` of MODEL as a module object numbers its codels and outcomes.
+const MODULE: &[bip_engine::CodelSignature] = &[
+    bip_engine::CodelSignature {
+        service: "Grab",
+        codel: "start",
+        yields: &["grab"],
+        throws: &[],
+    },
+    bip_engine::CodelSignature {
+        service: "Grab",
+        codel: "grab",
+        yields: &["ether"],
+        throws: &[],
+    },
+    bip_engine::CodelSignature {
+        service: "Tune",
+        codel: "start",
+        yields: &["pause::start"],
+        throws: &[],
+    },
+];
+
+#[test]
+fn a_codel_bound_apart_is_taken_from_its_module_object_and_an_unknown_one_is_refused() {
+    // the object answers 0 for its codels; the one bound apart answers its own
+    let builder =
+        || Engine::builder(load_text(MODEL)).module("m", MODULE, |_, _| Next::Declared(0));
+    let mut hosted = builder()
+        .apart("m", 1, |ctx| {
+            ctx.set("frames", 3);
+            Next::Declared(0)
+        })
+        .hosted(&["m"])
+        .expect("hosted");
+    let mut ids = vec![0];
+    let mut output = None;
+    let end = hosted[0].run(
+        1,
+        bip_engine::HostedRun {
+            ids: &mut ids,
+            args: None,
+            output: &mut output,
+            now_us: 0,
+            tick: 0,
+        },
+    );
+    assert_eq!(end.next, Ok(Next::Declared(0)));
+    assert_eq!(ids, [3], "the closure bound apart ran, not the object");
+    let refused = builder()
+        .apart("m", 3, |_| Next::ETHER)
+        .build()
+        .err()
+        .map(|e| e.to_string());
+    assert_eq!(
+        refused.as_deref(),
+        Some("codel 3 of module `m` was bound apart, but `m` is bound to no module object with such a codel")
+    );
+}

@@ -1,6 +1,6 @@
-//! A component's async codels in the generated glue (docs/codegen.md, "Async codels in
-//! C"): each is bound apart from the module object ([`bip_engine`'s
-//! `EngineBuilder::apart`]), so that it runs on its own thread while the object serves
+//! A component's async codels in the generated glue (docs/codegen.md, "Running C codels
+//! on the engine"): each is bound apart from the module object (bip-engine's
+//! `EngineBuilder::apart`), so that it runs on its own thread while the object serves
 //! the component's other codels. It runs on a copy of the object's memory taken when it
 //! begins, with a context of its own, and what it may write (its service's parameters and
 //! locals, its `out` and `inout` ids members, the ports it writes) goes back into the
@@ -126,4 +126,39 @@ impl Apart {
 "#,
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_place_goes_back_once_and_none_inside_another() {
+        let mut a = Apart::new(3, Some("GoTo"));
+        a.writes(&Place::Ids(vec!["frames".into()]));
+        a.writes(&Place::Service(vec!["route".into()]));
+        a.writes(&Place::Port("image".into()));
+        a.writes(&Place::Ids(vec!["frames".into()]));
+        a.writes(&Place::Ids(vec!["framesets".into()]));
+        let swaps = a.swaps(true).expect("places");
+        assert_eq!(
+            swaps,
+            [
+                "core::mem::swap(&mut (*s).ids.frames, &mut (*a).ids.frames);",
+                "core::mem::swap(&mut (*s).ids.framesets, &mut (*a).ids.framesets);",
+                "core::mem::swap(&mut (*s).port_image, &mut (*a).port_image);",
+                "core::mem::swap(&mut (*s).svc_GoTo, &mut (*a).svc_GoTo);",
+            ]
+        );
+        // the whole ids take in their members
+        a.writes(&Place::Ids(Vec::new()));
+        let swaps = a.swaps(false).expect("places");
+        assert_eq!(
+            swaps,
+            [
+                "core::mem::swap(&mut (*s).ids, &mut (*a).ids);",
+                "core::mem::swap(&mut (*s).port_image, &mut (*a).port_image);",
+            ]
+        );
+    }
 }
