@@ -115,7 +115,7 @@ impl EngineBuilder {
     /// numbers them) to a closure of its own, which the object is then never asked to
     /// run. This is how generated bindings bind an async codel: it runs on a thread of
     /// its own without borrowing the module object, which serves the module's other
-    /// codels meanwhile (docs/engine.md, "Async codels"). A codel the model does not make
+    /// codels meanwhile (docs/engine.md, "Threads"). A codel the model does not make
     /// async runs as any closure bound with [`EngineBuilder::codel`].
     pub fn apart(
         mut self,
