@@ -18,6 +18,8 @@ pub enum BuildError {
     NoSuchModule(String),
     #[error("module `{module}` was bound for another model: {difference}; regenerate its bindings from this model")]
     OtherModel { module: String, difference: String },
+    #[error("codel {1} of module `{0}` was bound apart, but `{0}` is bound to no module object with such a codel")]
+    UnknownApart(String, usize),
     #[error("codel ({0}, {1}, {2}) is bound twice")]
     BoundTwice(String, String, String),
     #[error("the model has no GenoM layer, so it has no codel to bind")]

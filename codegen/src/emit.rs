@@ -153,6 +153,21 @@ fn module(
         if k > 0 {
             out.push('\n');
         }
+        if n.codel.apart.is_some() {
+            // an async codel runs on a thread of its own, beside the module's other
+            // codels: it cannot borrow the object they share
+            let _ = writeln!(
+                out,
+                "        /// Async codel `{}` of `{}.{}`: what runs it, given once when the module is\n        /// bound. It runs on a thread of its own, apart from this object, whose other\n        /// codels go on meanwhile: move into it what it needs.",
+                n.codel.state, m.name, n.service.name
+            );
+            let _ = writeln!(
+                out,
+                "        fn {}(&mut self) -> impl FnMut({}<'_, '_>) -> {} + Send + 'static;",
+                n.method, n.context, n.ty
+            );
+            continue;
+        }
         let _ = writeln!(
             out,
             "        /// Codel `{}` of `{}.{}`.",
@@ -174,24 +189,50 @@ fn module(
     out.push_str(
         "    pub fn bind(\n        builder: bip_engine::EngineBuilder,\n        mut codels: impl Codels,\n    ) -> bip_engine::EngineBuilder {\n",
     );
-    let _ = write!(
-        out,
-        "        builder\n            .typed_as(\"{m}\", &TYPES)\n            .module(\"{m}\", CODELS, move |codel, ctx| match codel {{",
-        m = m.name
-    );
-    for (k, n) in codels.iter().enumerate() {
+    let apart: Vec<(usize, &Named<'_>)> = codels
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| n.codel.apart.is_some())
+        .collect();
+    for (_, n) in &apart {
+        let _ = writeln!(out, "        let mut {m} = codels.{m}();", m = n.method);
+    }
+    if apart.len() == codels.len() {
+        // every codel runs apart: the object is asked to run none
         let _ = write!(
             out,
-            "\n                {k} => codels.{}({} {{ ctx }}).into(),",
-            n.method, n.context
+            "        builder\n            .typed_as(\"{m}\", &TYPES)\n            .module(\"{m}\", CODELS, |codel, _| {{\n                unreachable!(\"module `{m}` runs its codel {{codel}} apart\")\n            }})",
+            m = m.name
+        );
+    } else {
+        let _ = write!(
+            out,
+            "        builder\n            .typed_as(\"{m}\", &TYPES)\n            .module(\"{m}\", CODELS, move |codel, ctx| match codel {{",
+            m = m.name
+        );
+        for (k, n) in codels.iter().enumerate() {
+            if n.codel.apart.is_none() {
+                let _ = write!(
+                    out,
+                    "\n                {k} => codels.{}({} {{ ctx }}).into(),",
+                    n.method, n.context
+                );
+            }
+        }
+        let _ = write!(
+            out,
+            "\n                // the engine calls the module's codels only, by their index, and its\n                // async codels apart\n                _ => unreachable!(\"module `{}` has {} codels\"),\n            }})",
+            m.name,
+            codels.len()
         );
     }
-    let _ = write!(
-        out,
-        "\n                // the engine calls the module's codels only, by their index\n                _ => unreachable!(\"module `{}` has {} codels\"),\n            }})",
-        m.name,
-        codels.len()
-    );
+    for (k, n) in &apart {
+        let _ = write!(
+            out,
+            "\n            .apart(\"{}\", {k}, move |ctx| {}({} {{ ctx }}).into())",
+            m.name, n.method, n.context
+        );
+    }
     out.push_str("\n    }\n}\n\n");
     Ok(())
 }

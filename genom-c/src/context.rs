@@ -97,13 +97,20 @@ pub struct Context {
 }
 
 // SAFETY: the context's pointers are to its own boxed data; the engine calls one codel of
-// a module object at a time, so the C side never sees it from two threads at once.
+// a module object at a time, and an async codel, which runs beside them, has a context of
+// its own ([`Context::beside`]), so the C side never sees one from two threads at once.
 unsafe impl Send for Context {}
 
 impl Default for Context {
     fn default() -> Self {
+        Context::raising_into(Arc::new(Raised::default()))
+    }
+}
+
+impl Context {
+    fn raising_into(raised: Arc<Raised>) -> Self {
         let data = Box::new(Data {
-            raised: Arc::new(Raised::default()),
+            raised,
             call: Cell::new(std::ptr::null_mut()),
         });
         let iface = Box::new(ContextIface {
@@ -112,6 +119,13 @@ impl Default for Context {
             data: &*data as *const Data as *const c_void,
         });
         Context { iface, data }
+    }
+
+    /// A context for a codel that runs beside those of this one (an async codel, on a
+    /// thread of its own): its own call in progress, and what it raises kept with what
+    /// this one's codels raise ([`Context::raised`]).
+    pub fn beside(&self) -> Context {
+        Context::raising_into(Arc::clone(&self.data.raised))
     }
 }
 

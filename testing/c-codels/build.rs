@@ -2,7 +2,8 @@
 //! `OUT_DIR/counter_c.rs` in one call, as a controller's build script does, and compiles
 //! the component's codels (codels/*.c) against the headers with the `cc` crate: a codel
 //! of another prototype than the `.gen` file gives is a compile error here; the same for
-//! camera.gen (`OUT_DIR/camera_c.rs`, codels/camera.c). Writes the
+//! camera.gen (`OUT_DIR/camera_c.rs`, codels/camera.c) and apart.gen, whose async codel runs
+//! apart from its module object (`OUT_DIR/apart_c.rs`, codels/apart.c). Writes the
 //! `#[repr(C)]` mirrors of mirrors.gen's types, for the layout tests.
 
 use std::path::PathBuf;
@@ -14,8 +15,10 @@ fn main() {
         Ok(written) => written.include,
         Err(e) => panic!("C bindings of counter.gen: {e}"),
     };
-    if let Err(e) = bip_codegen::c::write_c_bindings(dir.join("camera.gen"), &[], &out) {
-        panic!("C bindings of camera.gen: {e}");
+    for gen in ["camera.gen", "apart.gen"] {
+        if let Err(e) = bip_codegen::c::write_c_bindings(dir.join(gen), &[], &out) {
+            panic!("C bindings of {gen}: {e}");
+        }
     }
     // the Rust mirrors of mirrors.gen's C types
     let spec = match bip_lang::read_gen_file(&dir.join("mirrors.gen"), &[]) {
@@ -33,7 +36,11 @@ fn main() {
     if let Err(e) = std::fs::write(out.join("mirrors_types.rs"), text) {
         panic!("mirrors_types.rs: {e}");
     }
-    let codels = [dir.join("codels/counter.c"), dir.join("codels/camera.c")];
+    let codels = [
+        dir.join("codels/counter.c"),
+        dir.join("codels/camera.c"),
+        dir.join("codels/apart.c"),
+    ];
     for c in &codels {
         println!("cargo:rerun-if-changed={}", c.display());
     }

@@ -162,6 +162,8 @@ impl Drop for Apart {
             // closing the job channel ends the thread's loop once its codel returns
             let (dead, _) = sync_channel(0);
             drop(core::mem::replace(&mut w.to, dead));
+            // a codel still running is not waited for (it may never return): its thread
+            // is left detached, and ends when the codel returns, its result dropped
             if let Some(t) = w.thread.take() {
                 if t.is_finished() {
                     let _ = t.join();

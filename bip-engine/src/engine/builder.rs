@@ -31,6 +31,9 @@ pub struct EngineBuilder {
     system: System,
     bindings: Vec<((String, String, String), CodelFn)>,
     modules: Vec<(String, &'static [CodelSignature], ModuleFn)>,
+    /// Codels of module objects bound to closures of their own: (module, the codel's
+    /// number in its object, the closure).
+    apart: Vec<(String, usize, CodelFn)>,
     typed: Vec<(String, &'static ModuleTypes)>,
     defaults: Option<DefaultCodels>,
     clock: Option<Box<dyn Clock>>,
@@ -54,7 +57,17 @@ impl EngineBuilder {
         let k = self.modules.iter().position(|m| m.0 == module);
         let taken = k.map(|k| {
             let (_, signature, f) = self.modules.swap_remove(k);
-            (signature, f)
+            let mut apart: Vec<(usize, CodelFn)> = Vec::new();
+            let mut j = 0;
+            while j < self.apart.len() {
+                if self.apart[j].0 == module {
+                    let (_, local, g) = self.apart.swap_remove(j);
+                    apart.push((local, g));
+                } else {
+                    j += 1;
+                }
+            }
+            (signature, with_apart(f, apart))
         });
         (&self.system, taken)
     }
@@ -85,7 +98,9 @@ impl EngineBuilder {
     /// says otherwise. This is how generated bindings bind a module (docs/codegen.md): one
     /// object serves all its codels, with no lock, since the engine calls one codel at a
     /// time. With [`EngineBuilder::threads`], a module whose codels run on several tasks
-    /// is called from their threads one at a time, behind a lock.
+    /// is called from their threads one at a time, behind a lock; so is an object that runs
+    /// an async codel itself, whose other codels then wait while it runs (bind it with
+    /// [`EngineBuilder::apart`] instead).
     pub fn module(
         mut self,
         module: &str,
@@ -93,6 +108,22 @@ impl EngineBuilder {
         f: impl FnMut(usize, &mut Ctx<'_>) -> Next + Send + 'static,
     ) -> Self {
         self.modules.push((module.into(), codels, Box::new(f)));
+        self
+    }
+
+    /// Binds codel `k` of module `module`'s object (numbered as [`EngineBuilder::module`]
+    /// numbers them) to a closure of its own, which the object is then never asked to
+    /// run. This is how generated bindings bind an async codel: it runs on a thread of
+    /// its own without borrowing the module object, which serves the module's other
+    /// codels meanwhile (docs/engine.md, "Threads"). A codel the model does not make
+    /// async runs as any closure bound with [`EngineBuilder::codel`].
+    pub fn apart(
+        mut self,
+        module: &str,
+        k: usize,
+        f: impl FnMut(&mut Ctx<'_>) -> Next + Send + 'static,
+    ) -> Self {
+        self.apart.push((module.into(), k, Box::new(f)));
         self
     }
 
@@ -168,7 +199,7 @@ impl EngineBuilder {
         self
     }
 
-    pub fn build(self) -> Result<Engine, BuildError> {
+    pub fn build(mut self) -> Result<Engine, BuildError> {
         let system = self.system;
         if system
             .genom
@@ -247,6 +278,11 @@ impl EngineBuilder {
                 });
             }
             for (local, &k) in codels.iter().enumerate() {
+                let own = self
+                    .apart
+                    .iter()
+                    .position(|(am, al, _)| *am == m && *al == local)
+                    .map(|j| self.apart.swap_remove(j).2);
                 if bodies[k].is_some() {
                     let i = &t.codels[k].info;
                     return Err(BuildError::BoundTwice(
@@ -255,12 +291,19 @@ impl EngineBuilder {
                         i.state.clone(),
                     ));
                 }
-                bodies[k] = Some(Body::Module {
-                    module: modules.len(),
-                    local,
+                bodies[k] = Some(match own {
+                    Some(f) => Body::Bound(f),
+                    None => Body::Module {
+                        module: modules.len(),
+                        local,
+                    },
                 });
             }
             modules.push(f);
+        }
+        // a closure for a codel no module object of the model has
+        if let Some((m, local, _)) = self.apart.first() {
+            return Err(BuildError::UnknownApart(m.clone(), *local));
         }
         let mut out = Vec::with_capacity(bodies.len());
         for (k, b) in bodies.into_iter().enumerate() {
@@ -447,6 +490,7 @@ impl Engine {
             system,
             bindings: Vec::new(),
             modules: Vec::new(),
+            apart: Vec::new(),
             typed: Vec::new(),
             defaults: None,
             clock: None,
@@ -460,4 +504,19 @@ impl Engine {
             codel_time: CodelTime::Zero,
         }
     }
+}
+
+/// A module object whose codels listed in `apart` are those closures: one object again,
+/// for a module run outside the engine ([`crate::HostedModule`]), which calls one codel
+/// at a time.
+fn with_apart(mut object: ModuleFn, mut apart: Vec<(usize, CodelFn)>) -> ModuleFn {
+    if apart.is_empty() {
+        return object;
+    }
+    Box::new(
+        move |k, ctx| match apart.iter_mut().find(|(j, _)| *j == k) {
+            Some((_, f)) => f(ctx),
+            None => object(k, ctx),
+        },
+    )
 }

@@ -199,3 +199,87 @@ fn an_interrupt_during_the_async_run_drops_its_outcome() {
     assert_eq!(e.inspect().port::<i64>("m", "image"), None);
     assert_replays(&e);
 }
+
+#[test]
+fn dropping_the_engine_does_not_wait_for_a_codel_that_never_returns() {
+    let (started_tx, started) = channel();
+    // held to the end: the grab never returns while the engine lives
+    let (release, release_rx) = channel();
+    let mut e = engine(started_tx, release_rx, Arc::new(AtomicU32::new(0)));
+    e.request("m", "Grab", ()).expect("sent");
+    for _ in 0..20 {
+        e.step().expect("steps");
+    }
+    started
+        .recv_timeout(Duration::from_secs(10))
+        .expect("the grab started");
+    let (dropped_tx, dropped) = channel();
+    std::thread::spawn(move || {
+        drop(e);
+        let _ = dropped_tx.send(());
+    });
+    dropped
+        .recv_timeout(Duration::from_secs(10))
+        .expect("the engine was dropped while its codel ran");
+    // the codel's thread, left detached, ends when its codel returns
+    drop(release);
+}
+
+/// Module `m` of MODEL as a module object numbers its codels and outcomes.
+const MODULE: &[bip_engine::CodelSignature] = &[
+    bip_engine::CodelSignature {
+        service: "Grab",
+        codel: "start",
+        yields: &["grab"],
+        throws: &[],
+    },
+    bip_engine::CodelSignature {
+        service: "Grab",
+        codel: "grab",
+        yields: &["ether"],
+        throws: &[],
+    },
+    bip_engine::CodelSignature {
+        service: "Tune",
+        codel: "start",
+        yields: &["pause::start"],
+        throws: &[],
+    },
+];
+
+#[test]
+fn a_codel_bound_apart_is_taken_from_its_module_object_and_an_unknown_one_is_refused() {
+    // the object answers 0 for its codels; the one bound apart answers its own
+    let builder =
+        || Engine::builder(load_text(MODEL)).module("m", MODULE, |_, _| Next::Declared(0));
+    let mut hosted = builder()
+        .apart("m", 1, |ctx| {
+            ctx.set("frames", 3);
+            Next::Declared(0)
+        })
+        .hosted(&["m"])
+        .expect("hosted");
+    let mut ids = vec![0];
+    let mut output = None;
+    let end = hosted[0].run(
+        1,
+        bip_engine::HostedRun {
+            ids: &mut ids,
+            args: None,
+            output: &mut output,
+            now_us: 0,
+            tick: 0,
+        },
+    );
+    assert_eq!(end.next, Ok(Next::Declared(0)));
+    assert_eq!(ids, [3], "the closure bound apart ran, not the object");
+    let refused = builder()
+        .apart("m", 3, |_| Next::ETHER)
+        .build()
+        .err()
+        .map(|e| e.to_string());
+    assert_eq!(
+        refused.as_deref(),
+        Some("codel 3 of module `m` was bound apart, but `m` is bound to no module object with such a codel")
+    );
+}

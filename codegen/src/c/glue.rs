@@ -16,6 +16,7 @@ use bip_lang::genom::syntax::ModuleDef;
 
 use super::codels::{all_codels, param, within, Param, Place};
 use super::ctype::{cname, holds_native, owns_buffer, Body, CTypes};
+use super::glue_apart::{apart_glue, Apart};
 use super::glue_args::{arg, port_field, service_field, Conv};
 use super::glue_ports::{port_glue, Port};
 use super::glue_service::service_data;
@@ -203,8 +204,13 @@ fn component_glue(
     let mut calls = Vec::new();
     let mut declared = BTreeSet::new();
     let mut ports = BTreeSet::new();
-    for n in &codels {
+    let mut apart = Vec::new();
+    for (k, n) in codels.iter().enumerate() {
         let f = &n.codel.function.value;
+        let mut run_apart = n
+            .codel
+            .asynchronous
+            .then(|| Apart::new(k, n.service.map(|s| s.name.value.as_str())));
         let mut tys = Vec::new();
         let mut exprs = Vec::new();
         for p in &n.codel.params {
@@ -212,6 +218,9 @@ fn component_glue(
             let (at, ty) = param(types, comp, n.service, &ids, p).map_err(|e| within(e, &place))?;
             if let (Place::Port(name), Param::Port(_)) = (&at, &ty) {
                 ports.insert(name.clone());
+            }
+            if let (Some(a), true) = (run_apart.as_mut(), p.dir.writes()) {
+                a.writes(&at);
             }
             let a = arg(
                 m,
@@ -240,6 +249,7 @@ fn component_glue(
         }
         exprs.push("this".into());
         calls.push(format!("{f}({})", exprs.join(", ")));
+        apart.extend(run_apart);
     }
     out.push_str("}\n\n");
 
@@ -395,6 +405,24 @@ fn component_glue(
     }
     out.push_str("            _ => return None,\n        })\n    }\n}\n\n");
 
+    let bind = if apart.is_empty() {
+        format!("/// Binds every codel of module `{c}` to its C function, the module object owning its\n/// memory (nothing to lock).\npub fn bind(builder: bip_genom_c::bip_engine::EngineBuilder) -> bip_genom_c::bip_engine::EngineBuilder {{\n    let mut module = Component::default();\n    builder.module({c:?}, CODELS, move |k, ctx| module.run(k, ctx))\n}}")
+    } else {
+        format!("/// Binds every codel of module `{c}` to its C function: its async codels apart from the\n/// module object, which is shared with them (see [`bind_shared`]).\npub fn bind(builder: bip_genom_c::bip_engine::EngineBuilder) -> bip_genom_c::bip_engine::EngineBuilder {{\n    bind_shared(builder).0\n}}")
+    };
+    let aparts: String = apart
+        .iter()
+        .map(|a| {
+            format!(
+                "\n    // async codel {k}: on its own thread, beside the object\n    let mut apart = Apart::new({k}, &shared);\n    let builder = builder.apart({c:?}, {k}, move |ctx| apart.run(ctx));",
+                k = a.k
+            )
+        })
+        .collect();
+    if !apart.is_empty() {
+        let storages: Vec<String> = starts.iter().map(|(s, _)| s.clone()).collect();
+        apart_glue(&mut out, &apart, &storages)?;
+    }
     let _ = write!(
         out,
         r#"/// The module object of component `{c}`: its memory of the C layout, the context its
@@ -424,33 +452,37 @@ impl Component {{
     /// Runs codel `k` (as [`CODELS`] numbers them) and reads the event it returns: a
     /// declared outcome, or one the engine takes the activity's error path with.
     pub fn run(&mut self, k: usize, ctx: &mut bip_genom_c::bip_engine::Ctx<'_>) -> bip_genom_c::bip_engine::Next {{
-        let Some(sig) = CODELS.get(k) else {{
-            return bip_genom_c::bip_engine::Next::Declared(u16::MAX);
-        }};
-        let s: *mut State = &mut self.state;
-        let ctx: *mut bip_genom_c::bip_engine::Ctx<'static> = (ctx as *mut bip_genom_c::bip_engine::Ctx<'_>).cast();
-        let this = self.context.as_ptr();
-        let mut now = Call {{ state: s, ctx }};
-        let at: *mut Call = &mut now;
-        // SAFETY: the prototypes are the header's (the codels compile against it); the
-        // state, the context and the engine's `ctx` outlive the call, and the codel is
-        // given pointers into the state for the call only
-        let ev = self
-            .context
-            .with_call(at.cast(), || unsafe {{ call(k, s, ctx, this) }});
-        match ev {{
-            Some(ev) => self.events.next(k, sig, ev),
-            None => bip_genom_c::bip_engine::Next::Declared(u16::MAX),
-        }}
+        run_on(k, &mut self.state, &self.context, &self.events, ctx)
     }}
 }}
 
-/// Binds every codel of module `{c}` to its C function, the module object owning its
-/// memory (nothing to lock).
-pub fn bind(builder: bip_genom_c::bip_engine::EngineBuilder) -> bip_genom_c::bip_engine::EngineBuilder {{
-    let mut module = Component::default();
-    builder.module({c:?}, CODELS, move |k, ctx| module.run(k, ctx))
+/// Runs codel `k` on `state` with `context`, and reads the event it returns by `events`.
+fn run_on(
+    k: usize,
+    state: &mut State,
+    context: &bip_genom_c::Context,
+    events: &bip_genom_c::Events,
+    ctx: &mut bip_genom_c::bip_engine::Ctx<'_>,
+) -> bip_genom_c::bip_engine::Next {{
+    let Some(sig) = CODELS.get(k) else {{
+        return bip_genom_c::bip_engine::Next::Declared(u16::MAX);
+    }};
+    let s: *mut State = state;
+    let ctx: *mut bip_genom_c::bip_engine::Ctx<'static> = (ctx as *mut bip_genom_c::bip_engine::Ctx<'_>).cast();
+    let this = context.as_ptr();
+    let mut now = Call {{ state: s, ctx }};
+    let at: *mut Call = &mut now;
+    // SAFETY: the prototypes are the header's (the codels compile against it); the
+    // state, the context and the engine's `ctx` outlive the call, and the codel is
+    // given pointers into the state for the call only
+    let ev = context.with_call(at.cast(), || unsafe {{ call(k, s, ctx, this) }});
+    match ev {{
+        Some(ev) => events.next(k, sig, ev),
+        None => bip_genom_c::bip_engine::Next::Declared(u16::MAX),
+    }}
 }}
+
+{bind}
 
 /// As [`bind`], the module object shared with the caller, who may read its memory between
 /// the engine's steps (a lock per codel call).
@@ -462,7 +494,7 @@ pub fn bind_shared(
     let builder = builder.module({c:?}, CODELS, move |k, ctx| match module.lock() {{
         Ok(mut m) => m.run(k, ctx),
         Err(_) => bip_genom_c::bip_engine::Next::Declared(u16::MAX),
-    }});
+    }});{aparts}
     (builder, shared)
 }}
 "#

@@ -36,15 +36,20 @@ pub struct Arg {
 
 /// The expression of `place` from `s: *mut State` (`(*s).ids.limits.lo`).
 fn place_expr(place: &Place, service: Option<&str>) -> Result<String, CodegenError> {
+    place_in("s", place, service)
+}
+
+/// The expression of `place` from `state`, a `*mut State` (`(*state).ids.limits.lo`).
+pub fn place_in(state: &str, place: &Place, service: Option<&str>) -> Result<String, CodegenError> {
     let (mut out, path) = match place {
-        Place::Ids(path) => ("(*s).ids".to_string(), &path[..]),
+        Place::Ids(path) => (format!("(*{state}).ids"), &path[..]),
         Place::Service(path) => {
             let s = service.ok_or_else(|| {
                 CodegenError::CMapping("a task's codel names no service parameter".into())
             })?;
-            (format!("(*s).{}", service_field(s)), &path[..])
+            (format!("(*{state}).{}", service_field(s)), &path[..])
         }
-        Place::Port(p) => return Ok(format!("(*s).{}", port_field(p))),
+        Place::Port(p) => return Ok(format!("(*{state}).{}", port_field(p))),
     };
     for step in path {
         if step.starts_with('[') {

@@ -12,6 +12,7 @@ mod codels;
 pub mod ctype;
 mod decls;
 mod glue;
+mod glue_apart;
 mod glue_args;
 mod glue_ports;
 mod glue_service;

@@ -1,7 +1,9 @@
-//! The test hooks of codels/counter.c, which are no part of the component: what
-//! `counter_count_step` returns, chosen by a test, and gcc's layout of `counter_ids`.
+//! The test hooks of codels/counter.c and codels/apart.c, which are no part of the
+//! components: what `counter_count_step` returns, chosen by a test, and gcc's layout of
+//! `counter_ids`; when apart.c's async codel begins, its release, and what followed it.
 
 use std::ffi::c_int;
+use std::sync::atomic::{AtomicI32, Ordering};
 use std::sync::Mutex;
 
 extern "C" {
@@ -22,3 +24,30 @@ pub fn set_step_outcome(k: i32) {
 
 /// Held by whoever sets [`set_step_outcome`] and runs the codels (tests run in threads).
 pub static OUTCOME_LOCK: Mutex<()> = Mutex::new(());
+
+extern "C" {
+    /// codels/apart.c: set by the async `apart_grab_wait` when it begins.
+    static apart_test_started: AtomicI32;
+    /// Read by `apart_grab_wait`, which waits until it is set.
+    static apart_test_release: AtomicI32;
+    /// What `apart_grab_publish` saw: 100 × the local `got` + the ids' `frames`.
+    static apart_test_published: AtomicI32;
+}
+
+/// Whether apart.c's async codel has begun.
+pub fn apart_started() -> bool {
+    // SAFETY: a C11 `atomic_int`, laid out as an `AtomicI32`, alive for the process
+    unsafe { apart_test_started.load(Ordering::SeqCst) != 0 }
+}
+
+/// Lets apart.c's async codel return.
+pub fn apart_release() {
+    // SAFETY: as in `apart_started`
+    unsafe { apart_test_release.store(1, Ordering::SeqCst) }
+}
+
+/// What apart.c's `publish` codel saw (0 before it ran).
+pub fn apart_published() -> i32 {
+    // SAFETY: as in `apart_started`
+    unsafe { apart_test_published.load(Ordering::SeqCst) }
+}

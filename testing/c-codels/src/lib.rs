@@ -3,7 +3,7 @@
 //! (`bip_codegen::c::write_c_bindings`) and compiles codels/counter.c against the headers;
 //! [`counter`] is the generated glue (the mirrors of its types, its codels' declarations,
 //! `CODELS`, `bind`), on the runtime of `bip-genom-c`; [`camera_glue`] is camera.gen's,
-//! whose data hold pointers; [`hooks`] are the tests' handles on the C file.
+//! whose data hold pointers; [`apart_glue`] is apart.gen's, with an async codel; [`hooks`] are the tests' handles on the C file.
 
 pub mod hooks;
 
@@ -18,6 +18,11 @@ pub use glue::{counter, place};
 /// strings), owned by the module object's memory and the engine's copies.
 pub mod camera_glue {
     include!(concat!(env!("OUT_DIR"), "/camera_c.rs"));
+}
+
+/// apart.gen's generated glue: its async codel runs apart from its module object.
+pub mod apart_glue {
+    include!(concat!(env!("OUT_DIR"), "/apart_c.rs"));
 }
 
 /// The mirrors of mirrors.gen's types: one of each kind, for the layout tests.

@@ -8,8 +8,10 @@
 //! can take (roles, guards that fail, properties) is behind [`Options`].
 //!
 //! [`timed`] draws timed task sets instead, with the naive interpreter of the timed
-//! semantics that answers for them.
+//! semantics that answers for them; [`genom_async`] GenoM layers with async codels, with
+//! theirs.
 
+pub mod genom_async;
 mod ron;
 pub mod timed;
 

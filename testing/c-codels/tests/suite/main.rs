@@ -1,6 +1,7 @@
 //! counter.gen's C codels on the engine: each outcome a codel returns, declared or not;
 //! the ids' layout on both sides; random outcomes whose recordings replay.
 
+mod apart;
 mod at_request;
 mod compiles;
 mod layout;

@@ -3,6 +3,7 @@
 //! compile; and `models/typed.ron`'s, for the types the rover does not use.
 
 mod alloc;
+mod apart;
 mod compile_fail;
 mod property;
 mod rover;
