@@ -62,6 +62,7 @@ fn report(what: &str, times: &[u64], wall: f64) {
 }
 
 fn main() {
+    bip_zenoh::tune_zenoh_runtime();
     let args: Vec<String> = std::env::args().collect();
     let codels: usize = args
         .iter()
