@@ -39,6 +39,8 @@ pub(crate) struct RunLink {
     _subscriber: zenoh::pubsub::Subscriber<()>,
     /// The number of the last run published.
     seq: u64,
+    /// How long the engine's thread polls for an answer before it sleeps.
+    spin: Duration,
 }
 
 /// The publisher of a layer's runs or answers: never dropped under congestion (a run
@@ -77,6 +79,7 @@ impl RunLink {
         prefix: &str,
         module: &str,
         low_latency: bool,
+        spin: Duration,
     ) -> Result<RunLink, NetworkError> {
         let key = keys::run(prefix, module);
         let answer_key = keys::ran(prefix, module);
@@ -93,7 +96,21 @@ impl RunLink {
             answers,
             _subscriber: subscriber,
             seq: 0,
+            spin,
         })
+    }
+
+    /// The next answer: polled until `spin_until` (the answer often comes sooner than a
+    /// sleeping thread is woken), then waited for at most `left`.
+    fn receive(&self, spin_until: Instant, left: Duration) -> Option<Vec<u8>> {
+        while Instant::now() < spin_until {
+            match self.answers.try_recv() {
+                Ok(payload) => return Some(payload),
+                Err(mpsc::TryRecvError::Empty) => std::hint::spin_loop(),
+                Err(mpsc::TryRecvError::Disconnected) => return None,
+            }
+        }
+        self.answers.recv_timeout(left).ok()
     }
 
     /// The number of the next run.
@@ -119,9 +136,10 @@ impl RunLink {
             .put(bytes)
             .wait()
             .map_err(|e| format!("cannot publish on `{}`: {e}", self.key))?;
+        let spin_until = Instant::now() + self.spin;
         loop {
             let left = deadline.saturating_sub(start.elapsed());
-            let Ok(payload) = self.answers.recv_timeout(left) else {
+            let Some(payload) = self.receive(spin_until, left) else {
                 return Err(format!(
                     "no answer on `{}` within {} ms",
                     self.answer_key,

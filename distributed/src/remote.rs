@@ -26,6 +26,11 @@ pub struct RemoteOptions {
     /// process's virtual clock ([`RunResult::virtual_us`]) is added to it, as a codel in
     /// the engine's process advances the engine's clock itself.
     pub virtual_clock: Option<VirtualClock>,
+    /// How long the engine's thread polls for a run's answer before it sleeps until it
+    /// comes (zero: it sleeps at once). Polling saves the wake-up of a sleeping thread,
+    /// the most of a round trip on a loaded machine (docs/performance.md), for a CPU kept
+    /// busy meanwhile.
+    pub spin: Duration,
 }
 
 impl Default for RemoteOptions {
@@ -33,6 +38,7 @@ impl Default for RemoteOptions {
         RemoteOptions {
             deadline: Duration::from_millis(500),
             virtual_clock: None,
+            spin: Duration::ZERO,
         }
     }
 }
@@ -244,7 +250,13 @@ impl RemoteModules {
         self.presence
             .expect(module, codels.iter().map(|c| c.name.clone()).collect());
         Ok(Proxy {
-            link: RunLink::new(&self.session, &self.prefix, module, self.low_latency)?,
+            link: RunLink::new(
+                &self.session,
+                &self.prefix,
+                module,
+                self.low_latency,
+                self.options.spin,
+            )?,
             module: module.to_string(),
             types: Arc::clone(&self.types),
             fields,
