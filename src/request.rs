@@ -35,6 +35,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> u8 {
+    bip_zenoh::tune_zenoh_runtime();
     let Some(system) = load::system(&args.file) else {
         return exit::ERROR;
     };
@@ -54,9 +55,9 @@ pub fn run(args: &Args) -> u8 {
             }
         },
         None => Network {
-            listen: Vec::new(),
             connect: args.connect.clone(),
             prefix: args.prefix.clone(),
+            ..Network::default()
         },
     };
     let timeout = Duration::from_millis(args.timeout_ms);

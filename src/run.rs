@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
 
-use bip_zenoh::{run_layer, Deployment, LayerOptions};
+use bip_zenoh::{run_layer, Deployment, LayerOptions, Mode};
 
 use crate::{exit, interrupt, load};
 
@@ -31,6 +31,8 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> u8 {
+    // before zenoh starts, and inherited by the module processes started
+    bip_zenoh::tune_zenoh_runtime();
     let Some(system) = load::system(&args.file) else {
         return exit::ERROR;
     };
@@ -55,9 +57,12 @@ pub fn run(args: &Args) -> u8 {
     };
     let flag = interrupt::stop_flag();
     let stop = || flag.load(Ordering::Relaxed);
-    let listen = deployment.listen.join(", ");
+    let place = match deployment.mode {
+        Mode::Peer => deployment.engine_listen().join(", "),
+        Mode::Client => format!("the zenoh router at {}", deployment.connect.join(", ")),
+    };
     eprintln!(
-        "{}: layer `{}` on {listen}, keys under `{}`",
+        "{}: layer `{}` on {place}, keys under `{}`",
         args.file.display(),
         system.name,
         deployment.prefix

@@ -45,10 +45,12 @@ impl Counter {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    bip_zenoh::tune_zenoh_runtime();
     let model = std::env::args()
         .nth(1)
         .ok_or("usage: counter_module MODEL")?;
-    let network = Network::from_env().ok_or("not started by `bip run` (no BIP_LAYER_CONNECT)")?;
+    let network =
+        Network::from_env().ok_or("not started by `bip run` (no BIP_LAYER_CONNECT)")??;
     let system = bip_engine::load_file(std::path::Path::new(&model))?;
     let mut counter = Counter { runs: 0 };
     let builder = Engine::builder(system.clone())

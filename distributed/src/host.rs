@@ -2,7 +2,7 @@
 //! bound as in one process ([`HostedModule`]), one thread per module.
 
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
 use bip_engine::Clock;
@@ -10,6 +10,7 @@ use bip_engine::{CodelSignature, HostedModule, HostedRun, Next, System, VirtualC
 use zenoh::Wait;
 
 use crate::codec::Types;
+use crate::link;
 use crate::network::Network;
 use crate::remote::RemoteError;
 use crate::wire::{keys, Answer, Message, PortData, RunEnd, RunGrant, RunResult};
@@ -18,6 +19,7 @@ use crate::wire::{keys, Answer, Message, PortData, RunEnd, RunGrant, RunResult};
 pub struct ModuleHost {
     session: zenoh::Session,
     prefix: String,
+    low_latency: bool,
     types: Arc<Types>,
     modules: Vec<Served>,
     clock: Option<VirtualClock>,
@@ -41,6 +43,7 @@ impl ModuleHost {
         Ok(ModuleHost {
             session: network.open()?,
             prefix: network.prefix.clone(),
+            low_latency: network.low_latency,
             types: Arc::new(types),
             modules: Vec::new(),
             clock: None,
@@ -69,13 +72,30 @@ impl ModuleHost {
         let mut threads = Vec::new();
         // the engine hears that the process is there, and when it is gone
         let mut tokens = Vec::new();
+        let mut declared = Vec::new();
         for served in self.modules {
-            let key = keys::run(&self.prefix, &served.name);
+            let (sink, inbox) = mpsc::channel();
+            // the run key first: a process that answers `hello` takes runs
+            let runs = sink.clone();
+            let subscriber = link::subscriber(
+                &self.session,
+                &keys::run(&self.prefix, &served.name),
+                move |payload| {
+                    let _ = runs.send(Inbound::Run(payload));
+                },
+            )?;
+            let answers = keys::ran(&self.prefix, &served.name);
+            let publisher = link::publisher(&self.session, &answers)?;
+            let hello = keys::hello(&self.prefix, &served.name);
             let queryable = self
                 .session
-                .declare_queryable(key.as_str())
+                .declare_queryable(hello.as_str())
+                .callback(move |q| {
+                    let _ = sink.send(Inbound::Hello(q));
+                })
                 .wait()
-                .map_err(|e| crate::NetworkError::Open(format!("cannot serve `{key}`: {e}")))?;
+                .map_err(|e| crate::NetworkError::Open(format!("cannot serve `{hello}`: {e}")))?;
+            declared.push((subscriber, queryable));
             let alive = keys::alive(&self.prefix, &served.name);
             let token = self
                 .session
@@ -87,19 +107,28 @@ impl ModuleHost {
             let types = Arc::clone(&self.types);
             let clock = self.clock.clone();
             let stop = Arc::clone(&stop);
+            let low_latency = self.low_latency;
             let mut served = served;
+            // the module's own thread answers both its runs and `hello`: a process
+            // that answers `hello` is one whose module takes runs
             threads.push(std::thread::spawn(move || {
                 while !stop.load(Ordering::Relaxed) {
-                    let Ok(Some(q)) = queryable.recv_timeout(Duration::from_millis(50)) else {
-                        continue;
-                    };
-                    let payload = q
-                        .payload()
-                        .map(|p| p.to_bytes().to_vec())
-                        .unwrap_or_default();
-                    let answer = served.answer(&payload, &types, clock.as_ref());
-                    if let Err(e) = q.reply(key.as_str(), answer.to_bytes()).wait() {
-                        tracing::warn!(target: "bip_zenoh", "cannot answer on `{key}`: {e}");
+                    match inbox.recv_timeout(Duration::from_millis(50)) {
+                        Ok(Inbound::Run(payload)) => {
+                            let answer = served.answer(&payload, &types, clock.as_ref());
+                            let bytes = served.fitting(answer, low_latency, &answers);
+                            if let Err(e) = publisher.put(bytes).wait() {
+                                tracing::warn!(target: "bip_zenoh", "cannot answer on `{answers}`: {e}");
+                            }
+                        }
+                        Ok(Inbound::Hello(q)) => {
+                            let hello = served.hello().to_bytes();
+                            if let Err(e) = q.reply(q.key_expr().clone(), hello).wait() {
+                                tracing::warn!(target: "bip_zenoh", "cannot answer `hello`: {e}");
+                            }
+                        }
+                        Err(mpsc::RecvTimeoutError::Timeout) => {}
+                        Err(mpsc::RecvTimeoutError::Disconnected) => break,
                     }
                 }
             }));
@@ -108,28 +137,59 @@ impl ModuleHost {
             let _ = t.join();
         }
         drop(tokens);
+        drop(declared);
         Ok(())
     }
 }
 
+/// What a module's thread is given: a run's message, or a `hello` query to answer.
+enum Inbound {
+    Run(Vec<u8>),
+    Hello(zenoh::query::Query),
+}
+
 impl Served {
+    fn hello(&self) -> Answer {
+        Answer::Hello {
+            module: self.name.clone(),
+            codels: self
+                .codels
+                .iter()
+                .map(|c| format!("{}.{}", c.service, c.codel))
+                .collect(),
+        }
+    }
+
     fn answer(&mut self, payload: &[u8], types: &Types, clock: Option<&VirtualClock>) -> Answer {
         match serde_json::from_slice::<Message>(payload) {
-            Ok(Message::Hello) => Answer::Hello {
-                module: self.name.clone(),
-                codels: self
-                    .codels
-                    .iter()
-                    .map(|c| format!("{}.{}", c.service, c.codel))
-                    .collect(),
-            },
-            Ok(Message::Run(g)) => match self.run(g, types, clock) {
-                Ok(r) => Answer::Ran(r),
-                Err(reason) => Answer::Refused { reason },
-            },
+            Ok(Message::Hello) => self.hello(),
+            Ok(Message::Run(g)) => {
+                let seq = Some(g.seq);
+                match self.run(g, types, clock) {
+                    Ok(r) => Answer::Ran(r),
+                    Err(reason) => Answer::Refused { seq, reason },
+                }
+            }
             Err(e) => Answer::Refused {
+                seq: None,
                 reason: format!("not a message of the engine: {e}"),
             },
+        }
+    }
+
+    /// `answer`'s bytes, or a refusal when they are more than the link carries.
+    fn fitting(&self, answer: Answer, low_latency: bool, key: &str) -> Vec<u8> {
+        let bytes = answer.to_bytes();
+        match link::too_large(low_latency, key, bytes.len()) {
+            None => bytes,
+            Some(reason) => Answer::Refused {
+                seq: match answer {
+                    Answer::Ran(r) => Some(r.seq),
+                    _ => None,
+                },
+                reason: format!("module `{}` cannot send its answer: {reason}", self.name),
+            }
+            .to_bytes(),
         }
     }
 
@@ -227,6 +287,7 @@ impl Served {
             _ => None,
         };
         Ok(RunResult {
+            seq: g.seq,
             end: end.0,
             ids: g.ids,
             written: end.1,

@@ -7,7 +7,7 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 
 use crate::deploy::{DeployError, Deployment, Process};
-use crate::network::{ENV_CONNECT, ENV_PREFIX, ENV_PROCESS};
+use crate::network::ENV_PROCESS;
 
 /// The module processes started, killed (and reaped) when dropped.
 pub struct Launched(Vec<Child>);
@@ -24,7 +24,7 @@ impl Drop for Launched {
 impl Deployment {
     /// Starts every process of the deployment read from `file`: by its `command` (a
     /// program relative to the file's directory, or found on `PATH`), else by
-    /// `default(process)`; with [`ENV_PROCESS`], [`ENV_CONNECT`] and [`ENV_PREFIX`] set
+    /// `default(process)`; with [`ENV_PROCESS`] and the network's environment set ([`crate::Network::env`])
     /// and its standard input a pipe from this process.
     pub fn launch(
         &self,
@@ -53,8 +53,7 @@ impl Deployment {
             };
             command
                 .env(ENV_PROCESS, &p.name)
-                .env(ENV_CONNECT, network.connect.join(","))
-                .env(ENV_PREFIX, &network.prefix)
+                .envs(network.env())
                 .stdin(Stdio::piped());
             let child = command.spawn().map_err(|e| DeployError::Read {
                 file: format!("{:?}", command.get_program()),

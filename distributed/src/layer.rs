@@ -64,7 +64,7 @@ pub fn run_layer(
     let types = || Types::of(system);
     let remote_options = RemoteOptions {
         deadline: options.deadline,
-        virtual_clock: None,
+        ..RemoteOptions::default()
     };
     types().check(system).map_err(RemoteError::Types)?;
     // started first, so that they are killed last, after the engine stopped listening

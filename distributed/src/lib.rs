@@ -25,10 +25,12 @@ mod deploy;
 mod host;
 mod launch;
 mod layer;
+mod link;
 mod network;
 mod presence;
 mod remote;
 mod requests;
+mod runtime;
 mod wire;
 
 pub use client::ClientRequest;
@@ -37,8 +39,12 @@ pub use deploy::{DeployError, Deployment, Process};
 pub use host::ModuleHost;
 pub use launch::Launched;
 pub use layer::{run_layer, LayerError, LayerOptions};
-pub use network::{Network, NetworkError, ENV_CONNECT, ENV_PREFIX, ENV_PROCESS};
+pub use network::{
+    Mode, Network, NetworkError, ENV_CONNECT, ENV_LOW_LATENCY, ENV_MODE, ENV_PREFIX, ENV_PROCESS,
+    ENV_ZENOH_CONFIG,
+};
 pub use presence::{Presence, PROBE_EVERY};
 pub use remote::{RemoteError, RemoteModules, RemoteOptions};
 pub use requests::{request, request_bytes, RequestServer, ServiceReply, ServiceRequest};
+pub use runtime::{tune_zenoh_runtime, LAYER_RUNTIME, ZENOH_RUNTIME_ENV};
 pub use wire::{keys, Answer, Message, PortData, RunEnd, RunGrant, RunResult};

@@ -147,7 +147,7 @@ impl Watch {
                 while !stop.load(Ordering::Relaxed) {
                     std::thread::sleep(PROBE_EVERY);
                     for (module, codels) in presence.absent_modules() {
-                        let key = keys::run(&prefix, &module);
+                        let key = keys::hello(&prefix, &module);
                         match crate::network::query(&session, &key, &Message::Hello, PROBE_EVERY) {
                             Ok(Answer::Hello { codels: c, .. }) if c == codels => {
                                 presence.mark_present(&module)

@@ -11,6 +11,7 @@ use bip_engine::{CodelSignature, Ctx, EngineBuilder, ModuleTypes, Next, System, 
 use serde_json::Value;
 
 use crate::codec::Types;
+use crate::link::RunLink;
 use crate::network::{query, Network, NetworkError};
 use crate::presence::{Presence, Watch};
 use crate::wire::{keys, Answer, Message, PortData, RunEnd, RunGrant, RunResult};
@@ -25,6 +26,11 @@ pub struct RemoteOptions {
     /// process's virtual clock ([`RunResult::virtual_us`]) is added to it, as a codel in
     /// the engine's process advances the engine's clock itself.
     pub virtual_clock: Option<VirtualClock>,
+    /// How long the engine's thread polls for a run's answer before it sleeps until it
+    /// comes (zero: it sleeps at once). Polling saves the wake-up of a sleeping thread,
+    /// the most of a round trip on a loaded machine (docs/performance.md), for a CPU kept
+    /// busy meanwhile.
+    pub spin: Duration,
 }
 
 impl Default for RemoteOptions {
@@ -32,6 +38,7 @@ impl Default for RemoteOptions {
         RemoteOptions {
             deadline: Duration::from_millis(500),
             virtual_clock: None,
+            spin: Duration::ZERO,
         }
     }
 }
@@ -58,6 +65,7 @@ pub enum RemoteError {
 pub struct RemoteModules {
     session: zenoh::Session,
     prefix: String,
+    low_latency: bool,
     types: Arc<Types>,
     system: System,
     options: RemoteOptions,
@@ -90,6 +98,7 @@ impl RemoteModules {
         Ok(RemoteModules {
             session,
             prefix: network.prefix.clone(),
+            low_latency: network.low_latency,
             types: Arc::new(types),
             system: system.clone(),
             options,
@@ -140,7 +149,7 @@ impl RemoteModules {
         want: Vec<String>,
         timeout: Duration,
     ) -> Result<(), RemoteError> {
-        let key = keys::run(&self.prefix, module);
+        let key = keys::hello(&self.prefix, module);
         let start = Instant::now();
         while start.elapsed() < timeout {
             let left = timeout.saturating_sub(start.elapsed());
@@ -242,8 +251,13 @@ impl RemoteModules {
         self.presence
             .expect(module, codels.iter().map(|c| c.name.clone()).collect());
         Ok(Proxy {
-            session: self.session.clone(),
-            key: keys::run(&self.prefix, module),
+            link: RunLink::new(
+                &self.session,
+                &self.prefix,
+                module,
+                self.low_latency,
+                self.options.spin,
+            )?,
             module: module.to_string(),
             types: Arc::clone(&self.types),
             fields,
@@ -259,8 +273,7 @@ impl RemoteModules {
 
 /// The closure of one remote module.
 struct Proxy {
-    session: zenoh::Session,
-    key: String,
+    link: RunLink,
     module: String,
     types: Arc<Types>,
     fields: Vec<String>,
@@ -343,6 +356,7 @@ impl Proxy {
             }
         }
         let grant = RunGrant {
+            seq: self.link.next_seq(),
             codel: k as u32,
             name: codel.name.clone(),
             ids,
@@ -352,10 +366,10 @@ impl Proxy {
             tick: ctx.tick(),
         };
         let deadline = codel.deadline;
-        let answer = query(&self.session, &self.key, &Message::Run(grant), deadline);
+        let answer = self.link.exchange(&Message::Run(grant), deadline);
         let result = match answer {
             Ok(Answer::Ran(r)) => r,
-            Ok(Answer::Refused { reason }) => {
+            Ok(Answer::Refused { reason, .. }) => {
                 // what it holds is unknown now: send every port again next time
                 self.seen.clear();
                 return Err(NotRun::Remote(format!(

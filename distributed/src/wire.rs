@@ -7,10 +7,22 @@ use serde_json::Value;
 
 /// The key expressions of a layer under its prefix.
 pub mod keys {
-    /// Where module `module`'s process answers the engine's queries
-    /// (`<prefix>/module/<module>/run`).
+    /// Where the engine publishes the runs of module `module`'s codels, to which its
+    /// process subscribes (`<prefix>/module/<module>/run`).
     pub fn run(prefix: &str, module: &str) -> String {
         format!("{prefix}/module/{module}/run")
+    }
+
+    /// Where module `module`'s process publishes what its runs did, to which the engine
+    /// subscribes (`<prefix>/module/<module>/ran`).
+    pub fn ran(prefix: &str, module: &str) -> String {
+        format!("{prefix}/module/{module}/ran")
+    }
+
+    /// Where module `module`'s process answers the engine's `hello` queries
+    /// (`<prefix>/module/<module>/hello`).
+    pub fn hello(prefix: &str, module: &str) -> String {
+        format!("{prefix}/module/{module}/hello")
     }
 
     /// The liveliness token of module `module`'s process (`<prefix>/alive/<module>`),
@@ -26,7 +38,8 @@ pub mod keys {
     }
 }
 
-/// A query of the engine to a module process.
+/// What the engine sends a module process: a query on its `hello` key, a publication on
+/// its `run` key.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "type")]
 pub enum Message {
@@ -36,7 +49,7 @@ pub enum Message {
     Run(RunGrant),
 }
 
-/// A module process's answer.
+/// A module process's answer: to a `hello` query, or published on its `ran` key.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "type")]
 pub enum Answer {
@@ -46,8 +59,11 @@ pub enum Answer {
         codels: Vec<String>,
     },
     Ran(RunResult),
-    /// The query could not be read or names no codel of the module: why.
+    /// The message could not be read or names no codel of the module: why, and the run's
+    /// number when it could be read.
     Refused {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        seq: Option<u64>,
         reason: String,
     },
 }
@@ -55,6 +71,9 @@ pub enum Answer {
 /// A codel run the engine granted: what the codel sees.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunGrant {
+    /// The run's number, which its answer repeats: an answer to an earlier run (from a
+    /// process that was hung) is not taken for this one's.
+    pub seq: u64,
     /// The codel's index among its module's codels (services, then their codels, in the
     /// model's order).
     pub codel: u32,
@@ -82,6 +101,8 @@ pub struct PortData {
 /// What a codel run did.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
+    /// The number of the run it answers.
+    pub seq: u64,
     pub end: RunEnd,
     /// The ids fields as the codel left them, and which it wrote (bit `k`, field `k`).
     pub ids: Vec<i64>,

@@ -97,7 +97,10 @@ const CRATES: &[Layers] = &[
     Layers {
         src: "distributed/src",
         layers: &[
-            ("wire", &["network", "wire", "codec", "deploy"]),
+            (
+                "wire",
+                &["runtime", "network", "wire", "link", "codec", "deploy"],
+            ),
             (
                 "sides",
                 &["presence", "remote", "host", "requests", "launch", "client"],

@@ -2,7 +2,7 @@
 //! the rover with its drive and its localisation running, each codel run timed from the
 //! engine's step to its commit (docs/performance.md, "Distributed").
 //!
-//! `cargo bench -p bip-rover-controller --bench round_trip [-- --codels N]`
+//! `cargo bench -p bip-rover-controller --bench round_trip [-- --codels N] [--spin-us N]`
 
 use std::net::TcpListener;
 use std::process::{Child, Command, Stdio};
@@ -62,6 +62,7 @@ fn report(what: &str, times: &[u64], wall: f64) {
 }
 
 fn main() {
+    bip_zenoh::tune_zenoh_runtime();
     let args: Vec<String> = std::env::args().collect();
     let codels: usize = args
         .iter()
@@ -69,6 +70,12 @@ fn main() {
         .and_then(|k| args.get(k + 1))
         .and_then(|n| n.parse().ok())
         .unwrap_or(20_000);
+    let spin_us: u64 = args
+        .iter()
+        .position(|a| a == "--spin-us")
+        .and_then(|k| args.get(k + 1))
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0);
     let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/rover.ron");
     let system = bip_engine::load_file(&model).expect("the rover");
 
@@ -102,10 +109,15 @@ fn main() {
     let clock = VirtualClock::new();
     let options = RemoteOptions {
         virtual_clock: Some(clock.clone()),
+        spin: std::time::Duration::from_micros(spin_us),
         ..RemoteOptions::default()
     };
     let remote = RemoteModules::new(&network, &system, types(&system), options).expect("a session");
     let builder = bind_remote(Engine::builder(system.clone()), &remote).expect("the processes");
     let (times, wall) = measure(builder, clock, codels);
-    report("module processes over zenoh (TCP, loopback)", &times, wall);
+    report(
+        &format!("module processes over zenoh (TCP, loopback, engine polls {spin_us} µs)"),
+        &times,
+        wall,
+    );
 }

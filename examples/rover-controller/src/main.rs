@@ -50,6 +50,7 @@ fn network_of(args: &[String], _engine: bool) -> Network {
         listen: value(args, "--listen").into_iter().collect(),
         connect: value(args, "--connect").into_iter().collect(),
         prefix: value(args, "--prefix").unwrap_or_else(|| "bip/rover".into()),
+        ..Network::default()
     }
 }
 
@@ -115,6 +116,7 @@ fn layer(
 }
 
 fn main() {
+    bip_zenoh::tune_zenoh_runtime();
     let args: Vec<String> = std::env::args().collect();
     let real_time = args.iter().any(|a| a == "--real-time");
     let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../robots/rover.ron");

@@ -54,6 +54,7 @@ impl Layer {
         let options = RemoteOptions {
             deadline: DEADLINE,
             virtual_clock: Some(clock.clone()),
+            ..RemoteOptions::default()
         };
         let types = || bip_rover_controller::distributed::types(&system);
         let remote = RemoteModules::new(&network, &system, types(), options).expect("a session");
