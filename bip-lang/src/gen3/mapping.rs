@@ -277,11 +277,14 @@ fn codel_defs(
             let writes = writes(c, s, codel);
             let uses = uses(c, s, codel);
             // with its unit: a bare number below 100 µs reads as a slip for milliseconds
-            let wcet = codel.wcet.map(|(us, span)| Spanned {
-                value: ConstValue::Expr(format!("{us}us")),
-                span,
-                verbatim: false,
-            });
+            let budget = |b: Option<(u64, Span)>| {
+                b.map(|(us, span)| Spanned {
+                    value: ConstValue::Expr(format!("{us}us")),
+                    span,
+                    verbatim: false,
+                })
+            };
+            let (bcet, wcet) = (budget(codel.bcet), budget(codel.wcet));
             codel.states.iter().map(move |state| CodelDef {
                 state: state.clone(),
                 yields: codel.yields.clone(),
@@ -289,8 +292,7 @@ fn codel_defs(
                 writes: writes.clone(),
                 uses: uses.clone(),
                 wcet: wcet.clone(),
-                // GenoM3 declares a WCET only
-                bcet: None,
+                bcet: bcet.clone(),
                 asynchronous: codel.asynchronous,
             })
         })
