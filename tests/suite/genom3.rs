@@ -64,7 +64,7 @@ fn bip_import_prints_a_model_that_loads() {
     assert!(printed.contains("tick_ms: 200"), "{printed}");
     assert!(
         printed.contains(
-            r#"(state: "move", yields: ["pause::move", "ether"], throws: ["e_blocked"])"#
+            r#"(state: "move", yields: ["pause::move", "ether"], throws: ["e_blocked"], uses: ["plan"])"#
         ),
         "{printed}"
     );

@@ -203,4 +203,6 @@ pub struct Codel {
     pub asynchronous: bool,
     /// The timed dialect's `wcet`, in microseconds.
     pub wcet: Option<(u64, Span)>,
+    /// bip's `bcet` beside it, in microseconds: the shortest run.
+    pub bcet: Option<(u64, Span)>,
 }

@@ -403,7 +403,7 @@ fn service(c: &mut Cursor, idl: &mut Idl, word: &str) -> Result<Service, ModelEr
                 "validate" => {
                     c.next();
                     let mut v = simple_codel(c, false)?;
-                    v.wcet = wcet(c, idl)?;
+                    (v.bcet, v.wcet) = budgets(c, idl)?;
                     s.validate = Some(v);
                 }
                 "local" => {
@@ -563,17 +563,27 @@ fn codel(c: &mut Cursor, idl: &Idl, fsm: bool) -> Result<Codel, ModelError> {
             c.here(),
         ));
     }
-    codel.wcet = wcet(c, idl)?;
+    (codel.bcet, codel.wcet) = budgets(c, idl)?;
     c.expect_punct(";")?;
     Ok(codel)
 }
 
-/// The timed dialect's `wcet 10 ms` after a codel: its worst-case execution time.
-fn wcet(c: &mut Cursor, idl: &Idl) -> Result<Option<(u64, Span)>, ModelError> {
-    if c.eat_ident("wcet").is_none() {
-        return Ok(None);
+/// The timed dialect's `wcet 10 ms` after a codel, its worst-case execution time, and
+/// bip's `bcet 8 ms`, its best-case one, each at most once and in either order: (bcet,
+/// wcet).
+type Budgets = (Option<(u64, Span)>, Option<(u64, Span)>);
+fn budgets(c: &mut Cursor, idl: &Idl) -> Result<Budgets, ModelError> {
+    let (mut bcet, mut wcet) = (None, None);
+    loop {
+        let slot = if wcet.is_none() && c.eat_ident("wcet").is_some() {
+            &mut wcet
+        } else if bcet.is_none() && c.eat_ident("bcet").is_some() {
+            &mut bcet
+        } else {
+            return Ok((bcet, wcet));
+        };
+        *slot = Some(duration(c, idl)?);
     }
-    duration(c, idl).map(Some)
 }
 
 /// `s` or `pause::s`, as one name.
@@ -607,6 +617,7 @@ fn simple_codel(c: &mut Cursor, asynchronous: bool) -> Result<Codel, ModelError>
         yields: Vec::new(),
         asynchronous,
         wcet: None,
+        bcet: None,
     })
 }
 

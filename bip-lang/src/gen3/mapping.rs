@@ -212,8 +212,9 @@ fn service(
                 yields: vec![at("ether")],
                 throws: throws.clone(),
                 writes: writes(c, Some(s), codel),
-                wcet: wcet(codel),
-                bcet: None,
+                uses: uses(c, Some(s), codel),
+                wcet: budget(codel.wcet),
+                bcet: budget(codel.bcet),
                 asynchronous: codel.asynchronous,
             }
         }));
@@ -295,25 +296,26 @@ fn codel_defs(
         .iter()
         .flat_map(|codel| {
             let writes = writes(c, s, codel);
-            let wcet = wcet(codel);
+            let uses = uses(c, s, codel);
+            let (bcet, wcet) = (budget(codel.bcet), budget(codel.wcet));
             codel.states.iter().map(move |state| CodelDef {
                 state: state.clone(),
                 yields: codel.yields.clone(),
                 throws: throws.to_vec(),
                 writes: writes.clone(),
+                uses: uses.clone(),
                 wcet: wcet.clone(),
-                // GenoM3 declares a WCET only
-                bcet: None,
+                bcet: bcet.clone(),
                 asynchronous: codel.asynchronous,
             })
         })
         .collect()
 }
 
-/// A codel's WCET, with its unit: a bare number below 100 µs reads as a slip for
+/// A codel's WCET or BCET, with its unit: a bare number below 100 µs reads as a slip for
 /// milliseconds.
-fn wcet(codel: &Codel) -> Option<ConstExpr> {
-    codel.wcet.map(|(us, span)| Spanned {
+fn budget(micros: Option<(u64, Span)>) -> Option<ConstExpr> {
+    micros.map(|(us, span)| Spanned {
         value: ConstValue::Expr(format!("{us}us")),
         span,
         verbatim: false,
@@ -353,6 +355,46 @@ fn writes(c: &Component, s: Option<&Service>, codel: &Codel) -> Vec<Text> {
                 value: first.clone(),
                 ..p.name.clone()
             });
+        }
+    }
+    out
+}
+
+/// The ids members and ports a codel reads or writes, by their first name (`ids in
+/// a.b` is `a`), each once: the locks it takes in a timed model. `::ids`, the whole ids,
+/// is every member; a service's parameters and locals are the codel's own.
+fn uses(c: &Component, s: Option<&Service>, codel: &Codel) -> Vec<Text> {
+    let local = |name: &str| {
+        s.is_some_and(|s| {
+            s.params.iter().any(|p| p.local_name() == name)
+                || s.locals.iter().any(|l| l.name.value == name)
+        })
+    };
+    let is_ids = |name: &str| c.ids.iter().any(|m| m.name.value == name);
+    let is_port = |name: &str| c.ports.iter().any(|p| p.name.value == name);
+    let mut out: Vec<Text> = Vec::new();
+    let mut add = |name: &str, at: &Text| {
+        if !out.iter().any(|u| u.value == name) {
+            out.push(Text {
+                value: name.to_string(),
+                ..at.clone()
+            });
+        }
+    };
+    for p in &codel.params {
+        let Some(first) = p.path.first() else {
+            for m in &c.ids {
+                add(&m.name.value, &p.name);
+            }
+            continue;
+        };
+        let used = match p.source {
+            Some(Source::Ids) | Some(Source::Port) => true,
+            Some(_) => false,
+            None => !local(first) && (is_ids(first) || is_port(first)),
+        };
+        if used {
+            add(first, &p.name);
         }
     }
     out

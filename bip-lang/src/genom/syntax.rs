@@ -178,6 +178,12 @@ pub struct CodelDef {
     /// Out ports of the module the codel writes on every normal completion.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub writes: Vec<Text>,
+    /// The module's ids members and ports (out or in) the codel reads or writes besides
+    /// `writes`: GenoM3's codel parameters. In a timed model a codel holds a lock on each,
+    /// and on each of `writes`, while it runs (docs/model.md, "Codel locks"); an untimed
+    /// model's codels are instants and need none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub uses: Vec<Text>,
     /// Worst-case execution time of one run: `"2ms"`, `"150us"`, or microseconds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wcet: Option<ConstExpr>,

@@ -270,3 +270,35 @@ fn a_gen_task_machine_becomes_the_tasks_codels() {
         .and_then(|g| g.service("flight", "main"))
         .is_some());
 }
+
+/// A codel's `uses` are the ids members and ports among its parameters, whatever their
+/// direction, each once by its first name; a service's parameters and locals are not
+/// (docs/genom.md, "GenoM3 files"). `::ids`, the whole ids, is every member.
+#[test]
+fn a_gen_codel_uses_its_ids_members_and_ports() {
+    let dir = TempDir::new();
+    dir.write(
+        "lock.gen",
+        r#"component lock {
+  ids { double odo; long state; };
+  port out double pose;
+  port in double laser;
+  task main { period 10 ms; };
+  activity Go(in double goal) {
+    task main;
+    codel<start> g_start(in odo, ids in state, in goal) yield step;
+    codel<step> g_step(in laser, port out pose, inout odo) yield pause::step, ether;
+    codel<stop> g_stop(ids inout ::ids) yield ether;
+  };
+};
+"#,
+    );
+    let def =
+        import_gen_file(&dir.0.join("lock.gen"), &[]).unwrap_or_else(|e| panic!("{}", e.summary()));
+    let go = &def.modules[0].services[0];
+    let uses = |i: usize| -> Vec<&str> { go.codels[i].uses.iter().map(|u| u.as_str()).collect() };
+    assert_eq!(uses(0), ["odo", "state"]);
+    assert_eq!(uses(1), ["laser", "pose", "odo"]);
+    assert_eq!(uses(2), ["odo", "state"]);
+    assert_eq!(go.codels[1].writes[0].value, "pose");
+}

@@ -222,3 +222,76 @@ fn global_tasks_share_the_cores_of_their_cpu() {
     let got = explore(&tasks(1, ["", "", ""]), &set);
     assert!(got["c"].misses && !got["a"].misses, "{got:?}");
 }
+
+#[test]
+fn a_codel_waits_for_a_lock_holding_its_core() {
+    // two tasks on two cores, each codel exactly 2 ms: with a common lock, one runs
+    // [4, 6) and the other waits on its core, then runs [6, 8)
+    let set = |uses: &str| {
+        let codels = format!(
+            r#"codels: [(state: "start", yields: ["pause::run"], bcet: "2ms", wcet: "2ms"{uses}),
+                       (state: "run", yields: ["pause::run"], bcet: "2ms", wcet: "2ms"{uses})]"#
+        );
+        system(
+            r#"(name: "main", cores: 2, preemption: Job)"#,
+            &[
+                format!(r#"(name: "a", period: 4, priority: 2, {codels})"#),
+                format!(r#"(name: "b", period: 4, priority: 1, {codels})"#),
+            ],
+        )
+    };
+    let tasks = [task("a", 4, 0, 4), task("b", 4, 0, 4)];
+    let got = explore(&set(""), &tasks);
+    assert_eq!(got["a"], found(&[2], false));
+    assert_eq!(got["b"], found(&[2], false));
+    // either takes the lock first; alone (the other's machine ended) it never waits
+    let got = explore(&set(r#", uses: ["x"]"#), &tasks);
+    assert_eq!(got["a"], found(&[2, 4], false));
+    assert_eq!(got["b"], found(&[2, 4], false));
+    // with a third task on a third core that also needs it, the last waits 4 ms: a miss
+    let third = set(r#", uses: ["x"]"#)
+        .replace("cores: 2", "cores: 3")
+        .replace(
+            r#"(name: "b","#,
+            r#"(name: "c", period: 4, priority: 3, codels: [
+                    (state: "start", yields: ["pause::run"], bcet: "2ms", wcet: "2ms", uses: ["x"]),
+                    (state: "run", yields: ["pause::run"], bcet: "2ms", wcet: "2ms", uses: ["x"])]),
+                (name: "b","#,
+        );
+    let got = explore(
+        &third,
+        &[task("a", 4, 0, 4), task("b", 4, 0, 4), task("c", 4, 0, 4)],
+    );
+    assert!(
+        got["a"].misses && got["b"].misses && got["c"].misses,
+        "{got:?}"
+    );
+}
+
+#[test]
+fn an_activity_waits_behind_an_earlier_one_that_waits_for_a_lock() {
+    // `a` and `b`'s machine both lock `x` for 2 ms; `b`'s activity `S` (1 ms, no lock)
+    // runs after `b`'s machine in the job: when `a` holds `x` first, `b` waits [4, 6),
+    // runs its machine's codel [6, 8) and `S` [8, 9): 5 ms, past its 4 ms deadline. (Were
+    // `S` to run while the machine waits, `b` would end at 8.)
+    let text = r#"System(name: "ts", tick_ms: 1, time: Exact,
+        cpus: [(name: "main", cores: 2, preemption: Job)],
+        modules: [(name: "m",
+            tasks: [
+                (name: "a", period: 4, priority: 2, codels: [
+                    (state: "start", yields: ["pause::start"], bcet: "2ms", wcet: "2ms", uses: ["x"])]),
+                (name: "b", period: 4, priority: 1, codels: [
+                    (state: "start", yields: ["pause::start"], bcet: "2ms", wcet: "2ms", uses: ["x"])]),
+            ],
+            services: [(name: "S", kind: Activity, task: "b", codels: [
+                (state: "start", yields: ["pause::start"], bcet: "1ms", wcet: "1ms")])])])"#;
+    let got = explore(text, &[task("a", 4, 0, 4), task("b", 4, 0, 4)]);
+    assert!(got["b"].misses, "{got:?}");
+    assert!(!got["a"].misses, "{got:?}");
+    // without the lock `b` never misses
+    let got = explore(
+        &text.replace(r#", uses: ["x"]"#, ""),
+        &[task("a", 4, 0, 4), task("b", 4, 0, 4)],
+    );
+    assert!(!got["b"].misses, "{got:?}");
+}

@@ -27,6 +27,7 @@ fn exact(wcet: u64, yields: Vec<Yield>) -> Codel {
         bcet_us: Some(wcet * 1000),
         wcet_us: Some(wcet * 1000),
         yields,
+        uses: Vec::new(),
     }
 }
 
@@ -57,6 +58,7 @@ fn one_task_responds_in_the_sum_of_its_wcets() {
         bcet_us: Some(bcet * 1000),
         wcet_us: Some(wcet * 1000),
         yields,
+        uses: Vec::new(),
     };
     let t = task(
         10,
@@ -223,6 +225,7 @@ fn a_release_is_ordered_freely_among_its_instants_steps() {
         bcet_us: None,
         wcet_us: Some(4000),
         yields: vec![Yield::Pause(0)],
+        uses: Vec::new(),
     };
     let hi = Task {
         codels: vec![codel.clone()],
@@ -357,11 +360,13 @@ fn a_set_renders_in_the_timed_syntax() {
                 bcet_us: Some(500),
                 wcet_us: Some(1000),
                 yields: vec![Yield::Next(1), Yield::Pause(0)],
+                uses: Vec::new(),
             },
             Codel {
                 bcet_us: None,
                 wcet_us: None,
                 yields: vec![Yield::Pause(1)],
+                uses: Vec::new(),
             },
         ],
         ..job(2, 7, 1)
@@ -404,4 +409,17 @@ fn a_set_renders_in_the_timed_syntax() {
 )
 "#
     );
+    // locks: ids members, the module's out port, an in port connected to `m0.p`
+    s.tasks[0].codels[0].uses = vec!["a", "p"];
+    s.tasks[1].codels[0].uses = vec!["q"];
+    let text = s.to_ron();
+    for line in [
+        r#"    (name: "m0", ports: [(name: "p")], tasks: ["#,
+        r#"    (name: "m1", ports: [(name: "p")], in_ports: [(name: "q")], tasks: ["#,
+        r#"         (state: "start", yields: ["c1", "pause::start"], bcet: "500us", wcet: "1ms", uses: ["a", "p"]),"#,
+        r#"         (state: "start", yields: ["pause::start"], bcet: "2ms", wcet: "2ms", uses: ["q"]),"#,
+        r#"    (port: "m1.q", reads: "m0.p"),"#,
+    ] {
+        assert!(text.lines().any(|l| l == line), "{line}\n{text}");
+    }
 }

@@ -163,6 +163,10 @@ pub(super) fn codels<'d>(
             }
         }
         written_ids.sort_unstable();
+        unique(errors, c.uses.iter(), "used ids member or port");
+        for u in &c.uses {
+            check_name(errors, u, "used ids member or port");
+        }
         unique(errors, c.throws.iter(), "exception");
         for t in &c.throws {
             check_name(errors, t, "exception");

@@ -68,6 +68,19 @@ pub struct Codel {
     pub wcet_us: Option<u64>,
     /// At least one. Besides these, every codel may fail, which ends the task machine.
     pub yields: Vec<Yield>,
+    /// The names its `uses` lists, each a lock it holds while it runs (docs/model.md,
+    /// "Codel locks"): `a` and `b`, ids members of its module; `p`, its module's out
+    /// port; `q`, an in port of a module other than `m0`, connected to `m0.p`.
+    pub uses: Vec<&'static str>,
+}
+
+/// What a name of a codel's `uses` locks, for a task of `module`: (the module it belongs
+/// to, its name there); `q` is `m0.p`, which it reads.
+pub fn lock(module: usize, name: &str) -> (usize, &str) {
+    match name {
+        "q" => (0, "p"),
+        other => (module, other),
+    }
 }
 
 /// Where a codel of a task machine may go next.
@@ -233,6 +246,7 @@ pub fn generate(seed: u64) -> TaskSet {
                         bcet_us: bcet.map(|b| b * grain_us),
                         wcet_us: wcet.map(|w| w * grain_us),
                         yields,
+                        uses: Vec::new(),
                     }
                 })
                 .collect()
@@ -269,6 +283,23 @@ pub fn generate(seed: u64) -> TaskSet {
         0 => Some(grain_us),
         _ => None,
     };
+    // locks in half the sets, drawn last so that the other half are the sets drawn
+    // before locks existed
+    if r.chance(50) {
+        for t in tasks.iter_mut() {
+            let pool: &[&'static str] = match t.module {
+                0 => &["a", "b", "p"],
+                _ => &["a", "b", "p", "q"],
+            };
+            for c in t.codels.iter_mut() {
+                for &name in pool {
+                    if r.chance(30) {
+                        c.uses.push(name);
+                    }
+                }
+            }
+        }
+    }
     TaskSet {
         tick_ms,
         unit_us,

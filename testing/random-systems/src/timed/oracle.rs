@@ -153,6 +153,24 @@ impl Interp<'_> {
             })
     }
 
+    /// Codel `c` of task `t` may take its locks: no other task's running codel holds one
+    /// of them (a task runs one codel at a time, so its own never do).
+    fn locks_free(&self, s: &Projected, t: usize, c: usize) -> bool {
+        let locks = |task: usize, codel: usize| {
+            let module = self.set.tasks[task].module;
+            self.set.tasks[task].codels[codel]
+                .uses
+                .iter()
+                .map(move |&name| super::lock(module, name))
+        };
+        (0..s.tasks.len()).all(|u| match s.tasks[u].position {
+            Position::Running(k) if u != t => {
+                !locks(u, k).any(|held| locks(t, c).any(|wanted| wanted == held))
+            }
+            _ => true,
+        })
+    }
+
     /// The task's work released: a paused codel becomes runnable and the task ready; an
     /// ended machine has none, and the task stays idle.
     fn release(task: &mut TaskState) {
@@ -202,7 +220,8 @@ impl Interp<'_> {
                 (Stage::Ready, _) if self.may_dispatch(s, t) => {
                     go(&|k| k.stage = Stage::Running, None)
                 }
-                (Stage::Running, Position::Runnable(c)) => go(
+                // a codel waiting for a lock keeps its task's core
+                (Stage::Running, Position::Runnable(c)) if self.locks_free(s, t, c) => go(
                     &|k| {
                         k.position = Position::Running(c);
                         k.x = 0;
@@ -262,6 +281,7 @@ impl Interp<'_> {
                 let pending = match (ts.stage, ts.position) {
                     (Stage::Ready, _) => self.may_dispatch(s, t),
                     (Stage::Running, Position::Running(_)) => at_wcet,
+                    (Stage::Running, Position::Runnable(c)) => self.locks_free(s, t, c),
                     (Stage::Running, _) => true,
                     (Stage::Idle, _) => false,
                 };

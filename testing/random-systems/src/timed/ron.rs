@@ -37,8 +37,21 @@ impl TaskSet {
         s += "  ],\n  modules: [\n";
         let mut modules: Vec<usize> = self.tasks.iter().map(|t| t.module).collect();
         modules.dedup();
-        for m in modules {
-            s += &format!("    (name: \"m{m}\", tasks: [\n");
+        // the ports `uses` names, declared only when some codel names one
+        let ports = self
+            .tasks
+            .iter()
+            .flat_map(|t| &t.codels)
+            .any(|c| c.uses.iter().any(|&u| u == "p" || u == "q"));
+        for &m in &modules {
+            s += &format!("    (name: \"m{m}\", ");
+            if ports {
+                s += "ports: [(name: \"p\")], ";
+                if m != 0 {
+                    s += "in_ports: [(name: \"q\")], ";
+                }
+            }
+            s += "tasks: [\n";
             for (i, t) in self.tasks.iter().enumerate().filter(|(_, t)| t.module == m) {
                 let (_, name) = t.names(i);
                 s += &format!(
@@ -75,13 +88,25 @@ impl TaskSet {
                     if let Some(w) = c.wcet_us {
                         s += &format!(", wcet: \"{}\"", duration(w));
                     }
+                    if !c.uses.is_empty() {
+                        let uses: Vec<String> = c.uses.iter().map(|u| format!("\"{u}\"")).collect();
+                        s += &format!(", uses: [{}]", uses.join(", "));
+                    }
                     s += "),\n";
                 }
                 s += "       ]),\n";
             }
             s += "    ]),\n";
         }
-        s += "  ],\n)\n";
+        s += "  ],\n";
+        if ports && modules.len() > 1 {
+            s += "  connections: [\n";
+            for &m in modules.iter().filter(|&&m| m != 0) {
+                s += &format!("    (port: \"m{m}.q\", reads: \"m0.p\"),\n");
+            }
+            s += "  ],\n";
+        }
+        s += ")\n";
         s
     }
 }

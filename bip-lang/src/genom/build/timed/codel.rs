@@ -8,13 +8,13 @@
 use super::{Builder, TaskCodel, TimedTaskRef};
 use crate::expr::{Assign, BinOp, Expr};
 use crate::genom::names::*;
-use crate::genom::tree::{and, assign, binary, int, member, not};
+use crate::genom::tree::{all, and, assign, binary, int, member, not};
 use crate::syntax::Role;
 
 use super::super::{connector, port};
 
 impl<'a, 'd> Builder<'a, 'd> {
-    pub(super) fn codels(&mut self, task: &TimedTaskRef) {
+    pub(super) fn codels(&mut self, task: &TimedTaskRef, tasks: &[TimedTaskRef]) {
         let comp = self.task_comp(task);
         let codel = member(&comp, RUNNING_CODEL);
         let elapsed = member(&comp, ELAPSED);
@@ -28,14 +28,15 @@ impl<'a, 'd> Builder<'a, 'd> {
             let m = self.module_name(c.activity);
             let state = s.codels[c.codel].state;
             let span = s.codels[c.codel].def.state.span;
-            // the start
-            let guard = and(
-                and(
-                    self.stage_is(task, STAGE_RUNNING),
-                    binary(BinOp::Eq, codel.clone(), int(0)),
-                ),
+            // the start, once its locks are free (`locks.rs`)
+            let guard = all([
+                self.stage_is(task, STAGE_RUNNING),
+                binary(BinOp::Eq, codel.clone(), int(0)),
                 self.codel_runnable(c),
-            );
+            ]
+            .into_iter()
+            .chain(self.locks_free(task, k, tasks))
+            .chain(self.no_earlier_waits(task, k)));
             let start = start_connector(m, s.name, state);
             self.claim(
                 &start,
@@ -44,7 +45,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             );
             self.connectors.push((
                 connector(&start, vec![port(&comp, "start")], Role::Progress),
-                Some(guard),
+                guard,
                 vec![assign(codel.clone(), number.clone())],
             ));
             // the finish: its run and error path, once it has run its BCET

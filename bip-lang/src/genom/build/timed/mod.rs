@@ -21,6 +21,7 @@
 mod codel;
 mod deadlines;
 mod jump;
+mod locks;
 mod priorities;
 mod task;
 mod tick;
@@ -33,13 +34,15 @@ use crate::genom::timed::{Timed, TimedTask};
 use crate::genom::tree::{and, at, binary, chain, int, member, not};
 
 /// A codel of a task, in the order its job runs them.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct TaskCodel {
     activity: ServiceRef,
     /// Index among its activity's codels.
     codel: usize,
     bcet: u64,
     wcet: u64,
+    /// What it holds while it runs (`locks.rs`).
+    locks: Vec<locks::Lock>,
 }
 
 /// A task of the layer that runs codels.
@@ -73,13 +76,15 @@ impl<'a, 'd> Builder<'a, 'd> {
                 let codels: Vec<TaskCodel> = activities
                     .iter()
                     .flat_map(|&r| {
-                        (0..self.service(r).codels.len()).map(move |ci| {
+                        (0..m.services[r.service].codels.len()).map(move |ci| {
                             let (bcet, wcet) = t.codel(r.module, r.service, ci);
+                            let codel = &m.services[r.service].codels[ci];
                             TaskCodel {
                                 activity: r,
                                 codel: ci,
                                 bcet,
                                 wcet,
+                                locks: locks::codel_locks(m, r.module, codel),
                             }
                         })
                     })

@@ -28,7 +28,7 @@ impl<'a, 'd> Builder<'a, 'd> {
             self.task_atom(task);
             self.dispatch(t, task, &tasks);
             self.job_done(task);
-            self.codels(task);
+            self.codels(task, &tasks);
         }
     }
 
