@@ -163,10 +163,9 @@ pub(super) fn codels<'d>(
             }
         }
         written_ids.sort_unstable();
+        // a used name is a lock, never written in an expression: an imported ids member
+        // may be called what the expression language reserves (`count`)
         unique(errors, c.uses.iter(), "used ids member or port");
-        for u in &c.uses {
-            check_name(errors, u, "used ids member or port");
-        }
         unique(errors, c.throws.iter(), "exception");
         for t in &c.throws {
             check_name(errors, t, "exception");
