@@ -35,6 +35,9 @@ fn symbolic_options() -> Options {
         symbolic: SymbolicOptions {
             solver_timeout: None,
             rlimit: Some(200_000_000),
+            // the confirmation's memory budget counts this process's resident memory,
+            // which the suite's other tests share: bound it by states alone
+            confirm_memory: u64::MAX,
             ..SymbolicOptions::default()
         },
         ..Options::default()

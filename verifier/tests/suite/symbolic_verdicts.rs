@@ -17,6 +17,9 @@ fn symbolic_options() -> Options {
             rlimit: Some(20_000_000),
             max_depth: 6,
             confirm_states: 2_000,
+            // the confirmation's memory budget counts this process's resident memory,
+            // which the suite's other tests share: bound it by states alone
+            confirm_memory: u64::MAX,
             ..SymbolicOptions::default()
         },
         ..Options::default()
