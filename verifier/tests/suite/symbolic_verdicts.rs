@@ -20,7 +20,6 @@ fn symbolic_options() -> Options {
             // the confirmation's memory budget counts this process's resident memory,
             // which the suite's other tests share: bound it by states alone
             confirm_memory: u64::MAX,
-            ..SymbolicOptions::default()
         },
         ..Options::default()
     }
