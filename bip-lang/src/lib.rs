@@ -33,6 +33,6 @@ pub use diag::{LoadError, ModelError};
 pub use genom::expand;
 pub use load::{
     compile, compile_def, expand_file, expand_str, import_gen_file, import_gen_files, load_file,
-    load_str, parse_str, read_gen_file, read_model_file,
+    load_file_timed, load_str, parse_str, read_gen_file, read_model_file,
 };
 pub use syntax::ron_options;

@@ -261,3 +261,31 @@ fn a_bound_in_ticks_counts_the_units_of_its_ticks() {
         .replacen("time: Exact,", r#"time: Exact(unit: "1ms"),"#, 1);
     assert_eq!(bound(&whole), (Some(1000), Some(3)));
 }
+
+#[test]
+fn an_untimed_model_loads_timed_on_request() {
+    let untimed = TIMED
+        .replacen("    time: Exact,\n", "", 1)
+        .replacen(", cores: 2, policy: FixedPriority, preemption: Job", "", 1)
+        .replacen(r#"(name: "io", preemption: Job)"#, r#""io""#, 1)
+        .replacen(r#"cpu: "io", core: 0"#, r#"cpu: "io""#, 1);
+    let path = std::env::temp_dir().join(format!("bip-timed-{}.ron", std::process::id()));
+    std::fs::write(&path, &untimed).expect("the model written");
+    let unit = |system: bip_model::System| system.genom.expect("a GenoM layer").time_unit_us;
+    assert_eq!(unit(bip_lang::load_file(&path).expect("loads")), None);
+    let timed = bip_lang::load_file_timed(&path)
+        .map(unit)
+        .map_err(|e| e.summary());
+    let error = timed.expect_err("a CPU named alone is preemptive");
+    assert!(
+        error.contains("CPU `main` is preemptive, which a timed model does not support yet"),
+        "{error}"
+    );
+    // a model that says `time: Exact` is loaded as written
+    std::fs::write(&path, TIMED).expect("the model written");
+    assert_eq!(
+        unit(bip_lang::load_file_timed(&path).expect("loads")),
+        Some(500)
+    );
+    std::fs::remove_file(&path).expect("removed");
+}
