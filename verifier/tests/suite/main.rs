@@ -11,6 +11,7 @@
 //! - `symbolic_verdicts`: the symbolic method never contradicts the explicit one;
 //! - `time_progress`: timelocks against a naive search for a tick from every state, the
 //!   fuzzer's timelocks that made liveness properties hold, and the symbolic method;
+//! - `timed_constraints`: `Exclusive` and `AtMost` with codels running at once on cores;
 //! - `timed_oracle`: the timed expansion against a naive interpreter of the timed
 //!   semantics, on random task sets;
 //! - `timed_rta`: exploration against response-time analysis on one preemptive core.
@@ -23,6 +24,7 @@ mod schedulability;
 mod symbolic_known_answers;
 mod symbolic_verdicts;
 mod time_progress;
+mod timed_constraints;
 mod timed_oracle;
 mod timed_rta;
 

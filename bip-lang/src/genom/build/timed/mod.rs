@@ -216,6 +216,24 @@ impl<'a, 'd> Builder<'a, 'd> {
 }
 
 impl<'a, 'd> Builder<'a, 'd> {
+    /// In a timed model, activity `r` is starting: its `start` codel has started on its
+    /// task's core and not finished (the activity is still at `ether` until it does).
+    /// `None` in an untimed model, where a codel is an instant.
+    pub(in super::super) fn activity_starting(&self, r: ServiceRef) -> Option<Expr> {
+        let t = self.timed?;
+        let tasks = self.timed_task_list(t);
+        tasks.iter().find_map(|task| {
+            let k = task.codels.iter().position(|c| {
+                c.activity == r && self.service(r).codels[c.codel].state == "start"
+            })?;
+            Some(binary(
+                BinOp::Eq,
+                self.task_var(task, RUNNING_CODEL),
+                int(k as i64 + 1),
+            ))
+        })
+    }
+
     /// The time since the release of the task's job, in units: `late · period + (n −
     /// delay) mod period`, derived from the clock (a boundary that passed while the job
     /// ran counts one period, and so does the instant's boundary while its release is
