@@ -5,7 +5,7 @@
 #[allow(unused_imports)]
 use crate::prelude::*;
 
-use crate::fast_path::{ActionCode, FlatCode, GuardCode, Ranges};
+use crate::fast_path::{ActionCode, FlatCode, GuardCode, Ranges, ValueCode};
 
 /// Flat tables for finding enabled transitions quickly: the transitions of a component from
 /// its current location on a port are `cells[port.base + location * port.stride]`, without
@@ -31,6 +31,8 @@ pub(crate) struct EnableIndex {
     pub(crate) comp_code: Vec<(u32, u32)>,
     pub(crate) inter_guards: Vec<GuardCode>,
     pub(crate) inter_actions: Vec<ActionCode>,
+    /// Each interaction's `advance`, if it has one.
+    pub(crate) inter_advance: Vec<Option<ValueCode>>,
     /// The interactions' steps tabulated over their arguments (filled once the system
     /// exists, since the relation computes them).
     pub(crate) tables: crate::step_tables::StepTables,
@@ -107,6 +109,10 @@ impl EnableIndex {
             .iter()
             .map(|i| flat.action(&i.action, &ranges))
             .collect();
+        let inter_advance = interactions
+            .iter()
+            .map(|i| i.advance.as_ref().map(|e| flat.value(e, &ranges)))
+            .collect();
         flat.done();
         let cell = |component: u32, col: usize, optional: bool| {
             let comp = &components[component as usize];
@@ -153,6 +159,7 @@ impl EnableIndex {
             comp_code,
             inter_guards,
             inter_actions,
+            inter_advance,
             tables: Default::default(),
         }
     }

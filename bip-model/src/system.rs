@@ -204,9 +204,14 @@ impl System {
             return Ok(1);
         };
         let context = || format!("advance of {}", inter.name);
-        let value = e
-            .eval(&mut Env::new(state.slots(), 0))
-            .map_err(|err| self.range_error(err, &context()))?;
+        let index = &self.enable_index;
+        let flat = index.inter_advance[i as usize].and_then(|c| c.eval(&index.flat, state.slots()));
+        let value = match flat {
+            Some(v) => v,
+            None => e
+                .eval(&mut Env::new(state.slots(), 0))
+                .map_err(|err| self.range_error(err, &context()))?,
+        };
         if value < 1 {
             return Err(RangeError {
                 context: context(),

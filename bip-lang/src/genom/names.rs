@@ -144,6 +144,18 @@ pub fn dispatch_connector(m: &str, t: &str) -> String {
     format!("{m}_{t}_dispatch")
 }
 
+/// The connector by which running task `m.t` gives its core, between two codels of its
+/// job, to a more urgent ready task (`preemption: Codel`).
+pub fn yield_connector(m: &str, t: &str) -> String {
+    format!("{m}_{t}_yield")
+}
+
+/// The connector by which ready task `m.t` takes the core of running task `n.u`
+/// (`preemption: Preemptive`).
+pub fn preempt_connector(m: &str, t: &str, n: &str, u: &str) -> String {
+    format!("{m}_{t}_preempts_{n}_{u}")
+}
+
 /// The connector by which task `m.t`'s job ends, freeing its core.
 pub fn done_connector(m: &str, t: &str) -> String {
     format!("{m}_{t}_done")

@@ -2,8 +2,8 @@
 //! (declared, or the greatest common divisor of the model's durations), every duration
 //! in units, the common cycle of the periods, the CPUs' cores and scheduling, and each
 //! task's core; what the timed expansion works from. What this version does not
-//! schedule yet (preemptive CPUs, EDF, aperiodic tasks, atoms' tasks) is refused at the
-//! value that asks for it.
+//! schedule yet (aperiodic tasks, atoms' tasks, async codels) is refused at the value
+//! that asks for it.
 
 use std::collections::HashMap;
 
@@ -30,6 +30,8 @@ pub(crate) struct Timed {
     pub cores: Vec<u32>,
     /// Whether each CPU dispatches by earliest deadline (else by fixed priority).
     pub edf: Vec<bool>,
+    /// When each CPU's tasks may lose their core.
+    pub preemption: Vec<Preemption>,
     /// Per module, per task.
     pub tasks: Vec<Vec<TimedTask>>,
     /// (best, worst) execution time by (module, service, codel state) indices; a codel
@@ -119,7 +121,6 @@ fn check_in(
         }
         return None;
     };
-    cpus(def, time.span, errors);
     unsupported_tasks(def, layer, errors);
     // every duration, in file order: the declared unit must divide each
     let mut written: Vec<Written> = Vec::new();
@@ -263,12 +264,18 @@ fn check_in(
             .map(|c| c.policy.as_ref().is_some_and(|p| p.value == Policy::Edf))
             .collect()
     };
+    let preemption = if def.cpus.is_empty() {
+        vec![Preemption::Preemptive]
+    } else {
+        def.cpus.iter().map(|c| c.preemption()).collect()
+    };
     Some(Timed {
         unit_us,
         tick_units: tick_us / unit_us,
         hyperperiod,
         cores,
         edf,
+        preemption,
         tasks,
         codels,
     })
@@ -299,43 +306,6 @@ fn declared_unit(
         return None;
     }
     Some(unit_us)
-}
-
-/// The CPUs of a timed model: declared, and scheduled in a way this version explores.
-fn cpus(def: &SystemDef, time: Span, errors: &mut Errors) {
-    if def.cpus.is_empty() {
-        errors.push(
-            ModelError::new("a timed model declares its CPUs", time)
-                .with_help("say how its cores are shared: `cpus: [(name: \"main\", cores: 1, preemption: Job)]` beside `name`"),
-        );
-    }
-    for cpu in &def.cpus {
-        match &cpu.preemption {
-            Some(p) if p.value != Preemption::Job => errors.push(
-                ModelError::new(
-                    format!(
-                        "CPU `{}`: `preemption: {}` is not supported in a timed model yet",
-                        cpu.name,
-                        p.value.word()
-                    ),
-                    p.span,
-                )
-                .with_help("use `preemption: Job`: a task keeps its core until its period's work is done"),
-            ),
-            Some(_) => {}
-            None => errors.push(
-                ModelError::new(
-                    format!("CPU `{}` is preemptive, which a timed model does not support yet", cpu.name),
-                    cpu.name.span,
-                )
-                .with_label("a CPU without `preemption` is preemptive")
-                .with_help(format!(
-                    "write `(name: \"{}\", preemption: Job)`: a task keeps its core until its period's work is done",
-                    cpu.name
-                )),
-            ),
-        }
-    }
 }
 
 /// The tasks a timed model does not schedule yet: aperiodic ones, atoms' tasks, and

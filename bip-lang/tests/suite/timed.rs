@@ -144,6 +144,42 @@ fn bad_units() {
     );
 }
 
+/// Every preemption loads, and a CPU named alone is one preemptive core, as in an
+/// untimed model: the tasks that may lose their cores get the steps that take them.
+#[test]
+fn every_preemption_loads() {
+    let connectors = |text: &str| {
+        let system = load_str("ts.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()));
+        let names: Vec<&String> = system.interactions.iter().map(|i| &i.name).collect();
+        (
+            names.iter().filter(|n| n.ends_with("_yield")).count(),
+            names.iter().filter(|n| n.contains("_preempts_")).count(),
+        )
+    };
+    assert_eq!(connectors(TIMED), (0, 0));
+    // `t0` and `t1` share one core of `main`: each may give it to the other (EDF) or `t1`
+    // to `t0` (fixed priorities); on two cores, never
+    let one_core = |p: &str| {
+        bad("preemption: Job),\n", &format!("preemption: {p}),\n"))
+            .replacen("cores: 2", "cores: 1", 1)
+    };
+    let two_cores = bad("preemption: Job),\n", "preemption: Preemptive),\n");
+    assert_eq!(connectors(&two_cores), (0, 0));
+    let codel = one_core("Codel");
+    assert_eq!(connectors(&codel), (1, 0));
+    let preemptive = one_core("Preemptive");
+    assert_eq!(connectors(&preemptive), (0, 1));
+    let edf = preemptive.replacen("policy: FixedPriority", "policy: Edf", 1);
+    assert_eq!(connectors(&edf), (0, 2));
+    // `log`, alone on `io`, is never preempted
+    let alone = bad(r#"(name: "io", preemption: Job)"#, r#""io""#).replacen(
+        r#"cpu: "io", core: 0"#,
+        r#"cpu: "io""#,
+        1,
+    );
+    assert_eq!(connectors(&alone), (0, 0));
+}
+
 #[test]
 fn bad_cores_and_scheduling() {
     assert_error(
@@ -160,16 +196,6 @@ fn bad_cores_and_scheduling() {
         &bad("cores: 2,", "cores: 0,"),
         "CPU `main` has 0 cores",
         "0",
-    );
-    assert_error(
-        &bad("preemption: Job),\n", "preemption: Codel),\n"),
-        "CPU `main`: `preemption: Codel` is not supported in a timed model yet",
-        "Codel",
-    );
-    assert_error(
-        &bad(r#"(name: "io", preemption: Job)"#, r#""io""#),
-        "CPU `io` is preemptive, which a timed model does not support yet",
-        "io",
     );
     assert_error(
         &bad(r#"deadline: "4ms""#, r#"deadline: "6ms""#),
@@ -276,11 +302,7 @@ fn an_untimed_model_loads_timed_on_request() {
     let timed = bip_lang::load_file_timed(&path)
         .map(unit)
         .map_err(|e| e.summary());
-    let error = timed.expect_err("a CPU named alone is preemptive");
-    assert!(
-        error.contains("CPU `main` is preemptive, which a timed model does not support yet"),
-        "{error}"
-    );
+    assert_eq!(timed, Ok(Some(500)));
     // a model that says `time: Exact` is loaded as written
     std::fs::write(&path, TIMED).expect("the model written");
     assert_eq!(

@@ -153,6 +153,25 @@ impl FlatAssign {
     }
 }
 
+/// A value computed on a state (a time step's `advance`), in flat form if it has one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct ValueCode(Value);
+
+impl ValueCode {
+    /// The value on `slots`; `None` if the expression tree must be evaluated (it has no
+    /// flat form, or fails: the tree says how).
+    #[inline]
+    pub(crate) fn eval(self, code: &FlatCode, slots: &[i64]) -> Option<i64> {
+        match self.0 {
+            Value::Const(v) => Some(v),
+            Value::Offset { slot, add, .. } => slots[slot as usize].checked_add(add),
+            Value::Code { start, end } => code.run(start, end, slots, 0).ok(),
+            Value::Table(t) => code.lookup(t, slots, 0),
+            Value::Tree => None,
+        }
+    }
+}
+
 /// Where an action's assignments are in [`FlatCode`], one per assignment in order, and
 /// its table of the values they write, if it has one ([`NO_TABLE`] if not).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -230,6 +249,11 @@ impl FlatCode {
             start: start as u32,
             end: self.tests.len() as u32,
         }
+    }
+
+    /// A value's flat form (an expression read on the state alone, not a component's).
+    pub(crate) fn value(&mut self, e: &Expr, ranges: &Ranges<'_>) -> ValueCode {
+        ValueCode(value_of(e, self, ranges))
     }
 
     pub(crate) fn action(&mut self, action: &[Assign], ranges: &Ranges<'_>) -> ActionCode {

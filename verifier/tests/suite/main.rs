@@ -11,8 +11,10 @@
 //! - `symbolic_verdicts`: the symbolic method never contradicts the explicit one;
 //! - `time_progress`: timelocks against a naive search for a tick from every state, the
 //!   fuzzer's timelocks that made liveness properties hold, and the symbolic method;
+//! - `timed_constraints`: `Exclusive` and `AtMost` with codels running at once on cores;
 //! - `timed_oracle`: the timed expansion against a naive interpreter of the timed
-//!   semantics, on random task sets.
+//!   semantics, on random task sets;
+//! - `timed_rta`: exploration against response-time analysis on one preemptive core.
 
 mod advance;
 mod known_answers;
@@ -22,7 +24,9 @@ mod schedulability;
 mod symbolic_known_answers;
 mod symbolic_verdicts;
 mod time_progress;
+mod timed_constraints;
 mod timed_oracle;
+mod timed_rta;
 
 /// The time units a trace spans: the sum of its time steps' `advance`.
 fn trace_units(system: &bip_model::System, trace: &bip_model::Trace) -> u64 {

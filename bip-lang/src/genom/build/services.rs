@@ -39,18 +39,15 @@ impl<'a, 'd> Builder<'a, 'd> {
         }
         for (ci, c) in self.layer.constraints.iter().enumerate() {
             let reason = c.reason.clone();
-            let others = |list: &[ServiceRef], f: &dyn Fn(String) -> Expr| -> Vec<Expr> {
-                list.iter()
-                    .filter(|&&y| y != r)
-                    .map(|&y| f(self.comp(y)))
-                    .collect()
+            let others = |list: &[ServiceRef], f: &dyn Fn(ServiceRef) -> Expr| -> Vec<Expr> {
+                list.iter().filter(|&&y| y != r).map(|&y| f(y)).collect()
             };
             let expr = match &c.kind {
                 ConstraintKind::Exclusive(list) if list.contains(&r) => {
-                    all(others(list, &|c| at(&c, ETHER)))
+                    all(others(list, &|y| self.inactive(y)))
                 }
                 ConstraintKind::AtMost { max, services } if services.contains(&r) => {
-                    let active = |c: String| cond(at(&c, ETHER), int(0), int(1));
+                    let active = |y: ServiceRef| cond(self.inactive(y), int(0), int(1));
                     chain(BinOp::Add, others(services, &active))
                         .map(|count| binary(BinOp::Lt, count, int(*max)))
                 }
@@ -79,6 +76,17 @@ impl<'a, 'd> Builder<'a, 'd> {
             }
         }
         (start, run)
+    }
+
+    /// Activity `y` is neither active nor starting: at `ether`, and in a timed model its
+    /// `start` codel not running on another core (two activities of an `Exclusive` started
+    /// at once on two cores would both become active).
+    fn inactive(&self, y: ServiceRef) -> Expr {
+        let idle = at(&self.comp(y), ETHER);
+        match self.activity_starting(y) {
+            Some(starting) => and(idle, not(starting)),
+            None => idle,
+        }
     }
 
     pub(super) fn service_connectors(&mut self, r: ServiceRef, user: &UserTexts) {

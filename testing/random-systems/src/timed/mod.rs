@@ -14,6 +14,17 @@ mod ron;
 
 pub use oracle::{explore, Position, Projected, Stage, TaskState, Verdict};
 
+/// When a task may lose its core (docs/model.md, "Preemption").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Preemption {
+    /// Never before its job is done.
+    Job,
+    /// Between two codels of its job, to a ready task that comes first.
+    Codel,
+    /// At any unit, to a ready task that comes first; its running codel waits.
+    Preemptive,
+}
+
 use crate::Rng;
 
 /// A timed model: CPUs, and tasks with their own state machines.
@@ -36,11 +47,12 @@ pub enum Policy {
     Edf,
 }
 
-/// A CPU: `cores` cores shared by its tasks, cooperatively (`preemption: Job`).
+/// A CPU: `cores` cores shared by its tasks.
 #[derive(Clone, Debug)]
 pub struct Cpu {
     pub cores: usize,
     pub policy: Policy,
+    pub preemption: Preemption,
 }
 
 #[derive(Clone, Debug)]
@@ -205,6 +217,7 @@ pub fn generate(seed: u64) -> TaskSet {
                 } else {
                     Policy::FixedPriority
                 },
+                preemption: Preemption::Job,
             };
             (cpu, r.chance(50))
         })
@@ -300,10 +313,19 @@ pub fn generate(seed: u64) -> TaskSet {
             }
         }
     }
+    // preemption drawn after locks, for the same reason
+    let mut cpus: Vec<Cpu> = cpus.into_iter().map(|(c, _)| c).collect();
+    for c in cpus.iter_mut() {
+        c.preemption = match r.below(3) {
+            0 => Preemption::Job,
+            1 => Preemption::Codel,
+            _ => Preemption::Preemptive,
+        };
+    }
     TaskSet {
         tick_ms,
         unit_us,
-        cpus: cpus.into_iter().map(|(c, _)| c).collect(),
+        cpus,
         tasks,
     }
 }

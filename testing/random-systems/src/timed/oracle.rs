@@ -6,14 +6,14 @@
 
 use std::collections::{BTreeSet, HashMap, VecDeque};
 
-use super::{Policy, TaskSet, Yield};
+use super::{Policy, Preemption, TaskSet, Yield};
 
 /// A task's job.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Stage {
     /// No job: nothing released, or its last job is done.
     Idle,
-    /// Released, waiting for a core.
+    /// Released, waiting for a core (or preempted: its running codel waits with it).
     Ready,
     /// Holding a core.
     Running,
@@ -27,7 +27,7 @@ pub enum Position {
     Paused(usize),
     /// This codel may start in the current job.
     Runnable(usize),
-    /// This codel holds the task's core.
+    /// This codel has started and not finished: it runs while its task holds a core.
     Running(usize),
     /// The machine is done (a codel failed): the task never has work again.
     Ended,
@@ -137,20 +137,92 @@ impl Interp<'_> {
         }
     }
 
+    /// Tasks `t` and `u` compete for the same cores: the same CPU, pinned to the same core
+    /// or both global.
+    fn compete(&self, t: usize, u: usize) -> bool {
+        let (a, b) = (&self.set.tasks[t], &self.set.tasks[u]);
+        t != u && a.cpu == b.cpu && a.core == b.core
+    }
+
+    /// Ready task `t` comes first among the ready tasks competing with it.
+    fn first_ready(&self, s: &Projected, t: usize) -> bool {
+        s.tasks[t].stage == Stage::Ready
+            && !(0..s.tasks.len()).any(|u| {
+                self.compete(t, u) && s.tasks[u].stage == Stage::Ready && self.before(s, u, t)
+            })
+    }
+
     /// Ready task `t` takes a core: one is free, and no ready task that competes for it
     /// (same CPU, same pinned core or both global) comes before it.
     fn may_dispatch(&self, s: &Projected, t: usize) -> bool {
-        let task = &self.set.tasks[t];
-        s.tasks[t].stage == Stage::Ready
-            && self.core_free(s, t)
-            && !(0..s.tasks.len()).any(|u| {
-                let other = &self.set.tasks[u];
-                u != t
-                    && other.cpu == task.cpu
-                    && other.core == task.core
-                    && s.tasks[u].stage == Stage::Ready
-                    && self.before(s, u, t)
+        self.first_ready(s, t) && self.core_free(s, t)
+    }
+
+    /// The preemption of the CPU of task `t`.
+    fn preemption(&self, t: usize) -> Preemption {
+        self.set.cpus[self.set.tasks[t].cpu].preemption
+    }
+
+    /// Task `t` is more urgent than task `u`, enough to take its core: a higher priority,
+    /// or under EDF a strictly earlier absolute deadline.
+    fn urgent(&self, s: &Projected, t: usize, u: usize) -> bool {
+        match self.set.cpus[self.set.tasks[t].cpu].policy {
+            Policy::FixedPriority => self.set.tasks[t].priority > self.set.tasks[u].priority,
+            Policy::Edf => {
+                let left = |v: usize| self.set.deadline(v) as i64 - self.elapsed(s, v) as i64;
+                left(t) < left(u)
+            }
+        }
+    }
+
+    /// Running task `u`, between two codels of its job on a CPU with `preemption: Codel`,
+    /// gives its core to a ready task: one competing with it is more urgent, and no core
+    /// is free for it (any such running task gives its core at its first codel boundary,
+    /// not only the least urgent one).
+    fn yields(&self, s: &Projected, u: usize) -> bool {
+        self.preemption(u) == Preemption::Codel
+            && (0..s.tasks.len()).any(|t| {
+                self.compete(t, u)
+                    && s.tasks[t].stage == Stage::Ready
+                    && self.urgent(s, t, u)
+                    && !self.core_free(s, t)
             })
+    }
+
+    /// The running tasks that ready task `t` may preempt (`preemption: Preemptive`): it
+    /// comes first among the ready, no core is free for it, and each comes last among the
+    /// running tasks competing with it, is less urgent than `t`, has work left in its job
+    /// (else its job ends first), and is not at the end of a codel's WCET (a codel that
+    /// has run its WCET is done: it finishes first).
+    fn victims(&self, s: &Projected, t: usize) -> Vec<usize> {
+        if self.preemption(t) != Preemption::Preemptive
+            || !self.first_ready(s, t)
+            || self.core_free(s, t)
+        {
+            return Vec::new();
+        }
+        let running = |u: usize| self.compete(t, u) && s.tasks[u].stage == Stage::Running;
+        (0..s.tasks.len())
+            .filter(|&u| {
+                running(u)
+                    && matches!(
+                        s.tasks[u].position,
+                        Position::Runnable(_) | Position::Running(_)
+                    )
+                    && self.urgent(s, t, u)
+                    && !self.at_wcet(s, u)
+                    && !(0..s.tasks.len()).any(|v| v != u && running(v) && self.before(s, u, v))
+            })
+            .collect()
+    }
+
+    /// Task `t`'s running codel has held a core for its WCET.
+    fn at_wcet(&self, s: &Projected, t: usize) -> bool {
+        let ts = s.tasks[t];
+        match ts.position {
+            Position::Running(c) => ts.x == self.set.window(t, c).1,
+            _ => false,
+        }
     }
 
     /// Codel `c` of task `t` may take its locks: no other task's running codel holds one
@@ -220,6 +292,22 @@ impl Interp<'_> {
                 (Stage::Ready, _) if self.may_dispatch(s, t) => {
                     go(&|k| k.stage = Stage::Running, None)
                 }
+                (Stage::Ready, _) => {
+                    for u in self.victims(s, t) {
+                        let mut to = s.clone();
+                        to.tasks[t].stage = Stage::Running;
+                        to.tasks[u].stage = Stage::Ready;
+                        out.push(Successor {
+                            to,
+                            tick: false,
+                            response: None,
+                        });
+                    }
+                }
+                // between two codels, a more urgent ready task takes the core
+                (Stage::Running, Position::Runnable(_)) if self.yields(s, t) => {
+                    go(&|k| k.stage = Stage::Ready, None)
+                }
                 // a codel waiting for a lock keeps its task's core
                 (Stage::Running, Position::Runnable(c)) if self.locks_free(s, t, c) => go(
                     &|k| {
@@ -274,14 +362,12 @@ impl Interp<'_> {
         !s.due
             && (0..s.tasks.len()).all(|t| {
                 let ts = s.tasks[t];
-                let at_wcet = match ts.position {
-                    Position::Running(c) => ts.x == self.set.window(t, c).1,
-                    _ => false,
-                };
                 let pending = match (ts.stage, ts.position) {
-                    (Stage::Ready, _) => self.may_dispatch(s, t),
-                    (Stage::Running, Position::Running(_)) => at_wcet,
-                    (Stage::Running, Position::Runnable(c)) => self.locks_free(s, t, c),
+                    (Stage::Ready, _) => self.may_dispatch(s, t) || !self.victims(s, t).is_empty(),
+                    (Stage::Running, Position::Running(_)) => self.at_wcet(s, t),
+                    (Stage::Running, Position::Runnable(c)) => {
+                        self.yields(s, t) || self.locks_free(s, t, c)
+                    }
                     (Stage::Running, _) => true,
                     (Stage::Idle, _) => false,
                 };
@@ -294,7 +380,8 @@ impl Interp<'_> {
         let mut to = s.clone();
         to.n = (s.n + 1) % self.hyper;
         for k in to.tasks.iter_mut() {
-            if matches!(k.position, Position::Running(_)) {
+            // a preempted codel waits
+            if k.stage == Stage::Running && matches!(k.position, Position::Running(_)) {
                 k.x += 1;
             }
         }

@@ -1,6 +1,6 @@
 //! Writing a task set as a timed model file.
 
-use super::{codel_name, Policy, TaskSet, Yield};
+use super::{codel_name, Policy, Preemption, TaskSet, Yield};
 
 /// A duration as the model file writes it.
 fn duration(us: u64) -> String {
@@ -29,8 +29,13 @@ impl TaskSet {
                 Policy::FixedPriority => "FixedPriority",
                 Policy::Edf => "Edf",
             };
+            let preemption = match c.preemption {
+                Preemption::Job => "Job",
+                Preemption::Codel => "Codel",
+                Preemption::Preemptive => "Preemptive",
+            };
             s += &format!(
-                "    (name: \"cpu{i}\", cores: {}, policy: {policy}, preemption: Job),\n",
+                "    (name: \"cpu{i}\", cores: {}, policy: {policy}, preemption: {preemption}),\n",
                 c.cores
             );
         }

@@ -8,13 +8,14 @@
 use super::{Builder, TaskCodel, TimedTaskRef};
 use crate::expr::{Assign, BinOp, Expr};
 use crate::genom::names::*;
+use crate::genom::timed::Timed;
 use crate::genom::tree::{all, and, assign, binary, int, member, not};
 use crate::syntax::Role;
 
 use super::super::{connector, port};
 
 impl<'a, 'd> Builder<'a, 'd> {
-    pub(super) fn codels(&mut self, task: &TimedTaskRef, tasks: &[TimedTaskRef]) {
+    pub(super) fn codels(&mut self, t: &Timed, task: &TimedTaskRef, tasks: &[TimedTaskRef]) {
         let comp = self.task_comp(task);
         let codel = member(&comp, RUNNING_CODEL);
         let elapsed = member(&comp, ELAPSED);
@@ -49,7 +50,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                 vec![assign(codel.clone(), number.clone())],
             ));
             // the finish: its run and error path, once it has run its BCET
-            let finishing = ran_bcet(binary(BinOp::Eq, codel.clone(), number), &elapsed, c);
+            let finishing = ran_bcet(self.codel_runs(t, task, k), &elapsed, c);
             for name in [
                 codel_connector(m, s.name, state),
                 fail_connector(m, s.name, state),

@@ -76,12 +76,7 @@ impl<'a, 'd> Builder<'a, 'd> {
                         int(1),
                     )
                 };
-                let running = binary(
-                    BinOp::Eq,
-                    self.task_var(task, RUNNING_CODEL),
-                    int(k as i64 + 1),
-                );
-                codel_bound = cond(running, bound, codel_bound);
+                codel_bound = cond(self.codel_runs(t, task, k), bound, codel_bound);
             }
             candidates.push(codel_bound);
             // the first unit past the deadline of an active job not yet past it

@@ -14,6 +14,8 @@
 //! - `tick.rs`: the tick and the release at the tasks' boundaries;
 //! - `jump.rs`: how many units the tick stands for, up to the next instant at which
 //!   something may happen;
+//! - `order.rs`, `preempt.rs`: which of a CPU's tasks comes first, and how a task loses
+//!   its core to a more urgent one before its job is done (`Codel`, `Preemptive`);
 //! - `priorities.rs`: zero-time steps before time passes, a task's codels in GenoM3's
 //!   order, and the CPUs' fixed priorities;
 //! - `deadlines.rs`: each task's deadline as an invariant (`Schedulable` by exploration).
@@ -22,6 +24,8 @@ mod codel;
 mod deadlines;
 mod jump;
 mod locks;
+mod order;
+mod preempt;
 mod priorities;
 mod task;
 mod tick;
@@ -162,6 +166,23 @@ impl<'a, 'd> Builder<'a, 'd> {
         .unwrap_or_else(|| crate::genom::tree::boolean(false))
     }
 
+    /// Codel `k` (counted from 0) of the task runs: it has started and not finished, and
+    /// its task holds a core (on a preemptive CPU a started codel may wait, its task
+    /// preempted).
+    fn codel_runs(&self, t: &Timed, task: &TimedTaskRef, k: usize) -> Expr {
+        let started = binary(
+            BinOp::Eq,
+            self.task_var(task, RUNNING_CODEL),
+            int(k as i64 + 1),
+        );
+        match self.preemption(t, task) {
+            crate::syntax::Preemption::Preemptive => {
+                and(started, self.stage_is(task, STAGE_RUNNING))
+            }
+            _ => started,
+        }
+    }
+
     /// The codel that holds the task's core has run its WCET: it must finish before time
     /// passes. `None` if that can never be.
     fn at_wcet(&self, task: &TimedTaskRef) -> Option<Expr> {
@@ -195,6 +216,24 @@ impl<'a, 'd> Builder<'a, 'd> {
 }
 
 impl<'a, 'd> Builder<'a, 'd> {
+    /// In a timed model, activity `r` is starting: its `start` codel has started on its
+    /// task's core and not finished (the activity is still at `ether` until it does).
+    /// `None` in an untimed model, where a codel is an instant.
+    pub(in super::super) fn activity_starting(&self, r: ServiceRef) -> Option<Expr> {
+        let t = self.timed?;
+        let tasks = self.timed_task_list(t);
+        tasks.iter().find_map(|task| {
+            let k = task.codels.iter().position(|c| {
+                c.activity == r && self.service(r).codels[c.codel].state == "start"
+            })?;
+            Some(binary(
+                BinOp::Eq,
+                self.task_var(task, RUNNING_CODEL),
+                int(k as i64 + 1),
+            ))
+        })
+    }
+
     /// The time since the release of the task's job, in units: `late · period + (n −
     /// delay) mod period`, derived from the clock (a boundary that passed while the job
     /// ran counts one period, and so does the instant's boundary while its release is

@@ -5,6 +5,7 @@
 //! whenever no codel runs), and `late` (a period boundary passed while its job was
 //! unfinished). Nothing else is stored: which cores are busy is read from the stages.
 
+use super::preempt::preemption_ports;
 use super::{Builder, TimedTaskRef};
 use crate::expr::{Assign, BinOp, Expr};
 use crate::genom::names::*;
@@ -25,14 +26,20 @@ impl<'a, 'd> Builder<'a, 'd> {
     pub(in super::super) fn timed_tasks(&mut self, t: &Timed) {
         let tasks = self.timed_task_list(t);
         for task in &tasks {
-            self.task_atom(task);
+            self.task_atom(t, task);
             self.dispatch(t, task, &tasks);
             self.job_done(task);
-            self.codels(task, &tasks);
+            self.codels(t, task, &tasks);
+            self.preemptions(t, task, &tasks);
         }
     }
 
-    fn task_atom(&mut self, task: &TimedTaskRef) {
+    fn task_atom(&mut self, t: &Timed, task: &TimedTaskRef) {
+        let ports: Vec<&str> = TASK_PORTS
+            .iter()
+            .chain(preemption_ports(self.preemption(t, task)))
+            .copied()
+            .collect();
         let m = &self.layer.modules[task.module];
         let (name, _) = m.tasks[task.task];
         let span = m.def.tasks[task.task].name.span;
@@ -47,14 +54,14 @@ impl<'a, 'd> Builder<'a, 'd> {
         let atom = AtomDef {
             locations: vec![text("on")],
             initial: text("on"),
-            ports: TASK_PORTS.iter().map(|p| text(*p)).collect(),
+            ports: ports.iter().map(|p| text(*p)).collect(),
             vars: vec![
                 int_var(STAGE, STAGE_RUNNING as u64),
                 int_var(RUNNING_CODEL, task.codels.len() as u64),
                 int_var(ELAPSED, max_wcet),
                 var(LATE, TypeDef::Bool, Some(0)),
             ],
-            transitions: TASK_PORTS
+            transitions: ports
                 .iter()
                 .map(|p| tr("on", p, "on", None, Vec::new()))
                 .collect(),
@@ -68,7 +75,12 @@ impl<'a, 'd> Builder<'a, 'd> {
 
     /// A core the task may take is free: its pinned core runs no other task, or fewer
     /// than its CPU's cores run its CPU's tasks. `None`: always.
-    fn core_free(&self, t: &Timed, task: &TimedTaskRef, tasks: &[TimedTaskRef]) -> Option<Expr> {
+    pub(super) fn core_free(
+        &self,
+        t: &Timed,
+        task: &TimedTaskRef,
+        tasks: &[TimedTaskRef],
+    ) -> Option<Expr> {
         let cpu = task.times.cpu;
         let rivals = tasks.iter().filter(|u| {
             u.times.cpu == cpu
@@ -104,25 +116,8 @@ impl<'a, 'd> Builder<'a, 'd> {
         if let Some(free) = self.core_free(t, task, tasks) {
             guard = and(guard, free);
         }
-        if t.edf.get(task.times.cpu as usize).copied().unwrap_or(false) {
-            let mine = self.time_left(task);
-            let me = (task.module, task.task);
-            for other in tasks {
-                let them = (other.module, other.task);
-                if them == me
-                    || other.times.cpu != task.times.cpu
-                    || other.times.core != task.times.core
-                {
-                    continue;
-                }
-                let theirs = self.time_left(other);
-                let before = match them < me {
-                    true => binary(BinOp::Le, theirs, mine.clone()),
-                    false => binary(BinOp::Lt, theirs, mine.clone()),
-                };
-                let first = and(self.stage_is(other, STAGE_READY), before);
-                guard = and(guard, not(first));
-            }
+        for first in self.first_ready(t, task, tasks) {
+            guard = and(guard, first);
         }
         let action = vec![assign(member(&comp, STAGE), int(STAGE_RUNNING))];
         let m = &self.layer.modules[task.module];
@@ -141,7 +136,7 @@ impl<'a, 'd> Builder<'a, 'd> {
     }
 
     /// The units left until the deadline of the task's job.
-    fn time_left(&self, task: &TimedTaskRef) -> Expr {
+    pub(super) fn time_left(&self, task: &TimedTaskRef) -> Expr {
         let deadline = int(task.times.deadline as i64);
         binary(BinOp::Sub, deadline, self.job_elapsed(task))
     }

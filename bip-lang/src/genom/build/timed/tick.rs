@@ -19,7 +19,7 @@ use crate::expr::{Assign, BinOp, Expr};
 use crate::genom::names::*;
 use crate::genom::timed::Timed;
 use crate::genom::tree::{and, assign, binary, boolean, chain, cond, int, member, name, not, or};
-use crate::syntax::{ExprDef, Role};
+use crate::syntax::{ExprDef, Preemption, Role};
 
 use super::super::{connector, port};
 
@@ -59,13 +59,14 @@ impl<'a, 'd> Builder<'a, 'd> {
             ports.push(port(&comp, "tick"));
             let codel = member(&comp, RUNNING_CODEL);
             let elapsed = member(&comp, ELAPSED);
+            let mut grown = binary(BinOp::Add, elapsed.clone(), units.clone());
+            // a preempted codel waits
+            if self.preemption(t, task) == Preemption::Preemptive {
+                grown = cond(self.stage_is(task, STAGE_RUNNING), grown, elapsed.clone());
+            }
             action.push(assign(
                 elapsed.clone(),
-                cond(
-                    binary(BinOp::Eq, codel, int(0)),
-                    int(0),
-                    binary(BinOp::Add, elapsed, units.clone()),
-                ),
+                cond(binary(BinOp::Eq, codel, int(0)), int(0), grown),
             ));
         }
         // the phase, once incremented, is the new instant's number modulo the cycle
