@@ -298,8 +298,9 @@ fn exact_text(r: &Row) -> String {
         Err(Some(us)) => format!("≥ {}", show(us)),
         Err(None) => "-".into(),
     };
-    match r.misses {
-        Some(true) => format!("{figure} misses"),
+    match (r.misses, r.exact) {
+        (Some(true), Err(None)) => "misses".into(),
+        (Some(true), _) => format!("{figure} misses"),
         _ => figure,
     }
 }
