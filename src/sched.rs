@@ -65,7 +65,7 @@ pub struct Args {
     /// Also explore the model as a timed model (its codels hold its cores for their
     /// durations): each task's exact worst response beside the analysis', and whether a
     /// deadline is missed, which decides the exit code.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "demand")]
     pub exact: bool,
     /// With `--exact`: save each task's worst-case run and each deadline miss as a RON
     /// trace file in DIR, with its sequence chart and schedule.

@@ -41,12 +41,6 @@ fn not_applicable(cpu: &CpuDef, tasks_on_it: usize) -> Option<&'static str> {
     None
 }
 
-/// What the exploration says of one task.
-struct Explored<'r> {
-    worst: Option<&'r PropertyResult>,
-    deadline: Option<&'r PropertyResult>,
-}
-
 /// One task's row.
 struct Row {
     name: String,
@@ -207,17 +201,16 @@ fn rows(sched: &Schedulability, cpu_defs: &[CpuDef], report: &Report) -> Vec<Row
                     .as_ref()
                     .map_or(ResponseTime::Unbounded, |a| a.tasks[i].response)),
             };
-            let explored = Explored {
-                worst: report.properties.iter().find(|p| {
-                    p.kind == CheckKind::WorstResponse
-                        && p.name == format!("{} worst response", t.name)
-                }),
-                deadline: report
-                    .properties
-                    .iter()
-                    .find(|p| is_deadline_of(p, &t.name)),
-            };
-            let (exact, why) = match explored.worst {
+            let worst_name = format!("{} worst response", t.name);
+            let worst = report
+                .properties
+                .iter()
+                .find(|p| p.kind == CheckKind::WorstResponse && p.name == worst_name);
+            let deadline = report
+                .properties
+                .iter()
+                .find(|p| is_deadline_of(p, &t.name));
+            let (exact, why) = match worst {
                 Some(p) => match &p.verdict {
                     PropertyVerdict::Holds { .. } => (p.worst_us.ok_or(None), p.note.clone()),
                     PropertyVerdict::Inconclusive { reason } => {
@@ -227,7 +220,7 @@ fn rows(sched: &Schedulability, cpu_defs: &[CpuDef], report: &Report) -> Vec<Row
                 },
                 None => (Err(None), Some("the task runs no codel".into())),
             };
-            let misses = explored.deadline.and_then(|d| match &d.verdict {
+            let misses = deadline.and_then(|d| match &d.verdict {
                 PropertyVerdict::Holds { .. } => Some(false),
                 PropertyVerdict::Fails { .. } => Some(true),
                 PropertyVerdict::Inconclusive { .. } => None,
