@@ -92,8 +92,9 @@ enum Command {
     Simulate(simulate::Args),
     /// Whether the GenoM layer's tasks meet their deadlines, from the codels' WCETs:
     /// each task's work per period, its worst response time by exact response-time
-    /// analysis, per CPU. Exit code 0: schedulable, 1: a task misses its deadline, 2: model
-    /// or usage error (or no WCETs).
+    /// analysis, per CPU; with `--exact`, also by exploring the model as a timed model.
+    /// Exit code 0: schedulable, 1: a task misses its deadline, 2: model or usage error
+    /// (or no WCETs), 3: `--exact` stopped by a limit before deciding.
     Sched(sched::Args),
     /// Re-execute a trace (a counterexample, a witness, a recording) through the engine,
     /// step by step, and show where the property fails. Exit code 0: a recording replayed,

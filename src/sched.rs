@@ -1,6 +1,9 @@
 //! `bip sched FILE`: whether the model's tasks meet their deadlines, from the codels'
 //! WCETs and the atoms that stand for tasks: each task's demand per period, its worst
-//! response by exact response-time analysis, per CPU; the schedule as a picture.
+//! response by exact response-time analysis, per CPU; the schedule as a picture. With
+//! `--exact` (`exact`), the model explored as a timed model beside the analysis.
+
+mod exact;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -55,15 +58,28 @@ pub struct Args {
     /// Exact demand: use the bound before using more memory than SIZE.
     #[arg(long, value_name = "SIZE", value_parser = parse_memory)]
     pub max_memory: Option<u64>,
-    /// Exact demand: use the bound after SECS seconds of exploration.
+    /// Exact demand: use the bound after SECS seconds of exploration (with `--exact`:
+    /// stop exploring, inconclusive).
     #[arg(long, value_name = "SECS", value_parser = parse_seconds)]
     pub timeout: Option<Duration>,
+    /// Also explore the model as a timed model (its codels hold its cores for their
+    /// durations): each task's exact worst response beside the analysis', and whether a
+    /// deadline is missed, which decides the exit code.
+    #[arg(long, conflicts_with = "demand")]
+    pub exact: bool,
+    /// With `--exact`: save each task's worst-case run and each deadline miss as a RON
+    /// trace file in DIR, with its sequence chart and schedule.
+    #[arg(long, value_name = "DIR", requires = "exact")]
+    pub trace_dir: Option<PathBuf>,
 }
 
 /// Jobs the picture may draw.
 const MAX_DRAWN_JOBS: u64 = 20_000;
 
 pub fn run(args: &Args) -> u8 {
+    if args.exact {
+        return exact::run(args);
+    }
     memory_guard::guard(args.max_memory, "loading the model", exit::ERROR);
     let Some(system) = load::system(&args.file) else {
         return exit::ERROR;
@@ -71,7 +87,7 @@ pub fn run(args: &Args) -> u8 {
     memory_guard::release();
     if bip_verifier::is_timed(&system) {
         eprintln!(
-            "error: {}: a timed model (`time: Exact`) is not supported by `bip sched` yet: its response-time analysis assumes preemptive single-core CPUs; `bip verify` decides its deadlines by exploration",
+            "error: {}: a timed model (`time: Exact`): the response-time analysis assumes preemptive single-core CPUs; `bip sched --exact` explores it, beside the analysis where it applies",
             args.file.display()
         );
         return exit::ERROR;
@@ -83,11 +99,7 @@ pub fn run(args: &Args) -> u8 {
         interrupt: Some(crate::interrupt::stop_flag()),
         ..Options::default()
     };
-    let assignment = match args.assign {
-        AssignArg::Given => Assignment::Given,
-        AssignArg::Rm => Assignment::RateMonotonic,
-        AssignArg::Dm => Assignment::DeadlineMonotonic,
-    };
+    let assignment = assignment(args.assign);
     let choice = match args.demand {
         DemandArg::Exact => DemandChoice::Exact,
         DemandArg::Bound => DemandChoice::Bound,
@@ -124,6 +136,14 @@ pub fn run(args: &Args) -> u8 {
         exit::OK
     } else {
         exit::FAILED
+    }
+}
+
+fn assignment(arg: AssignArg) -> Assignment {
+    match arg {
+        AssignArg::Given => Assignment::Given,
+        AssignArg::Rm => Assignment::RateMonotonic,
+        AssignArg::Dm => Assignment::DeadlineMonotonic,
     }
 }
 
@@ -175,30 +195,7 @@ fn text(title: &str, sched: &Schedulability, assignment: Assignment) -> String {
     let header = [
         "task", "period", "demand", "priority", "rank", "response", "deadline", "slack",
     ];
-    let widths: Vec<usize> = (0..header.len())
-        .map(|c| {
-            rows.iter()
-                .map(|r| r[c].chars().count())
-                .chain([header[c].len()])
-                .max()
-                .unwrap_or(0)
-        })
-        .collect();
-    let line = |cells: &[String]| {
-        let mut l = String::from("    ");
-        for (c, cell) in cells.iter().enumerate() {
-            let pad = widths[c].saturating_sub(cell.chars().count());
-            if c == 0 {
-                l.push_str(cell);
-                l.push_str(&" ".repeat(pad + 2));
-            } else {
-                l.push_str(&" ".repeat(pad));
-                l.push_str(cell);
-                l.push_str("  ");
-            }
-        }
-        l.trim_end().to_string()
-    };
+    let line = table_line(&header, &rows);
     for (cpu, name) in sched.cpus.iter().enumerate() {
         let on_cpu: Vec<usize> = (0..set.tasks.len())
             .filter(|&i| set.tasks[i].cpu == cpu)
@@ -261,6 +258,35 @@ fn text(title: &str, sched: &Schedulability, assignment: Assignment) -> String {
     }
     let _ = writeln!(out, "result: {}", sched.verdict());
     out
+}
+
+/// A table's line maker: the first column left-aligned, the others right-aligned, each
+/// as wide as its widest cell or header.
+fn table_line(header: &[&str], rows: &[Vec<String>]) -> impl Fn(&[String]) -> String {
+    let widths: Vec<usize> = (0..header.len())
+        .map(|c| {
+            rows.iter()
+                .map(|r| r[c].chars().count())
+                .chain([header[c].len()])
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    move |cells: &[String]| {
+        let mut l = String::from("    ");
+        for (c, cell) in cells.iter().enumerate() {
+            let pad = widths[c].saturating_sub(cell.chars().count());
+            if c == 0 {
+                l.push_str(cell);
+                l.push_str(&" ".repeat(pad + 2));
+            } else {
+                l.push_str(&" ".repeat(pad));
+                l.push_str(cell);
+                l.push_str("  ");
+            }
+        }
+        l.trim_end().to_string()
+    }
 }
 
 /// Priorities as numbers for the analysed order: per CPU, the most urgent gets the

@@ -311,7 +311,7 @@ fn write_outputs(args: &Args, system: &System, report: &Report) -> Result<(), St
 
 /// Writes `<file name>.trace.ron` for each property with a trace, adding each to `saved`
 /// as it goes (the property's name and the path).
-fn save_traces(
+pub(crate) fn save_traces(
     dir: &Path,
     report: &Report,
     saved: &mut Vec<(String, PathBuf)>,

@@ -108,6 +108,10 @@ pub struct PropertyResult {
     /// `component.internal`), the one after the trace's last.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error_step: Option<String>,
+    /// For a worst response time: the figure in microseconds, exact when the verdict
+    /// holds, a lower bound when it is inconclusive.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub worst_us: Option<u64>,
 }
 
 /// Why a run ended before it had looked at every reachable state.
@@ -275,6 +279,7 @@ mod tests {
             method: Method::Explicit,
             note: None,
             error_step: None,
+            worst_us: None,
         }
     }
 

@@ -200,20 +200,13 @@ impl Explorer<'_> {
                 method: Method::Explicit,
                 note,
                 error_step,
+                worst_us: None,
             });
         }
-        // a timed model's worst responses, given only when every state was seen and no
-        // deadline is missed
-        let deadlines_hold = properties
-            .iter()
-            .filter(|p| p.kind == CheckKind::Invariant)
-            .all(|p| !p.verdict.fails());
-        properties.extend(worst_responses(
-            self.system,
-            &self.visited,
-            complete,
-            deadlines_hold,
-        )?);
+        // a timed model's worst responses: exact when every state was seen, else the
+        // most the stored states show (none once the user interrupted the run)
+        let look = !matches!(run_stopped, Some(Stop::Interrupted));
+        properties.extend(worst_responses(self.system, &self.visited, complete, look)?);
         tracing::info!(
             states,
             transitions = self.transitions,

@@ -4,8 +4,13 @@
 //! such state in exploration order, then the job end. The elapsed time is derived from
 //! the state as the expansion defines it (`late · period + (n − delay) mod period`, plus
 //! a period while the instant's boundary is due, in time units, docs/genom.md, "Timed
-//! models"); it is exact while no deadline is missed,
-//! so the figures are given only when every deadline holds.
+//! models"). `late` is one bit: the boundaries that pass while a job is active count as
+//! one, so the elapsed time is exact as long as no job of the task is still active when
+//! a second boundary is released (the release a step in a state where the task's job is
+//! active, late, and its boundary due). Misses of deadlines do not matter: a job that
+//! ends within two periods has its exact figure. A task whose job can run past a second
+//! release gets a lower bound, two periods, never a figure that could be too small; so
+//! does every task of an exploration that stopped early, with the most it saw.
 
 use bip_model::{Label, OwnedStep, State, Steps, System, Verdict as TraceVerdict};
 use bip_sched::show_micros;
@@ -16,12 +21,16 @@ use crate::visited::{StateId, Visited};
 
 use super::trace::trace_to;
 
+/// The expansion's release of the instant's period boundaries.
+const RELEASE: &str = "release";
+
 /// What the worst response of a task reads from a state.
 struct TaskClock {
     /// `m.t`.
     name: String,
     done: u32,
     task: u32,
+    stage: u32,
     late: u32,
     period: i64,
     delay: i64,
@@ -47,13 +56,16 @@ fn task_clocks(system: &System) -> Vec<TaskClock> {
             ) else {
                 continue;
             };
-            let Some(late) = system.atom_of(task).var_index("late") else {
+            let atom = system.atom_of(task);
+            let (Some(stage), Some(late)) = (atom.var_index("stage"), atom.var_index("late"))
+            else {
                 continue;
             };
             out.push(TaskClock {
                 name: format!("{}.{}", m.name, t.name),
                 done,
                 task,
+                stage,
                 late,
                 period: units(period),
                 delay: units(t.delay),
@@ -74,14 +86,24 @@ fn clock(system: &System, s: &State) -> (i64, bool) {
     (read("n"), read("due") != 0)
 }
 
+/// What the states show of one task.
+#[derive(Default)]
+struct Seen {
+    /// The largest elapsed time at a job end, in the first state (in exploration order)
+    /// that shows it, with the job end.
+    worst: Option<(i64, StateId, OwnedStep)>,
+    /// A release of the task's boundary can come while its job, already late, is active.
+    coalesced: bool,
+}
+
 /// Each task's worst response, in the order of the model's tasks; nothing for a model
-/// that is not timed. `complete`: every reachable state was explored; `deadlines_hold`:
-/// no invariant (the generated deadlines among them) fails.
+/// that is not timed. `complete`: every reachable state was explored; `look`: read the
+/// states stored (false when the user interrupted the run: no figure is given then).
 pub(super) fn worst_responses(
     system: &System,
     visited: &Visited,
     complete: bool,
-    deadlines_hold: bool,
+    look: bool,
 ) -> Result<Vec<PropertyResult>, VerifyError> {
     let tasks = task_clocks(system);
     if tasks.is_empty() {
@@ -92,7 +114,8 @@ pub(super) fn worst_responses(
         .as_ref()
         .and_then(|g| g.time_unit_us)
         .unwrap_or(1);
-    let result = |t: &TaskClock, verdict, note| PropertyResult {
+    let micros = |units: i64| units.max(0) as u64 * unit_us;
+    let result = |t: &TaskClock, verdict, note, worst_us| PropertyResult {
         name: format!("{} worst response", t.name),
         kind: CheckKind::WorstResponse,
         expr: String::new(),
@@ -100,63 +123,60 @@ pub(super) fn worst_responses(
         method: Method::Explicit,
         note,
         error_step: None,
+        worst_us,
     };
-    let why_not = if !complete {
-        Some("not given: the exploration stopped before every state was seen")
-    } else if !deadlines_hold {
-        Some("not given: an invariant fails (a deadline is missed, or another), and past a miss a job's elapsed time is not tracked exactly")
+    let seen = if look {
+        read_states(system, visited, &tasks)?
     } else {
-        None
+        tasks.iter().map(|_| Seen::default()).collect()
     };
-    if let Some(why) = why_not {
-        return Ok(tasks
-            .iter()
-            .map(|t| {
-                let reason = why.to_string();
-                result(t, PropertyVerdict::Inconclusive { reason }, None)
-            })
-            .collect());
-    }
-    // per task, the largest elapsed time at a job end, in the first state (in exploration
-    // order) that shows it
-    let mut best: Vec<Option<(i64, StateId, OwnedStep)>> = tasks.iter().map(|_| None).collect();
-    let layout = &system.layout;
-    let mut steps = Steps::new();
-    for level in 0..visited.levels() {
-        for chunk in visited.chunks(level, u32::MAX) {
-            for local in chunk.start..chunk.end {
-                let id = visited.id(chunk.shard, local);
-                let state = layout.unpack(visited.state(id));
-                system.enabled_steps(&state, &mut steps).map_err(|e| {
-                    VerifyError::Internal(format!("a reachable state has a range error: {e}"))
-                })?;
-                let (n, due) = clock(system, &state);
-                for (t, best) in tasks.iter().zip(&mut best) {
-                    let Some(step) = steps.iter().find(|s| s.label == Label::Interaction(t.done))
-                    else {
-                        continue;
-                    };
-                    let since = (n - t.delay).rem_euclid(t.period);
-                    let due_here = i64::from(due && since == 0);
-                    let elapsed =
-                        (system.value(&state, t.task, t.late) + due_here) * t.period + since;
-                    if best.as_ref().is_none_or(|b| elapsed > b.0) {
-                        *best = Some((elapsed, id, step.to_owned()));
-                    }
-                }
-            }
-        }
-    }
     let mut out = Vec::with_capacity(tasks.len());
-    for (t, best) in tasks.iter().zip(best) {
-        out.push(match best {
-            None => result(
+    for (t, seen) in tasks.iter().zip(seen) {
+        let inconclusive = |reason: String, worst_us| {
+            result(t, PropertyVerdict::Inconclusive { reason }, None, worst_us)
+        };
+        out.push(match seen {
+            Seen {
+                coalesced: true, ..
+            } => {
+                let bound = micros(2 * t.period);
+                inconclusive(
+                    format!(
+                        "at least 2 periods ({}): its job runs past a second release, which the model coalesces",
+                        show_micros(bound)
+                    ),
+                    Some(bound),
+                )
+            }
+            _ if !look => inconclusive("not given: the run was interrupted".into(), None),
+            Seen { worst: None, .. } if !complete => inconclusive(
+                "not given: the exploration stopped before every state was seen, and no job of it ended in those it saw".into(),
+                None,
+            ),
+            Seen {
+                worst: Some((elapsed, _, _)),
+                ..
+            } if !complete => {
+                let us = micros(elapsed);
+                inconclusive(
+                    format!(
+                        "at least {}: the exploration stopped before every state was seen",
+                        show_micros(us)
+                    ),
+                    Some(us),
+                )
+            }
+            Seen { worst: None, .. } => result(
                 t,
                 PropertyVerdict::Holds { witness: None },
                 Some("no job of it ever ends".into()),
+                None,
             ),
-            Some((elapsed, id, step)) => {
-                let us = elapsed as u64 * unit_us;
+            Seen {
+                worst: Some((elapsed, id, step)),
+                ..
+            } => {
+                let us = micros(elapsed);
                 let trace = trace_to(
                     system,
                     visited,
@@ -170,9 +190,56 @@ pub(super) fn worst_responses(
                         witness: Some(trace),
                     },
                     Some(show_micros(us)),
+                    Some(us),
                 )
             }
         });
     }
     Ok(out)
+}
+
+/// Per task, what the stored states show: its largest elapsed time at a job end, and
+/// whether a second boundary can be released while its job is active.
+fn read_states(
+    system: &System,
+    visited: &Visited,
+    tasks: &[TaskClock],
+) -> Result<Vec<Seen>, VerifyError> {
+    let release = system.interaction_index(RELEASE);
+    let mut seen: Vec<Seen> = tasks.iter().map(|_| Seen::default()).collect();
+    let layout = &system.layout;
+    let mut steps = Steps::new();
+    for level in 0..visited.levels() {
+        for chunk in visited.chunks(level, u32::MAX) {
+            for local in chunk.start..chunk.end {
+                let id = visited.id(chunk.shard, local);
+                let state = layout.unpack(visited.state(id));
+                system.enabled_steps(&state, &mut steps).map_err(|e| {
+                    VerifyError::Internal(format!("a reachable state has a range error: {e}"))
+                })?;
+                let (n, due) = clock(system, &state);
+                let releases = due
+                    && release
+                        .is_some_and(|r| steps.iter().any(|s| s.label == Label::Interaction(r)));
+                for (t, seen) in tasks.iter().zip(&mut seen) {
+                    let since = (n - t.delay).rem_euclid(t.period);
+                    let boundary_due = due && since == 0;
+                    let late = system.value(&state, t.task, t.late);
+                    let active = system.value(&state, t.task, t.stage) != 0;
+                    if releases && boundary_due && active && late != 0 {
+                        seen.coalesced = true;
+                    }
+                    let Some(step) = steps.iter().find(|s| s.label == Label::Interaction(t.done))
+                    else {
+                        continue;
+                    };
+                    let elapsed = (late + i64::from(boundary_due)) * t.period + since;
+                    if seen.worst.as_ref().is_none_or(|b| elapsed > b.0) {
+                        seen.worst = Some((elapsed, id, step.to_owned()));
+                    }
+                }
+            }
+        }
+    }
+    Ok(seen)
 }

@@ -159,6 +159,7 @@ pub(crate) fn as_property(
         method,
         note: Some(note),
         error_step: None,
+        worst_us: None,
     };
     let failed = |e: SchedError| {
         result(

@@ -279,6 +279,7 @@ fn run(
             verdict: outcome.verdict,
             method: outcome.method,
             note: outcome.note,
+            worst_us: None,
         });
     }
     if let Some(outcome) = progress {
@@ -290,6 +291,7 @@ fn run(
             verdict: outcome.verdict,
             method: outcome.method,
             note: outcome.note,
+            worst_us: None,
         });
     }
     properties.push(PropertyResult {
@@ -300,6 +302,7 @@ fn run(
         verdict: range.verdict,
         method: range.method,
         note: range.note,
+        worst_us: None,
     });
     let seconds = started.elapsed().as_secs_f64();
     Report {
@@ -368,6 +371,7 @@ fn undecided(system: &System, why: &str, watch: &Watch) -> Report {
             method: Method::Symbolic,
             note: None,
             error_step: None,
+            worst_us: None,
         })
         .collect();
     if checks_time_progress(system) {
@@ -379,6 +383,7 @@ fn undecided(system: &System, why: &str, watch: &Watch) -> Report {
             method: Method::Symbolic,
             note: None,
             error_step: None,
+            worst_us: None,
         });
     }
     properties.push(PropertyResult {
@@ -389,6 +394,7 @@ fn undecided(system: &System, why: &str, watch: &Watch) -> Report {
         method: Method::Symbolic,
         note: None,
         error_step: None,
+        worst_us: None,
     });
     Report {
         model: system.name.clone(),

@@ -61,9 +61,13 @@ pub struct Projected {
 pub struct Verdict {
     /// No reachable state has a job past its deadline.
     pub schedulable: bool,
-    /// Per task, the largest elapsed time of a job when it is done, in units: given only
-    /// when the set is schedulable, and None for a task none of whose jobs ever ends.
+    /// Per task, the largest elapsed time of a job when it is done, in units, None for a
+    /// task none of whose jobs ever ends: its response time where it does not coalesce.
     pub worst_response: Vec<Option<u64>>,
+    /// Per task, whether a reachable state releases its boundary while its job, already
+    /// late, is ready or running: two late boundaries count as one, and its elapsed time
+    /// (so its worst response) falls a period short from then on.
+    pub coalesces: Vec<bool>,
     /// Per task, whether a reachable state has its job past its deadline.
     pub can_miss: Vec<bool>,
     /// The earliest time, in units from the start, at which a job can be past its
@@ -427,6 +431,7 @@ pub fn explore(set: &TaskSet) -> Verdict {
     let count = set.tasks.len();
     let mut worst: Vec<Option<u64>> = vec![None; count];
     let mut can_miss = vec![false; count];
+    let mut coalesces = vec![false; count];
     let mut earliest_miss: Option<u64> = None;
     // earliest time of each state; zero-time steps go to the front of the queue
     let mut time: HashMap<Projected, u64> = HashMap::new();
@@ -440,6 +445,11 @@ pub fn explore(set: &TaskSet) -> Verdict {
             if interp.misses(&s, t) {
                 *miss = true;
                 earliest_miss = Some(earliest_miss.map_or(now, |e| e.min(now)));
+            }
+        }
+        for (t, k) in s.tasks.iter().enumerate() {
+            if s.due && interp.boundary(s.n, t) && k.stage != Stage::Idle && k.late {
+                coalesces[t] = true;
             }
         }
         for succ in interp.successors(&s) {
@@ -458,14 +468,10 @@ pub fn explore(set: &TaskSet) -> Verdict {
             }
         }
     }
-    let schedulable = !can_miss.iter().any(|&m| m);
     Verdict {
-        schedulable,
-        worst_response: if schedulable {
-            worst
-        } else {
-            vec![None; count]
-        },
+        schedulable: !can_miss.iter().any(|&m| m),
+        worst_response: worst,
+        coalesces,
         can_miss,
         earliest_miss,
         states: time.into_keys().collect(),
