@@ -244,18 +244,23 @@ fn budgets(sim: &Simulation, codel_time: CodelTimeArg) -> String {
         count(stats.deadlines_missed, "period's work")
     );
     for e in &sim.budget_events {
-        let (m, s, k) = &e.codel;
-        let what = match e.kind {
-            BudgetEventKind::WcetExceeded { took_us, wcet_us } => {
-                format!("{m}.{s}.{k} took {}, its WCET is {}", show(took_us), show(wcet_us))
-            }
+        let codel = e.codel.as_ref().map(|(m, s, k)| format!("{m}.{s}.{k}"));
+        let what = match &e.kind {
+            BudgetEventKind::WcetExceeded { took_us, wcet_us } => format!(
+                "{} took {}, its WCET is {}",
+                codel.unwrap_or_default(),
+                show(*took_us),
+                show(*wcet_us)
+            ),
             BudgetEventKind::DeadlineMissed {
+                task,
                 elapsed_us,
                 deadline_us,
             } => format!(
-                "a period's work of the task of {m}.{s}.{k} was late: {} after its release, deadline {}",
-                show(elapsed_us),
-                show(deadline_us)
+                "task {task} was late: {} after its release, deadline {}{}",
+                show(*elapsed_us),
+                show(*deadline_us),
+                codel.map_or(String::new(), |c| format!(" ({c} ran last)"))
             ),
         };
         let _ = writeln!(out, "    at {}: {what}", show(e.at_us));

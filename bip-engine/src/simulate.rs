@@ -61,9 +61,9 @@ pub struct CodelReport {
 pub struct BudgetEvent {
     /// The engine's time when it was seen.
     pub at_us: u64,
-    /// `(module, service, codel state)` of the codel that ran (for a miss: the last one
-    /// of the late period's work).
-    pub codel: (String, String, String),
+    /// `(module, service, codel state)` of the codel that ran (for a miss: the one of
+    /// the late task that ran last, if any).
+    pub codel: Option<(String, String, String)>,
     pub kind: BudgetEventKind,
 }
 
@@ -80,10 +80,18 @@ pub struct LateResponse {
     pub ticket: Option<u64>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum BudgetEventKind {
-    WcetExceeded { took_us: u64, wcet_us: u64 },
-    DeadlineMissed { elapsed_us: u64, deadline_us: u64 },
+    WcetExceeded {
+        took_us: u64,
+        wcet_us: u64,
+    },
+    /// Task `task` (`module.task`) was late.
+    DeadlineMissed {
+        task: String,
+        elapsed_us: u64,
+        deadline_us: u64,
+    },
 }
 
 /// What a simulation reports to its caller while it runs.
@@ -316,14 +324,19 @@ fn keep_events(engine: &mut Engine, kept: &mut Vec<BudgetEvent>, late: &mut Vec<
                 codel,
                 took_us,
                 wcet_us,
-            } => (codel, BudgetEventKind::WcetExceeded { took_us, wcet_us }),
+            } => (
+                Some(codel),
+                BudgetEventKind::WcetExceeded { took_us, wcet_us },
+            ),
             Event::DeadlineMissed {
+                task,
                 codel,
                 elapsed_us,
                 deadline_us,
             } => (
                 codel,
                 BudgetEventKind::DeadlineMissed {
+                    task: task.to_string(),
                     elapsed_us,
                     deadline_us,
                 },
@@ -333,11 +346,7 @@ fn keep_events(engine: &mut Engine, kept: &mut Vec<BudgetEvent>, late: &mut Vec<
         if kept.len() < KEPT_BUDGET_EVENTS {
             kept.push(BudgetEvent {
                 at_us,
-                codel: (
-                    codel.module.clone(),
-                    codel.service.clone(),
-                    codel.state.clone(),
-                ),
+                codel: codel.map(|c| (c.module.clone(), c.service.clone(), c.state.clone())),
                 kind,
             });
         }

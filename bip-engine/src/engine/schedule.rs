@@ -80,6 +80,9 @@ impl Engine {
         if self.apart.live != 0 && self.return_apart()? {
             return Ok(Stepped::Other);
         }
+        if self.timed.is_some() {
+            return self.step_timed();
+        }
         // 1. a due tick
         if self.time.clock.now_us() >= self.time.next_tick_us {
             if let Some(i) = self.enabled_time() {
@@ -88,6 +91,15 @@ impl Engine {
             }
         }
         // 2. progress
+        if let Some(stepped) = self.progress()? {
+            return Ok(stepped);
+        }
+        self.quiescent()
+    }
+
+    /// One progress step chosen by the policy, if there is one.
+    #[inline(always)]
+    pub(super) fn progress(&mut self) -> Result<Option<Stepped>, EngineError> {
         self.collect_candidates();
         if !self.sched.candidates.is_empty() {
             let k = self.sched.chooser.choose(self.sched.candidates.len());
@@ -113,13 +125,25 @@ impl Engine {
                     let _ = c;
                     Err(EngineError::Stopped(self.internal_error()))
                 }
+                Candidate::TimedStart(c) => self.start_timed(c, false).map_err(|e| match e {
+                    StepAsError::Engine(e) => e,
+                    _ => EngineError::Stopped(self.internal_error()),
+                }),
                 Candidate::Step(label, k) => {
                     self.choose_kth(label, k);
                     self.commit(self.progress_cause(label))?;
                     Ok(Stepped::Other)
                 }
-            };
+            }
+            .map(Some);
         }
+        Ok(None)
+    }
+
+    /// Nothing to do before time passes: reports what is held, serves a request, or is
+    /// idle until the next tick.
+    #[inline(always)]
+    pub(super) fn quiescent(&mut self) -> Result<Stepped, EngineError> {
         // 3. quiescent: report what is held, serve a request
         if self.held.dirty {
             self.report_held()?;
@@ -130,7 +154,10 @@ impl Engine {
         }
         // 4. idle
         Ok(Stepped::Idle {
-            next_tick_us: self.enabled_time().map(|_| self.time.next_tick_us),
+            next_tick_us: match self.timed.is_some() {
+                false => self.enabled_time().map(|_| self.time.next_tick_us),
+                true => self.next_timed_tick()?.map(|(_, at)| at),
+            },
         })
     }
 
@@ -352,6 +379,7 @@ fn collect_progress(
                 }
             }
             InterKind::Start { codel } => out.push(Candidate::Start(codel)),
+            InterKind::TimedStart { codel } => out.push(Candidate::TimedStart(codel)),
             InterKind::Progress => {
                 let n = enabled.steps_of(i).count() as u32;
                 for k in 0..n {
@@ -359,6 +387,7 @@ fn collect_progress(
                 }
             }
             InterKind::Return { .. }
+            | InterKind::Dropped { .. }
             | InterKind::Request { .. }
             | InterKind::AtRequestFail { .. }
             | InterKind::Time
