@@ -15,7 +15,7 @@ use bip_engine::simulate::{
 };
 use bip_engine::{CodelTime, CODEL_TIME_BUCKETS};
 use bip_lang::trace_file::TraceWriter;
-use bip_model::Trace;
+use bip_model::{System, Trace};
 use bip_sched::show_micros as show;
 
 use crate::{exit, interrupt, load};
@@ -57,7 +57,7 @@ pub enum CodelTimeArg {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let Some(system) = load::system(&args.file) else {
+    let Some(system) = model(args) else {
         return exit::ERROR;
     };
     // the trace file is opened before the run, so that a bad path fails at once
@@ -189,6 +189,41 @@ pub fn run(args: &Args) -> u8 {
         }
     }
     code
+}
+
+/// The model to run; `None` once its diagnostic is printed. With `--codel-time wcet` or
+/// `random`, an untimed GenoM layer is loaded as a timed one (`time: Exact`, its CPUs as
+/// declared), so that its codels take their times in the model's own semantics
+/// (docs/engine.md, "Codel times"). A model with a preemptive CPU (a CPU written as its
+/// name alone is one) cannot be timed yet: its codel times run on the engine's simulated
+/// CPUs, scheduled as `bip sched` assumes.
+fn model(args: &Args) -> Option<System> {
+    if args.codel_time == CodelTimeArg::Zero {
+        return load::system(&args.file);
+    }
+    match bip_lang::load_file_timed(&args.file) {
+        Ok(timed) if timed.genom.is_some() => Some(timed),
+        Ok(_) => load::system(&args.file),
+        Err(e) => {
+            let system = load::system(&args.file)?;
+            if system.genom.is_none() || preemptive_cpu(&args.file) {
+                return Some(system);
+            }
+            crate::report::load_error(&e);
+            None
+        }
+    }
+}
+
+/// Whether the model in `file` declares a CPU that is not cooperative (`preemption: Job`).
+fn preemptive_cpu(file: &std::path::Path) -> bool {
+    let def = bip_lang::read_model_file(file)
+        .and_then(|text| bip_lang::parse_str(&file.display().to_string(), &text));
+    def.is_ok_and(|d| {
+        d.cpus
+            .iter()
+            .any(|c| c.preemption() != bip_lang::syntax::Preemption::Job)
+    })
 }
 
 /// The codels' run times, and the overruns and misses the run saw.
