@@ -26,6 +26,7 @@ mod memory_bounds;
 mod replay;
 mod response;
 mod sched;
+mod simulate_timed;
 mod time_progress;
 mod trace;
 mod verify;
