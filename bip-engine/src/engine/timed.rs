@@ -304,6 +304,13 @@ impl Engine {
         Ok(Stepped::Other)
     }
 
+    /// Whether codel `c` has started and not finished.
+    pub(super) fn is_running(&self, c: u32) -> bool {
+        let task = self.t.codels[c as usize].task;
+        let run = task.and_then(|k| self.timed.as_ref()?.tasks.get(k as usize)?.run.as_ref());
+        run.is_some_and(|r| r.codel == c)
+    }
+
     /// The run of codel `ck`, taken from its task.
     fn take_run(&mut self, ck: usize) -> Option<Run> {
         let c = ck as u32;
