@@ -56,7 +56,7 @@ impl Engine {
     /// and waits for you on either clock. `Idle { next_tick_us: None }`: nothing can
     /// happen until a request arrives (no time step is enabled).
     pub fn step(&mut self) -> Result<Stepped, EngineError> {
-        let stepped = self.step_once()?;
+        let stepped = self.step_any()?;
         if let Stepped::Idle {
             next_tick_us: Some(t),
         } = stepped
@@ -66,6 +66,18 @@ impl Engine {
             }
         }
         Ok(stepped)
+    }
+
+    /// One step, without moving a virtual clock when idle: in a timed model, first a
+    /// codel whose time has come or a due time step (`timed.rs`).
+    #[inline(always)]
+    fn step_any(&mut self) -> Result<Stepped, EngineError> {
+        if self.timed.is_some() {
+            if let Some(stepped) = self.step_timed()? {
+                return Ok(stepped);
+            }
+        }
+        self.step_once()
     }
 
     /// One step, without moving a virtual clock when idle.
@@ -80,9 +92,6 @@ impl Engine {
         if self.apart.live != 0 && self.return_apart()? {
             return Ok(Stepped::Other);
         }
-        if self.timed.is_some() {
-            return self.step_timed();
-        }
         // 1. a due tick
         if self.time.clock.now_us() >= self.time.next_tick_us {
             if let Some(i) = self.enabled_time() {
@@ -91,15 +100,6 @@ impl Engine {
             }
         }
         // 2. progress
-        if let Some(stepped) = self.progress()? {
-            return Ok(stepped);
-        }
-        self.quiescent()
-    }
-
-    /// One progress step chosen by the policy, if there is one.
-    #[inline(always)]
-    pub(super) fn progress(&mut self) -> Result<Option<Stepped>, EngineError> {
         self.collect_candidates();
         if !self.sched.candidates.is_empty() {
             let k = self.sched.chooser.choose(self.sched.candidates.len());
@@ -119,31 +119,23 @@ impl Engine {
                     StepAsError::Engine(e) => e,
                     _ => EngineError::Stopped(self.internal_error()),
                 }),
+                Candidate::TimedStart(c) => self.start_timed(c, false).map_err(|e| match e {
+                    StepAsError::Engine(e) => e,
+                    _ => EngineError::Stopped(self.internal_error()),
+                }),
                 #[cfg(not(feature = "std"))]
                 // (without `std` no model with an async codel is built)
                 Candidate::Start(c) | Candidate::Outcome(c) => {
                     let _ = c;
                     Err(EngineError::Stopped(self.internal_error()))
                 }
-                Candidate::TimedStart(c) => self.start_timed(c, false).map_err(|e| match e {
-                    StepAsError::Engine(e) => e,
-                    _ => EngineError::Stopped(self.internal_error()),
-                }),
                 Candidate::Step(label, k) => {
                     self.choose_kth(label, k);
                     self.commit(self.progress_cause(label))?;
                     Ok(Stepped::Other)
                 }
-            }
-            .map(Some);
+            };
         }
-        Ok(None)
-    }
-
-    /// Nothing to do before time passes: reports what is held, serves a request, or is
-    /// idle until the next tick.
-    #[inline(always)]
-    pub(super) fn quiescent(&mut self) -> Result<Stepped, EngineError> {
         // 3. quiescent: report what is held, serve a request
         if self.held.dirty {
             self.report_held()?;
@@ -154,10 +146,7 @@ impl Engine {
         }
         // 4. idle
         Ok(Stepped::Idle {
-            next_tick_us: match self.timed.is_some() {
-                false => self.enabled_time().map(|_| self.time.next_tick_us),
-                true => self.next_timed_tick()?.map(|(_, at)| at),
-            },
+            next_tick_us: self.enabled_time().map(|_| self.time.next_tick_us),
         })
     }
 
@@ -174,7 +163,7 @@ impl Engine {
                 Until::TimeUs(t) if self.time.clock.now_us() >= t => return Ok(()),
                 _ => {}
             }
-            if let Stepped::Idle { next_tick_us } = self.step_once()? {
+            if let Stepped::Idle { next_tick_us } = self.step_any()? {
                 if until == Until::Quiescent {
                     return Ok(());
                 }
@@ -240,6 +229,9 @@ impl Engine {
     }
 
     pub(super) fn fire_time(&mut self, i: u32) -> Result<(), EngineError> {
+        if self.timed.is_some() {
+            return self.fire_timed_tick(i, false);
+        }
         self.take_step_of(i);
         self.commit(Cause::Other)?;
         self.count_tick();

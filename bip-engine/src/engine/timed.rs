@@ -97,39 +97,41 @@ impl Timed {
 }
 
 impl Engine {
-    /// One step of a timed model: a codel whose time has come finishes; else a due time
-    /// step; else a zero-time step chosen by the policy (a dispatch, a codel's start, a
-    /// job's end, a release, a step of yours); else as an untimed model when quiescent.
+    /// What comes first in a timed model's step: a codel whose time has come finishes,
+    /// else a time step that is due. Otherwise (`None`) the step goes on as an untimed
+    /// model's, a zero-time step chosen by the policy (a dispatch, a codel's start, a
+    /// job's end, a release, a step of yours) or a request, with the time step's time as
+    /// the next tick's.
     #[inline(never)]
-    pub(super) fn step_timed(&mut self) -> Result<Stepped, EngineError> {
-        let engine = |e: StepAsError| match e {
-            StepAsError::Engine(e) => e,
-            _ => EngineError::Stopped(bip_model::RangeError {
-                context: "the engine (please report)".into(),
-                kind: bip_model::RangeErrorKind::Overflow,
-            }),
-        };
+    pub(super) fn step_timed(&mut self) -> Result<Option<Stepped>, EngineError> {
+        if let Some(e) = &self.stopped {
+            return Err(EngineError::Stopped(e.clone()));
+        }
         if let Some((codel, dropped)) = self.due_finish() {
-            return match dropped {
+            let finished = match dropped {
                 false => self.finish_timed(codel, false),
                 true => self.drop_timed(codel, false),
-            }
-            .map_err(engine);
+            };
+            // without a forced step a finish never diverges or is refused
+            return finished.map(Some).map_err(|e| match e {
+                StepAsError::Engine(e) => e,
+                _ => EngineError::Stopped(self.internal_error()),
+            });
         }
-        if let Some((i, at)) = self.next_timed_tick()? {
-            if self.time.clock.now_us() >= at {
+        let next = self.next_timed_tick()?;
+        self.time.next_tick_us = next.map_or(u64::MAX, |(_, at)| at);
+        match next {
+            Some((i, at)) if self.time.clock.now_us() >= at => {
                 self.fire_timed_tick(i, false)?;
-                return Ok(Stepped::Tick);
+                Ok(Some(Stepped::Tick))
             }
+            _ => Ok(None),
         }
-        if let Some(stepped) = self.progress()? {
-            return Ok(stepped);
-        }
-        self.quiescent()
     }
 
     /// The enabled time step and the clock's time at which it is due: the model's time
     /// plus the units it stands for.
+    #[inline(never)]
     pub(super) fn next_timed_tick(&mut self) -> Result<Option<(u32, u64)>, EngineError> {
         let Some(i) = self.enabled_time() else {
             return Ok(None);
@@ -160,6 +162,7 @@ impl Engine {
 
     /// Commits the time step of interaction `i` (chosen, or forced) and moves the
     /// model's time by the units it stands for.
+    #[inline(never)]
     pub(super) fn fire_timed_tick(&mut self, i: u32, forced: bool) -> Result<(), EngineError> {
         let units = self.advance_of(i)?;
         if !forced {
@@ -204,6 +207,7 @@ impl Engine {
     /// Commits codel `c`'s start (the step chosen, or forced), then runs its body: a
     /// bound codel now, for the time its clock measures; a default codel's outcome is
     /// drawn at its finish, its time now.
+    #[inline(never)]
     pub(super) fn start_timed(&mut self, c: u32, forced: bool) -> Result<Stepped, StepAsError> {
         let ck = c as usize;
         if !forced {
@@ -262,6 +266,7 @@ impl Engine {
 
     /// Commits the finish of codel `c`: the end its body returned at its start (a default
     /// codel's drawn now, or the forced step's).
+    #[inline(never)]
     pub(super) fn finish_timed(&mut self, c: u32, forced: bool) -> Result<Stepped, StepAsError> {
         let ck = c as usize;
         let run = self.take_run(ck);
@@ -287,6 +292,7 @@ impl Engine {
 
     /// Commits the finish of codel `c` whose activity left it while it ran: it frees the
     /// core, its outcome dropped; its run is counted.
+    #[inline(never)]
     pub(super) fn drop_timed(&mut self, c: u32, forced: bool) -> Result<Stepped, StepAsError> {
         let ck = c as usize;
         if !forced {
@@ -305,6 +311,7 @@ impl Engine {
     }
 
     /// Whether codel `c` has started and not finished.
+    #[inline(never)]
     pub(super) fn is_running(&self, c: u32) -> bool {
         let task = self.t.codels[c as usize].task;
         let run = task.and_then(|k| self.timed.as_ref()?.tasks.get(k as usize)?.run.as_ref());
