@@ -3,10 +3,11 @@
 //! every invariant (and deadlock freedom, if the model asks for it) after every step
 //! (docs/engine.md, "`bip simulate` and `bip replay`"). A run is the same for a seed.
 //!
-//! Codels may take a simulated time on the virtual clock ([`CodelTime`]: their WCETs, or
-//! random times up to them), run on CPUs scheduled as `bip sched` assumes: a run then
-//! shows the deadline misses the analysis predicts when its worst case happens. A run
-//! reports each codel's times and the first overruns and misses it saw.
+//! In a timed model, [`CodelTime`] chooses when each codel finishes (its BCET, its WCET,
+//! or in between), and a deadline invariant that fails ends the run; an untimed model's
+//! codels may take a simulated time on CPUs scheduled as `bip sched` assumes
+//! (docs/engine.md, "Codel times"). A run reports each codel's times and the first
+//! overruns and misses it saw.
 //!
 //! A run of any length takes constant memory: the engine records only the last steps (a
 //! window, for the report of a failure), and [`Hooks::on_steps`] receives the run in
@@ -40,7 +41,8 @@ pub struct SimulationOptions {
     pub steps: u64,
     /// Seed of the random requests, codel outcomes and choices.
     pub seed: u64,
-    /// How long codels take on the virtual clock (default: no time).
+    /// When codels finish in a timed model, how long they take on simulated CPUs in an
+    /// untimed one (default: as early as the model allows, no time).
     pub codel_time: CodelTime,
 }
 

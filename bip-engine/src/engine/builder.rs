@@ -83,10 +83,11 @@ impl EngineBuilder {
         self
     }
 
-    /// How long unbound codels take on the engine's clock (default: no time). With a
-    /// simulated time, the tasks' work runs on CPUs scheduled as `bip sched` assumes, and
-    /// a deadline is judged when the work ends there (docs/engine.md, "Simulated codel
-    /// times").
+    /// How long unbound codels take (default: as early as the model allows). In a timed
+    /// model, when each finishes after its start: at its BCET, its WCET, or in between
+    /// (docs/engine.md, "Codel times"). In an untimed one, with a simulated time, the
+    /// tasks' work runs on CPUs scheduled as `bip sched` assumes, and a deadline is judged
+    /// when the work ends there.
     pub fn codel_time(mut self, t: CodelTime) -> Self {
         self.codel_time = t;
         self
