@@ -115,6 +115,18 @@ fn the_engine_misses_a_deadline_where_the_verifier_finds_one() {
         text.contains("task m.t was late: 3 ms after its release, deadline 2 ms"),
         "{text}"
     );
+    // the verifier's shortest run to the miss replays through the engine to it
+    let traces = dir.path().join("traces");
+    let traces = traces.to_str().expect("utf-8");
+    bip(&["verify", &late, "-q", "--trace-dir", traces]);
+    let trace = format!("{traces}/m_t_meets_its_2_ms_deadline.trace.ron");
+    let out = bip(&["replay", &late, &trace]);
+    let replayed = stdout(&out);
+    assert_eq!(out.status.code(), Some(1), "{replayed}");
+    assert!(
+        replayed.contains("result: m.t meets its 2 ms deadline fails"),
+        "{replayed}"
+    );
 }
 
 /// `--codel-time` on an untimed model runs it as timed: the 500 µs codel in a 10 ms period,
