@@ -215,14 +215,16 @@ fn model(args: &Args) -> Option<System> {
     }
 }
 
-/// Whether the model in `file` declares a CPU that is not cooperative (`preemption: Job`).
+/// Whether the model in `file` has a CPU that is not cooperative (`preemption: Job`): one
+/// it declares, or the one preemptive CPU of a model that declares none.
 fn preemptive_cpu(file: &std::path::Path) -> bool {
     let def = bip_lang::read_model_file(file)
         .and_then(|text| bip_lang::parse_str(&file.display().to_string(), &text));
     def.is_ok_and(|d| {
-        d.cpus
-            .iter()
-            .any(|c| c.preemption() != bip_lang::syntax::Preemption::Job)
+        d.cpus.is_empty()
+            || d.cpus
+                .iter()
+                .any(|c| c.preemption() != bip_lang::syntax::Preemption::Job)
     })
 }
 
