@@ -15,7 +15,7 @@ use bip_engine::simulate::{
 };
 use bip_engine::{CodelTime, CODEL_TIME_BUCKETS};
 use bip_lang::trace_file::TraceWriter;
-use bip_model::Trace;
+use bip_model::{System, Trace};
 use bip_sched::show_micros as show;
 
 use crate::{exit, interrupt, load};
@@ -57,7 +57,7 @@ pub enum CodelTimeArg {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let Some(system) = load::system(&args.file) else {
+    let Some(system) = model(args) else {
         return exit::ERROR;
     };
     // the trace file is opened before the run, so that a bad path fails at once
@@ -191,6 +191,43 @@ pub fn run(args: &Args) -> u8 {
     code
 }
 
+/// The model to run; `None` once its diagnostic is printed. With `--codel-time wcet` or
+/// `random`, an untimed GenoM layer is loaded as a timed one (`time: Exact`, its CPUs as
+/// declared), so that its codels take their times in the model's own semantics
+/// (docs/engine.md, "Codel times"). A model with a preemptive CPU (a CPU written as its
+/// name alone is one) cannot be timed yet: its codel times run on the engine's simulated
+/// CPUs, scheduled as `bip sched` assumes.
+fn model(args: &Args) -> Option<System> {
+    if args.codel_time == CodelTimeArg::Zero {
+        return load::system(&args.file);
+    }
+    match bip_lang::load_file_timed(&args.file) {
+        Ok(timed) if timed.genom.is_some() => Some(timed),
+        Ok(_) => load::system(&args.file),
+        Err(e) => {
+            let system = load::system(&args.file)?;
+            if system.genom.is_none() || preemptive_cpu(&args.file) {
+                return Some(system);
+            }
+            crate::report::load_error(&e);
+            None
+        }
+    }
+}
+
+/// Whether the model in `file` has a CPU that is not cooperative (`preemption: Job`): one
+/// it declares, or the one preemptive CPU of a model that declares none.
+fn preemptive_cpu(file: &std::path::Path) -> bool {
+    let def = bip_lang::read_model_file(file)
+        .and_then(|text| bip_lang::parse_str(&file.display().to_string(), &text));
+    def.is_ok_and(|d| {
+        d.cpus.is_empty()
+            || d.cpus
+                .iter()
+                .any(|c| c.preemption() != bip_lang::syntax::Preemption::Job)
+    })
+}
+
 /// The codels' run times, and the overruns and misses the run saw.
 fn budgets(sim: &Simulation, codel_time: CodelTimeArg) -> String {
     use std::fmt::Write as _;
@@ -244,18 +281,23 @@ fn budgets(sim: &Simulation, codel_time: CodelTimeArg) -> String {
         count(stats.deadlines_missed, "period's work")
     );
     for e in &sim.budget_events {
-        let (m, s, k) = &e.codel;
-        let what = match e.kind {
-            BudgetEventKind::WcetExceeded { took_us, wcet_us } => {
-                format!("{m}.{s}.{k} took {}, its WCET is {}", show(took_us), show(wcet_us))
-            }
+        let codel = e.codel.as_ref().map(|(m, s, k)| format!("{m}.{s}.{k}"));
+        let what = match &e.kind {
+            BudgetEventKind::WcetExceeded { took_us, wcet_us } => format!(
+                "{} took {}, its WCET is {}",
+                codel.unwrap_or_default(),
+                show(*took_us),
+                show(*wcet_us)
+            ),
             BudgetEventKind::DeadlineMissed {
+                task,
                 elapsed_us,
                 deadline_us,
             } => format!(
-                "a period's work of the task of {m}.{s}.{k} was late: {} after its release, deadline {}",
-                show(elapsed_us),
-                show(deadline_us)
+                "task {task} was late: {} after its release, deadline {}{}",
+                show(*elapsed_us),
+                show(*deadline_us),
+                codel.map_or(String::new(), |c| format!(" ({c} ran last)"))
             ),
         };
         let _ = writeln!(out, "    at {}: {what}", show(e.at_us));

@@ -8,7 +8,7 @@ use crate::prelude::*;
 use alloc::sync::Arc;
 
 use bip_model::genom::map::{DataType, GenomMap};
-use bip_model::genom::{CodelMap, Condition};
+use bip_model::genom::{CodelMap, Condition, TimedTaskMap};
 use bip_model::{Pick, Role, System};
 
 use crate::codel::{CodelInfo, Field};
@@ -25,6 +25,12 @@ pub(crate) enum InterKind {
     Start { codel: u32 },
     /// An async codel's return: committed when its run apart has ended.
     Return { codel: u32 },
+    /// A timed model's codel start: the codel takes its task's core, and its body runs;
+    /// its finish ([`InterKind::Codel`]) comes once its time has passed
+    /// (docs/engine.md, "Codel times").
+    TimedStart { codel: u32 },
+    /// A timed codel's finish that drops its outcome: its activity left it while it ran.
+    Dropped { codel: u32 },
     /// A service's request, sent by the engine on behalf of a client.
     Request { service: u32 },
     /// The error path of a codel that runs at a request (docs/genom.md, "Codels at the
@@ -203,6 +209,9 @@ pub(crate) struct Tables {
     pub progress_mask: Vec<u64>,
     /// The modules' tasks, in order: each one's period in ticks and declared deadline.
     pub tasks: Vec<(u64, Option<u64>)>,
+    /// In a timed model, per task of `tasks`: its name (`m.t`) and its atom, if it runs
+    /// codels.
+    pub timed_tasks: Vec<(Arc<str>, Option<TimedTaskMap>)>,
     /// Per interaction, the service whose pending request sends its interrupts again
     /// through it ([`bip_model::genom::map::ServiceMap::interrupt`]): what it ends was
     /// interrupted by that service.
@@ -237,6 +246,7 @@ impl Tables {
             progress_mask: Vec::new(),
             interrupts_of: vec![None; system.interactions.len()],
             tasks: Vec::new(),
+            timed_tasks: Vec::new(),
         };
         let Some(map) = &system.genom else {
             return Ok(t.finish(system, kind));
@@ -262,6 +272,13 @@ impl Tables {
             let task_base = t.tasks.len() as u32;
             t.tasks
                 .extend(m.tasks.iter().map(|k| (period_ticks(k), k.deadline_us)));
+            if map.time_unit_us.is_some() {
+                t.timed_tasks.extend(
+                    m.tasks
+                        .iter()
+                        .map(|k| (Arc::from(format!("{}.{}", m.name, k.name)), k.timed)),
+                );
+            }
             for p in &m.ports {
                 t.ports.push((m.name.clone(), p.name.clone()));
                 t.port_types.push(p.ty.clone());
@@ -305,6 +322,12 @@ impl Tables {
                     if let Some(a) = c.apart {
                         kind[a.start as usize] = InterKind::Start { codel: cid };
                         kind[a.returned as usize] = InterKind::Return { codel: cid };
+                    }
+                    if let Some(tc) = c.timed {
+                        kind[tc.start as usize] = InterKind::TimedStart { codel: cid };
+                        if let Some(d) = tc.dropped {
+                            kind[d as usize] = InterKind::Dropped { codel: cid };
+                        }
                     }
                     let k = codel_table(m, s, c, sid, &fields, port_base, period_ticks, cid)?;
                     t.codels.push(CodelTable {
@@ -356,10 +379,15 @@ impl Tables {
     fn finish(mut self, system: &System, kind: Vec<InterKind>) -> Tables {
         self.progress_mask = vec![0; kind.len().div_ceil(64)];
         for (i, k) in kind.iter().enumerate() {
-            if matches!(
-                k,
-                InterKind::Codel { .. } | InterKind::Start { .. } | InterKind::Progress
-            ) {
+            // a timed codel's finish is the engine's choice of its time, not a candidate
+            let progress = match *k {
+                InterKind::Codel { codel, .. } => self.codels[codel as usize].map.timed.is_none(),
+                InterKind::Start { .. } | InterKind::TimedStart { .. } | InterKind::Progress => {
+                    true
+                }
+                _ => false,
+            };
+            if progress {
                 self.progress_mask[i / 64] |= 1 << (i % 64);
             }
             if *k == InterKind::Time {

@@ -1,7 +1,9 @@
 //! Time budgets at run time (docs/model.md, "Time budgets"): how long each codel takes,
 //! against its WCET, and how long each task's work of a period takes from its release,
-//! against its deadline. In a simulation, codels without a body may take a simulated time
-//! ([`CodelTime`]) on CPUs scheduled as the analysis assumes ([`SimulatedCpus`]).
+//! against its deadline. In a simulation, codels without a body take a time
+//! ([`CodelTime`]): in a timed model, their time in the model (`engine/timed.rs`); in an
+//! untimed one, work on CPUs scheduled as the analysis assumes ([`SimulatedCpus`], for
+//! models whose preemptive CPUs cannot be timed yet).
 
 #[allow(unused_imports)]
 use crate::prelude::*;
@@ -107,15 +109,20 @@ impl TaskClock {
     }
 }
 
-/// How long a codel without a body (a default codel of a simulation) takes.
+/// How long a codel without a body (a default codel of a simulation) takes: in a timed
+/// model, when its finish comes after its start (docs/engine.md, "Codel times"); in an
+/// untimed one, its work on the simulated CPUs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum CodelTime {
-    /// No time, as in the model: the engine's measures and checks see instants.
+    /// As early as the model allows: its BCET in a timed model, no time in an untimed
+    /// one (the engine's measures and checks see instants).
     #[default]
     Zero,
-    /// Its WCET (no time without one): the work the scheduling analysis assumes.
+    /// Its WCET (no time without one): the worst case, the work the scheduling analysis
+    /// assumes.
     Wcet,
-    /// Uniformly from 0 to its WCET, drawn from this seed.
+    /// Drawn from this seed at its start: a whole number of units in [BCET, WCET] in a
+    /// timed model, uniformly from 0 to its WCET in an untimed one.
     Random(u64),
 }
 

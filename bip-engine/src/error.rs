@@ -28,8 +28,6 @@ pub enum BuildError {
     TooMany(String, &'static str),
     #[error("threads for tasks need the `std` feature")]
     NoThreads,
-    #[error("a timed model (`time: Exact`) cannot be run by the engine yet: its codels' starts, finishes and time units are not bound to the engine's clock; verify it with `bip verify`")]
-    Timed,
     #[error("codel ({0}, {1}, {2}) is async: the engine runs an async codel on a thread of its own, which needs bip-engine's `std` feature; enable it, or make the codel synchronous")]
     Async(String, String, String),
     #[error("codel ({0}, {1}, {2}) runs at a request (a function's codel or a `validate` codel) that a component of the model sends: the engine cannot run it before the model's step; let the environment send the request, or leave the codel out")]

@@ -147,11 +147,15 @@ pub enum Event {
         took_us: u64,
         wcet_us: u64,
     },
-    /// A codel of a task ended `elapsed_us` after the task's release, past its deadline
-    /// (the period, unless the model gives one): the task's work of this period is late.
-    /// Reported once per period.
+    /// A task's job was still active `elapsed_us` after its release, past its deadline
+    /// (the period, unless the model gives one): in a timed model, a step made the task's
+    /// deadline invariant false (reported once until it holds again); in an untimed one,
+    /// a codel of the task ended past the deadline (once per period).
     DeadlineMissed {
-        codel: Arc<Codel>,
+        /// The task, `module.task`.
+        task: Arc<str>,
+        /// The codel of the task that ran last, if any.
+        codel: Option<Arc<Codel>>,
         elapsed_us: u64,
         deadline_us: u64,
     },
@@ -433,15 +437,25 @@ impl fmt::Display for Event {
                 codel,
                 took_us,
                 wcet_us,
-            } => write!(f, "over budget: {codel} took {took_us} µs, its WCET is {wcet_us} µs"),
+            } => write!(
+                f,
+                "over budget: {codel} took {took_us} µs, its WCET is {wcet_us} µs"
+            ),
             Event::DeadlineMissed {
+                task,
                 codel,
                 elapsed_us,
                 deadline_us,
-            } => write!(
-                f,
-                "deadline missed: {codel} ended its task's work {elapsed_us} µs after the release, past {deadline_us} µs"
-            ),
+            } => {
+                write!(f, "deadline missed: task {task}")?;
+                if let Some(codel) = codel {
+                    write!(f, " (its codel {codel} ran last)")?;
+                }
+                write!(
+                    f,
+                    ": its job was active {elapsed_us} µs after its release, past {deadline_us} µs"
+                )
+            }
             Event::ResponseLate {
                 property,
                 within,

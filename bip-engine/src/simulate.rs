@@ -3,10 +3,11 @@
 //! every invariant (and deadlock freedom, if the model asks for it) after every step
 //! (docs/engine.md, "`bip simulate` and `bip replay`"). A run is the same for a seed.
 //!
-//! Codels may take a simulated time on the virtual clock ([`CodelTime`]: their WCETs, or
-//! random times up to them), run on CPUs scheduled as `bip sched` assumes: a run then
-//! shows the deadline misses the analysis predicts when its worst case happens. A run
-//! reports each codel's times and the first overruns and misses it saw.
+//! In a timed model, [`CodelTime`] chooses when each codel finishes (its BCET, its WCET,
+//! or in between), and a deadline invariant that fails ends the run; an untimed model's
+//! codels may take a simulated time on CPUs scheduled as `bip sched` assumes
+//! (docs/engine.md, "Codel times"). A run reports each codel's times and the first
+//! overruns and misses it saw.
 //!
 //! A run of any length takes constant memory: the engine records only the last steps (a
 //! window, for the report of a failure), and [`Hooks::on_steps`] receives the run in
@@ -40,7 +41,8 @@ pub struct SimulationOptions {
     pub steps: u64,
     /// Seed of the random requests, codel outcomes and choices.
     pub seed: u64,
-    /// How long codels take on the virtual clock (default: no time).
+    /// When codels finish in a timed model, how long they take on simulated CPUs in an
+    /// untimed one (default: as early as the model allows, no time).
     pub codel_time: CodelTime,
 }
 
@@ -61,9 +63,9 @@ pub struct CodelReport {
 pub struct BudgetEvent {
     /// The engine's time when it was seen.
     pub at_us: u64,
-    /// `(module, service, codel state)` of the codel that ran (for a miss: the last one
-    /// of the late period's work).
-    pub codel: (String, String, String),
+    /// `(module, service, codel state)` of the codel that ran (for a miss: the one of
+    /// the late task that ran last, if any).
+    pub codel: Option<(String, String, String)>,
     pub kind: BudgetEventKind,
 }
 
@@ -80,10 +82,18 @@ pub struct LateResponse {
     pub ticket: Option<u64>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum BudgetEventKind {
-    WcetExceeded { took_us: u64, wcet_us: u64 },
-    DeadlineMissed { elapsed_us: u64, deadline_us: u64 },
+    WcetExceeded {
+        took_us: u64,
+        wcet_us: u64,
+    },
+    /// Task `task` (`module.task`) was late.
+    DeadlineMissed {
+        task: String,
+        elapsed_us: u64,
+        deadline_us: u64,
+    },
 }
 
 /// What a simulation reports to its caller while it runs.
@@ -316,14 +326,19 @@ fn keep_events(engine: &mut Engine, kept: &mut Vec<BudgetEvent>, late: &mut Vec<
                 codel,
                 took_us,
                 wcet_us,
-            } => (codel, BudgetEventKind::WcetExceeded { took_us, wcet_us }),
+            } => (
+                Some(codel),
+                BudgetEventKind::WcetExceeded { took_us, wcet_us },
+            ),
             Event::DeadlineMissed {
+                task,
                 codel,
                 elapsed_us,
                 deadline_us,
             } => (
                 codel,
                 BudgetEventKind::DeadlineMissed {
+                    task: task.to_string(),
                     elapsed_us,
                     deadline_us,
                 },
@@ -333,11 +348,7 @@ fn keep_events(engine: &mut Engine, kept: &mut Vec<BudgetEvent>, late: &mut Vec<
         if kept.len() < KEPT_BUDGET_EVENTS {
             kept.push(BudgetEvent {
                 at_us,
-                codel: (
-                    codel.module.clone(),
-                    codel.service.clone(),
-                    codel.state.clone(),
-                ),
+                codel: codel.map(|c| (c.module.clone(), c.service.clone(), c.state.clone())),
                 kind,
             });
         }

@@ -27,6 +27,7 @@ mod replay;
 mod response;
 mod sched;
 mod sched_exact;
+mod simulate_timed;
 mod time_progress;
 mod trace;
 mod verify;

@@ -83,10 +83,11 @@ impl EngineBuilder {
         self
     }
 
-    /// How long unbound codels take on the engine's clock (default: no time). With a
-    /// simulated time, the tasks' work runs on CPUs scheduled as `bip sched` assumes, and
-    /// a deadline is judged when the work ends there (docs/engine.md, "Simulated codel
-    /// times").
+    /// How long unbound codels take (default: as early as the model allows). In a timed
+    /// model, when each finishes after its start: at its BCET, its WCET, or in between
+    /// (docs/engine.md, "Codel times"). In an untimed one, with a simulated time, the
+    /// tasks' work runs on CPUs scheduled as `bip sched` assumes, and a deadline is judged
+    /// when the work ends there.
     pub fn codel_time(mut self, t: CodelTime) -> Self {
         self.codel_time = t;
         self
@@ -201,13 +202,7 @@ impl EngineBuilder {
 
     pub fn build(mut self) -> Result<Engine, BuildError> {
         let system = self.system;
-        if system
-            .genom
-            .as_ref()
-            .is_some_and(|g| g.time_unit_us.is_some())
-        {
-            return Err(BuildError::Timed);
-        }
+        let unit_us = system.genom.as_ref().and_then(|g| g.time_unit_us);
         // a request that a component of the model sends takes its step without the
         // engine, which could not run its codels at the request first
         if let Some(genom) = &system.genom {
@@ -329,7 +324,8 @@ impl EngineBuilder {
             .or(system.tick_ms.map(|ms| ms.saturating_mul(1000)))
             .unwrap_or(1000)
             .max(1);
-        let cpus = (self.codel_time != CodelTime::Zero).then(|| {
+        // a timed model's codels take their time in the model itself
+        let cpus = (self.codel_time != CodelTime::Zero && unit_us.is_none()).then(|| {
             let tasks = system.genom.iter().flat_map(|g| &g.modules);
             SimulatedCpus::new(
                 tasks
@@ -355,6 +351,22 @@ impl EngineBuilder {
                 super::monitor::Monitor::none()
             }
         };
+        let timed = unit_us.map(|unit_us| {
+            let deadlines = t.tasks.iter().map(|&(period_ticks, deadline)| {
+                deadline.unwrap_or_else(|| period_ticks.saturating_mul(tick_us))
+            });
+            let tasks = t
+                .timed_tasks
+                .iter()
+                .zip(deadlines)
+                .map(|((name, map), d)| (alloc::sync::Arc::clone(name), *map, d));
+            Box::new(super::timed::Timed::new(unit_us, clock.now_us(), tasks))
+        });
+        let monitor = monitor.with_deadlines(
+            timed
+                .as_ref()
+                .is_some_and(|t| t.deadlines().next().is_some()),
+        );
         let pool = gate.enabled().pool();
         let plan_moves = gate
             .plans()
@@ -465,6 +477,7 @@ impl EngineBuilder {
             budgets,
             stopped,
             monitor,
+            timed,
             #[cfg(feature = "std")]
             remote: None,
             #[cfg(feature = "std")]

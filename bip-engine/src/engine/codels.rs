@@ -512,8 +512,15 @@ impl Engine {
             service = i.service.as_str(), codel = i.state.as_str(), elapsed_us, deadline_us,
             "task's period work ended past its deadline");
         let codel = Arc::clone(&self.t.codels[ck].name);
+        let service = &self.t.services[self.t.codels[ck].service as usize];
+        let task = format!(
+            "{}.{}",
+            service.module,
+            service.task.as_deref().unwrap_or("?")
+        );
         self.emit(Event::DeadlineMissed {
-            codel,
+            task: task.into(),
+            codel: Some(codel),
             elapsed_us,
             deadline_us,
         });

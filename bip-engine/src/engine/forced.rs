@@ -58,7 +58,12 @@ impl Engine {
             InterKind::Codel { codel, .. } if self.t.codels[codel as usize].map.apart.is_some() => {
                 self.run_outcome(codel, true)
             }
+            InterKind::Codel { codel, .. } if self.t.codels[codel as usize].map.timed.is_some() => {
+                self.finish_timed(codel, true)
+            }
             InterKind::Codel { codel, .. } => self.run_codel(codel, true),
+            InterKind::TimedStart { codel } => self.start_timed(codel, true),
+            InterKind::Dropped { codel } => self.drop_timed(codel, true),
             #[cfg(feature = "std")]
             InterKind::Start { codel } => self.start_apart(codel, true),
             #[cfg(feature = "std")]
@@ -83,6 +88,13 @@ impl Engine {
                     ticket,
                     accepted: true,
                 })
+            }
+            InterKind::Time if self.timed.is_some() => {
+                let Label::Interaction(i) = step.label else {
+                    return Err(StepAsError::NotAllowed);
+                };
+                self.fire_timed_tick(i, true)?;
+                Ok(Stepped::Tick)
             }
             InterKind::Time => {
                 self.commit(Cause::Other)?;
@@ -120,6 +132,8 @@ impl Engine {
             InterKind::Time => Stepped::Tick,
             InterKind::Start { .. }
             | InterKind::Return { .. }
+            | InterKind::TimedStart { .. }
+            | InterKind::Dropped { .. }
             | InterKind::Progress
             | InterKind::Environment => Stepped::Other,
         }

@@ -131,7 +131,13 @@ impl Engine {
         {
             return Ok(None); // it can run; it may only wait for its turn
         }
-        Ok(Some((c, Reasons(self.failing(&cm.holds)?))))
+        let failing = self.failing(&cm.holds)?;
+        // a timed codel also waits for its task's core and its locks, which hold nothing:
+        // it is held only by its conditions, before it starts
+        if cm.timed.is_some() && (failing == 0 || self.is_running(c)) {
+            return Ok(None);
+        }
+        Ok(Some((c, Reasons(failing))))
     }
 
     /// The conditions of a request or a codel that fail now, as bits, evaluated as the

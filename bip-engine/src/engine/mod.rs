@@ -55,6 +55,7 @@ mod remote;
 mod replies;
 mod requests;
 mod schedule;
+mod timed;
 
 pub use builder::{EngineBuilder, DEFAULT_STATE_CACHE};
 pub use inspect::Inspect;
@@ -116,6 +117,8 @@ pub struct Engine {
     stopped: Option<RangeError>,
     /// The bounded response properties, watched step by step.
     monitor: monitor::Monitor,
+    /// A timed model's time and running codels (`None` for an untimed one).
+    timed: Option<Box<timed::Timed>>,
     #[cfg(feature = "std")]
     remote: Option<crate::handle::Remote>,
     /// The async codels' threads and runs.
@@ -203,6 +206,8 @@ enum Candidate {
     /// An async codel's start, and its outcome.
     Start(u32),
     Outcome(u32),
+    /// A timed codel's start.
+    TimedStart(u32),
     /// The `k`-th enabled step with this label.
     Step(Label, u32),
 }

@@ -19,6 +19,8 @@ use crate::event::{Event, Ticket};
 /// then a step costs one test.
 pub(super) struct Monitor {
     watches: Vec<Watch>,
+    /// A timed model's deadline invariants are watched too (`timed.rs`).
+    deadlines: bool,
 }
 
 struct Watch {
@@ -51,18 +53,28 @@ impl Monitor {
                 ticket: None,
             });
         }
-        Ok(Monitor { watches })
+        Ok(Monitor {
+            watches,
+            deadlines: false,
+        })
+    }
+
+    /// Watches a timed model's deadline invariants too.
+    pub(super) fn with_deadlines(mut self, on: bool) -> Monitor {
+        self.deadlines = on;
+        self
     }
 
     /// Watching nothing: for an engine stopped before its first step.
     pub(super) fn none() -> Monitor {
         Monitor {
             watches: Vec::new(),
+            deadlines: false,
         }
     }
 
     pub(super) fn is_empty(&self) -> bool {
-        self.watches.is_empty()
+        self.watches.is_empty() && !self.deadlines
     }
 }
 
@@ -84,7 +96,11 @@ impl Engine {
         self.watch_step(label, ticket).map_err(|e| {
             self.stopped = Some(e.clone());
             EngineError::Range(e)
-        })
+        })?;
+        if self.monitor.deadlines {
+            self.watch_deadlines()?;
+        }
+        Ok(())
     }
 
     fn watch_step(&mut self, label: Label, ticket: Option<Ticket>) -> Result<(), RangeError> {

@@ -56,7 +56,7 @@ impl Engine {
     /// and waits for you on either clock. `Idle { next_tick_us: None }`: nothing can
     /// happen until a request arrives (no time step is enabled).
     pub fn step(&mut self) -> Result<Stepped, EngineError> {
-        let stepped = self.step_once()?;
+        let stepped = self.step_any()?;
         if let Stepped::Idle {
             next_tick_us: Some(t),
         } = stepped
@@ -66,6 +66,18 @@ impl Engine {
             }
         }
         Ok(stepped)
+    }
+
+    /// One step, without moving a virtual clock when idle: in a timed model, first a
+    /// codel whose time has come or a due time step (`timed.rs`).
+    #[inline(always)]
+    fn step_any(&mut self) -> Result<Stepped, EngineError> {
+        if self.timed.is_some() {
+            if let Some(stepped) = self.step_timed()? {
+                return Ok(stepped);
+            }
+        }
+        self.step_once()
     }
 
     /// One step, without moving a virtual clock when idle.
@@ -104,6 +116,10 @@ impl Engine {
                 }),
                 #[cfg(feature = "std")]
                 Candidate::Outcome(c) => self.run_outcome(c, false).map_err(|e| match e {
+                    StepAsError::Engine(e) => e,
+                    _ => EngineError::Stopped(self.internal_error()),
+                }),
+                Candidate::TimedStart(c) => self.start_timed(c, false).map_err(|e| match e {
                     StepAsError::Engine(e) => e,
                     _ => EngineError::Stopped(self.internal_error()),
                 }),
@@ -147,7 +163,7 @@ impl Engine {
                 Until::TimeUs(t) if self.time.clock.now_us() >= t => return Ok(()),
                 _ => {}
             }
-            if let Stepped::Idle { next_tick_us } = self.step_once()? {
+            if let Stepped::Idle { next_tick_us } = self.step_any()? {
                 if until == Until::Quiescent {
                     return Ok(());
                 }
@@ -213,6 +229,9 @@ impl Engine {
     }
 
     pub(super) fn fire_time(&mut self, i: u32) -> Result<(), EngineError> {
+        if self.timed.is_some() {
+            return self.fire_timed_tick(i, false);
+        }
         self.take_step_of(i);
         self.commit(Cause::Other)?;
         self.count_tick();
@@ -352,6 +371,7 @@ fn collect_progress(
                 }
             }
             InterKind::Start { codel } => out.push(Candidate::Start(codel)),
+            InterKind::TimedStart { codel } => out.push(Candidate::TimedStart(codel)),
             InterKind::Progress => {
                 let n = enabled.steps_of(i).count() as u32;
                 for k in 0..n {
@@ -359,6 +379,7 @@ fn collect_progress(
                 }
             }
             InterKind::Return { .. }
+            | InterKind::Dropped { .. }
             | InterKind::Request { .. }
             | InterKind::AtRequestFail { .. }
             | InterKind::Time

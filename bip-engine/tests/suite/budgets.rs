@@ -191,19 +191,3 @@ fn simulated_codel_times_miss_a_deadline_exactly_when_the_analysis_does() {
     // of `slow` until tick 20 is judged: 9 of them
     assert_eq!(misses, vec![(19_000, 18_000); 9]);
 }
-
-/// A timed model's codels start and finish in the model, on its cores, in time units the
-/// engine's clock does not count yet: the engine refuses it rather than run it as an
-/// untimed one.
-#[test]
-fn a_timed_model_is_refused() {
-    let model = r#"System(name: "ts", tick_ms: 1, time: Exact,
-        cpus: [(name: "main", preemption: Job)],
-        modules: [(name: "m", tasks: [(name: "t", period: 2, codels: [
-            (state: "start", yields: ["pause::start"], wcet: "1ms")])])])"#;
-    let system = load_str("timed.ron", model).expect("loads");
-    let built = Engine::builder(system)
-        .default_codels(DefaultCodels::FirstYield)
-        .build();
-    assert!(matches!(built, Err(bip_engine::BuildError::Timed)));
-}

@@ -20,3 +20,4 @@ mod response;
 mod scheduling;
 mod simulate;
 mod soak;
+mod timed;

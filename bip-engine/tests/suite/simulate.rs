@@ -17,7 +17,7 @@ use bip_model::{System, Trace, Verdict};
 use common::*;
 
 /// A simulation with its whole run, joined from the segments it streams.
-fn streamed(system: System, options: SimulationOptions) -> (Simulation, Trace) {
+pub(crate) fn streamed(system: System, options: SimulationOptions) -> (Simulation, Trace) {
     let mut whole = Trace {
         system: system.name.clone(),
         steps: Vec::new(),

@@ -1,6 +1,7 @@
 //! The engine's map by names, as the expansion writes it (a recipe); once the expanded
 //! model is compiled, [`Recipe::resolve`] turns the names into the system's indices.
 
+use super::names;
 use super::timing::Timing;
 use crate::expr::Expr;
 use crate::syntax::ServiceKind;
@@ -247,6 +248,17 @@ impl Recipe {
                             }),
                             None => None,
                         },
+                        timed: match self.time_unit_us {
+                            Some(_) => Some(TimedCodelMap {
+                                start: interaction(&names::start_connector(
+                                    &m.name, &s.name, &c.state,
+                                ))?,
+                                dropped: system.interaction_index(&names::dropped_connector(
+                                    &m.name, &s.name, &c.state,
+                                )),
+                            }),
+                            None => None,
+                        },
                     });
                 }
                 let at_request = |c: &RecipeCodel| -> Result<CodelMap, MissingName> {
@@ -283,6 +295,7 @@ impl Recipe {
                         wcet_us: None,
                         bcet_us: None,
                         apart: None,
+                        timed: None,
                     })
                 };
                 services.push(ServiceMap {
@@ -330,6 +343,9 @@ impl Recipe {
                             cpu: budget.cpu,
                             priority: budget.priority,
                             deadline_us: budget.deadline_us,
+                            timed: self
+                                .time_unit_us
+                                .and_then(|_| timed_task(system, &m.name, n)),
                         }
                     })
                     .collect(),
@@ -351,6 +367,25 @@ impl Recipe {
             idle,
         })
     }
+}
+
+/// Task `m.t` of a timed model as the engine reads it: its atom's component and elapsed
+/// time, and its deadline's invariant; `None` for a task without codels (it has no atom).
+fn timed_task(system: &System, m: &str, t: &str) -> Option<TimedTaskMap> {
+    let component = system.component_index(&names::task_component(m, t))?;
+    let var = system.atom_of(component).var_index(names::ELAPSED)?;
+    // the invariant `m.t meets its D deadline` (`timed/deadlines.rs`)
+    let prefix = format!("{m}.{t} meets its ");
+    let deadline = system.properties.iter().position(|p| {
+        matches!(p.kind, bip_model::PropertyKind::Invariant(_))
+            && p.name.starts_with(&prefix)
+            && p.name.ends_with(" deadline")
+    });
+    Some(TimedTaskMap {
+        component,
+        elapsed_slot: system.components[component as usize].var_slot(var),
+        deadline: deadline.map(|k| k as u32),
+    })
 }
 
 /// The ids fields `names` of module component `mc` that a codel writes, with their strides

@@ -101,6 +101,20 @@ pub struct TaskMap {
     pub priority: Option<i64>,
     /// How long after its release a period's work must be done; `None`: the period.
     pub deadline_us: Option<u64>,
+    /// In a timed model, the task's atom (`None` for a task that runs no codel).
+    pub timed: Option<TimedTaskMap>,
+}
+
+/// A task of a timed model as the engine reads it (docs/genom.md, "Timed models").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TimedTaskMap {
+    /// The task's component (`m_t_task`).
+    pub component: u32,
+    /// The slot of its `x`: the running codel's elapsed time units.
+    pub elapsed_slot: u32,
+    /// Index into the system's properties of the invariant that the task meets its
+    /// deadline.
+    pub deadline: Option<u32>,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -326,6 +340,18 @@ pub struct CodelMap {
     /// An async codel's start and return (docs/genom.md, "Async codels"); its outcome
     /// is then [`CodelMap::run`] or [`CodelMap::fail`], at its task's next cycle.
     pub apart: Option<Apart>,
+    /// In a timed model, the codel's start (its finish is [`CodelMap::run`] or
+    /// [`CodelMap::fail`]).
+    pub timed: Option<TimedCodelMap>,
+}
+
+/// The steps of a codel of a timed model besides its finish: its start takes its task's
+/// core, and the finish that drops its outcome frees the core when its activity left it
+/// while it ran (`None` for a task machine's codel, never interrupted).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TimedCodelMap {
+    pub start: u32,
+    pub dropped: Option<u32>,
 }
 
 /// The steps of an async codel besides its outcome: it starts apart from its task (its

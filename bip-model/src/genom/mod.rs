@@ -9,6 +9,6 @@ mod stuck;
 pub use conditions::failing;
 pub use map::{
     AgeMap, CodelMap, Condition, ConstraintRef, GenomMap, IdsField, IdsWrite, ModuleMap, PortMap,
-    Reason, ServiceKind, ServiceMap, TaskMap, YieldMap,
+    Reason, ServiceKind, ServiceMap, TaskMap, TimedCodelMap, TimedTaskMap, YieldMap,
 };
 pub use stuck::Stuck;
