@@ -396,15 +396,15 @@ fn replay_names_a_misspelt_step_and_a_tampered_value() {
     );
 }
 
-/// `--codel-time wcet` runs each codel for its WCET on CPUs scheduled as `bip sched`
-/// assumes (the rover's CPUs are preemptive, which a timed model cannot have yet: its codel
-/// times run on the engine's simulated CPUs): the rover, schedulable, misses nothing; with the map's `fuse` raised from 70
-/// to 120 ms the payload CPU is overloaded (`bip sched`: antenna.comm never catches up)
-/// and the run sees the antenna's periods end late. Without simulated times the codels
-/// are instants, and their runs are still counted.
+/// `--codel-time wcet` runs the rover as a timed model, each codel for its WCET on its
+/// CPU's one preemptive core, as `bip sched` assumes: the rover, schedulable, misses
+/// nothing; with the map's `fuse` raised from 70 to 120 ms the payload CPU is overloaded
+/// (`bip sched`: antenna.comm never catches up) and the run fails the antenna's deadline
+/// (exit 1). Without simulated times the codels are instants, and their runs are still
+/// counted.
 #[test]
 fn simulated_codel_times_show_the_misses_of_an_overloaded_cpu() {
-    let run = |file: &str, codel_time: &str| {
+    let run_with = |file: &str, codel_time: &str, code: i32| {
         let out = bip(&[
             "simulate",
             file,
@@ -416,9 +416,10 @@ fn simulated_codel_times_show_the_misses_of_an_overloaded_cpu() {
             codel_time,
         ]);
         let text = stdout(&out);
-        assert_eq!(out.status.code(), Some(0), "{text}");
+        assert_eq!(out.status.code(), Some(code), "{text}");
         text
     };
+    let run = |file: &str, codel_time: &str| run_with(file, codel_time, 0);
     let text = run("robots/rover.ron", "zero");
     assert!(text.contains("codel times (none simulated"), "{text}");
     assert!(
@@ -447,8 +448,12 @@ fn simulated_codel_times_show_the_misses_of_an_overloaded_cpu() {
     let heavy = heavy.to_str().expect("utf-8");
     let sched = stdout(&bip(&["sched", heavy, "--demand", "bound"]));
     assert!(sched.contains("antenna.comm never catches up"), "{sched}");
-    let text = run(heavy, "wcet");
+    let text = run_with(heavy, "wcet", 1);
     assert!(text.contains("task antenna.comm was late"), "{text}");
+    assert!(
+        text.contains("invariant `antenna.comm meets its 200 ms deadline` FAILS"),
+        "{text}"
+    );
     assert!(text.contains("0 codel runs past a WCET"), "{text}");
     assert!(
         !text.contains(" 0 period's works past a deadline"),

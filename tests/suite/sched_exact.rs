@@ -197,25 +197,26 @@ fn a_limit_gives_an_inconclusive_answer_with_the_most_seen() {
     assert!(bound <= 5.0, "{text}");
 }
 
-/// A CPU written as a name alone is preemptive, which the timed semantics does not
-/// support yet: `--exact` gives the loader's error. Once it does, this model is explored
-/// and this test changes.
+/// A CPU written as a name alone is one preemptive core: both tasks on it, the analysis
+/// applies to each, and the log task, preempted by the servo, waits for the servo's
+/// costliest period twice in the analysis (3 + 8 + 8 = 19 ms) and never more than one
+/// real job's 5 ms in a run (8 ms).
 #[test]
-fn a_preemptive_cpu_is_refused_until_timed_models_have_preemption() {
-    let (_dir, path) = pessimism_with((
-        r#"(name: "arm", preemption: Job), (name: "io", preemption: Job)"#,
-        r#""arm", "io""#,
-    ));
+fn a_preemptive_cpu_has_both_columns() {
+    let (_dir, path) = written(
+        &std::fs::read_to_string(format!("{}/{PESSIMISM}", env!("CARGO_MANIFEST_DIR")))
+            .expect("the model")
+            .replacen(
+                r#"(name: "arm", preemption: Job), (name: "io", preemption: Job)"#,
+                r#""arm""#,
+                1,
+            )
+            .replacen(r#"cpu: "io""#, r#"cpu: "arm""#, 1),
+    );
     let out = bip(&["sched", "--exact", &path]);
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("CPU `arm` is preemptive, which a timed model does not support yet"),
-        "{err}"
-    );
-    assert!(
-        err.contains(r#"write `(name: "arm", preemption: Job)`"#),
-        "{err}"
-    );
-    assert!(out.stdout.is_empty());
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("CPU arm: 1 core, fixed priorities, preemptive"), "{text}");
+    assert_eq!(row(&text, "arm.servo")[3..], ["8 ms misses", "5 ms", "3 ms"], "{text}");
+    assert_eq!(row(&text, "arm.log")[3..], ["19 ms", "8 ms", "11 ms"], "{text}");
 }
