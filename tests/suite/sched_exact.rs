@@ -216,7 +216,18 @@ fn a_preemptive_cpu_has_both_columns() {
     let out = bip(&["sched", "--exact", &path]);
     let text = String::from_utf8_lossy(&out.stdout).to_string();
     assert_eq!(out.status.code(), Some(0), "{text}");
-    assert!(text.contains("CPU arm: 1 core, fixed priorities, preemptive"), "{text}");
-    assert_eq!(row(&text, "arm.servo")[3..], ["8 ms misses", "5 ms", "3 ms"], "{text}");
-    assert_eq!(row(&text, "arm.log")[3..], ["19 ms", "8 ms", "11 ms"], "{text}");
+    assert!(
+        text.contains("CPU arm: 1 core, fixed priorities, preemptive"),
+        "{text}"
+    );
+    assert_eq!(
+        row(&text, "arm.servo")[3..],
+        ["8 ms misses", "5 ms", "3 ms"],
+        "{text}"
+    );
+    assert_eq!(
+        row(&text, "arm.log")[3..],
+        ["19 ms", "8 ms", "11 ms"],
+        "{text}"
+    );
 }

@@ -3,8 +3,8 @@
 //! interpreter.
 
 use bip_random_systems::timed::{
-    explore, generate, Codel, Cpu, Policy, Position, Projected, Stage, Task, TaskSet, TaskState,
-    Yield,
+    explore, generate, Codel, Cpu, Policy, Position, Preemption, Projected, Stage, Task, TaskSet,
+    TaskState, Yield,
 };
 
 /// Tick and unit 1 ms: periods, delays and durations below are all in units.
@@ -18,7 +18,19 @@ fn set(cpus: Vec<Cpu>, tasks: Vec<Task>) -> TaskSet {
 }
 
 fn cpu(cores: usize, policy: Policy) -> Cpu {
-    Cpu { cores, policy }
+    Cpu {
+        cores,
+        policy,
+        preemption: Preemption::Job,
+    }
+}
+
+fn preempting(preemption: Preemption) -> Vec<Cpu> {
+    vec![Cpu {
+        cores: 1,
+        policy: Policy::FixedPriority,
+        preemption,
+    }]
 }
 
 /// A codel of exactly `wcet` units (bcet = wcet) with these yields.
@@ -330,6 +342,7 @@ fn the_unit_is_derived_from_every_duration() {
 #[test]
 fn random_sets_explore_and_render() {
     let (mut schedulable, mut not) = (0, 0);
+    let mut preemptions = std::collections::BTreeMap::new();
     for seed in 0..200 {
         let s = generate(seed);
         let v = explore(&s);
@@ -341,8 +354,13 @@ fn random_sets_explore_and_render() {
             not += 1;
         }
         let ron = s.to_ron();
-        assert!(ron.contains("time: Exact") && ron.contains("preemption: Job"));
+        assert!(ron.contains("time: Exact") && ron.contains("preemption: "));
+        for p in ["Job", "Codel", "Preemptive"] {
+            *preemptions.entry(p).or_insert(0) += ron.matches(&format!("preemption: {p}")).count();
+        }
     }
+    // every preemption is drawn
+    assert!(preemptions.values().all(|&n| n > 30), "{preemptions:?}");
     // the generator gives both verdicts often enough for a property test to mean something
     assert!(
         schedulable > 40 && not > 40,
@@ -423,4 +441,44 @@ fn a_set_renders_in_the_timed_syntax() {
     ] {
         assert!(text.lines().any(|l| l == line), "{line}\n{text}");
     }
+}
+
+/// `lo` (period 8, one codel of exactly 3) starts at 8, 16, …; `hi` (period 4, delay 1,
+/// one codel of exactly 2) is released at 9, 13, 17, … while `lo` may run: the worst
+/// responses of (`hi`, `lo`).
+fn hi_during_lo(preemption: Preemption) -> (Option<u64>, Option<u64>) {
+    let mut hi = job(4, 2, 2);
+    hi.delay_ticks = 1;
+    let lo = task(8, 1, vec![exact(3, vec![Yield::Pause(0)])]);
+    let v = explore(&set(preempting(preemption), vec![hi, lo]));
+    (v.worst_response[0], v.worst_response[1])
+}
+
+#[test]
+fn preemption_stops_the_running_codel() {
+    // Job: `hi` released at 9 waits for `lo` (8 to 11) and runs to 13: 4; `lo` always
+    // finds the core free at its release (`hi` runs 13 to 15, 21 to 23): 3
+    assert_eq!(hi_during_lo(Preemption::Job), (Some(4), Some(3)));
+    // Preemptive: `hi` takes the core at 9 and runs to 11: 2; `lo`, stopped after 1 of
+    // its 3 units, goes on at 11 and ends at 13: 5
+    assert_eq!(hi_during_lo(Preemption::Preemptive), (Some(2), Some(5)));
+}
+
+#[test]
+fn a_codel_boundary_is_where_a_cooperative_task_gives_its_core() {
+    // `lo` runs two codels of exactly 2 from 8: at 9 `hi` is released and waits until
+    // `lo`'s first codel ends at 10, takes the core to 12 (response 3), `lo` runs its
+    // second codel 12 to 14 (6), and at 13 `hi` waits again until 14 (response 3)
+    let mut hi = job(4, 2, 2);
+    hi.delay_ticks = 1;
+    let lo = task(
+        8,
+        1,
+        vec![
+            exact(2, vec![Yield::Next(1)]),
+            exact(2, vec![Yield::Pause(0)]),
+        ],
+    );
+    let v = explore(&set(preempting(Preemption::Codel), vec![hi, lo]));
+    assert_eq!(v.worst_response, vec![Some(3), Some(6)]);
 }
