@@ -104,19 +104,10 @@ pub fn run(args: &Args) -> u8 {
         DemandArg::Exact => DemandChoice::Exact,
         DemandArg::Bound => DemandChoice::Bound,
     };
-    let sched = match schedulability(&system, &options, assignment, choice) {
-        Ok(Some(s)) => s,
-        Ok(None) => {
-            eprintln!(
-                "error: {}: no time budgets to analyse: give codels a `wcet` and the model a `tick_ms`, or an atom a `task` (docs/model.md, \"Time budgets\")",
-                args.file.display()
-            );
-            return exit::ERROR;
-        }
-        Err(e) => {
-            eprintln!("error: {}: {e}", args.file.display());
-            return exit::ERROR;
-        }
+    let budgets = "give codels a `wcet` and the model a `tick_ms`, or an atom a `task`";
+    let sched = match analysed(&args.file, &system, &options, assignment, choice, budgets) {
+        Ok(s) => s,
+        Err(code) => return code,
     };
     let title = format!("{}: system `{}`", args.file.display(), system.name);
     match args.format {
@@ -136,6 +127,32 @@ pub fn run(args: &Args) -> u8 {
         exit::OK
     } else {
         exit::FAILED
+    }
+}
+
+/// The analysis of the model's task set; `Err` with the exit code once its error is
+/// printed, `budgets` saying how to give a model without time budgets some.
+fn analysed(
+    file: &std::path::Path,
+    system: &bip_model::System,
+    options: &Options,
+    assignment: Assignment,
+    choice: DemandChoice,
+    budgets: &str,
+) -> Result<Schedulability, u8> {
+    match schedulability(system, options, assignment, choice) {
+        Ok(Some(s)) => Ok(s),
+        Ok(None) => {
+            eprintln!(
+                "error: {}: no time budgets to analyse: {budgets} (docs/model.md, \"Time budgets\")",
+                file.display()
+            );
+            Err(exit::ERROR)
+        }
+        Err(e) => {
+            eprintln!("error: {}: {e}", file.display());
+            Err(exit::ERROR)
+        }
     }
 }
 

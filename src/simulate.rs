@@ -193,39 +193,19 @@ pub fn run(args: &Args) -> u8 {
 
 /// The model to run; `None` once its diagnostic is printed. With `--codel-time wcet` or
 /// `random`, an untimed GenoM layer is loaded as a timed one (`time: Exact`, its CPUs as
-/// declared), so that its codels take their times in the model's own semantics
-/// (docs/engine.md, "Codel times"). A model with a preemptive CPU (a CPU written as its
-/// name alone is one) cannot be timed yet: its codel times run on the engine's simulated
-/// CPUs, scheduled as `bip sched` assumes.
+/// declared, a CPU written as its name alone one preemptive core), so that its codels take
+/// their times in the model's own semantics (docs/engine.md, "Codel times"). A model that
+/// cannot be timed yet (an aperiodic task, an `async` codel, codels at a request, an atom standing for a task) runs
+/// untimed, its codel times on the engine's simulated CPUs, scheduled as `bip sched`
+/// assumes.
 fn model(args: &Args) -> Option<System> {
     if args.codel_time == CodelTimeArg::Zero {
         return load::system(&args.file);
     }
     match bip_lang::load_file_timed(&args.file) {
         Ok(timed) if timed.genom.is_some() => Some(timed),
-        Ok(_) => load::system(&args.file),
-        Err(e) => {
-            let system = load::system(&args.file)?;
-            if system.genom.is_none() || preemptive_cpu(&args.file) {
-                return Some(system);
-            }
-            crate::report::load_error(&e);
-            None
-        }
+        _ => load::system(&args.file),
     }
-}
-
-/// Whether the model in `file` has a CPU that is not cooperative (`preemption: Job`): one
-/// it declares, or the one preemptive CPU of a model that declares none.
-fn preemptive_cpu(file: &std::path::Path) -> bool {
-    let def = bip_lang::read_model_file(file)
-        .and_then(|text| bip_lang::parse_str(&file.display().to_string(), &text));
-    def.is_ok_and(|d| {
-        d.cpus.is_empty()
-            || d.cpus
-                .iter()
-                .any(|c| c.preemption() != bip_lang::syntax::Preemption::Job)
-    })
 }
 
 /// The codels' run times, and the overruns and misses the run saw.

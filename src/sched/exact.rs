@@ -11,8 +11,8 @@ use bip_lang::syntax::{CpuDef, Policy, Preemption};
 use bip_model::System;
 use bip_sched::{show_micros as show, ResponseTime};
 use bip_verifier::{
-    schedulability, CheckKind, DemandChoice, Method, Options, PropertyResult, PropertyVerdict,
-    Report, Schedulability, Stop,
+    CheckKind, DemandChoice, Method, Options, PropertyResult, PropertyVerdict, Report,
+    Schedulability, Stop,
 };
 use serde_json::{json, Value};
 
@@ -101,19 +101,17 @@ pub fn run(args: &Args) -> u8 {
     let assignment = super::assignment(args.assign);
     // the analysis of the timed model's task set: its demands bounded from the codel
     // automata (an exact demand counts the work between two ticks of an untimed model)
-    let sched = match schedulability(&system, &options, assignment, DemandChoice::Bound) {
-        Ok(Some(s)) => s,
-        Ok(None) => {
-            eprintln!(
-                "error: {}: no time budgets to analyse: give codels a `wcet` and the model a `tick_ms` (docs/model.md, \"Time budgets\")",
-                args.file.display()
-            );
-            return exit::ERROR;
-        }
-        Err(e) => {
-            eprintln!("error: {}: {e}", args.file.display());
-            return exit::ERROR;
-        }
+    let budgets = "give codels a `wcet` and the model a `tick_ms`";
+    let sched = match super::analysed(
+        &args.file,
+        &system,
+        &options,
+        assignment,
+        DemandChoice::Bound,
+        budgets,
+    ) {
+        Ok(s) => s,
+        Err(code) => return code,
     };
     let report = match bip_verifier::verify(&system, Method::Explicit, &options, &|_| {}) {
         Ok(r) => r,
