@@ -156,6 +156,15 @@ fn analysed(
     }
 }
 
+/// A response time as the JSON reports write it.
+fn response_json(r: ResponseTime) -> serde_json::Value {
+    match r {
+        ResponseTime::Exact(us) => serde_json::json!({"us": us}),
+        ResponseTime::Unbounded => serde_json::json!({"unbounded": true}),
+        ResponseTime::AtLeast(us) => serde_json::json!({"at_least_us": us}),
+    }
+}
+
 fn assignment(arg: AssignArg) -> Assignment {
     match arg {
         AssignArg::Given => Assignment::Given,
@@ -340,13 +349,6 @@ fn json(
         DemandMethod::Bound { why } => json!({"method": "bound", "why": why}),
         DemandMethod::Declared => json!({"method": "declared"}),
     };
-    let response = |r: ResponseTime| -> Value {
-        match r {
-            ResponseTime::Exact(us) => json!({"us": us}),
-            ResponseTime::Unbounded => json!({"unbounded": true}),
-            ResponseTime::AtLeast(us) => json!({"at_least_us": us}),
-        }
-    };
     let cpus: Vec<Value> = sched
         .cpus
         .iter()
@@ -363,7 +365,7 @@ fn json(
                         "demand_us": sched.demands[i],
                         "priority": t.priority,
                         "rank": a.map(|a| a.rank),
-                        "response": a.map(|a| response(a.response)),
+                        "response": a.map(|a| response_json(a.response)),
                         "deadline_us": t.deadline,
                         "slack_us": a.and_then(|a| a.slack(t.deadline)),
                         "unbudgeted_codels": sched.tasks[i].unbudgeted,

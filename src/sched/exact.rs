@@ -411,13 +411,7 @@ fn json_doc(
     verdict: &Verdict,
     saved: &[(String, PathBuf)],
 ) -> String {
-    let response = |r: ResponseTime| -> Value {
-        match r {
-            ResponseTime::Exact(us) => json!({"us": us}),
-            ResponseTime::Unbounded => json!({"unbounded": true}),
-            ResponseTime::AtLeast(us) => json!({"at_least_us": us}),
-        }
-    };
+    let response = super::response_json;
     let tasks: Vec<Value> = rows
         .iter()
         .map(|r| {
