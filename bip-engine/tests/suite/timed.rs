@@ -33,7 +33,8 @@ const LATE: &str = r#"System(name: "late", tick_ms: 1, time: Exact,
         (state: "work", yields: ["pause::work"], bcet: "1ms", wcet: "3ms")])])])"#;
 
 /// Two tasks sharing one core by EDF, activities that clients request, interrupt and
-/// stop, a codel that may throw.
+/// stop, a codel that may throw, and a function whose codel and validation run at its
+/// request, in zero time.
 const EDF: &str = r#"System(name: "edf", tick_ms: 1, time: Exact,
     cpus: [(name: "c", cores: 1, policy: Edf, preemption: Job)],
     modules: [(name: "m",
@@ -45,7 +46,8 @@ const EDF: &str = r#"System(name: "edf", tick_ms: 1, time: Exact,
                  bcet: "1ms", wcet: "2ms")]),
             (name: "B", kind: Activity, task: "b", codels: [
                 (state: "start", yields: ["ether"], wcet: "3ms")]),
-            (name: "Stop", kind: Function, interrupts: ["A"]),
+            (name: "Stop", kind: Function, interrupts: ["A"], validate: (throws: ["e_no"]),
+             codels: [(state: "start", yields: ["ether"], throws: ["e_x"])]),
         ])])"#;
 
 fn model(k: usize) -> System {
@@ -260,4 +262,49 @@ fn a_bound_codel_takes_the_time_it_took() {
     let (ran, over) = run(5000);
     assert!(ran.len() > 1 && ran[1..].iter().all(|&x| x == 3), "{ran:?}");
     assert_eq!(over, ran.len() - 1);
+}
+
+/// `EDF`'s `Stop` runs its validation and its codel at the request, in zero time: across
+/// runs each of their outcomes is taken, while codels of its module run on their core,
+/// and every run replays (`check_run`).
+#[test]
+fn codels_at_the_request_run_in_a_timed_run() {
+    let system = model(3);
+    let running = |s: &bip_model::State| {
+        let task = system.component_index("m_a_task").expect("task a");
+        let codel = system.atom_of(task).var_index("codel").expect("codel");
+        system.value(s, task, codel) != 0
+    };
+    let mut taken = std::collections::BTreeMap::<String, usize>::new();
+    let mut while_running = 0;
+    for seed in 0..8 {
+        let options = SimulationOptions {
+            steps: 1500,
+            seed,
+            codel_time: CodelTime::Random(seed),
+        };
+        let (_, trace) = streamed(system.clone(), options);
+        for (label, before) in path_of(&system, &trace) {
+            let Label::Interaction(i) = label else {
+                continue;
+            };
+            let name = &system.interactions[i as usize].name;
+            if name.starts_with("m_Stop_") {
+                *taken.entry(name.clone()).or_default() += 1;
+                while_running += usize::from(running(&before));
+            }
+        }
+        check_run(3, seed, CodelTime::Random(seed));
+    }
+    for outcome in [
+        "m_Stop_request",
+        "m_Stop_start_fail",
+        "m_Stop_validate_fail",
+    ] {
+        assert!(
+            taken.get(outcome).is_some_and(|&n| n > 0),
+            "{outcome}: {taken:?}"
+        );
+    }
+    assert!(while_running > 0, "{taken:?}");
 }

@@ -150,9 +150,8 @@ fn reference_successors(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
     if !codels.is_empty() {
         return codels;
     }
-    let mut out = Vec::new();
     let phase = (s.phase + 1) % l.period;
-    out.push((
+    let mut out = vec![(
         "tick".to_string(),
         RefState {
             paused: s.paused && phase != 0,
@@ -160,7 +159,15 @@ fn reference_successors(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
             phase,
             ..*s
         },
-    ));
+    )];
+    out.extend(request_outcomes(l, s));
+    out
+}
+
+/// The requests' outcomes from `s`: F's and A's, and their validations' refusals. They
+/// depend on the module and A alone, not on time or on where A's codels are.
+fn request_outcomes(l: &Layer, s: &RefState) -> Vec<(String, RefState)> {
+    let mut out = Vec::new();
     // F: its interrupt of A, then its outcomes
     let interrupted = if l.f_interrupts_a {
         RefState {
@@ -275,6 +282,90 @@ proptest! {
     }
 }
 
+/// `l` as a timed model: A's codels take up to a unit of 1 ms on one cooperative core.
+fn timed_model(l: &Layer) -> String {
+    model(l)
+        .replace(
+            r#"System(name: "at_request", "#,
+            r#"System(name: "at_request", tick_ms: 1, time: Exact, cpus: [(name: "c", preemption: Job)], "#,
+        )
+        .replace(r#"yields: ["pause::main"])"#, r#"yields: ["pause::main"], wcet: "1ms")"#)
+        .replace(r#"(state: "main", yields: ["ether"])"#, r#"(state: "main", yields: ["ether"], wcet: "1ms")"#)
+}
+
+/// The request steps of `l`'s timed model: from every reachable state, exactly the
+/// outcomes the untimed reference gives from its module and A (they take no time and no
+/// core: the task's atom and the clock unchanged), at any instant, while A's codel runs
+/// too. Returns how many were taken while a codel ran.
+fn timed_requests_step_as_the_reference_says(l: &Layer) -> Result<usize, TestCaseError> {
+    let text = timed_model(l);
+    let sys = load(&text);
+    let a = sys.component_index("m_A").expect("A");
+    let m = sys.component_index("m").expect("the module");
+    let clock = sys.component_index("clock").expect("the clock");
+    let task = sys.component_index("m_t_task").expect("the task's atom");
+    let value = |s: &State, comp: u32, name: &str| {
+        sys.atom_of(comp)
+            .var_index(name)
+            .map_or(0, |v| sys.value(s, comp, v))
+    };
+    let view = |s: &State| RefState {
+        main: sys.location_name(s, a) == "main",
+        req: value(s, a, "req") != 0,
+        paused: value(s, a, "paused") != 0,
+        done_f: value(s, m, "done_F") != 0,
+        x: value(s, m, "x"),
+        age: value(s, m, "age_p"),
+        phase: 0,
+    };
+    let timing = |s: &State| {
+        let vars = |comp: u32| {
+            let atom = sys.atom_of(comp);
+            (0..atom.vars.len())
+                .map(|v| sys.value(s, comp, v as u32))
+                .collect::<Vec<_>>()
+        };
+        (vars(task), vars(clock))
+    };
+    let requests = [
+        "F_request",
+        "F_start_fail",
+        "F_validate_fail",
+        "A_request",
+        "A_validate_fail",
+    ];
+    let mut seen = std::collections::HashSet::from([sys.initial_state()]);
+    let mut queue = std::collections::VecDeque::from([sys.initial_state()]);
+    let mut while_running = 0;
+    while let Some(s) = queue.pop_front() {
+        let mut got = BTreeSet::new();
+        for (step, next) in sys.successors(&s).expect("no range error") {
+            let name = interaction_name(&sys, step.label);
+            let name = name.strip_prefix("m_").unwrap_or(name).to_string();
+            if requests.contains(&name.as_str()) {
+                prop_assert_eq!(timing(&s), timing(&next), "{} took time\n{}", name, text);
+                while_running += usize::from(value(&s, task, "codel") != 0);
+                got.insert((name, view(&next)));
+            }
+            if seen.insert(next.clone()) {
+                queue.push_back(next);
+            }
+        }
+        let want: BTreeSet<_> = request_outcomes(l, &view(&s)).into_iter().collect();
+        prop_assert_eq!(&got, &want, "from {:?}\n{}", view(&s), text);
+    }
+    Ok(while_running)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_request_codels_in_a_timed_model_take_no_time(l in layer()) {
+        timed_requests_step_as_the_reference_says(&l)?;
+    }
+}
+
 const ALL: Layer = Layer {
     period: 2,
     f_codel: true,
@@ -286,6 +377,13 @@ const ALL: Layer = Layer {
     f_interrupts_a: true,
     fresh: true,
 };
+
+/// With every part, requests come while A's codels run.
+#[test]
+fn requests_come_while_a_timed_codel_runs() {
+    let n = timed_requests_step_as_the_reference_says(&ALL).expect("as the reference says");
+    assert!(n > 0);
+}
 
 #[test]
 fn the_map_has_the_request_codels_and_their_steps() {

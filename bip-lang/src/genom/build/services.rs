@@ -6,7 +6,6 @@
 //! codel held.
 
 use super::{connector, port, Builder, Cond, UserTexts};
-use crate::diag::ModelError;
 use crate::expr::{Assign, BinOp, Expr};
 use crate::genom::check::{ConstraintKind, PortRef, ServiceRef, ETHER, VALIDATE};
 use crate::genom::names::*;
@@ -418,15 +417,6 @@ impl<'a, 'd> Builder<'a, 'd> {
     ) -> (Option<RecipeCodel>, Option<RecipeCodel>) {
         let s = self.service(r);
         let m = self.module_name(r);
-        if self.timed.is_some() && (s.function.is_some() || s.validate.is_some()) {
-            self.errors.push(
-                ModelError::new(
-                    format!("a timed model cannot have `{m}.{}`'s codel that runs at its request yet", s.name),
-                    s.def.name.span,
-                )
-                .with_help("leave `time: Exact` out, or the function's codel and the `validate` codel (docs/genom.md, \"Codels at the request\")"),
-            );
-        }
         let module = &self.layer.modules[r.module];
         let function = s.function.as_ref().map(|c| RecipeCodel {
             state: c.state.to_string(),
