@@ -8,6 +8,7 @@
 mod api;
 mod http;
 mod session;
+mod timing;
 
 use std::io::Write;
 use std::net::{IpAddr, Ipv4Addr, TcpListener};
