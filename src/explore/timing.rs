@@ -58,8 +58,8 @@ pub fn state(layer: &TimedLayer, system: &System, state: &State, since_start: u6
     json!({
         "unit": layer.show(1),
         "now": duration(layer, layer.now(state)),
-        "cycle": layer.show(layer.cycle),
-        "since_start": layer.show(since_start),
+        "cycle": duration(layer, layer.cycle),
+        "since_start": duration(layer, since_start),
         "tasks": tasks,
     })
 }
