@@ -157,6 +157,47 @@ fn explore_fires_steps_and_goes_back_and_forward() {
 }
 
 #[test]
+fn explore_shows_a_timed_models_time_and_tasks_and_lets_time_pass() {
+    let e = explore(&["robots/tests/timed.ron"]);
+    let a = e.address.as_str();
+    let start = ok(a, "GET", "/api/state", Value::Null);
+    let tasks: Vec<&Value> = start["timing"]["tasks"]
+        .as_array()
+        .expect("tasks")
+        .iter()
+        .collect();
+    assert_eq!(
+        tasks
+            .iter()
+            .map(|t| t["name"].as_str().expect("a name"))
+            .collect::<Vec<_>>(),
+        ["nav.control", "nav.plan", "nav.log"]
+    );
+    let time = start["enabled"]
+        .as_array()
+        .expect("enabled")
+        .iter()
+        .find(|s| s["time"] == true)
+        .expect("time may pass")
+        .clone();
+    let advance = &time["advance"];
+    assert_eq!(
+        time["label"],
+        format!(
+            "time passes {0}: 0 → {0}",
+            advance["time"].as_str().expect("a time")
+        )
+    );
+    let after = ok(a, "POST", "/api/fire", json!({ "index": time["index"] }));
+    assert_eq!(after["timing"]["now"], *advance);
+    assert_eq!(after["steps"], json!([time["label"]]));
+    // an untimed model has none
+    let e = explore(&["robots/philosophers.ron"]);
+    let view = ok(&e.address, "GET", "/api/state", Value::Null);
+    assert_eq!(view["timing"], Value::Null);
+}
+
+#[test]
 fn explore_deep_link_reproduces_a_state_and_its_history() {
     let e = explore(&["robots/philosophers.ron"]);
     let a = e.address.as_str();
