@@ -105,7 +105,7 @@ impl Session {
         let enabled = self.enabled(&state).map_err(|e| (409, e))?;
         let labels = self.labels(&enabled, &vec![&state; enabled.len()]);
         let named: Vec<usize> = (0..enabled.len())
-            .filter(|&k| labels[k] == name || self.system.label_name(enabled[k].label) == name)
+            .filter(|&k| labels[k].0 == name || self.system.label_name(enabled[k].label) == name)
             .collect();
         match named[..] {
             [k] => Ok(k),
@@ -222,18 +222,15 @@ impl Session {
             .iter()
             .zip(&labels)
             .enumerate()
-            .map(|(index, (step, label))| {
+            .map(|(index, (step, (label, advance)))| {
                 let mut out = json!({
                     "index": index,
                     "label": label,
                     "interaction": system.label_name(step.label),
                     "time": system.role(step.label) == bip_model::Role::Time,
                 });
-                let timed = self.timed.as_ref();
-                if let Some((layer, (_, units))) =
-                    timed.and_then(|l| Some((l, timing::time_step(l, system, &state, step)?)))
-                {
-                    out["advance"] = json!({"units": units, "time": layer.show(units)});
+                if let Some(advance) = advance {
+                    out["advance"] = advance.clone();
                 }
                 out
             })
@@ -246,10 +243,14 @@ impl Session {
         let befores: Vec<&State> = std::iter::once(&initial)
             .chain(self.path.iter().map(|(_, after)| after))
             .collect();
-        let history_labels = self.labels(&history_steps, &befores);
+        let history_labels: Vec<String> = self
+            .labels(&history_steps, &befores)
+            .into_iter()
+            .map(|(label, _)| label)
+            .collect();
         let timing = self.timed.as_ref().map(|layer| {
-            let along = history_steps[..self.position].iter().zip(&befores);
-            let since_start = timing::elapsed(system, along.map(|(step, before)| (*before, step)));
+            let along = &history_steps[..self.position];
+            let since_start = timing::elapsed(system, along, &befores);
             timing::state(layer, system, &state, since_start)
         });
         let groups: Vec<Value> = view::user_state(system, &state, false)
@@ -287,17 +288,24 @@ impl Session {
     }
 
     /// The labels of `steps`, each leaving the state of `befores` at its index: as a trace
-    /// names them, a timed model's time step by how far it goes.
-    fn labels(&self, steps: &[OwnedStep], befores: &[&State]) -> Vec<String> {
-        let mut labels = view::step_labels(&self.system, steps);
-        if let Some(layer) = &self.timed {
-            for ((label, step), before) in labels.iter_mut().zip(steps).zip(befores) {
-                if let Some((time, _)) = timing::time_step(layer, &self.system, before, step) {
-                    *label = time;
-                }
-            }
-        }
+    /// names them, a timed model's time step by how far it goes, with its advance (as
+    /// JSON).
+    fn labels(&self, steps: &[OwnedStep], befores: &[&State]) -> Vec<(String, Option<Value>)> {
+        let labels = view::step_labels(&self.system, steps);
+        let Some(layer) = &self.timed else {
+            return labels.into_iter().map(|l| (l, None)).collect();
+        };
         labels
+            .into_iter()
+            .zip(steps)
+            .zip(befores)
+            .map(|((label, step), before)| {
+                match timing::time_step(layer, &self.system, before, step) {
+                    Some((time, advance)) => (time, Some(advance)),
+                    None => (label, None),
+                }
+            })
+            .collect()
     }
 
     fn liveness_here(&mut self, state: &State) -> Option<Liveness> {

@@ -65,14 +65,14 @@ pub fn state(layer: &TimedLayer, system: &System, state: &State, since_start: u6
 }
 
 /// The time step `step` of `state`: its label, `time passes 1 ms: 3 ms → 4 ms` (the
-/// clock modulo its cycle, as the state shows it), and the units it stands for; `None`
-/// for another step, or one whose advance is a range error (it keeps its plain name).
+/// clock modulo its cycle, as the state shows it), and how far it goes; `None` for
+/// another step, or one whose advance is a range error (it keeps its plain name).
 pub fn time_step(
     layer: &TimedLayer,
     system: &System,
     state: &State,
     step: &OwnedStep,
-) -> Option<(String, u64)> {
+) -> Option<(String, Value)> {
     if system.role(step.label) != Role::Time {
         return None;
     }
@@ -85,11 +85,14 @@ pub fn time_step(
         layer.show(now),
         layer.show(then)
     );
-    Some((label, units))
+    Some((label, duration(layer, units)))
 }
 
-/// The units that pass along `path` (each step with the state it leaves).
-pub fn elapsed<'p>(system: &System, path: impl Iterator<Item = (&'p State, &'p OwnedStep)>) -> u64 {
-    path.map(|(before, step)| system.time_advance(before, step.as_step()).unwrap_or(0))
+/// The units that pass along `steps`, each leaving the state of `befores` at its index.
+pub fn elapsed(system: &System, steps: &[OwnedStep], befores: &[&State]) -> u64 {
+    steps
+        .iter()
+        .zip(befores)
+        .map(|(step, before)| system.time_advance(before, step.as_step()).unwrap_or(0))
         .sum()
 }
