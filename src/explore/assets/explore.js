@@ -151,15 +151,20 @@ function renderTiming(timing) {
   const tasks = $("tasks");
   tasks.replaceChildren();
   const head = element("tr");
-  for (const h of ["task", "stage", "codel: run / WCET", "job: since release / deadline"]) head.append(element("th", h));
+  for (const h of ["task", "codel", "job"]) head.append(element("th", h));
   tasks.append(head);
   for (const t of timing.tasks) {
     const tr = element("tr");
     const where = [t.cpu, t.core === null ? null : "core " + t.core].filter((x) => x).join(" ");
-    const stage = element("td", t.stage, t.stage === "idle" ? "idle" : t.stage === "running" ? "running" : "");
+    const task = element("td", undefined, "task");
+    const stage = element("div", t.stage, t.stage === "idle" ? "idle" : t.stage === "running" ? "running" : "");
     stage.title = t.stage_text;
-    const codel = element("td", t.codel ? t.codel.name + ": " + t.codel.elapsed.time + " / " + t.codel.wcet : "–");
-    const job = element("td", t.job ? t.job.elapsed.time + " / " + t.job.deadline : "–");
+    task.append(element("div", t.name + (where ? " (" + where + ")" : "")), stage);
+    // a duration pair is kept on one line
+    const codel = element("td", t.codel ? undefined : "–");
+    if (t.codel) codel.append(element("div", t.codel.name), element("div", t.codel.elapsed.time + " / " + t.codel.wcet, "times"));
+    const job = element("td", t.job ? undefined : "–");
+    if (t.job) job.append(element("div", t.job.elapsed.time + " / " + t.job.deadline, "times"));
     const notes = [];
     if (t.job && t.job.past_deadline) notes.push("past its deadline");
     if (t.late) notes.push("late: a period boundary passed while its job ran");
@@ -167,7 +172,7 @@ function renderTiming(timing) {
       job.classList.add("late");
       job.append(element("div", notes.join("; ")));
     }
-    tr.append(element("td", t.name + (where ? " (" + where + ")" : ""), "task"), stage, codel, job);
+    tr.append(task, codel, job);
     tasks.append(tr);
   }
 }
