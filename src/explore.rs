@@ -8,6 +8,9 @@
 mod api;
 mod http;
 mod session;
+mod timing;
+#[cfg(test)]
+mod timing_tests;
 
 use std::io::Write;
 use std::net::{IpAddr, Ipv4Addr, TcpListener};

@@ -6,6 +6,7 @@
 //! --trace-dir` also draws beside each trace of a timed model.
 
 mod schedule;
+pub(crate) mod timed;
 mod timeline;
 pub(crate) mod view;
 pub(crate) mod why;

@@ -9,6 +9,8 @@ use bip_model::{
 };
 use serde_json::{json, Value};
 
+use super::timing;
+use crate::trace::timed::TimedLayer;
 use crate::trace::{self, view};
 
 /// Bound on the steps of one history, so that a deep link cannot make the server work
@@ -26,11 +28,14 @@ pub struct Session {
     /// The loaded trace's verdict, in words, while its steps are the history.
     loaded: Option<String>,
     liveness: LivenessChecker,
+    /// A timed model's clock and tasks.
+    timed: Option<TimedLayer>,
 }
 
 impl Session {
     pub fn new(system: System) -> Session {
         Session {
+            timed: TimedLayer::of(&system),
             system,
             path: Vec::new(),
             choices: Vec::new(),
@@ -96,10 +101,11 @@ impl Session {
     /// The index of the enabled step named `name`: its label as the page shows it
     /// (`request ndd.GoTo`) or its interaction (`ndd_GoTo_request`, `comp.internal`).
     pub fn index_of(&self, name: &str) -> Result<usize, (u16, String)> {
-        let enabled = self.enabled(&self.state()).map_err(|e| (409, e))?;
-        let labels = view::step_labels(&self.system, &enabled);
+        let state = self.state();
+        let enabled = self.enabled(&state).map_err(|e| (409, e))?;
+        let labels = self.labels(&enabled, &vec![&state; enabled.len()]);
         let named: Vec<usize> = (0..enabled.len())
-            .filter(|&k| labels[k] == name || self.system.label_name(enabled[k].label) == name)
+            .filter(|&k| labels[k].0 == name || self.system.label_name(enabled[k].label) == name)
             .collect();
         match named[..] {
             [k] => Ok(k),
@@ -211,28 +217,52 @@ impl Session {
             Ok(e) => (e, None),
             Err(e) => (Vec::new(), Some(e)),
         };
-        let labels = view::step_labels(system, &enabled);
+        let labels = self.labels(&enabled, &vec![&state; enabled.len()]);
         let enabled_json: Vec<Value> = enabled
             .iter()
             .zip(&labels)
             .enumerate()
-            .map(|(index, (step, label))| {
-                json!({
+            .map(|(index, (step, (label, advance)))| {
+                let mut out = json!({
                     "index": index,
                     "label": label,
                     "interaction": system.label_name(step.label),
                     "time": system.role(step.label) == bip_model::Role::Time,
-                })
+                });
+                if let Some(advance) = advance {
+                    out["advance"] = advance.clone();
+                }
+                out
             })
             .collect();
         let properties = self.properties(&state, liveness);
         // no progress, where deadlock freedom allows it: an end, not a deadlock
         let terminal = properties.iter().any(|p| p["status"] == "terminal");
+        let initial = system.initial_state();
         let history_steps: Vec<OwnedStep> = self.path.iter().map(|(s, _)| s.clone()).collect();
-        let history_labels = view::step_labels(system, &history_steps);
+        let befores: Vec<&State> = std::iter::once(&initial)
+            .chain(self.path.iter().map(|(_, after)| after))
+            .collect();
+        let history_labels: Vec<String> = self
+            .labels(&history_steps, &befores)
+            .into_iter()
+            .map(|(label, _)| label)
+            .collect();
+        let timing = self.timed.as_ref().map(|layer| {
+            let along = &history_steps[..self.position];
+            let since_start = timing::elapsed(system, along, &befores);
+            timing::state(layer, system, &state, since_start)
+        });
         let groups: Vec<Value> = view::user_state(system, &state, false)
             .into_iter()
             .filter(|g| !g.entries.is_empty())
+            // a timed model's task atoms are shown by `timing`, in the user's terms
+            .filter(|g| {
+                !self
+                    .timed
+                    .as_ref()
+                    .is_some_and(|l| l.has_task_named(system, &g.name))
+            })
             .map(|g| {
                 json!({
                     "name": g.name,
@@ -247,6 +277,7 @@ impl Session {
             "steps": history_labels,
             "loaded": self.loaded,
             "state": groups,
+            "timing": timing,
             "enabled": enabled_json,
             "range_error": range_error,
             "liveness": if terminal { "terminal" } else { liveness_name(liveness) },
@@ -254,6 +285,27 @@ impl Session {
             "properties": properties,
             "chart": self.chart(liveness, &properties),
         })
+    }
+
+    /// The labels of `steps`, each leaving the state of `befores` at its index: as a trace
+    /// names them, a timed model's time step by how far it goes, with its advance (as
+    /// JSON).
+    fn labels(&self, steps: &[OwnedStep], befores: &[&State]) -> Vec<(String, Option<Value>)> {
+        let labels = view::step_labels(&self.system, steps);
+        let Some(layer) = &self.timed else {
+            return labels.into_iter().map(|l| (l, None)).collect();
+        };
+        labels
+            .into_iter()
+            .zip(steps)
+            .zip(befores)
+            .map(|((label, step), before)| {
+                match timing::time_step(layer, &self.system, before, step) {
+                    Some((time, advance)) => (time, Some(advance)),
+                    None => (label, None),
+                }
+            })
+            .collect()
     }
 
     fn liveness_here(&mut self, state: &State) -> Option<Liveness> {

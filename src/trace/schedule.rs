@@ -5,70 +5,13 @@
 //! Global cores are counted, never named, in the model: the picture gives a job the
 //! first core free when it is dispatched.
 
-use bip_model::{Label, State, System, Trace, Verdict};
+use bip_model::{Label, System, Trace, Verdict};
 use bip_picture::timeline::{Event, Lane, Segment, Timeline};
 
-/// A task of the model and what the picture reads of its atom.
-struct Task {
-    /// `m.t`.
-    name: String,
-    component: u32,
-    stage: u32,
-    codel: u32,
-    cpu: u32,
-    core: Option<u32>,
-    /// Its codels' starts: the interaction and the codel's name (`S.s`).
-    starts: Vec<(u32, String)>,
-}
+use super::timed::{Stage, TimedLayer};
 
 /// A segment being drawn: where it starts, in units, and its label.
 type Open = Option<(u64, String)>;
-
-/// A job's stage in the task atom (docs/genom.md, "Timed models").
-const READY: i64 = 1;
-const RUNNING: i64 = 2;
-
-fn tasks(system: &System) -> Vec<Task> {
-    let Some(map) = &system.genom else {
-        return Vec::new();
-    };
-    let mut out = Vec::new();
-    for m in &map.modules {
-        for (ti, t) in m.tasks.iter().enumerate() {
-            let Some(component) = system.component_index(&format!("{}_{}_task", m.name, t.name))
-            else {
-                continue;
-            };
-            let atom = system.atom_of(component);
-            let (Some(stage), Some(codel)) = (atom.var_index("stage"), atom.var_index("codel"))
-            else {
-                continue;
-            };
-            let starts = m
-                .services
-                .iter()
-                .filter(|s| s.task == Some(ti))
-                .flat_map(|s| {
-                    s.codels.iter().filter_map(|c| {
-                        let start = format!("{}_{}_{}_start", m.name, s.name, c.state);
-                        let i = system.interaction_index(&start)?;
-                        Some((i, format!("{}.{}", s.name, c.state)))
-                    })
-                })
-                .collect();
-            out.push(Task {
-                name: format!("{}.{}", m.name, t.name),
-                component,
-                stage,
-                codel,
-                cpu: t.cpu,
-                core: t.core,
-                starts,
-            });
-        }
-    }
-    out
-}
 
 /// The lane of core `k` of CPU `cpu`, made when first used.
 fn core_lane(lanes: &mut Vec<((u32, u32), Lane)>, cpus: &[String], cpu: u32, k: u32) -> usize {
@@ -107,13 +50,13 @@ pub fn schedule(system: &System, trace: &Trace) -> Result<Timeline, String> {
     let Some(map) = &system.genom else {
         return Err("a schedule shows tasks: the model has no GenoM layer".into());
     };
-    let Some(unit_us) = map.time_unit_us else {
+    let Some(layer) = TimedLayer::of(system) else {
         return Err(
             "a schedule needs a timed model (`time: Exact`): in another one codels take no time"
                 .into(),
         );
     };
-    let tasks = tasks(system);
+    let (unit_us, tasks) = (layer.unit_us, &layer.tasks);
     let path = trace
         .replay(system)
         .map_err(|e| format!("the trace does not fit the model: {e}"))?;
@@ -135,7 +78,6 @@ pub fn schedule(system: &System, trace: &Trace) -> Result<Timeline, String> {
     let mut waiting: Vec<Open> = vec![None; tasks.len()];
     let mut running: Vec<Open> = vec![None; tasks.len()];
     let mut holding: Vec<Option<(usize, Open)>> = vec![None; tasks.len()];
-    let stage = |s: &State, t: &Task| system.value(s, t.component, t.stage);
     let initial = system.initial_state();
     let mut before = &initial;
     let mut now = 0u64;
@@ -150,10 +92,10 @@ pub fn schedule(system: &System, trace: &Trace) -> Result<Timeline, String> {
             continue;
         };
         for (k, t) in tasks.iter().enumerate() {
-            let (was, is) = (stage(before, t), stage(after, t));
+            let (was, is) = (t.stage(system, before), t.stage(system, after));
             let lane = &mut lanes[k];
-            if is == READY && was != READY {
-                if was == 0 {
+            if is == Stage::Ready && was != Stage::Ready {
+                if was == Stage::Idle {
                     lane.events.push(Event {
                         at: at as usize,
                         kind: "release".into(),
@@ -162,17 +104,17 @@ pub fn schedule(system: &System, trace: &Trace) -> Result<Timeline, String> {
                 }
                 waiting[k] = Some((at, "waits for a core".into()));
             }
-            if was == READY && is != READY {
+            if was == Stage::Ready && is != Stage::Ready {
                 close(lane, &mut waiting[k], at, "ready");
             }
-            if let Some((_, label)) = t.starts.iter().find(|(s, _)| *s == i) {
-                running[k] = Some((at, label.clone()));
+            if let Some(c) = t.codels.iter().find(|c| c.start == i) {
+                running[k] = Some((at, c.name.clone()));
             }
-            let codel_before = system.value(before, t.component, t.codel);
-            if codel_before != 0 && system.value(after, t.component, t.codel) == 0 {
+            if t.running_codel(system, before).is_some() && t.running_codel(system, after).is_none()
+            {
                 close(lane, &mut running[k], at, "running");
             }
-            if is == RUNNING && was != RUNNING {
+            if is == Stage::Running && was != Stage::Running {
                 let busy: Vec<usize> = holding.iter().flatten().map(|(c, _)| *c).collect();
                 let core = match t.core {
                     Some(c) => core_lane(&mut cores, &cpus, t.cpu, c),
@@ -183,7 +125,7 @@ pub fn schedule(system: &System, trace: &Trace) -> Result<Timeline, String> {
                 };
                 holding[k] = Some((core, Some((at, t.name.clone()))));
             }
-            if was == RUNNING && is != RUNNING {
+            if was == Stage::Running && is != Stage::Running {
                 if let Some((core, mut open)) = holding[k].take() {
                     close(&mut cores[core].1, &mut open, at, "job");
                 }
@@ -192,7 +134,7 @@ pub fn schedule(system: &System, trace: &Trace) -> Result<Timeline, String> {
                     kind: "done".into(),
                     label: format!("{}'s job ends", t.name),
                 });
-                if is == READY {
+                if is == Stage::Ready {
                     waiting[k] = Some((at, "waits for a core".into()));
                 }
             }

@@ -168,7 +168,7 @@ fn lifelines(system: &System) -> (Vec<String>, Vec<Option<usize>>) {
 }
 
 /// The GenoM clock: the trigger of the tick.
-fn clock_component(system: &System, map: &GenomMap) -> Option<u32> {
+pub(super) fn clock_component(system: &System, map: &GenomMap) -> Option<u32> {
     let tick = system.interactions.get(map.tick as usize)?;
     let trigger = tick.trigger? as usize;
     Some(tick.ports.get(trigger)?.component)

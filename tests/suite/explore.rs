@@ -157,6 +157,47 @@ fn explore_fires_steps_and_goes_back_and_forward() {
 }
 
 #[test]
+fn explore_shows_a_timed_models_time_and_tasks_and_lets_time_pass() {
+    let e = explore(&["robots/tests/timed.ron"]);
+    let a = e.address.as_str();
+    let start = ok(a, "GET", "/api/state", Value::Null);
+    let tasks: Vec<&Value> = start["timing"]["tasks"]
+        .as_array()
+        .expect("tasks")
+        .iter()
+        .collect();
+    assert_eq!(
+        tasks
+            .iter()
+            .map(|t| t["name"].as_str().expect("a name"))
+            .collect::<Vec<_>>(),
+        ["nav.control", "nav.plan", "nav.log"]
+    );
+    let time = start["enabled"]
+        .as_array()
+        .expect("enabled")
+        .iter()
+        .find(|s| s["time"] == true)
+        .expect("time may pass")
+        .clone();
+    let advance = &time["advance"];
+    assert_eq!(
+        time["label"],
+        format!(
+            "time passes {0}: 0 → {0}",
+            advance["time"].as_str().expect("a time")
+        )
+    );
+    let after = ok(a, "POST", "/api/fire", json!({ "index": time["index"] }));
+    assert_eq!(after["timing"]["now"], *advance);
+    assert_eq!(after["steps"], json!([time["label"]]));
+    // an untimed model has none
+    let e = explore(&["robots/philosophers.ron"]);
+    let view = ok(&e.address, "GET", "/api/state", Value::Null);
+    assert_eq!(view["timing"], Value::Null);
+}
+
+#[test]
 fn explore_deep_link_reproduces_a_state_and_its_history() {
     let e = explore(&["robots/philosophers.ron"]);
     let a = e.address.as_str();
@@ -442,21 +483,22 @@ fn chromium(args: &[&str], url: &str, profile: &std::path::Path) -> Browser {
 
 /// The browser test cannot run here: a failure where CI requires it
 /// (`BIP_REQUIRE_CHROMIUM=1`), else a skip written past the harness's capture, with why.
-fn browser_unavailable(why: &str) {
+fn browser_unavailable(test: &str, why: &str) {
     let required = std::env::var("BIP_REQUIRE_CHROMIUM").is_ok_and(|v| v == "1");
     assert!(!required, "BIP_REQUIRE_CHROMIUM=1 but {why}");
     use std::io::Write;
     let _ = writeln!(
         std::io::stderr().lock(),
-        "SKIPPED explore_in_chromium_clicks_through_the_rover_deadlock: {why}; the browser \
-         test did NOT run"
+        "SKIPPED {test}: {why}; the browser test did NOT run"
     );
 }
+
+const ROVER: &str = "explore_in_chromium_clicks_through_the_rover_deadlock";
 
 #[test]
 fn explore_in_chromium_clicks_through_the_rover_deadlock() {
     if !have("chromium") {
-        browser_unavailable("chromium is not on PATH (apt-get install chromium)");
+        browser_unavailable(ROVER, "chromium is not on PATH (apt-get install chromium)");
         return;
     }
     let dir = tempfile::tempdir().expect("temp dir");
@@ -471,7 +513,7 @@ fn explore_in_chromium_clicks_through_the_rover_deadlock() {
     let run = chromium(&["--dump-dom"], &url, &dir.path().join("profile"));
     if !run.succeeded() && !run.stdout.contains("<body>") {
         // it could not start (a memory cap is enough): not a fault of the page
-        browser_unavailable(&format!("chromium cannot start: {}", run.why()));
+        browser_unavailable(ROVER, &format!("chromium cannot start: {}", run.why()));
         return;
     }
     let document = run
@@ -535,4 +577,78 @@ fn explore_in_chromium_clicks_through_the_rover_deadlock() {
     if let Ok(path) = std::env::var("BIP_EXPLORE_SCREENSHOT") {
         std::fs::copy(&shot, path).expect("the screenshot copied");
     }
+}
+
+/// The body of the page chromium dumped, or `None` (said on stderr) where it cannot run.
+fn dumped_page(test: &str, url: &str, profile: &std::path::Path) -> Option<String> {
+    if !have("chromium") {
+        browser_unavailable(test, "chromium is not on PATH (apt-get install chromium)");
+        return None;
+    }
+    let run = chromium(&["--dump-dom"], url, profile);
+    if !run.succeeded() && !run.stdout.contains("<body>") {
+        browser_unavailable(test, &format!("chromium cannot start: {}", run.why()));
+        return None;
+    }
+    let body = run.stdout.split_once("<body>").map(|(_, b)| b.to_string());
+    Some(body.unwrap_or_else(|| {
+        panic!(
+            "no page in chromium's output: {}\n{}",
+            run.stdout,
+            run.why()
+        )
+    }))
+}
+
+#[test]
+fn explore_in_chromium_shows_a_timed_models_tasks() {
+    let e = explore(&["robots/tests/timed.ron"]);
+    let a = e.address.as_str();
+    // `plan` runs `compute` while `control` runs `start`, then time passes
+    for step in [
+        "request nav.Plan",
+        "tick",
+        "release",
+        "nav_plan_dispatch",
+        "nav_Plan_start_start",
+        "tick",
+        "nav.Plan: start → compute",
+        "nav_Plan_compute_start",
+        "tick",
+        "tick",
+        "release",
+        "nav_control_dispatch",
+        "nav_control_start_start",
+        "tick",
+    ] {
+        ok(a, "POST", "/api/fire", json!({ "step": step }));
+    }
+    let view = ok(a, "POST", "/api/go", json!({ "position": 0 }));
+    let history: Vec<String> = view["history"]
+        .as_array()
+        .expect("history")
+        .iter()
+        .map(|k| k.to_string())
+        .collect();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let url = format!("http://{a}/#h={}", history.join("."));
+    let test = "explore_in_chromium_shows_a_timed_models_tasks";
+    let Some(page) = dumped_page(test, &url, &dir.path().join("profile")) else {
+        return;
+    };
+    for seen in [
+        "<div id=\"timing\">",
+        "4.5 ms into the 8 ms cycle",
+        ">time passes 500 µs: 4.5 ms → 5 ms<",
+        ">nav.control</div><div class=\"running\"",
+        ">control.start</div><div class=\"times\">500 µs / 1 ms<",
+        ">Plan.compute</div><div class=\"times\">2 ms / 3 ms<",
+        ">2.5 ms / 8 ms<",
+    ] {
+        assert!(
+            page.contains(seen),
+            "the page does not show {seen:?}: {page}"
+        );
+    }
+    assert_eq!(ok(a, "GET", "/api/state", Value::Null)["position"], 14);
 }

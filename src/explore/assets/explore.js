@@ -117,6 +117,8 @@ function render(v) {
     history.append(li);
   });
 
+  renderTiming(v.timing);
+
   const state = $("state");
   state.replaceChildren();
   for (const group of v.state) {
@@ -137,6 +139,42 @@ function render(v) {
   const hash = "#h=" + v.history.join(".") + "&at=" + v.position;
   $("link").href = hash;
   window.history.replaceState(null, "", hash);
+}
+
+// a timed model's time and tasks (null for an untimed model)
+function renderTiming(timing) {
+  $("timing").hidden = !timing;
+  if (!timing) return;
+  $("time").textContent = timing.now.time + " into the " + timing.cycle.time +
+    " cycle of the periods (the state holds time modulo it); " + timing.since_start.time +
+    " since the initial state along the history. Unit: " + timing.unit + ".";
+  const tasks = $("tasks");
+  tasks.replaceChildren();
+  const head = element("tr");
+  for (const h of ["task", "codel", "job"]) head.append(element("th", h));
+  tasks.append(head);
+  for (const t of timing.tasks) {
+    const tr = element("tr");
+    const where = [t.cpu, t.core === null ? null : "core " + t.core].filter((x) => x).join(" ");
+    const task = element("td", undefined, "task");
+    const stage = element("div", t.stage, t.stage === "idle" ? "idle" : t.stage === "running" ? "running" : "");
+    stage.title = t.stage_text;
+    task.append(element("div", t.name + (where ? " (" + where + ")" : "")), stage);
+    // a duration pair is kept on one line
+    const codel = element("td", t.codel ? undefined : "–");
+    if (t.codel) codel.append(element("div", t.codel.name), element("div", t.codel.elapsed.time + " / " + t.codel.wcet, "times"));
+    const job = element("td", t.job ? undefined : "–");
+    if (t.job) job.append(element("div", t.job.elapsed.time + " / " + t.job.deadline, "times"));
+    const notes = [];
+    if (t.job && t.job.past_deadline) notes.push("past its deadline");
+    if (t.late) notes.push("late: a period boundary passed while its job ran");
+    if (notes.length) {
+      job.classList.add("late");
+      job.append(element("div", notes.join("; ")));
+    }
+    tr.append(task, codel, job);
+    tasks.append(tr);
+  }
 }
 
 function parseHash() {
