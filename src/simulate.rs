@@ -195,7 +195,8 @@ pub fn run(args: &Args) -> u8 {
 /// `random`, an untimed GenoM layer is loaded as a timed one (`time: Exact`, its CPUs as
 /// declared, a CPU written as its name alone one preemptive core), so that its codels take
 /// their times in the model's own semantics (docs/engine.md, "Codel times"). A model that
-/// cannot be timed yet (an aperiodic task, an `async` codel, an atom standing for a task) runs
+/// cannot be timed yet (an aperiodic task, an `async` codel, an atom standing for a task, tasks
+/// sharing a lock on a preemptive CPU) runs
 /// untimed, its codel times on the engine's simulated CPUs, scheduled as `bip sched`
 /// assumes.
 fn model(args: &Args) -> Option<System> {

@@ -231,3 +231,57 @@ fn a_preemptive_cpu_has_both_columns() {
         "{text}"
     );
 }
+
+/// A lock shared across two CPUs: the log task waits for the servo's `move` codel, which
+/// the analysis of the log's CPU does not see: a run takes 4 ms more than its response.
+#[test]
+fn a_lock_held_on_another_cpu_makes_the_analysis_optimistic() {
+    let text = std::fs::read_to_string(format!("{}/{PESSIMISM}", env!("CARGO_MANIFEST_DIR")))
+        .expect("the model")
+        .replacen(
+            r#"cpus: [(name: "arm", preemption: Job), (name: "io", preemption: Job)]"#,
+            r#"cpus: ["arm", "io"]"#,
+            1,
+        )
+        .replacen(
+            r#"bcet: "2ms", wcet: "4ms"),"#,
+            r#"bcet: "2ms", wcet: "4ms", uses: ["calib"]),"#,
+            1,
+        )
+        .replacen(
+            r#"yields: ["ether"], wcet: "3ms"),"#,
+            r#"yields: ["ether"], wcet: "3ms", uses: ["calib"]),"#,
+            1,
+        );
+    assert_eq!(text.matches("calib").count(), 2);
+    let (_dir, path) = written(&text);
+    let out = bip(&["sched", "--exact", &path]);
+    let report = stdout(&out);
+    assert_eq!(out.status.code(), Some(1), "{report}");
+    assert_eq!(
+        row(&report, "arm.log"),
+        ["arm.log", "20 ms", "20 ms", "3 ms", "7 ms", "-4 ms"]
+    );
+    assert!(
+        report
+            .contains("note: arm.log: a run of the model takes longer than the analysis' response"),
+        "{report}"
+    );
+    // under a state limit, a run already past the analysis' response bounds the pessimism
+    let out = bip(&[
+        "sched",
+        "--exact",
+        &path,
+        "--max-states",
+        "1400",
+        "--format",
+        "json",
+    ]);
+    let doc: Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let log = &doc["tasks"][1];
+    assert_eq!(log["name"], "arm.log");
+    assert_eq!(doc["exploration"]["complete"], false);
+    assert_eq!(log["exact"]["at_least_us"], 4000, "{log}");
+    assert_eq!(log["pessimism_at_most_us"], -1000);
+    assert!(log["pessimism_us"].is_null());
+}

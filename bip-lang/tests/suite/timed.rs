@@ -180,6 +180,37 @@ fn every_preemption_loads() {
     assert_eq!(connectors(&alone), (0, 0));
 }
 
+/// Tasks that compete for a preemptive CPU's cores and share a lock are refused (a task
+/// waiting for a lock keeps its core, a spin); on cooperative CPUs, or on separate cores,
+/// they load.
+#[test]
+fn a_lock_shared_on_a_preemptive_cpu_is_refused() {
+    let locked = bad(
+        r#"(state: "c2", yields: ["pause::c1"], wcet: "1ms"),"#,
+        r#"(state: "c2", yields: ["pause::c1"], wcet: "1ms", uses: ["pose"]),"#,
+    )
+    .replacen(
+        r#"codels: [(state: "start", yields: ["ether"], wcet: "500us")]"#,
+        r#"codels: [(state: "start", yields: ["ether"], wcet: "500us", uses: ["pose"])]"#,
+        1,
+    );
+    let preemptive = locked.replacen("preemption: Job),\n", "preemption: Preemptive),\n", 1);
+    assert_error(
+        &preemptive,
+        "tasks `m0.t0` and `m0.t1` share `m0.pose` on the preemptive CPU `main`, whose lock waits the model does not have yet",
+        "start",
+    );
+    for fine in [
+        locked.clone(),
+        locked.replacen("preemption: Job),\n", "preemption: Codel),\n", 1),
+        preemptive
+            .replacen(r#"priority: 3,"#, r#"priority: 3, core: 0,"#, 1)
+            .replacen(r#"priority: 2)"#, r#"priority: 2, core: 1)"#, 1),
+    ] {
+        load_str("ts.ron", &fine).unwrap_or_else(|e| panic!("{}\n{fine}", e.summary()));
+    }
+}
+
 #[test]
 fn bad_cores_and_scheduling() {
     assert_error(

@@ -322,6 +322,27 @@ pub fn generate(seed: u64) -> TaskSet {
             _ => Preemption::Preemptive,
         };
     }
+    // the tasks competing for a preemptive CPU's cores share no lock: a model refuses
+    // them (a task waiting for a lock keeps its core, which a holder preempted by it
+    // would need; docs/model.md, "Codel locks")
+    for i in 0..tasks.len() {
+        for j in 0..i {
+            let (a, b) = (&tasks[j], &tasks[i]);
+            let competing = a.cpu == b.cpu && a.core == b.core;
+            if !competing || cpus[a.cpu].preemption != Preemption::Preemptive {
+                continue;
+            }
+            let held: Vec<(usize, &'static str)> = a
+                .codels
+                .iter()
+                .flat_map(|c| c.uses.iter().map(|&u| lock(a.module, u)))
+                .collect();
+            let module = b.module;
+            for c in tasks[i].codels.iter_mut() {
+                c.uses.retain(|&u| !held.contains(&lock(module, u)));
+            }
+        }
+    }
     TaskSet {
         tick_ms,
         unit_us,

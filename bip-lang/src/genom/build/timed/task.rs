@@ -25,6 +25,7 @@ impl<'a, 'd> Builder<'a, 'd> {
     /// and the priorities between them.
     pub(in super::super) fn timed_tasks(&mut self, t: &Timed) {
         let tasks = self.timed_task_list(t);
+        self.refuse_spins(t, &tasks);
         for task in &tasks {
             self.task_atom(t, task);
             self.dispatch(t, task, &tasks);
