@@ -28,6 +28,8 @@ pub(crate) mod graph;
 mod response;
 pub(crate) mod scc;
 mod targets;
+#[cfg(test)]
+mod tests;
 mod trace;
 mod worst;
 

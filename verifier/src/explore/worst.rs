@@ -109,7 +109,7 @@ fn clock(system: &System, s: &State) -> (i64, bool) {
 }
 
 /// What the states show of one task.
-#[derive(Default)]
+#[derive(Debug, Default, PartialEq)]
 pub(super) struct Seen {
     /// The largest elapsed time at a job end, in the first state (in exploration order)
     /// that shows it, with the job end.
@@ -228,7 +228,7 @@ pub(super) fn worst_responses(
 
 /// Per task, what the stored states show: its largest elapsed time at a job end, and
 /// whether a second boundary can be released while its job is active.
-fn read_states(
+pub(super) fn read_states(
     system: &System,
     visited: &Visited,
     tasks: &Tasks,
