@@ -483,7 +483,7 @@ impl<'a, K: Keep> Explorer<'a, K> {
             .par_iter_mut()
             .zip(group.par_iter().zip(firsts.par_iter()))
             .for_each(|(out, (chunk, &first))| {
-                out.reset(n, keep, &ctx.tasks);
+                out.reset(n, keep, ctx.tasks);
                 let worker = rayon::current_thread_index().unwrap_or(0) % scratch.len();
                 let mut s = scratch[worker].lock().unwrap_or_else(|p| p.into_inner());
                 ctx.expand_chunk(*chunk, first, &mut s, out);

@@ -52,17 +52,15 @@ pub(super) fn decide(
     if questions.is_empty() && !time_progress {
         return Ok((Vec::new(), None));
     }
-    let mut out: Vec<Option<Decided>> = questions.iter().map(|_| None).collect();
-    let mut which = Vec::new();
-    for k in 0..questions.len() {
-        if which.len() == MAX_WATCHED {
-            out[k] = Some(inconclusive(format!(
+    // the graph watches the first questions; the others are left open
+    let which: Vec<usize> = (0..questions.len().min(MAX_WATCHED)).collect();
+    let mut out: Vec<Option<Decided>> = (0..questions.len())
+        .map(|k| {
+            (k >= MAX_WATCHED).then(|| inconclusive(format!(
                 "one run checks at most {MAX_WATCHED} response properties; check this one in a run of its own"
-            )));
-            continue;
-        }
-        which.push(k);
-    }
+            )))
+        })
+        .collect();
     let done = |out: Vec<Option<Decided>>| {
         out.into_iter()
             .map(|d| d.expect("every question is answered"))
