@@ -51,7 +51,7 @@ use crate::watch::Watch;
 use expand::{read_hash, read_parent, REC_HEADER};
 use graph::{Graph, Keep, Recorder, Rows};
 use response::watched::Watching;
-use targets::{asks_paths, range_errors, targets, watched, Target};
+use targets::{asks_paths, counts_units, range_errors, targets, watched, Target};
 use worst::{Seen, Tasks};
 
 /// States per chunk: large enough to amortise scheduling, small enough to balance.
@@ -120,7 +120,7 @@ pub(crate) fn verify(
     let targets = targets(system);
     let watched = watched(&targets);
     let watching = Watching {
-        advance: system.has_advance(),
+        advance: counts_units(system, &targets),
         system,
         watched: &watched,
     };

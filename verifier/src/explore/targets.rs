@@ -126,6 +126,25 @@ pub(super) fn watched<'a>(targets: &[Target<'a>]) -> Vec<Watched<'a>> {
         .collect()
 }
 
+/// Whether the state graph of a run of `system` for `targets` must note each tick's
+/// time units: the system has an `advance`, and a bounded response property is watched.
+pub(super) fn counts_units(system: &System, targets: &[Target<'_>]) -> bool {
+    system.has_advance()
+        && targets
+            .iter()
+            .filter(|t| matches!(t.check, Check::Response { .. }))
+            .take(MAX_WATCHED)
+            .any(|t| {
+                matches!(
+                    t.check,
+                    Check::Response {
+                        within: Some(_),
+                        ..
+                    }
+                )
+            })
+}
+
 /// The range errors, which every run checks.
 pub(super) fn range_errors<'a>() -> Target<'a> {
     Target {

@@ -11,7 +11,7 @@ use bip_model::{Steps, System};
 
 use super::graph::{Keep, IN_ERROR};
 use super::response::watched::{Flagged, Watching};
-use super::targets::{targets, watched};
+use super::targets::{counts_units, targets, watched};
 use super::worst::{read_states, Seen};
 use super::{workers, Explorer};
 use crate::options::Options;
@@ -48,7 +48,7 @@ fn record(system: &System, jobs: usize, max_states: Option<u64>) -> Recorded {
     let targets = targets(system);
     let watched = watched(&targets);
     let watching = Watching {
-        advance: system.has_advance(),
+        advance: counts_units(system, &targets),
         system,
         watched: &watched,
     };
@@ -88,7 +88,7 @@ fn check_against_the_stored_states(system: &System, r: &Recorded) {
     let targets = targets(system);
     let watched = watched(&targets);
     let keep = Watching {
-        advance: system.has_advance(),
+        advance: counts_units(system, &targets),
         system,
         watched: &watched,
     };
@@ -158,6 +158,10 @@ fn check(system: &System) {
 fn a_timed_models_recorded_graph_and_figures_are_those_of_its_stored_states() {
     let system = timed();
     assert!(system.has_time() && !super::worst::Tasks::of(&system).is_empty());
+    assert!(
+        counts_units(&system, &targets(&system)),
+        "the ticks' units are noted"
+    );
     check(&system);
 }
 
