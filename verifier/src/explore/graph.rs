@@ -227,8 +227,8 @@ impl<'k, K: Keep> Recorder<'k, K> {
         self.graph.allocated()
     }
 
-    /// Appends the rows of `chunk`, whose targets are resolved; false, with the memory
-    /// stop raised, if they do not fit.
+    /// Appends the rows of `chunk`, whose targets are resolved; false if they do not fit
+    /// (the run is not stopped: the caller decides).
     pub(super) fn append(
         &mut self,
         chunk: Chunk,
@@ -239,11 +239,11 @@ impl<'k, K: Keep> Recorder<'k, K> {
         let g = &mut self.graph;
         let states = rows.degrees.len();
         let edges = rows.targets.len();
-        if !(watch.reserve(&mut g.offsets, states)
-            && watch.reserve(&mut g.state_flags, states)
-            && watch.reserve(&mut g.ids, states)
-            && watch.reserve(&mut g.targets, edges)
-            && watch.reserve(&mut g.edge_data, edges))
+        if !(watch.grow(&mut g.offsets, states)
+            && watch.grow(&mut g.state_flags, states)
+            && watch.grow(&mut g.ids, states)
+            && watch.grow(&mut g.targets, edges)
+            && watch.grow(&mut g.edge_data, edges))
         {
             return false;
         }

@@ -224,6 +224,11 @@ struct Explorer<'a, K: Keep> {
     outs: Vec<ChunkOut<K>>,
     /// The state graph recorded so far, when a question about paths needs it.
     recorder: Option<Recorder<'a, K>>,
+    /// The graph may be dropped when it does not fit, to decide the other properties
+    /// (else the run is for the graph, and stops)...
+    may_drop_graph: bool,
+    /// ... and it was.
+    graph_dropped: bool,
     /// The tasks whose worst responses the run gives, and what the states expanded so
     /// far show of them (the first state whose steps could not be computed, if any).
     tasks: Tasks,
@@ -279,6 +284,9 @@ impl<'a, K: Keep> Explorer<'a, K> {
             scratch,
             outs: Vec::new(),
             recorder: keep.map(Recorder::new),
+            // a run that checks range errors alone is for the graph (`on_state_graph`)
+            may_drop_graph: n > 1,
+            graph_dropped: false,
             seen: Ok(tasks.unseen()),
             tasks,
             findings: vec![None; n],
@@ -401,8 +409,10 @@ impl<'a, K: Keep> Explorer<'a, K> {
         Ok(stopped)
     }
 
-    /// A limit that stops the run before the next batch, if any.
-    fn limit_reached(&self, last_growth: u64) -> Option<Stop> {
+    /// A limit that stops the run before the next batch, if any. In a run that decides
+    /// other properties besides those the graph answers, a graph that would pass the
+    /// memory limit is dropped first (those properties stay open: see `report`).
+    fn limit_reached(&mut self, last_growth: u64) -> Option<Stop> {
         if let Some(limit) = self.options.max_states {
             if self.visited.len() >= limit {
                 return Some(Stop::MaxStates { limit });
@@ -411,9 +421,15 @@ impl<'a, K: Keep> Explorer<'a, K> {
         if let Some(limit) = self.watch.max_memory() {
             // the next batch may grow the set by about as much as the last one; leave room
             // for twice that, and for what the process holds besides (read from /proc)
-            let projected = self.store_bytes() + self.graph_bytes() + 2 * last_growth;
-            let resident = memory::resident_bytes().unwrap_or(0) + 2 * last_growth;
-            if projected.max(resident) > limit {
+            let over = |me: &Self| {
+                let projected = me.store_bytes() + me.graph_bytes() + 2 * last_growth;
+                let resident = memory::resident_bytes().unwrap_or(0) + 2 * last_growth;
+                projected.max(resident) > limit
+            };
+            if over(self) && self.may_drop_graph && self.recorder.is_some() {
+                self.drop_graph();
+            }
+            if over(self) {
                 self.watch.raise(Stop::MaxMemory { limit });
             }
         }
@@ -536,8 +552,18 @@ impl<'a, K: Keep> Explorer<'a, K> {
         }
     }
 
+    /// Gives up the graph, which does not fit, to go on deciding the other properties.
+    fn drop_graph(&mut self) {
+        tracing::info!(
+            graph_bytes = self.graph_bytes(),
+            "the state graph does not fit in the memory limit: dropped"
+        );
+        self.recorder = None;
+        self.graph_dropped = true;
+    }
+
     /// Adds the rows of a stored batch to the graph, and what its states show of the
-    /// tasks; false if the graph does not fit (the memory stop is raised).
+    /// tasks; false if the run must stop (the graph does not fit, and the run is for it).
     fn record(&mut self, group: &[Chunk]) -> Result<bool, VerifyError> {
         for out in &mut self.outs[..group.len()] {
             if let Ok(seen) = &mut self.seen {
@@ -568,7 +594,12 @@ impl<'a, K: Keep> Explorer<'a, K> {
                 continue;
             };
             if !recorder.append(*chunk, visited, rows, self.watch) {
-                return Ok(false);
+                if !self.may_drop_graph {
+                    self.watch.out_of_memory();
+                    return Ok(false);
+                }
+                self.drop_graph();
+                return Ok(true);
             }
         }
         Ok(true)

@@ -215,6 +215,10 @@ impl<K: Keep<Edge = u32, Notes = super::response::watched::Notes>> Explorer<'_, 
                 .iter()
                 .position(|t| matches!(t.check, Check::TimeProgress));
             self.watch.rebase();
+            if self.graph_dropped {
+                // as if the graph had been built after the exploration and did not fit
+                self.watch.out_of_memory();
+            }
             let started = std::time::Instant::now();
             let graph_bytes = self.graph_bytes();
             let graph: Option<Flagged> = self
