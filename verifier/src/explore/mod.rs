@@ -18,10 +18,12 @@
 //!
 //! This module holds the driver (levels, batches, the two phases, the limits) and the
 //! data it hands each batch; `expand` is phase 1 on one chunk, `targets` the properties a
-//! run checks and how its findings become verdicts and traces, `graph` the state graph
-//! stored once the exploration is complete, `response` the response properties, decided
-//! on it. [`on_state_graph`] explores and stores the graph for questions asked elsewhere
-//! (the scheduling analysis's demands).
+//! run checks and how its findings become verdicts and traces, `graph` the state graph,
+//! which phase 1 records as it goes when a question about paths needs it, `response`
+//! the response properties and time progress, decided on it once the exploration is
+//! complete, `worst` the timed tasks' worst responses, which phase 1 gathers too: one
+//! pass computes each state's steps for every question. [`on_state_graph`] explores and
+//! records the graph for questions asked elsewhere (the scheduling analysis's demands).
 
 mod expand;
 pub(crate) mod graph;
@@ -146,7 +148,7 @@ pub(crate) enum Unanswered {
     Failed(VerifyError),
 }
 
-/// Explores every reachable state of `system`, checking range errors only, stores the
+/// Explores every reachable state of `system`, checking range errors only, records the
 /// graph of its steps with what `keep` keeps of them, and answers `question` on it: for
 /// questions about paths rather than states. Every limit of `options` holds, in the
 /// exploration, in the storing, and in `question`, which polls the watch it is given
