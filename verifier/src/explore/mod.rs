@@ -561,6 +561,9 @@ impl<'a, K: Keep> Explorer<'a, K> {
             "the state graph does not fit in the memory limit: dropped"
         );
         self.recorder = None;
+        for out in &mut self.outs {
+            out.rows = None;
+        }
         self.graph_dropped = true;
     }
 
