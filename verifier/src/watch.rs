@@ -142,8 +142,24 @@ impl Watch {
     /// if the new allocation would pass the memory limit or the allocator refuses it, so
     /// that a big allocation ends the run as inconclusive instead of aborting it.
     pub fn reserve<T>(&self, v: &mut Vec<T>, additional: usize) -> bool {
+        match self.grow_or_say_why(v, additional) {
+            Ok(()) => true,
+            Err(stop) => {
+                self.raise(stop);
+                false
+            }
+        }
+    }
+
+    /// [`Watch::reserve`] without stopping the run: false if the growth does not fit,
+    /// for memory the run can do without.
+    pub fn grow<T>(&self, v: &mut Vec<T>, additional: usize) -> bool {
+        self.grow_or_say_why(v, additional).is_ok()
+    }
+
+    fn grow_or_say_why<T>(&self, v: &mut Vec<T>, additional: usize) -> Result<(), Stop> {
         if v.capacity() - v.len() >= additional {
-            return true;
+            return Ok(());
         }
         let capacity = v.capacity().saturating_mul(2).max(v.len() + additional);
         let bytes = (capacity * std::mem::size_of::<T>()) as u64;
@@ -152,15 +168,14 @@ impl Watch {
             let expected =
                 self.base.load(Ordering::Relaxed) + self.expected.load(Ordering::Relaxed);
             if resident.max(expected).saturating_add(bytes) > limit {
-                self.raise(Stop::MaxMemory { limit });
-                return false;
+                return Err(Stop::MaxMemory { limit });
             }
         }
         if memory::fallibly(|| v.try_reserve_exact(capacity - v.len())).is_err() {
-            self.out_of_memory();
-            return false;
+            let limit = self.max_memory.or_else(memory::resident_bytes).unwrap_or(0);
+            return Err(Stop::MaxMemory { limit });
         }
-        true
+        Ok(())
     }
 
     /// Stops the run because the allocator refused memory: at the memory limit, or, with

@@ -1,5 +1,7 @@
 //! Phase 1 on one chunk: each state's properties checked, its steps fired, and the
-//! successors not yet stored kept as candidate records, bucketed by shard.
+//! successors not yet stored kept as candidate records, bucketed by shard; and, when the
+//! run needs them, the chunk's rows of the state graph and what its states show of the
+//! tasks' responses, from the same steps.
 
 use std::sync::atomic::Ordering;
 
@@ -8,7 +10,9 @@ use bip_model::Liveness;
 
 use crate::visited::{hash, shard_of, Chunk, SHARDS};
 
+use super::graph::{Keep, Rows};
 use super::targets::Check;
+use super::worst::Tasks;
 use super::{ChunkOut, Ctx, Finding, Found, Scratch, SUCCESSORS_PER_LOOK};
 
 /// Candidate records a chunk finds before it announces them (bytes, records).
@@ -18,8 +22,26 @@ const ANNOUNCED_RECORDS: usize = 256;
 /// and stored; announced to the watch at that cost.
 const RECORD_COPIES: u64 = 3;
 
-impl ChunkOut {
-    pub(super) fn reset(&mut self, targets: usize) {
+impl<K: Keep> ChunkOut<K> {
+    pub(super) fn new(keep: Option<&K>, tasks: &Tasks) -> ChunkOut<K> {
+        ChunkOut {
+            raw: Vec::new(),
+            sorted: Vec::new(),
+            offsets: Vec::new(),
+            transitions: 0,
+            findings: Vec::new(),
+            liveness_unknown: 0,
+            cut: false,
+            rows: keep.map(Rows::new),
+            seen: Ok(tasks.unseen()),
+        }
+    }
+
+    pub(super) fn reset(&mut self, targets: usize, keep: Option<&K>, tasks: &Tasks) {
+        if let (Some(rows), Some(keep)) = (&mut self.rows, keep) {
+            rows.reset(keep);
+        }
+        self.seen = Ok(tasks.unseen());
         self.cut = false;
         self.raw.clear();
         self.sorted.clear();
@@ -31,7 +53,10 @@ impl ChunkOut {
     }
 
     pub(super) fn allocated(&self) -> usize {
-        self.raw.capacity() + self.sorted.capacity() + self.offsets.capacity() * 4
+        self.raw.capacity()
+            + self.sorted.capacity()
+            + self.offsets.capacity() * 4
+            + self.rows.as_ref().map_or(0, Rows::allocated)
     }
 
     /// Groups the raw records by shard (a counting sort, stable: order within a shard is
@@ -79,8 +104,15 @@ pub(super) fn read_parent(rec: &[u8]) -> u32 {
 
 pub(super) const REC_HEADER: usize = 12;
 
-impl Ctx<'_, '_> {
-    pub(super) fn expand_chunk(&self, chunk: Chunk, s: &mut Scratch, out: &mut ChunkOut) {
+impl<K: Keep> Ctx<'_, '_, K> {
+    /// Expands `chunk`, whose first state is state `first` of the recorded graph.
+    pub(super) fn expand_chunk(
+        &self,
+        chunk: Chunk,
+        first: u32,
+        s: &mut Scratch,
+        out: &mut ChunkOut<K>,
+    ) {
         let sys = self.system;
         let layout = &sys.layout;
         let width = self.visited.width();
@@ -95,7 +127,7 @@ impl Ctx<'_, '_> {
             let id = self.visited.id(chunk.shard, local);
             let current = self.visited.state(id);
             layout.decode(current, &mut s.state);
-            let found = |p: usize, what: Found, out: &mut ChunkOut| {
+            let found = |p: usize, what: Found, out: &mut ChunkOut<K>| {
                 if out.findings[p].is_none() {
                     out.findings[p] = Some(Finding { state: id, what });
                 }
@@ -124,9 +156,25 @@ impl Ctx<'_, '_> {
                     }
                 }
             }
+            let me = first + (local - chunk.start);
+            let flags = match (self.keep, &mut out.rows) {
+                (Some(keep), Some(rows)) => rows.open(keep, &s.state, me),
+                _ => 0,
+            };
             if let Err(err) = sys.enabled_steps(&s.state, &mut s.steps) {
+                if let Some(rows) = &mut out.rows {
+                    rows.close(flags, true, 0);
+                }
+                if out.seen.is_ok() {
+                    out.seen = Err(err.to_string());
+                }
                 found(range_target, Found::RangeError(err.to_string()), out);
                 continue;
+            }
+            if let Ok(seen) = &mut out.seen {
+                if !seen.is_empty() {
+                    self.tasks.see(sys, &s.state, &s.steps, id, seen);
+                }
             }
             if let Some(p) = deadlock_target {
                 match sys.liveness(&s.state, &s.steps, &mut s.checker) {
@@ -168,7 +216,12 @@ impl Ctx<'_, '_> {
                 out.transitions += 1;
                 layout.encode_changed(state, current, next, packed);
                 let h = hash(packed);
-                if self.visited.find(h, packed).is_none() {
+                let stored = self.visited.find(h, packed);
+                if let (Some(keep), Some(rows)) = (self.keep, &mut out.rows) {
+                    let candidate = (out.raw.len() / rec) as u32;
+                    rows.edge(keep, state, step, next, me, stored, candidate);
+                }
+                if stored.is_none() {
                     if !self.watch.reserve(&mut out.raw, rec) {
                         out.cut = true;
                         break;
@@ -177,6 +230,9 @@ impl Ctx<'_, '_> {
                     out.raw.extend_from_slice(&id.to_bits().to_le_bytes());
                     out.raw.extend_from_slice(packed);
                 }
+            }
+            if let Some(rows) = &mut out.rows {
+                rows.close(flags, false, steps.len());
             }
         }
         self.must_stop(out, &mut announced, rec, true);
@@ -191,7 +247,7 @@ impl Ctx<'_, '_> {
     /// stop: a limit of the run is reached, or the batch has found `room` new states.
     /// The records are announced in groups (or all, with `flush`), to keep the shared
     /// counters off the path of every state.
-    fn must_stop(&self, out: &ChunkOut, announced: &mut usize, rec: usize, flush: bool) -> bool {
+    fn must_stop(&self, out: &ChunkOut<K>, announced: &mut usize, rec: usize, flush: bool) -> bool {
         let new = out.raw.len() - *announced;
         if new >= ANNOUNCED_BYTES || new >= ANNOUNCED_RECORDS * rec || (flush && new > 0) {
             *announced = out.raw.len();

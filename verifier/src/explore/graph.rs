@@ -1,38 +1,33 @@
-//! The explored state graph, stored once the exploration is complete, for the questions
-//! about paths: each state's successors (compressed rows), with what the asker keeps of
-//! each state and each step ([`Keep`]): the response properties where their triggers and
-//! responses happen, the scheduling analysis each step's interaction.
+//! The explored state graph, for the questions about paths: each state's successors
+//! (compressed rows), with what the asker keeps of each state and each step ([`Keep`]):
+//! the response properties where their triggers and responses happen, the scheduling
+//! analysis each step's interaction.
 //!
-//! States are numbered in the exploration's order (level by level, chunk by chunk), so a
-//! smaller number is never deeper, and the numbering does not depend on the number of
-//! workers. The rows are computed by the step relation, chunk by chunk in parallel, in
-//! batches appended in chunk order: only one batch's rows are ever held twice.
+//! The exploration records it as it goes ([`Recorder`]): the expansion of a chunk, which
+//! computes each state's steps and fires them anyway, also writes the chunk's rows, and
+//! the rows of a batch are appended in chunk order once the batch is stored. States are
+//! numbered in the exploration's order (level by level, chunk by chunk), so a smaller
+//! number is never deeper, and the numbering does not depend on the number of workers.
+//! A successor is named by its stored id while the exploration runs (one found new is
+//! looked up once its batch is stored), and by its number once it is complete.
 
-use bip_model::{State, Step, Steps, System};
-use rayon::prelude::*;
+use bip_model::{State, Step};
 
-use crate::visited::{hash, Chunk, StateId, Visited, SHARDS};
+use crate::visited::{hash, Chunk, StateId, Visited};
 use crate::watch::Watch;
 
 /// On a state, bit 0 of its flags: a state in range error (its steps could not be
 /// computed, or every one of them fails). The other bits are the asker's.
 pub(crate) const IN_ERROR: u32 = 1;
 
-/// States per chunk of the rows' computation.
-const CHUNK_STATES: u32 = 1024;
-/// Chunks per worker in one batch.
-const CHUNKS_PER_WORKER: usize = 8;
-/// States a worker handles between two looks at the limits.
-const STATES_PER_LOOK: usize = 64;
-
 /// What a graph keeps of each state and each step, computed by the workers as they
-/// compute the rows.
+/// expand the states.
 pub(crate) trait Keep: Sync {
     /// What is kept of a step.
-    type Edge: Copy + Send;
+    type Edge: Copy + Send + Sync;
     /// What the states and steps note besides (such as the first error met): one per
     /// chunk, merged in chunk order.
-    type Notes: Send;
+    type Notes: Send + Sync;
 
     fn notes(&self) -> Self::Notes;
 
@@ -65,15 +60,6 @@ pub(crate) struct Graph<E, N = ()> {
     pub(crate) notes: N,
 }
 
-/// One chunk's rows.
-struct Rows<E, N> {
-    degrees: Vec<u32>,
-    targets: Vec<u32>,
-    edge_data: Vec<E>,
-    state_flags: Vec<u32>,
-    notes: N,
-}
-
 impl<E, N> Graph<E, N> {
     pub(crate) fn len(&self) -> usize {
         self.ids.len()
@@ -82,143 +68,228 @@ impl<E, N> Graph<E, N> {
     pub(crate) fn edges(&self, s: u32) -> std::ops::Range<usize> {
         self.offsets[s as usize] as usize..self.offsets[s as usize + 1] as usize
     }
+
+    fn allocated(&self) -> usize {
+        self.offsets.capacity() * 8
+            + self.targets.capacity() * 4
+            + self.edge_data.capacity() * std::mem::size_of::<E>()
+            + self.state_flags.capacity() * 4
+            + self.ids.capacity() * 4
+    }
 }
 
-/// Builds the graph of the states of a complete exploration, keeping what `keep` says;
-/// `None` if the run must stop (a limit of `watch`), or if a successor is not stored.
-pub(crate) fn build<K: Keep>(
-    system: &System,
-    visited: &Visited,
-    keep: &K,
-    watch: &Watch,
-) -> Option<Graph<K::Edge, K::Notes>> {
-    let mut chunks: Vec<Chunk> = Vec::new();
-    for level in 0..visited.levels() {
-        chunks.extend(visited.chunks(level, CHUNK_STATES));
-    }
-    let n = visited.len() as usize;
-    // the numbers of the states, by shard and index
-    let mut number: Vec<Vec<u32>> = (0..SHARDS).map(|_| Vec::new()).collect();
-    // per state its number, id, offset and flags
-    if !watch.expect(n as u64 * 20) {
-        return None;
-    }
-    let mut ids = Vec::with_capacity(n);
-    for c in &chunks {
-        let v = &mut number[c.shard];
-        if v.len() < c.end as usize {
-            v.resize(c.end as usize, u32::MAX);
-        }
-        for local in c.start..c.end {
-            v[local as usize] = ids.len() as u32;
-            ids.push(visited.id(c.shard, local));
-        }
-    }
-    let mut g = Graph {
-        offsets: Vec::with_capacity(n + 1),
-        targets: Vec::new(),
-        edge_data: Vec::new(),
-        state_flags: Vec::with_capacity(n),
-        ids,
-        notes: keep.notes(),
-    };
-    g.offsets.push(0);
-    let edge_bytes = (4 + std::mem::size_of::<K::Edge>()) as u64;
-    let batch = rayon::current_num_threads().max(1) * CHUNKS_PER_WORKER;
-    let mut first = 0u32;
-    for group in chunks.chunks(batch) {
-        let mut starts = Vec::with_capacity(group.len());
-        for c in group {
-            starts.push(first);
-            first += c.end - c.start;
-        }
-        let rows: Vec<Option<Rows<K::Edge, K::Notes>>> = group
-            .par_iter()
-            .zip(starts.par_iter())
-            .map_init(
-                || (system.initial_state(), system.initial_state(), Steps::new()),
-                |(state, next, steps), (chunk, &first)| {
-                    rows_of(
-                        system, visited, &number, keep, watch, *chunk, first, state, next, steps,
-                    )
-                },
-            )
-            .collect();
-        let rows = rows.into_iter().collect::<Option<Vec<_>>>()?;
-        let edges: usize = rows.iter().map(|r| r.targets.len()).sum();
-        // the rows' copy in the graph
-        if !watch.expect(edges as u64 * edge_bytes) {
-            return None;
-        }
-        for r in rows {
-            for d in &r.degrees {
-                let last = *g.offsets.last().unwrap_or(&0);
-                g.offsets.push(last + u64::from(*d));
-            }
-            g.targets.extend_from_slice(&r.targets);
-            g.edge_data.extend_from_slice(&r.edge_data);
-            g.state_flags.extend_from_slice(&r.state_flags);
-            keep.merge(&mut g.notes, r.notes);
-        }
-    }
-    Some(g)
+/// One chunk's rows, written as its states are expanded. A successor not stored yet
+/// when it is found is a candidate record of the chunk: its target waits in `pending`
+/// until the batch is stored.
+pub(super) struct Rows<E, N> {
+    degrees: Vec<u32>,
+    /// Each edge's target, as a stored state's id (bits).
+    targets: Vec<u32>,
+    edge_data: Vec<E>,
+    state_flags: Vec<u32>,
+    notes: N,
+    /// (edge, candidate record) for the targets found new.
+    pending: Vec<(u32, u32)>,
+    /// The number of edges when the state being expanded started.
+    open: usize,
 }
 
-#[allow(clippy::too_many_arguments)]
-fn rows_of<K: Keep>(
-    system: &System,
-    visited: &Visited,
-    number: &[Vec<u32>],
-    keep: &K,
-    watch: &Watch,
-    chunk: Chunk,
-    first: u32,
-    state: &mut State,
-    next: &mut State,
-    steps: &mut Steps,
-) -> Option<Rows<K::Edge, K::Notes>> {
-    let layout = &system.layout;
-    let mut rows = Rows {
-        degrees: Vec::new(),
-        targets: Vec::new(),
-        edge_data: Vec::new(),
-        state_flags: Vec::new(),
-        notes: keep.notes(),
-    };
-    let mut packed = vec![0u8; layout.bytes()];
-    for (k, local) in (chunk.start..chunk.end).enumerate() {
-        if k.is_multiple_of(STATES_PER_LOOK) && watch.stopped().is_some() {
+impl<E, N> Rows<E, N> {
+    pub(super) fn new<K: Keep<Edge = E, Notes = N>>(keep: &K) -> Rows<E, N> {
+        Rows {
+            degrees: Vec::new(),
+            targets: Vec::new(),
+            edge_data: Vec::new(),
+            state_flags: Vec::new(),
+            notes: keep.notes(),
+            pending: Vec::new(),
+            open: 0,
+        }
+    }
+
+    pub(super) fn reset<K: Keep<Edge = E, Notes = N>>(&mut self, keep: &K) {
+        self.degrees.clear();
+        self.targets.clear();
+        self.edge_data.clear();
+        self.state_flags.clear();
+        self.notes = keep.notes();
+        self.pending.clear();
+        self.open = 0;
+    }
+
+    pub(super) fn allocated(&self) -> usize {
+        self.degrees.capacity() * 4
+            + self.targets.capacity() * 4
+            + self.edge_data.capacity() * std::mem::size_of::<E>()
+            + self.state_flags.capacity() * 4
+            + self.pending.capacity() * 8
+    }
+
+    /// Starts the row of state `me`: its flags by `keep`.
+    pub(super) fn open<K: Keep<Edge = E, Notes = N>>(
+        &mut self,
+        keep: &K,
+        state: &State,
+        me: u32,
+    ) -> u32 {
+        self.open = self.targets.len();
+        keep.state(state, me, &mut self.notes)
+    }
+
+    /// Adds the edge of `step` to the open row, to stored state `to`, or else to the
+    /// chunk's candidate record `candidate`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn edge<K: Keep<Edge = E, Notes = N>>(
+        &mut self,
+        keep: &K,
+        state: &State,
+        step: Step<'_>,
+        next: &State,
+        me: u32,
+        to: Option<StateId>,
+        candidate: u32,
+    ) {
+        match to {
+            Some(id) => self.targets.push(id.to_bits()),
+            None => {
+                self.pending.push((self.targets.len() as u32, candidate));
+                self.targets.push(StateId::NONE.to_bits());
+            }
+        }
+        let kept = keep.edge(state, step, next, me, &mut self.notes);
+        self.edge_data.push(kept);
+    }
+
+    /// Ends the open row with the state's flags; `error`: its steps could not be
+    /// computed, or (`steps` of them) none fired.
+    pub(super) fn close(&mut self, flags: u32, error: bool, steps: usize) {
+        let degree = self.targets.len() - self.open;
+        let in_error = error || (degree == 0 && steps > 0);
+        self.degrees.push(degree as u32);
+        self.state_flags
+            .push(flags | if in_error { IN_ERROR } else { 0 });
+    }
+
+    /// Names the targets found new by their ids, now that the batch is stored (`raw`:
+    /// the chunk's candidate records, `rec` bytes each, `header` before the state);
+    /// false if one is not stored.
+    pub(super) fn resolve(
+        &mut self,
+        visited: &Visited,
+        raw: &[u8],
+        rec: usize,
+        header: usize,
+    ) -> bool {
+        for &(edge, candidate) in &self.pending {
+            let r = &raw[candidate as usize * rec..(candidate as usize + 1) * rec];
+            let packed = &r[header..];
+            let Some(id) = visited.find(hash(packed), packed) else {
+                return false;
+            };
+            self.targets[edge as usize] = id.to_bits();
+        }
+        self.pending.clear();
+        true
+    }
+}
+
+/// The graph an exploration records: the rows of the states expanded so far, in order.
+pub(super) struct Recorder<'k, K: Keep> {
+    keep: &'k K,
+    graph: Graph<K::Edge, K::Notes>,
+}
+
+impl<'k, K: Keep> Recorder<'k, K> {
+    pub(super) fn new(keep: &'k K) -> Self {
+        Recorder {
+            keep,
+            graph: Graph {
+                offsets: vec![0],
+                targets: Vec::new(),
+                edge_data: Vec::new(),
+                state_flags: Vec::new(),
+                ids: Vec::new(),
+                notes: keep.notes(),
+            },
+        }
+    }
+
+    pub(super) fn keep(&self) -> &'k K {
+        self.keep
+    }
+
+    /// States whose rows are recorded.
+    pub(super) fn states(&self) -> u32 {
+        self.graph.ids.len() as u32
+    }
+
+    pub(super) fn allocated(&self) -> usize {
+        self.graph.allocated()
+    }
+
+    /// Appends the rows of `chunk`, whose targets are resolved; false if they do not fit
+    /// (the run is not stopped: the caller decides).
+    pub(super) fn append(
+        &mut self,
+        chunk: Chunk,
+        visited: &Visited,
+        rows: &mut Rows<K::Edge, K::Notes>,
+        watch: &Watch,
+    ) -> bool {
+        let g = &mut self.graph;
+        let states = rows.degrees.len();
+        let edges = rows.targets.len();
+        if !(watch.grow(&mut g.offsets, states)
+            && watch.grow(&mut g.state_flags, states)
+            && watch.grow(&mut g.ids, states)
+            && watch.grow(&mut g.targets, edges)
+            && watch.grow(&mut g.edge_data, edges))
+        {
+            return false;
+        }
+        let mut last = *g.offsets.last().unwrap_or(&0);
+        for d in &rows.degrees {
+            last += u64::from(*d);
+            g.offsets.push(last);
+        }
+        g.targets.extend_from_slice(&rows.targets);
+        g.edge_data.extend_from_slice(&rows.edge_data);
+        g.state_flags.extend_from_slice(&rows.state_flags);
+        g.ids
+            .extend((chunk.start..chunk.end).map(|local| visited.id(chunk.shard, local)));
+        let notes = std::mem::replace(&mut rows.notes, self.keep.notes());
+        self.keep.merge(&mut g.notes, notes);
+        true
+    }
+
+    /// The graph of a complete exploration, its targets named by their numbers; `None`
+    /// if the run must stop (a limit of `watch`) or a target is not a recorded state.
+    pub(super) fn finish(
+        self,
+        visited: &Visited,
+        watch: &Watch,
+    ) -> Option<Graph<K::Edge, K::Notes>> {
+        let mut g = self.graph;
+        if g.ids.len() as u64 != visited.len() || !watch.expect(visited.len() * 4) {
             return None;
         }
-        let me = first + k as u32;
-        let current = visited.state(visited.id(chunk.shard, local));
-        layout.decode(current, state);
-        let mut flags = keep.state(state, me, &mut rows.notes);
-        let before = rows.targets.len();
-        if system.enabled_steps(state, steps).is_err() {
-            flags |= IN_ERROR;
-        } else {
-            let mut fired = 0usize;
-            for step in steps.iter() {
-                if system.fire(state, step, next).is_err() {
-                    continue;
-                }
-                fired += 1;
-                layout.encode(next, &mut packed);
-                let Some(id) = visited.find(hash(&packed), &packed) else {
-                    // every successor of a state of a complete exploration is stored
-                    return None;
-                };
-                rows.targets.push(number[id.shard()][id.local() as usize]);
-                let kept = keep.edge(state, step, next, me, &mut rows.notes);
-                rows.edge_data.push(kept);
+        // the numbers of the states, by shard and index
+        let mut number: Vec<Vec<u32>> = (0..crate::visited::SHARDS).map(|_| Vec::new()).collect();
+        for (n, id) in g.ids.iter().enumerate() {
+            let v = &mut number[id.shard()];
+            if v.len() <= id.local() as usize {
+                v.resize(id.local() as usize + 1, u32::MAX);
             }
-            if fired == 0 && !steps.is_empty() {
-                flags |= IN_ERROR;
-            }
+            v[id.local() as usize] = n as u32;
         }
-        rows.degrees.push((rows.targets.len() - before) as u32);
-        rows.state_flags.push(flags);
+        for t in &mut g.targets {
+            let id = StateId::from_bits(*t);
+            let n = *number.get(id.shard())?.get(id.local() as usize)?;
+            if n == u32::MAX {
+                return None;
+            }
+            *t = n;
+        }
+        Some(g)
     }
-    Some(rows)
 }

@@ -18,16 +18,20 @@
 //!
 //! This module holds the driver (levels, batches, the two phases, the limits) and the
 //! data it hands each batch; `expand` is phase 1 on one chunk, `targets` the properties a
-//! run checks and how its findings become verdicts and traces, `graph` the state graph
-//! stored once the exploration is complete, `response` the response properties, decided
-//! on it. [`on_state_graph`] explores and stores the graph for questions asked elsewhere
-//! (the scheduling analysis's demands).
+//! run checks and how its findings become verdicts and traces, `graph` the state graph,
+//! which phase 1 records as it goes when a question about paths needs it, `response`
+//! the response properties and time progress, decided on it once the exploration is
+//! complete, `worst` the timed tasks' worst responses, which phase 1 gathers too: one
+//! pass computes each state's steps for every question. [`on_state_graph`] explores and
+//! records the graph for questions asked elsewhere (the scheduling analysis's demands).
 
 mod expand;
 pub(crate) mod graph;
 mod response;
 pub(crate) mod scc;
 mod targets;
+#[cfg(test)]
+mod tests;
 mod trace;
 mod worst;
 
@@ -47,8 +51,10 @@ use crate::visited::{Chunk, Refused, StateId, Visited};
 use crate::watch::Watch;
 
 use expand::{read_hash, read_parent, REC_HEADER};
-use graph::{Graph, Keep};
-use targets::{range_errors, targets, Target};
+use graph::{Graph, Keep, Recorder, Rows};
+use response::watched::Watching;
+use targets::{asks_paths, counts_units, range_errors, targets, watched, Target};
+use worst::{Seen, Tasks};
 
 /// States per chunk: large enough to amortise scheduling, small enough to balance.
 const CHUNK_STATES: u32 = 1024;
@@ -85,8 +91,7 @@ struct Scratch {
 }
 
 /// The output of expanding one chunk.
-#[derive(Default)]
-struct ChunkOut {
+struct ChunkOut<K: Keep> {
     /// Candidate records `[hash: 8][parent: 4][packed state]`, in the order found...
     raw: Vec<u8>,
     /// ... and grouped by shard: shard `s` holds records `offsets[s]..offsets[s + 1]`.
@@ -97,6 +102,11 @@ struct ChunkOut {
     liveness_unknown: u64,
     /// The chunk stopped before its end because a limit was reached.
     cut: bool,
+    /// The chunk's rows of the state graph, when the run records it.
+    rows: Option<Rows<K::Edge, K::Notes>>,
+    /// What the chunk's states show of the tasks whose worst responses the run gives,
+    /// or the first state whose steps could not be computed.
+    seen: Result<Vec<Seen>, String>,
 }
 
 /// Verifies every property of `system` by explicit-state exploration.
@@ -109,11 +119,20 @@ pub(crate) fn verify(
 ) -> Result<Report, VerifyError> {
     let (pool, jobs) = workers(options)?;
     let watch = Watch::new(options, options.max_memory.or_else(memory::default_limit));
+    let targets = targets(system);
+    let watched = watched(&targets);
+    let watching = Watching {
+        advance: counts_units(system, &targets),
+        system,
+        watched: &watched,
+    };
+    // the state graph is recorded only for a question about paths
+    let keep = asks_paths(&targets).then_some(&watching);
     watch.around(
         || {},
         || {
             pool.install(|| {
-                Explorer::new(system, options, jobs, &watch, targets(system)).run(progress)
+                Explorer::new(system, options, jobs, &watch, targets, keep).run(progress)
             })
         },
     )
@@ -129,7 +148,7 @@ pub(crate) enum Unanswered {
     Failed(VerifyError),
 }
 
-/// Explores every reachable state of `system`, checking range errors only, stores the
+/// Explores every reachable state of `system`, checking range errors only, records the
 /// graph of its steps with what `keep` keeps of them, and answers `question` on it: for
 /// questions about paths rather than states. Every limit of `options` holds, in the
 /// exploration, in the storing, and in `question`, which polls the watch it is given
@@ -148,7 +167,8 @@ pub(crate) fn on_state_graph<K: Keep, R: Send>(
     let (pool, jobs) = workers(&options).map_err(Unanswered::Failed)?;
     let watch = Watch::new(&options, options.max_memory.or_else(memory::default_limit));
     let stored = || {
-        let mut explorer = Explorer::new(system, &options, jobs, &watch, vec![range_errors()]);
+        let targets = vec![range_errors()];
+        let mut explorer = Explorer::new(system, &options, jobs, &watch, targets, Some(keep));
         let stopped = explorer
             .explore(&|_: &Progress| {})
             .map_err(Unanswered::Failed)?;
@@ -162,15 +182,18 @@ pub(crate) fn on_state_graph<K: Keep, R: Send>(
         if let Some(stop) = stopped {
             return Err(Unanswered::Stopped(stop));
         }
-        // the explorer's buffers are freed before the graph is built
-        let Explorer { visited, .. } = explorer;
+        // the explorer's buffers are freed before the question is asked
+        let Explorer {
+            visited, recorder, ..
+        } = explorer;
         watch.rebase();
         let stopped = |what: &str| match watch.stopped() {
             Some(stop) => Unanswered::Stopped(stop.clone()),
             None => Unanswered::Failed(VerifyError::Internal(what.into())),
         };
-        let graph = graph::build(system, &visited, keep, &watch)
-            .ok_or_else(|| stopped("a successor of an explored state is not stored"))?;
+        let graph = recorder
+            .and_then(|r| r.finish(&visited, &watch))
+            .ok_or_else(|| stopped("a successor of an explored state is not recorded"))?;
         drop(visited);
         watch.rebase();
         question(graph, &watch).ok_or_else(|| stopped("the question on the graph failed"))
@@ -193,14 +216,25 @@ fn workers(options: &Options) -> Result<(rayon::ThreadPool, usize), VerifyError>
     Ok((pool, jobs))
 }
 
-struct Explorer<'a> {
+struct Explorer<'a, K: Keep> {
     system: &'a System,
     options: &'a Options,
     jobs: usize,
     targets: Vec<Target<'a>>,
     visited: Visited,
     scratch: Vec<Mutex<Scratch>>,
-    outs: Vec<ChunkOut>,
+    outs: Vec<ChunkOut<K>>,
+    /// The state graph recorded so far, when a question about paths needs it.
+    recorder: Option<Recorder<'a, K>>,
+    /// The graph may be dropped when it does not fit, to decide the other properties
+    /// (else the run is for the graph, and stops)...
+    may_drop_graph: bool,
+    /// ... and it was.
+    graph_dropped: bool,
+    /// The tasks whose worst responses the run gives, and what the states expanded so
+    /// far show of them (the first state whose steps could not be computed, if any).
+    tasks: Tasks,
+    seen: Result<Vec<Seen>, String>,
     findings: Vec<Option<Finding>>,
     liveness_unknown: u64,
     transitions: u64,
@@ -214,14 +248,15 @@ struct Explorer<'a> {
     stopped_decided: bool,
 }
 
-impl<'a> Explorer<'a> {
+impl<'a, K: Keep> Explorer<'a, K> {
     fn new(
         system: &'a System,
         options: &'a Options,
         jobs: usize,
         watch: &'a Watch,
         targets: Vec<Target<'a>>,
-    ) -> Explorer<'a> {
+        keep: Option<&'a K>,
+    ) -> Explorer<'a, K> {
         let slots = system.slot_count();
         let memo = (LIVENESS_MEMO_BYTES / (slots * 8 + 64)).clamp(1_000, 1_000_000);
         let scratch = (0..jobs)
@@ -241,6 +276,7 @@ impl<'a> Explorer<'a> {
             })
             .collect();
         let n = targets.len();
+        let tasks = Tasks::of(system);
         Explorer {
             system,
             options,
@@ -249,6 +285,12 @@ impl<'a> Explorer<'a> {
             visited: Visited::new(system.layout.bytes()),
             scratch,
             outs: Vec::new(),
+            recorder: keep.map(Recorder::new),
+            // a run that checks range errors alone is for the graph (`on_state_graph`)
+            may_drop_graph: n > 1,
+            graph_dropped: false,
+            seen: Ok(tasks.unseen()),
+            tasks,
             findings: vec![None; n],
             liveness_unknown: 0,
             transitions: 0,
@@ -259,11 +301,6 @@ impl<'a> Explorer<'a> {
             insert_time: Duration::ZERO,
             stopped_decided: false,
         }
-    }
-
-    fn run(mut self, progress: &(dyn Fn(&Progress) + Sync)) -> Result<Report, VerifyError> {
-        let stopped = self.explore(progress)?;
-        self.report(stopped)
     }
 
     /// Explores level by level until every state is, or the run must stop (why, then).
@@ -299,7 +336,7 @@ impl<'a> Explorer<'a> {
                     stopped = Some(stop);
                     break 'levels;
                 }
-                let before = self.visited.allocated_bytes();
+                let before = self.kept_bytes();
                 let t0 = Instant::now();
                 let room = self.room();
                 self.expand(group, room);
@@ -323,7 +360,7 @@ impl<'a> Explorer<'a> {
                     stopped = Some(stop.clone());
                     break 'levels;
                 }
-                last_growth = self.visited.allocated_bytes().saturating_sub(before);
+                last_growth = self.kept_bytes().saturating_sub(before);
                 if cut {
                     // the batch stopped at the state limit; if the states it found were
                     // fewer (duplicates), expand it again: the stored ones are known now
@@ -336,6 +373,10 @@ impl<'a> Explorer<'a> {
                 }
                 next_group = groups.next();
                 self.merge_findings(group.len());
+                if !self.record(group)? {
+                    stopped = self.watch.stopped().cloned();
+                    break 'levels;
+                }
                 level_done += group
                     .iter()
                     .map(|c| u64::from(c.end - c.start))
@@ -370,8 +411,10 @@ impl<'a> Explorer<'a> {
         Ok(stopped)
     }
 
-    /// A limit that stops the run before the next batch, if any.
-    fn limit_reached(&self, last_growth: u64) -> Option<Stop> {
+    /// A limit that stops the run before the next batch, if any. In a run that decides
+    /// other properties besides those the graph answers, a graph that would pass the
+    /// memory limit is dropped first (those properties stay open: see `report`).
+    fn limit_reached(&mut self, last_growth: u64) -> Option<Stop> {
         if let Some(limit) = self.options.max_states {
             if self.visited.len() >= limit {
                 return Some(Stop::MaxStates { limit });
@@ -380,9 +423,15 @@ impl<'a> Explorer<'a> {
         if let Some(limit) = self.watch.max_memory() {
             // the next batch may grow the set by about as much as the last one; leave room
             // for twice that, and for what the process holds besides (read from /proc)
-            let projected = self.store_bytes() + 2 * last_growth;
-            let resident = memory::resident_bytes().unwrap_or(0) + 2 * last_growth;
-            if projected.max(resident) > limit {
+            let over = |me: &Self| {
+                let projected = me.store_bytes() + me.graph_bytes() + 2 * last_growth;
+                let resident = memory::resident_bytes().unwrap_or(0) + 2 * last_growth;
+                projected.max(resident) > limit
+            };
+            if over(self) && self.may_drop_graph && self.recorder.is_some() {
+                self.drop_graph();
+            }
+            if over(self) {
                 self.watch.raise(Stop::MaxMemory { limit });
             }
         }
@@ -399,18 +448,41 @@ impl<'a> Explorer<'a> {
         })
     }
 
+    /// The store of states: the visited set and the buffers of a batch (the figure the
+    /// run reports).
     fn store_bytes(&self) -> u64 {
         self.visited.allocated_bytes() + self.outs.iter().map(|o| o.allocated() as u64).sum::<u64>()
+    }
+
+    /// The recorded graph's arrays.
+    fn graph_bytes(&self) -> u64 {
+        self.recorder.as_ref().map_or(0, |r| r.allocated() as u64)
+    }
+
+    /// What the run keeps for good: the states and the recorded graph.
+    fn kept_bytes(&self) -> u64 {
+        self.visited.allocated_bytes() + self.graph_bytes()
     }
 
     /// Phase 1: expands the chunks of a batch in parallel, until they end or a limit is
     /// reached (the run's, or `room` new states found).
     fn expand(&mut self, group: &[Chunk], room: u64) {
         let n = self.targets.len();
+        let keep = self.recorder.as_ref().map(Recorder::keep);
         if self.outs.len() < group.len() {
-            self.outs.resize_with(group.len(), ChunkOut::default);
+            self.outs
+                .resize_with(group.len(), || ChunkOut::new(keep, &self.tasks));
         }
         let open: Vec<bool> = self.findings.iter().map(Option::is_none).collect();
+        // the number of each chunk's first state, in the graph's order
+        let mut first = self.recorder.as_ref().map_or(0, Recorder::states);
+        let firsts: Vec<u32> = group
+            .iter()
+            .map(|c| {
+                first += c.end - c.start;
+                first - (c.end - c.start)
+            })
+            .collect();
         self.watch.rebase();
         let ctx = Ctx {
             system: self.system,
@@ -421,16 +493,18 @@ impl<'a> Explorer<'a> {
             room,
             found: AtomicU64::new(0),
             full: AtomicBool::new(false),
+            keep,
+            tasks: &self.tasks,
         };
         let scratch = &self.scratch;
         self.outs[..group.len()]
             .par_iter_mut()
-            .zip(group.par_iter())
-            .for_each(|(out, chunk)| {
-                out.reset(n);
+            .zip(group.par_iter().zip(firsts.par_iter()))
+            .for_each(|(out, (chunk, &first))| {
+                out.reset(n, keep, ctx.tasks);
                 let worker = rayon::current_thread_index().unwrap_or(0) % scratch.len();
                 let mut s = scratch[worker].lock().unwrap_or_else(|p| p.into_inner());
-                ctx.expand_chunk(*chunk, &mut s, out);
+                ctx.expand_chunk(*chunk, first, &mut s, out);
             });
         self.outs.truncate(group.len());
     }
@@ -480,6 +554,62 @@ impl<'a> Explorer<'a> {
         }
     }
 
+    /// Gives up the graph, which does not fit, to go on deciding the other properties.
+    fn drop_graph(&mut self) {
+        tracing::info!(
+            graph_bytes = self.graph_bytes(),
+            "the state graph does not fit in the memory limit: dropped"
+        );
+        self.recorder = None;
+        for out in &mut self.outs {
+            out.rows = None;
+        }
+        self.graph_dropped = true;
+    }
+
+    /// Adds the rows of a stored batch to the graph, and what its states show of the
+    /// tasks; false if the run must stop (the graph does not fit, and the run is for it).
+    fn record(&mut self, group: &[Chunk]) -> Result<bool, VerifyError> {
+        for out in &mut self.outs[..group.len()] {
+            if let Ok(seen) = &mut self.seen {
+                match &mut out.seen {
+                    Ok(later) => worst::merge(seen, later),
+                    Err(e) => self.seen = Err(e.clone()),
+                }
+            }
+        }
+        let Some(recorder) = &mut self.recorder else {
+            return Ok(true);
+        };
+        let rec = REC_HEADER + self.visited.width();
+        let visited = &self.visited;
+        let resolved = self.outs[..group.len()]
+            .par_iter_mut()
+            .all(|out| match &mut out.rows {
+                Some(rows) => rows.resolve(visited, &out.raw, rec, REC_HEADER),
+                None => false,
+            });
+        if !resolved {
+            return Err(VerifyError::Internal(
+                "a successor of a stored batch is not stored".into(),
+            ));
+        }
+        for (out, chunk) in self.outs.iter_mut().zip(group) {
+            let Some(rows) = out.rows.as_mut() else {
+                continue;
+            };
+            if !recorder.append(*chunk, visited, rows, self.watch) {
+                if !self.may_drop_graph {
+                    self.watch.out_of_memory();
+                    return Ok(false);
+                }
+                self.drop_graph();
+                return Ok(true);
+            }
+        }
+        Ok(true)
+    }
+
     fn any_failure(&self) -> bool {
         self.findings
             .iter()
@@ -493,7 +623,7 @@ impl<'a> Explorer<'a> {
 }
 
 /// What phase 1 reads.
-struct Ctx<'a, 'b> {
+struct Ctx<'a, 'b, K: Keep> {
     system: &'a System,
     targets: &'b [Target<'a>],
     visited: &'b Visited,
@@ -505,4 +635,7 @@ struct Ctx<'a, 'b> {
     room: u64,
     found: AtomicU64,
     full: AtomicBool,
+    /// What the recorded graph keeps, when the run records it.
+    keep: Option<&'b K>,
+    tasks: &'b Tasks,
 }

@@ -13,6 +13,8 @@ use crate::properties::{
 };
 use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 
+use super::graph::Keep;
+use super::response::watched::{Flagged, Watched, MAX_WATCHED};
 use super::response::{decide, Decided, Question};
 use super::trace::trace_to;
 use super::worst::worst_responses;
@@ -97,6 +99,52 @@ pub(super) fn targets(system: &System) -> Vec<Target<'_>> {
     out
 }
 
+/// Whether a run of `targets` asks a question about paths (a response property, time
+/// progress), which the state graph answers.
+pub(super) fn asks_paths(targets: &[Target<'_>]) -> bool {
+    targets
+        .iter()
+        .any(|t| matches!(t.check, Check::Response { .. } | Check::TimeProgress))
+}
+
+/// The response properties that the state graph watches: the first [`MAX_WATCHED`] of
+/// `targets`, in order (`response::decide` finds the others inconclusive).
+pub(super) fn watched<'a>(targets: &[Target<'a>]) -> Vec<Watched<'a>> {
+    targets
+        .iter()
+        .filter_map(|t| match t.check {
+            Check::Response {
+                trigger, response, ..
+            } => Some(Watched {
+                context: format!("property {}", t.name),
+                trigger,
+                response,
+            }),
+            _ => None,
+        })
+        .take(MAX_WATCHED)
+        .collect()
+}
+
+/// Whether the state graph of a run of `system` for `targets` must note each tick's
+/// time units: the system has an `advance`, and a bounded response property is watched.
+pub(super) fn counts_units(system: &System, targets: &[Target<'_>]) -> bool {
+    system.has_advance()
+        && targets
+            .iter()
+            .filter(|t| matches!(t.check, Check::Response { .. }))
+            .take(MAX_WATCHED)
+            .any(|t| {
+                matches!(
+                    t.check,
+                    Check::Response {
+                        within: Some(_),
+                        ..
+                    }
+                )
+            })
+}
+
 /// The range errors, which every run checks.
 pub(super) fn range_errors<'a>() -> Target<'a> {
     Target {
@@ -107,8 +155,17 @@ pub(super) fn range_errors<'a>() -> Target<'a> {
     }
 }
 
-impl Explorer<'_> {
-    pub(super) fn report(self, stopped: Option<Stop>) -> Result<Report, VerifyError> {
+impl<K: Keep<Edge = u32, Notes = super::response::watched::Notes>> Explorer<'_, K> {
+    /// Explores, then answers every property.
+    pub(super) fn run(
+        mut self,
+        progress: &(dyn Fn(&crate::progress::Progress) + Sync),
+    ) -> Result<Report, VerifyError> {
+        let stopped = self.explore(progress)?;
+        self.report(stopped)
+    }
+
+    pub(super) fn report(mut self, stopped: Option<Stop>) -> Result<Report, VerifyError> {
         let seconds = self.started.elapsed().as_secs_f64();
         let states = self.visited.len();
         // the deepest level with a stored state (the run may have stopped before expanding it)
@@ -143,16 +200,10 @@ impl Explorer<'_> {
                 .iter()
                 .enumerate()
                 .filter_map(|(k, t)| match &t.check {
-                    Check::Response {
-                        trigger,
-                        response,
-                        within,
-                    } => Some((
+                    Check::Response { within, .. } => Some((
                         k,
                         Question {
                             name: &t.name,
-                            trigger,
-                            response,
                             within: *within,
                         },
                     )),
@@ -163,13 +214,32 @@ impl Explorer<'_> {
                 .targets
                 .iter()
                 .position(|t| matches!(t.check, Check::TimeProgress));
+            self.watch.rebase();
+            if self.graph_dropped {
+                // as if the graph had been built after the exploration and did not fit
+                self.watch.out_of_memory();
+            }
+            let started = std::time::Instant::now();
+            let graph_bytes = self.graph_bytes();
+            let graph: Option<Flagged> = self
+                .recorder
+                .take()
+                .and_then(|r| r.finish(&self.visited, self.watch));
             let (decided, time_progress) = decide(
                 self.system,
                 &self.visited,
                 &questions,
                 progress.is_some(),
+                graph,
                 self.watch,
             )?;
+            if !which.is_empty() || progress.is_some() {
+                tracing::info!(
+                    seconds = started.elapsed().as_secs_f64(),
+                    graph_bytes,
+                    "state graph searched"
+                );
+            }
             // a limit reached while the graph was searched stopped the run too (every
             // state was explored: `complete` stays true)
             if !which.is_empty() || progress.is_some() {
@@ -206,7 +276,19 @@ impl Explorer<'_> {
         // a timed model's worst responses: exact when every state was seen, else the
         // most the stored states show (none once the user interrupted the run)
         let look = !matches!(run_stopped, Some(Stop::Interrupted));
-        properties.extend(worst_responses(self.system, &self.visited, complete, look)?);
+        let started = std::time::Instant::now();
+        let seen = std::mem::replace(&mut self.seen, Ok(Vec::new()));
+        properties.extend(worst_responses(
+            self.system,
+            &self.visited,
+            &self.tasks,
+            complete,
+            look,
+            seen,
+        )?);
+        if !self.tasks.is_empty() {
+            tracing::info!(seconds = started.elapsed().as_secs_f64(), "worst responses");
+        }
         tracing::info!(
             states,
             transitions = self.transitions,

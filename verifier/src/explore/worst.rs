@@ -36,6 +36,28 @@ struct TaskClock {
     delay: i64,
 }
 
+/// The tasks of a timed model whose worst responses a run gives, and the release of the
+/// period boundaries.
+pub(super) struct Tasks {
+    clocks: Vec<TaskClock>,
+    release: Option<u32>,
+}
+
+impl Tasks {
+    /// The tasks of `system`, as the expansion generated them; none for a model that is
+    /// not timed.
+    pub(super) fn of(system: &System) -> Tasks {
+        Tasks {
+            clocks: task_clocks(system),
+            release: system.interaction_index(RELEASE),
+        }
+    }
+
+    pub(super) fn is_empty(&self) -> bool {
+        self.clocks.is_empty()
+    }
+}
+
 /// The tasks of a timed model, as the expansion generated them; empty for another model.
 fn task_clocks(system: &System) -> Vec<TaskClock> {
     let Some(map) = system.genom.as_ref() else {
@@ -87,8 +109,8 @@ fn clock(system: &System, s: &State) -> (i64, bool) {
 }
 
 /// What the states show of one task.
-#[derive(Default)]
-struct Seen {
+#[derive(Debug, Default, PartialEq)]
+pub(super) struct Seen {
     /// The largest elapsed time at a job end, in the first state (in exploration order)
     /// that shows it, with the job end.
     worst: Option<(i64, StateId, OwnedStep)>,
@@ -98,14 +120,17 @@ struct Seen {
 
 /// Each task's worst response, in the order of the model's tasks; nothing for a model
 /// that is not timed. `complete`: every reachable state was explored; `look`: read the
-/// states stored (false when the user interrupted the run: no figure is given then).
+/// states stored (false when the user interrupted the run: no figure is given then);
+/// `gathered`: what the exploration saw of every state as it expanded them, if it did
+/// (else the stored states are read again).
 pub(super) fn worst_responses(
     system: &System,
     visited: &Visited,
+    tasks: &Tasks,
     complete: bool,
     look: bool,
+    gathered: Result<Vec<Seen>, String>,
 ) -> Result<Vec<PropertyResult>, VerifyError> {
-    let tasks = task_clocks(system);
     if tasks.is_empty() {
         return Ok(Vec::new());
     }
@@ -125,13 +150,16 @@ pub(super) fn worst_responses(
         error_step: None,
         worst_us,
     };
-    let seen = if look {
-        read_states(system, visited, &tasks)?
-    } else {
-        tasks.iter().map(|_| Seen::default()).collect()
+    // a complete exploration expanded every stored state once, in the order read_states
+    // reads them; a stopped one stored states it did not expand
+    let seen = match (look, complete, gathered) {
+        (false, _, _) => tasks.unseen(),
+        (true, true, Ok(seen)) => seen,
+        (true, true, Err(e)) => return Err(in_error(&e)),
+        (true, false, _) => read_states(system, visited, tasks)?,
     };
-    let mut out = Vec::with_capacity(tasks.len());
-    for (t, seen) in tasks.iter().zip(seen) {
+    let mut out = Vec::with_capacity(tasks.clocks.len());
+    for (t, seen) in tasks.clocks.iter().zip(seen) {
         let inconclusive = |reason: String, worst_us| {
             result(t, PropertyVerdict::Inconclusive { reason }, None, worst_us)
         };
@@ -200,13 +228,12 @@ pub(super) fn worst_responses(
 
 /// Per task, what the stored states show: its largest elapsed time at a job end, and
 /// whether a second boundary can be released while its job is active.
-fn read_states(
+pub(super) fn read_states(
     system: &System,
     visited: &Visited,
-    tasks: &[TaskClock],
+    tasks: &Tasks,
 ) -> Result<Vec<Seen>, VerifyError> {
-    let release = system.interaction_index(RELEASE);
-    let mut seen: Vec<Seen> = tasks.iter().map(|_| Seen::default()).collect();
+    let mut seen = tasks.unseen();
     let layout = &system.layout;
     let mut steps = Steps::new();
     for level in 0..visited.levels() {
@@ -214,32 +241,71 @@ fn read_states(
             for local in chunk.start..chunk.end {
                 let id = visited.id(chunk.shard, local);
                 let state = layout.unpack(visited.state(id));
-                system.enabled_steps(&state, &mut steps).map_err(|e| {
-                    VerifyError::Internal(format!("a reachable state has a range error: {e}"))
-                })?;
-                let (n, due) = clock(system, &state);
-                let releases = due
-                    && release
-                        .is_some_and(|r| steps.iter().any(|s| s.label == Label::Interaction(r)));
-                for (t, seen) in tasks.iter().zip(&mut seen) {
-                    let since = (n - t.delay).rem_euclid(t.period);
-                    let boundary_due = due && since == 0;
-                    let late = system.value(&state, t.task, t.late);
-                    let active = system.value(&state, t.task, t.stage) != 0;
-                    if releases && boundary_due && active && late != 0 {
-                        seen.coalesced = true;
-                    }
-                    let Some(step) = steps.iter().find(|s| s.label == Label::Interaction(t.done))
-                    else {
-                        continue;
-                    };
-                    let elapsed = (late + i64::from(boundary_due)) * t.period + since;
-                    if seen.worst.as_ref().is_none_or(|b| elapsed > b.0) {
-                        seen.worst = Some((elapsed, id, step.to_owned()));
-                    }
-                }
+                system
+                    .enabled_steps(&state, &mut steps)
+                    .map_err(|e| in_error(&e.to_string()))?;
+                tasks.see(system, &state, &steps, id, &mut seen);
             }
         }
     }
     Ok(seen)
+}
+
+/// The error of a reachable state whose steps cannot be computed: the worst responses
+/// read every state's.
+fn in_error(e: &str) -> VerifyError {
+    VerifyError::Internal(format!("a reachable state has a range error: {e}"))
+}
+
+impl Tasks {
+    /// What no state has shown yet, per task.
+    pub(super) fn unseen(&self) -> Vec<Seen> {
+        self.clocks.iter().map(|_| Seen::default()).collect()
+    }
+
+    /// Adds what stored state `id`, whose steps are `steps`, shows of each task to `seen`.
+    pub(super) fn see(
+        &self,
+        system: &System,
+        state: &State,
+        steps: &Steps,
+        id: StateId,
+        seen: &mut [Seen],
+    ) {
+        let (n, due) = clock(system, state);
+        let releases = due
+            && self
+                .release
+                .is_some_and(|r| steps.iter().any(|s| s.label == Label::Interaction(r)));
+        for (t, seen) in self.clocks.iter().zip(seen) {
+            let since = (n - t.delay).rem_euclid(t.period);
+            let boundary_due = due && since == 0;
+            let late = system.value(state, t.task, t.late);
+            let active = system.value(state, t.task, t.stage) != 0;
+            if releases && boundary_due && active && late != 0 {
+                seen.coalesced = true;
+            }
+            let Some(step) = steps.iter().find(|s| s.label == Label::Interaction(t.done)) else {
+                continue;
+            };
+            let elapsed = (late + i64::from(boundary_due)) * t.period + since;
+            if seen.worst.as_ref().is_none_or(|b| elapsed > b.0) {
+                seen.worst = Some((elapsed, id, step.to_owned()));
+            }
+        }
+    }
+}
+
+/// Adds what the states after those of `seen` showed (`later`, in the exploration's
+/// order): a largest time stays with the first state that shows it.
+pub(super) fn merge(seen: &mut [Seen], later: &mut [Seen]) {
+    for (mine, theirs) in seen.iter_mut().zip(later) {
+        mine.coalesced |= theirs.coalesced;
+        if let Some(w) = theirs.worst.take() {
+            if mine.worst.as_ref().is_none_or(|b| w.0 > b.0) {
+                mine.worst = Some(w);
+            }
+        }
+        theirs.coalesced = false;
+    }
 }

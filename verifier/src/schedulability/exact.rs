@@ -1,9 +1,9 @@
 //! A task's exact demand per period: the most WCET of its codels that any run of the
 //! model can pack between two ticks.
 //!
-//! The question is about paths, not states: the explicit exploration stores the graph of
-//! the reachable states (`explore::state_graph`, in parallel), keeping each step's
-//! interaction. A task's period is a path of steps other than the tick, starting where a
+//! The question is about paths, not states: the explicit exploration records the graph
+//! of the reachable states as it explores them (`explore::on_state_graph`), keeping each
+//! step's interaction. A task's period is a path of steps other than the tick, starting where a
 //! tick (or the start) left the model; its cost is the sum of the WCETs of the task's
 //! codel runs on it. The longest such path is found on the graph of non-tick steps
 //! condensed into strongly connected components: a component with a costly step inside

@@ -11,12 +11,11 @@ mod bounded;
 mod cycles;
 mod run;
 mod timelock;
-mod watched;
+pub(super) mod watched;
 
-use bip_model::{Happens, OwnedStep, State, Steps, System, Trace, Verdict};
+use bip_model::{OwnedStep, State, Steps, System, Trace, Verdict};
 
 use crate::error::VerifyError;
-use crate::explore::graph;
 use crate::report::PropertyVerdict;
 use crate::visited::Visited;
 use crate::watch::Watch;
@@ -24,7 +23,7 @@ use crate::watch::Watch;
 use cycles::Forever;
 use run::Run;
 use timelock::Timelocks;
-use watched::{Flagged, Watched, Watching, MAX_WATCHED};
+use watched::{Flagged, MAX_WATCHED};
 
 /// A response property's verdict, with a note when its trigger never happens.
 pub(super) struct Decided {
@@ -35,53 +34,39 @@ pub(super) struct Decided {
 /// A response property to decide.
 pub(super) struct Question<'a> {
     pub(super) name: &'a str,
-    pub(super) trigger: &'a Happens,
-    pub(super) response: &'a Happens,
     pub(super) within: Option<u64>,
 }
 
 /// The verdicts of the response properties `questions`, in order, and of time progress
-/// if `time_progress` asks for it, from a complete exploration stored in `visited`.
+/// if `time_progress` asks for it, from a complete exploration stored in `visited`, on
+/// its state graph `graph` (which watches the first [`MAX_WATCHED`] questions; `None`
+/// if it could not be recorded).
 pub(super) fn decide(
     system: &System,
     visited: &Visited,
     questions: &[Question<'_>],
     time_progress: bool,
+    graph: Option<Flagged>,
     watch: &Watch,
 ) -> Result<(Vec<Decided>, Option<Decided>), VerifyError> {
     if questions.is_empty() && !time_progress {
         return Ok((Vec::new(), None));
     }
-    let mut out: Vec<Option<Decided>> = questions.iter().map(|_| None).collect();
-    let mut watched = Vec::new();
-    let mut which = Vec::new();
-    for (k, t) in questions.iter().enumerate() {
-        let (trigger, response) = (t.trigger, t.response);
-        if watched.len() == MAX_WATCHED {
-            out[k] = Some(inconclusive(format!(
+    // the graph watches the first questions; the others are left open
+    let which: Vec<usize> = (0..questions.len().min(MAX_WATCHED)).collect();
+    let mut out: Vec<Option<Decided>> = (0..questions.len())
+        .map(|k| {
+            (k >= MAX_WATCHED).then(|| inconclusive(format!(
                 "one run checks at most {MAX_WATCHED} response properties; check this one in a run of its own"
-            )));
-            continue;
-        }
-        watched.push(Watched {
-            context: format!("property {}", t.name),
-            trigger,
-            response,
-        });
-        which.push(k);
-    }
+            )))
+        })
+        .collect();
     let done = |out: Vec<Option<Decided>>| {
         out.into_iter()
             .map(|d| d.expect("every question is answered"))
             .collect()
     };
-    watch.rebase();
-    let watching = Watching {
-        advance: system.has_advance(),
-        system,
-        watched: &watched,
-    };
-    let Some(g) = graph::build(system, visited, &watching, watch) else {
+    let Some(g) = graph else {
         for &k in &which {
             out[k] = Some(stopped(watch));
         }

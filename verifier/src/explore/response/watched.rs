@@ -80,7 +80,8 @@ pub(crate) struct Notes {
 pub(crate) struct Watching<'s, 'a> {
     pub(crate) system: &'s System,
     pub(crate) watched: &'s [Watched<'a>],
-    /// The system has an `advance` ([`System::has_advance`]): the graph notes units.
+    /// The graph notes units: the system has an `advance` ([`System::has_advance`]) and
+    /// a bounded response property, the one question that counts them, is watched.
     pub(crate) advance: bool,
 }
 
