@@ -114,8 +114,12 @@ fn a_timed_model_shows_the_time_and_each_tasks_job_as_steps_fire() {
             // named by the tasks whose period boundary it is
             let label = release["label"].as_str().unwrap();
             assert!(
-                ["release nav.control", "release nav.plan", "release nav.control, nav.log"]
-                    .contains(&label),
+                [
+                    "release nav.control",
+                    "release nav.plan",
+                    "release nav.control, nav.log"
+                ]
+                .contains(&label),
                 "{label}"
             );
             fire(&mut s, label)

@@ -339,7 +339,12 @@ fn describe(
     before: &State,
 ) -> (String, Kind, Vec<Told>) {
     let task = |c: u32| timed.and_then(|l| l.task_of(c));
-    let name = |c: u32| task(c).map_or_else(|| system.components[c as usize].name.clone(), |t| t.name.clone());
+    let name = |c: u32| {
+        task(c).map_or_else(
+            || system.components[c as usize].name.clone(),
+            |t| t.name.clone(),
+        )
+    };
     let told = |c: u32, var: TaskVar, value: Option<i64>| {
         task(c)
             .and_then(|t| t.slot(system, var))
@@ -564,9 +569,10 @@ pub fn user_state(system: &System, state: &State, all: bool) -> Vec<StateGroup> 
                 let value = t.tell(*var, state.slots()[slot as usize]);
                 (t.name.clone(), value)
             }
-            Slot::Bookkeeping if all => {
-                (system.slot_name(slot), system.trace_value(state, slot).to_string())
-            }
+            Slot::Bookkeeping if all => (
+                system.slot_name(slot),
+                system.trace_value(state, slot).to_string(),
+            ),
             Slot::Bookkeeping => continue,
         };
         if slot == system.components[c as usize].slot && pending.contains(&c) {

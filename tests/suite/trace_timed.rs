@@ -38,7 +38,10 @@ const KINDS: [(&str, &str); 9] = [
     ("m_hi_done", "m.hi: job done"),
     ("m_lo_yield", "m.lo yields its core"),
     ("m_u_preempts_m_t", "m.u preempts m.t"),
-    ("m_Plan_compute_dropped", "m.Plan: compute's outcome dropped"),
+    (
+        "m_Plan_compute_dropped",
+        "m.Plan: compute's outcome dropped",
+    ),
     ("release", "release"),
     ("tick", "time passes "),
 ];
@@ -159,4 +162,3 @@ fn trace_show_names_a_timed_models_steps_and_tasks_in_the_users_terms() {
         assert!(!chart.contains(expansion), "{expansion} in {chart}");
     }
 }
-
