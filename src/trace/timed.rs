@@ -110,6 +110,8 @@ pub struct TimedTask {
     pub cpu: u32,
     pub core: Option<u32>,
     pub codels: Vec<TaskCodel>,
+    /// The index of its deadline invariant among the system's properties.
+    pub deadline_property: Option<u32>,
     /// Its period, the offset of its boundaries and its deadline, in units.
     period: u64,
     delay: u64,
@@ -344,7 +346,7 @@ fn tasks(system: &System, map: &GenomMap, unit_us: u64) -> Vec<TimedTask> {
             let Some(TimedTaskMap {
                 component,
                 elapsed_slot,
-                ..
+                deadline: deadline_property,
             }) = t.timed
             else {
                 continue;
@@ -379,6 +381,7 @@ fn tasks(system: &System, map: &GenomMap, unit_us: u64) -> Vec<TimedTask> {
                 cpu: t.cpu,
                 core: t.core,
                 codels,
+                deadline_property,
                 period,
                 delay: u64::from(t.delay) * tick_units,
                 deadline: t.deadline_us.map_or(period, units),
