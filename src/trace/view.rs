@@ -353,24 +353,24 @@ fn describe(
     let stage = |c: u32, stage: Stage| told(c, TaskVar::Stage, Some(stage.value()));
     // a codel's finish frees its task's core
     let freed = |t: &Option<u32>| t.and_then(|c| told(c, TaskVar::Codel, Some(0)));
-    let step_of = |label: String, told: Vec<Option<Told>>| {
+    let named = |label: String, told: Vec<Option<Told>>| {
         (label, Kind::Step, told.into_iter().flatten().collect())
     };
     match role {
         Some(Role::Tick) => ("tick".into(), Kind::Tick, Vec::new()),
-        Some(Role::Request { service }) => step_of(format!("request {service}"), vec![]),
+        Some(Role::Request { service }) => named(format!("request {service}"), vec![]),
         Some(Role::Fail {
             service,
             codel,
             task,
-        }) => step_of(format!("{service}: {codel} throws"), vec![freed(task)]),
+        }) => named(format!("{service}: {codel} throws"), vec![freed(task)]),
         Some(Role::Apart {
             service,
             codel,
             returns,
         }) => {
             let what = if *returns { "returns" } else { "starts apart" };
-            step_of(format!("{service}: {codel} {what}"), vec![])
+            named(format!("{service}: {codel} {what}"), vec![])
         }
         Some(Role::Codel {
             service,
@@ -391,14 +391,14 @@ fn describe(
                 slot: system.components[c as usize].slot,
                 value: None,
             });
-            step_of(label, vec![state, freed(task)])
+            named(label, vec![state, freed(task)])
         }
         Some(Role::Timed {
             service,
             codel,
             task,
             dropped: false,
-        }) => step_of(
+        }) => named(
             format!("{service}: {codel} starts"),
             vec![told(*task, TaskVar::Codel, None)],
         ),
@@ -407,24 +407,24 @@ fn describe(
             codel,
             task,
             dropped: true,
-        }) => step_of(
+        }) => named(
             format!("{service}: {codel}'s outcome dropped"),
             vec![freed(&Some(*task))],
         ),
         Some(Role::Schedule(s)) => match *s {
-            TaskStep::Dispatch(t) => step_of(
+            TaskStep::Dispatch(t) => named(
                 format!("dispatch {}", name(t)),
                 vec![stage(t, Stage::Running)],
             ),
-            TaskStep::Done(t) => step_of(
+            TaskStep::Done(t) => named(
                 format!("{}: job done", name(t)),
                 vec![stage(t, Stage::Idle)],
             ),
-            TaskStep::Yield(t) => step_of(
+            TaskStep::Yield(t) => named(
                 format!("{} yields its core", name(t)),
                 vec![stage(t, Stage::Ready)],
             ),
-            TaskStep::Preempts { by, task } => step_of(
+            TaskStep::Preempts { by, task } => named(
                 format!("{} preempts {}", name(by), name(task)),
                 vec![stage(by, Stage::Running), stage(task, Stage::Ready)],
             ),
@@ -436,10 +436,10 @@ fn describe(
                     [] => "release".to_string(),
                     _ => format!("release {}", released.join(", ")),
                 };
-                step_of(label, vec![])
+                named(label, vec![])
             }
         },
-        None => step_of(system.label_name(step.label), vec![]),
+        None => named(system.label_name(step.label), vec![]),
     }
 }
 
