@@ -8,7 +8,12 @@
 use bip_model::genom::{GenomMap, TimedTaskMap};
 use bip_model::{State, System};
 
-use super::view::clock_component;
+/// The GenoM clock: the trigger of the tick.
+pub(super) fn clock_component(system: &System, map: &GenomMap) -> Option<u32> {
+    let tick = system.interactions.get(map.tick as usize)?;
+    let trigger = tick.trigger? as usize;
+    Some(tick.ports.get(trigger)?.component)
+}
 
 /// The task atom's variables and the clock's (bip-lang's `genom/names.rs`).
 const STAGE: &str = "stage";

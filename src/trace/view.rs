@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use bip_model::genom::{CodelMap, GenomMap};
 use bip_model::{Label, OwnedStep, State, System, Trace, Verdict};
 
-use super::timed::{Stage, TaskStep, TaskVar, TimedLayer};
+use super::timed::{clock_component, Stage, TaskStep, TaskVar, TimedLayer};
 
 /// What a slot of the state stands for.
 enum Slot {
@@ -237,13 +237,6 @@ fn lifelines(system: &System, timed: Option<&TimedLayer>) -> (Vec<String>, Vec<O
         }
     }
     (names, of)
-}
-
-/// The GenoM clock: the trigger of the tick.
-pub(super) fn clock_component(system: &System, map: &GenomMap) -> Option<u32> {
-    let tick = system.interactions.get(map.tick as usize)?;
-    let trigger = tick.trigger? as usize;
-    Some(tick.ports.get(trigger)?.component)
 }
 
 fn roles<'m>(
