@@ -13,7 +13,7 @@ pub(crate) mod why;
 
 use std::path::{Path, PathBuf};
 
-use bip_model::{System, Trace, Verdict};
+use bip_model::{State, System, Trace, Verdict};
 use bip_picture::chart::{Chart, Mark, Note, Row, Step};
 
 use crate::{exit, load};
@@ -211,7 +211,7 @@ fn text(system: &System, trace: &Trace, user: &view::UserTrace) -> String {
         }
         let _ = writeln!(s, "{}", line.trim_end());
     }
-    if let Some(note) = end_note(system, trace) {
+    if let Some(note) = end_note(system, trace, &user.last) {
         let _ = writeln!(s, "{}", note.title);
         for line in &note.lines {
             let _ = writeln!(s, "  {line}");
@@ -227,7 +227,7 @@ fn chart(system: &System, trace: &Trace, user: &view::UserTrace) -> Chart {
         Verdict::Witness(_) => Mark::Reached,
         _ => Mark::Plain,
     };
-    let mut end = end_note(system, trace);
+    let mut end = end_note(system, trace, &user.last);
     if let Some(note) = end.as_mut() {
         note.lifelines = held(system, trace, user);
     }
@@ -327,7 +327,7 @@ fn held(system: &System, trace: &Trace, user: &view::UserTrace) -> Vec<usize> {
 
 /// What the end of the trace shows: the deadlock and why, the failed or witnessed
 /// property, the range error.
-fn end_note(system: &System, trace: &Trace) -> Option<Note> {
+fn end_note(system: &System, trace: &Trace, last: &State) -> Option<Note> {
     match &trace.verdict {
         Verdict::Deadlock => {
             let mut lines = why_lines(system, trace);
@@ -345,13 +345,13 @@ fn end_note(system: &System, trace: &Trace) -> Option<Note> {
         }
         Verdict::Violation(p) => Some(Note {
             title: format!("{p} fails after the last step"),
-            lines: [property_text(system, p), why_lines(system, trace)].concat(),
+            lines: [property_text(system, p, last), why_lines(system, trace)].concat(),
             mark: Mark::Failing,
             lifelines: Vec::new(),
         }),
         Verdict::Witness(p) => Some(Note {
             title: format!("{p} is reached after the last step"),
-            lines: property_text(system, p),
+            lines: property_text(system, p, last),
             mark: Mark::Reached,
             lifelines: Vec::new(),
         }),
@@ -373,12 +373,29 @@ fn why_lines(system: &System, trace: &Trace) -> Vec<String> {
         .collect()
 }
 
-/// The property as written.
-fn property_text(system: &System, name: &str) -> Vec<String> {
-    system
+/// The property as written; a timed model's deadline invariant, which the expansion
+/// writes, as the job's time against its deadline in `last`.
+fn property_text(system: &System, name: &str, last: &State) -> Vec<String> {
+    let Some((k, property)) = system
         .properties
         .iter()
-        .find(|p| p.name == name)
-        .map(|p| vec![p.text.clone()])
-        .unwrap_or_default()
+        .enumerate()
+        .find(|(_, p)| p.name == name)
+    else {
+        return Vec::new();
+    };
+    let deadline = timed::TimedLayer::of(system).and_then(|layer| {
+        let task = layer
+            .tasks
+            .iter()
+            .find(|t| t.deadline_property == Some(k as u32))?;
+        let elapsed = layer.task(system, task, last).job?;
+        Some(format!(
+            "{}'s job is unfinished {} after its release, past its {} deadline",
+            task.name,
+            layer.show(elapsed),
+            layer.show(task.deadline)
+        ))
+    });
+    vec![deadline.unwrap_or_else(|| property.text.clone())]
 }

@@ -261,7 +261,7 @@ impl Session {
                 !self
                     .timed
                     .as_ref()
-                    .is_some_and(|l| l.has_task_named(system, &g.name))
+                    .is_some_and(|l| l.has_task_named(&g.name))
             })
             .map(|g| {
                 json!({
@@ -287,23 +287,20 @@ impl Session {
         })
     }
 
-    /// The labels of `steps`, each leaving the state of `befores` at its index: as a trace
-    /// names them, a timed model's time step by how far it goes, with its advance (as
-    /// JSON).
+    /// The labels of `steps`, each leaving the state of `befores` at its index, as a trace
+    /// names them, with a timed model's time step's advance (as JSON).
     fn labels(&self, steps: &[OwnedStep], befores: &[&State]) -> Vec<(String, Option<Value>)> {
-        let labels = view::step_labels(&self.system, steps);
-        let Some(layer) = &self.timed else {
-            return labels.into_iter().map(|l| (l, None)).collect();
-        };
+        let labels = view::step_labels(&self.system, steps, befores);
         labels
             .into_iter()
             .zip(steps)
             .zip(befores)
             .map(|((label, step), before)| {
-                match timing::time_step(layer, &self.system, before, step) {
-                    Some((time, advance)) => (time, Some(advance)),
-                    None => (label, None),
-                }
+                let advance = self
+                    .timed
+                    .as_ref()
+                    .and_then(|layer| timing::advance(layer, &self.system, before, step));
+                (label, advance)
             })
             .collect()
     }

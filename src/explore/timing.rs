@@ -1,6 +1,6 @@
 //! A timed model in the explorer: the time and each task's job as the state holds them
-//! (read by `trace::timed`, as the schedule drawing reads them), and the time step named
-//! by how far it goes.
+//! (read by `trace::timed`, as the schedule drawing reads them), and how far the time
+//! step goes (`trace::view` names it).
 
 use bip_model::{OwnedStep, Role, State, System};
 use serde_json::{json, Value};
@@ -64,28 +64,19 @@ pub fn state(layer: &TimedLayer, system: &System, state: &State, since_start: u6
     })
 }
 
-/// The time step `step` of `state`: its label, `time passes 1 ms: 3 ms → 4 ms` (the
-/// clock modulo its cycle, as the state shows it), and how far it goes; `None` for
-/// another step, or one whose advance is a range error (it keeps its plain name).
-pub fn time_step(
+/// How far the time step `step` of `state` goes; `None` for another step, or one whose
+/// advance is a range error.
+pub fn advance(
     layer: &TimedLayer,
     system: &System,
     state: &State,
     step: &OwnedStep,
-) -> Option<(String, Value)> {
+) -> Option<Value> {
     if system.role(step.label) != Role::Time {
         return None;
     }
     let units = system.time_advance(state, step.as_step()).ok()?;
-    let now = layer.now(state);
-    let then = (now + units) % layer.cycle.max(1);
-    let label = format!(
-        "time passes {}: {} → {}",
-        layer.show(units),
-        layer.show(now),
-        layer.show(then)
-    );
-    Some((label, duration(layer, units)))
+    Some(duration(layer, units))
 }
 
 /// The units that pass along `steps`, each leaving the state of `befores` at its index.

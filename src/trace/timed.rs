@@ -8,7 +8,12 @@
 use bip_model::genom::{GenomMap, TimedTaskMap};
 use bip_model::{State, System};
 
-use super::view::clock_component;
+/// The GenoM clock: the trigger of the tick.
+pub(super) fn clock_component(system: &System, map: &GenomMap) -> Option<u32> {
+    let tick = system.interactions.get(map.tick as usize)?;
+    let trigger = tick.trigger? as usize;
+    Some(tick.ports.get(trigger)?.component)
+}
 
 /// The task atom's variables and the clock's (bip-lang's `genom/names.rs`).
 const STAGE: &str = "stage";
@@ -16,6 +21,13 @@ const RUNNING_CODEL: &str = "codel";
 const LATE: &str = "late";
 const PHASE: &str = "n";
 const DUE: &str = "due";
+/// The ports of the task atom's steps other than a codel's, and the clock's release.
+const DISPATCH: &str = "dispatch";
+const DONE: &str = "done";
+const YIELD: &str = "yield";
+const PREEMPT: &str = "preempt";
+const PREEMPTED: &str = "preempted";
+const RELEASE: &str = "release";
 
 /// A job's stage in its task's atom.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,6 +48,49 @@ impl Stage {
             _ => Stage::Running,
         }
     }
+
+    /// Its value in the atom's `stage`.
+    pub fn value(self) -> i64 {
+        match self {
+            Stage::Idle => 0,
+            Stage::Ready => 1,
+            Stage::Running => 2,
+        }
+    }
+
+    /// `idle`, `ready`, `running`.
+    pub fn word(self) -> &'static str {
+        match self {
+            Stage::Idle => "idle",
+            Stage::Ready => "ready",
+            Stage::Running => "running",
+        }
+    }
+}
+
+/// A variable of a task's atom that a trace tells in words (its `x` is the time, which
+/// the time steps tell).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TaskVar {
+    Stage,
+    Codel,
+    Late,
+}
+
+/// A step of the expansion's scheduling (docs/genom.md, "Timed models"), by the task
+/// atoms it takes (their components).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TaskStep {
+    /// A ready job takes a core.
+    Dispatch(u32),
+    /// A job ends its period's work and frees its core.
+    Done(u32),
+    /// A job gives its core to a more urgent one between two codels.
+    Yield(u32),
+    /// `by` takes the core of `task`'s running codel.
+    Preempts { by: u32, task: u32 },
+    /// The release at the instant's period boundaries.
+    Release,
 }
 
 /// A codel of a task, as its atom's `codel` numbers them (from 1, in this order).
@@ -60,6 +115,8 @@ pub struct TimedTask {
     pub cpu: u32,
     pub core: Option<u32>,
     pub codels: Vec<TaskCodel>,
+    /// The index of its deadline invariant among the system's properties.
+    pub deadline_property: Option<u32>,
     /// Its period, the offset of its boundaries and its deadline, in units.
     period: u64,
     delay: u64,
@@ -84,6 +141,7 @@ pub struct TimedLayer {
     pub unit_us: u64,
     /// The clock counts units modulo this: the periods' least common multiple.
     pub cycle: u64,
+    clock: Option<u32>,
     phase: Option<u32>,
     due: Option<u32>,
     pub tasks: Vec<TimedTask>,
@@ -110,17 +168,68 @@ impl TimedLayer {
         Some(TimedLayer {
             unit_us,
             cycle,
+            clock,
             phase: slot(phase),
             due: slot(clock_var(DUE)),
             tasks: tasks(system, map, unit_us),
         })
     }
 
-    /// Whether `name` is the component of one of the tasks (the expansion's name).
-    pub fn has_task_named(&self, system: &System, name: &str) -> bool {
+    /// Whether `name` is one of the tasks' (`m.t`).
+    pub fn has_task_named(&self, name: &str) -> bool {
+        self.tasks.iter().any(|t| t.name == name)
+    }
+
+    /// What interaction `i` does, if it is a step of the scheduling.
+    pub fn step_of(&self, system: &System, i: u32) -> Option<TaskStep> {
+        let ports = &system.interactions.get(i as usize)?.ports;
+        let port = |name: &str, of_task: bool| {
+            ports.iter().find_map(|p| {
+                let here = match of_task {
+                    true => self.task_of(p.component).is_some(),
+                    false => Some(p.component) == self.clock,
+                };
+                (here && system.atom_of(p.component).ports[p.port as usize] == name)
+                    .then_some(p.component)
+            })
+        };
+        if port(RELEASE, false).is_some() {
+            return Some(TaskStep::Release);
+        }
+        if let (Some(by), Some(task)) = (port(PREEMPT, true), port(PREEMPTED, true)) {
+            return Some(TaskStep::Preempts { by, task });
+        }
+        port(DISPATCH, true)
+            .map(TaskStep::Dispatch)
+            .or_else(|| port(DONE, true).map(TaskStep::Done))
+            .or_else(|| port(YIELD, true).map(TaskStep::Yield))
+    }
+
+    /// The task whose atom is `component`.
+    pub fn task_of(&self, component: u32) -> Option<&TimedTask> {
+        self.tasks.iter().find(|t| t.component == component)
+    }
+
+    /// The tasks whose period boundary is the instant of `state` (the ones its release
+    /// releases).
+    pub fn at_boundary(&self, state: &State) -> impl Iterator<Item = &TimedTask> {
+        let n = self.now(state);
         self.tasks
             .iter()
-            .any(|t| system.components[t.component as usize].name == name)
+            .filter(move |t| t.period <= 1 || n % t.period == t.delay)
+    }
+
+    /// The time step of `units` from `state`: `time passes 500 µs: 4 ms → 4.5 ms` (the
+    /// clock modulo its cycle, as the state holds it).
+    pub fn time_passes(&self, state: &State, units: u64) -> String {
+        let now = self.now(state);
+        let then = (now + units) % self.cycle.max(1);
+        format!(
+            "time passes {}: {} → {}",
+            self.show(units),
+            self.show(now),
+            self.show(then)
+        )
     }
 
     /// The time in units, modulo [`TimedLayer::cycle`].
@@ -178,13 +287,55 @@ impl TimedTask {
         Stage::of(system.value(state, self.component, self.stage))
     }
 
-    /// The index into [`TimedTask::codels`] of the codel started and not finished.
-    pub fn running_codel(&self, system: &System, state: &State) -> Option<usize> {
-        let k = system.value(state, self.component, self.codel);
+    /// The slots of the variables of its atom a trace tells in words.
+    pub fn told_slots(&self, system: &System) -> Vec<(u32, TaskVar)> {
+        let slot = |var: u32| system.components[self.component as usize].var_slot(var);
+        let mut out = vec![
+            (slot(self.stage), TaskVar::Stage),
+            (slot(self.codel), TaskVar::Codel),
+        ];
+        out.extend(self.late.map(|v| (slot(v), TaskVar::Late)));
+        out
+    }
+
+    /// The slot of its `var`.
+    pub fn slot(&self, system: &System, var: TaskVar) -> Option<u32> {
+        self.told_slots(system)
+            .into_iter()
+            .find(|&(_, v)| v == var)
+            .map(|(slot, _)| slot)
+    }
+
+    /// Its `var` at `value` in words: `running`, `runs Plan.compute`, `late`.
+    pub fn tell(&self, var: TaskVar, value: i64) -> String {
+        match var {
+            TaskVar::Stage => Stage::of(value).word().to_string(),
+            TaskVar::Codel => match self.codel_named(value) {
+                Some(c) => format!("runs {}", c.name),
+                None => "runs no codel".to_string(),
+            },
+            TaskVar::Late => match value != 0 {
+                true => "late".to_string(),
+                false => "on time".to_string(),
+            },
+        }
+    }
+
+    /// The codel its atom's `codel` numbers `k` (from 1).
+    fn codel_named(&self, k: i64) -> Option<&TaskCodel> {
+        self.codel_index(k).map(|k| &self.codels[k])
+    }
+
+    fn codel_index(&self, k: i64) -> Option<usize> {
         usize::try_from(k)
             .ok()
             .and_then(|k| k.checked_sub(1))
             .filter(|&k| k < self.codels.len())
+    }
+
+    /// The index into [`TimedTask::codels`] of the codel started and not finished.
+    pub fn running_codel(&self, system: &System, state: &State) -> Option<usize> {
+        self.codel_index(system.value(state, self.component, self.codel))
     }
 }
 
@@ -200,7 +351,7 @@ fn tasks(system: &System, map: &GenomMap, unit_us: u64) -> Vec<TimedTask> {
             let Some(TimedTaskMap {
                 component,
                 elapsed_slot,
-                ..
+                deadline: deadline_property,
             }) = t.timed
             else {
                 continue;
@@ -235,6 +386,7 @@ fn tasks(system: &System, map: &GenomMap, unit_us: u64) -> Vec<TimedTask> {
                 cpu: t.cpu,
                 core: t.core,
                 codels,
+                deadline_property,
                 period,
                 delay: u64::from(t.delay) * tick_units,
                 deadline: t.deadline_us.map_or(period, units),

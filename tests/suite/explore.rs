@@ -608,17 +608,17 @@ fn explore_in_chromium_shows_a_timed_models_tasks() {
     for step in [
         "request nav.Plan",
         "tick",
-        "release",
-        "nav_plan_dispatch",
-        "nav_Plan_start_start",
+        "release nav.plan",
+        "dispatch nav.plan",
+        "nav.Plan: start starts",
         "tick",
         "nav.Plan: start → compute",
-        "nav_Plan_compute_start",
+        "nav.Plan: compute starts",
         "tick",
         "tick",
-        "release",
-        "nav_control_dispatch",
-        "nav_control_start_start",
+        "release nav.control",
+        "dispatch nav.control",
+        "nav.control: start starts",
         "tick",
     ] {
         ok(a, "POST", "/api/fire", json!({ "step": step }));
@@ -644,11 +644,18 @@ fn explore_in_chromium_shows_a_timed_models_tasks() {
         ">control.start</div><div class=\"times\">500 µs / 1 ms<",
         ">Plan.compute</div><div class=\"times\">2 ms / 3 ms<",
         ">2.5 ms / 8 ms<",
+        // the history and the chart in the user's names: the tasks, not their atoms
+        "<li>dispatch nav.plan</li>",
+        ">nav.plan</text>",
+        ">8  nav.Plan: compute starts</text>",
     ] {
         assert!(
             page.contains(seen),
             "the page does not show {seen:?}: {page}"
         );
+    }
+    for expansion in ["_task</text>", "_dispatch", "_start_start"] {
+        assert!(!page.contains(expansion), "{expansion} on the page: {page}");
     }
     assert_eq!(ok(a, "GET", "/api/state", Value::Null)["position"], 14);
 }

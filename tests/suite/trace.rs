@@ -488,4 +488,16 @@ fn a_timed_miss_is_drawn_as_a_schedule() {
         std::fs::read_to_string(&again).expect("drawn"),
         std::fs::read_to_string(&picture).expect("drawn")
     );
+    // the end says the miss in the user's terms, not as the expansion's invariant: `hi`'s
+    // job, released at 3, is unfinished at 5 (two units of 4 ms)
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    let end: Vec<&str> = text.lines().rev().take(2).collect();
+    assert_eq!(
+        end,
+        [
+            "  m.hi's job is unfinished 8 ms after its release, past its 4 ms deadline",
+            "m.hi meets its 4 ms deadline fails after the last step",
+        ],
+        "{text}"
+    );
 }
