@@ -273,7 +273,7 @@ fn a_lock_held_on_another_cpu_makes_the_analysis_optimistic() {
         "--exact",
         &path,
         "--max-states",
-        "1400",
+        "1600",
         "--format",
         "json",
     ]);
