@@ -172,6 +172,15 @@ pub fn save_charts(
 }
 
 /// The trace as text: one line per step, its participants and its changes.
+/// A timed model's trace as `bip trace show` prints it, in the user's names (the task
+/// atoms' steps and variables read as dispatches, starts and job ends); `None` for an
+/// untimed model, whose traces print as the model's.
+pub(crate) fn timed_text(system: &System, trace: &Trace, all: bool) -> Option<String> {
+    system.genom.as_ref()?.time_unit_us?;
+    let user = view::user_trace(system, trace, all).ok()?;
+    Some(text(system, trace, &user))
+}
+
 fn text(system: &System, trace: &Trace, user: &view::UserTrace) -> String {
     use std::fmt::Write;
     let n = user.steps.len();

@@ -489,15 +489,14 @@ fn text_report(
         } else {
             "counterexample"
         };
-        let _ = write!(
-            s,
-            "\n{} ({}), {what}: {}",
-            p.name,
-            kind_name(p.kind),
-            trace
+        let shown = match crate::trace::timed_text(system, trace, args.all_variables) {
+            Some(text) => text,
+            None => trace
                 .display(Some(system))
                 .all_variables(args.all_variables)
-        );
+                .to_string(),
+        };
+        let _ = write!(s, "\n{} ({}), {what}: {shown}", p.name, kind_name(p.kind));
         if let Some(step) = &p.error_step {
             // the failing step has no successor, so the trace cannot list it: it is next
             let _ = writeln!(
