@@ -235,25 +235,32 @@ fn interaction_name(sys: &System, label: Label) -> &str {
     &sys.interactions[i as usize].name
 }
 
-/// The expanded system's reachable graph, in the interpreter's terms.
-fn system_graph(sys: &System) -> BTreeSet<(RefState, String, RefState)> {
+/// The value of variable `name` of component `comp` in `s`, 0 if it has none.
+fn value(sys: &System, s: &State, comp: u32, name: &str) -> i64 {
+    sys.atom_of(comp)
+        .var_index(name)
+        .map_or(0, |v| sys.value(s, comp, v))
+}
+
+/// A state of the expanded system in the interpreter's terms.
+fn viewer(sys: &System) -> impl Fn(&State) -> RefState + '_ {
     let a = sys.component_index("m_A").expect("A");
     let m = sys.component_index("m").expect("the module");
     let clock = sys.component_index("clock").expect("the clock");
-    let value = |s: &State, comp: u32, name: &str| {
-        sys.atom_of(comp)
-            .var_index(name)
-            .map_or(0, |v| sys.value(s, comp, v))
-    };
-    let view = |s: &State| RefState {
+    move |s: &State| RefState {
         main: sys.location_name(s, a) == "main",
-        req: value(s, a, "req") != 0,
-        paused: value(s, a, "paused") != 0,
-        done_f: value(s, m, "done_F") != 0,
-        x: value(s, m, "x"),
-        age: value(s, m, "age_p"),
-        phase: value(s, clock, "n"),
-    };
+        req: value(sys, s, a, "req") != 0,
+        paused: value(sys, s, a, "paused") != 0,
+        done_f: value(sys, s, m, "done_F") != 0,
+        x: value(sys, s, m, "x"),
+        age: value(sys, s, m, "age_p"),
+        phase: value(sys, s, clock, "n"),
+    }
+}
+
+/// The expanded system's reachable graph, in the interpreter's terms.
+fn system_graph(sys: &System) -> BTreeSet<(RefState, String, RefState)> {
+    let view = viewer(sys);
     let steps = |s: &State| {
         sys.successors(s)
             .expect("no range error")
@@ -300,23 +307,13 @@ fn timed_model(l: &Layer) -> String {
 fn timed_requests_step_as_the_reference_says(l: &Layer) -> Result<usize, TestCaseError> {
     let text = timed_model(l);
     let sys = load(&text);
-    let a = sys.component_index("m_A").expect("A");
-    let m = sys.component_index("m").expect("the module");
     let clock = sys.component_index("clock").expect("the clock");
     let task = sys.component_index("m_t_task").expect("the task's atom");
-    let value = |s: &State, comp: u32, name: &str| {
-        sys.atom_of(comp)
-            .var_index(name)
-            .map_or(0, |v| sys.value(s, comp, v))
-    };
+    // the phase counts units of the timed model, which the requests leave as they are
+    let untimed = viewer(&sys);
     let view = |s: &State| RefState {
-        main: sys.location_name(s, a) == "main",
-        req: value(s, a, "req") != 0,
-        paused: value(s, a, "paused") != 0,
-        done_f: value(s, m, "done_F") != 0,
-        x: value(s, m, "x"),
-        age: value(s, m, "age_p"),
         phase: 0,
+        ..untimed(s)
     };
     let timing = |s: &State| {
         let vars = |comp: u32| {
@@ -344,7 +341,7 @@ fn timed_requests_step_as_the_reference_says(l: &Layer) -> Result<usize, TestCas
             let name = name.strip_prefix("m_").unwrap_or(name).to_string();
             if requests.contains(&name.as_str()) {
                 prop_assert_eq!(timing(&s), timing(&next), "{} took time\n{}", name, text);
-                while_running += usize::from(value(&s, task, "codel") != 0);
+                while_running += usize::from(value(&sys, &s, task, "codel") != 0);
                 got.insert((name, view(&next)));
             }
             if seen.insert(next.clone()) {
