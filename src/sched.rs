@@ -115,12 +115,8 @@ pub fn run(args: &Args) -> u8 {
         Format::Json => println!("{}", json(&args.file, &system.name, &sched, assignment)),
     }
     if let Some(path) = &args.svg {
-        if let Err(why) = draw(path, &title, &sched, assignment) {
-            eprintln!(
-                "error: cannot draw the schedule into {}: {why}",
-                path.display()
-            );
-            return exit::ERROR;
+        if let Err(code) = draw(path, &title, &sched, assignment) {
+            return code;
         }
     }
     if sched.schedulable() {
@@ -394,7 +390,24 @@ fn json(
     serde_json::to_string_pretty(&doc).unwrap_or_default()
 }
 
+/// Draws the analysis' schedule into `path`; on failure the error is printed and the
+/// exit code returned.
 fn draw(
+    path: &std::path::Path,
+    title: &str,
+    sched: &Schedulability,
+    assignment: Assignment,
+) -> Result<(), u8> {
+    drawn(path, title, sched, assignment).map_err(|why| {
+        eprintln!(
+            "error: cannot draw the schedule into {}: {why}",
+            path.display()
+        );
+        exit::ERROR
+    })
+}
+
+fn drawn(
     path: &std::path::Path,
     title: &str,
     sched: &Schedulability,

@@ -165,12 +165,8 @@ pub fn run(args: &Args) -> u8 {
         ),
     }
     if let Some(path) = &args.svg {
-        if let Err(why) = draw(path, &title, &sched, assignment) {
-            eprintln!(
-                "error: cannot draw the schedule into {}: {why}",
-                path.display()
-            );
-            return exit::ERROR;
+        if let Err(code) = draw(path, &title, &sched, assignment) {
+            return code;
         }
     }
     if let Some(why) = unsaved {
