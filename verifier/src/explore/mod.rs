@@ -52,8 +52,7 @@ use crate::watch::Watch;
 
 use expand::{read_hash, read_parent, REC_HEADER};
 use graph::{Graph, Keep, Recorder, Rows};
-use response::watched::Watching;
-use targets::{asks_paths, counts_units, range_errors, targets, watched, Target};
+use targets::{asks_paths, range_errors, targets, watched, watching, Target};
 use worst::{Seen, Tasks};
 
 /// States per chunk: large enough to amortise scheduling, small enough to balance.
@@ -121,11 +120,7 @@ pub(crate) fn verify(
     let watch = Watch::new(options, options.max_memory.or_else(memory::default_limit));
     let targets = targets(system);
     let watched = watched(&targets);
-    let watching = Watching {
-        advance: counts_units(system, &targets),
-        system,
-        watched: &watched,
-    };
+    let watching = watching(system, &targets, &watched);
     // the state graph is recorded only for a question about paths
     let keep = asks_paths(&targets).then_some(&watching);
     watch.around(

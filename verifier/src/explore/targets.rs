@@ -14,7 +14,7 @@ use crate::properties::{
 use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, RunStats, Stop};
 
 use super::graph::Keep;
-use super::response::watched::{Flagged, Watched, MAX_WATCHED};
+use super::response::watched::{Flagged, Watched, Watching, MAX_WATCHED};
 use super::response::{decide, Decided, Question};
 use super::trace::trace_to;
 use super::worst::worst_responses;
@@ -124,6 +124,20 @@ pub(super) fn watched<'a>(targets: &[Target<'a>]) -> Vec<Watched<'a>> {
         })
         .take(MAX_WATCHED)
         .collect()
+}
+
+/// What the state graph of a run of `system` for `targets` keeps: the watched response
+/// properties, and each tick's time units if one of them counts them.
+pub(super) fn watching<'s, 'a>(
+    system: &'s System,
+    targets: &[Target<'a>],
+    watched: &'s [Watched<'a>],
+) -> Watching<'s, 'a> {
+    Watching {
+        advance: counts_units(system, targets),
+        system,
+        watched,
+    }
 }
 
 /// Whether the state graph of a run of `system` for `targets` must note each tick's

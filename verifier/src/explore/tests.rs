@@ -10,8 +10,8 @@ use bip_lang::load_str;
 use bip_model::{Steps, System};
 
 use super::graph::{Keep, IN_ERROR};
-use super::response::watched::{Flagged, Watching};
-use super::targets::{counts_units, targets, watched};
+use super::response::watched::Flagged;
+use super::targets::{counts_units, targets, watched, watching};
 use super::worst::{read_states, Seen};
 use super::{workers, Explorer};
 use crate::options::Options;
@@ -47,11 +47,7 @@ fn record(system: &System, jobs: usize, max_states: Option<u64>) -> Recorded {
     let watch = Watch::new(&options, None);
     let targets = targets(system);
     let watched = watched(&targets);
-    let watching = Watching {
-        advance: counts_units(system, &targets),
-        system,
-        watched: &watched,
-    };
+    let watching = watching(system, &targets, &watched);
     pool.install(|| {
         let mut explorer = Explorer::new(system, &options, jobs, &watch, targets, Some(&watching));
         let stopped = explorer.explore(&|_| {}).expect("the exploration runs");
@@ -87,11 +83,7 @@ fn check_against_the_stored_states(system: &System, r: &Recorded) {
         .collect();
     let targets = targets(system);
     let watched = watched(&targets);
-    let keep = Watching {
-        advance: counts_units(system, &targets),
-        system,
-        watched: &watched,
-    };
+    let keep = watching(system, &targets, &watched);
     let mut notes = keep.notes();
     let (mut state, mut next, mut steps) =
         (system.initial_state(), system.initial_state(), Steps::new());
