@@ -407,8 +407,9 @@ fn text(
             if p < 0 {
                 let _ = writeln!(
                     out,
-                    "  note: {}: a run of the model takes longer than the analysis' response: \
-                     the analysis does not count its waits for a lock held by a codel on another CPU",
+                    "  note: {}: a run of the model takes longer than the analysis' response, \
+                     which does not count a wait for a codel lock held on another CPU; \
+                     `--trace-dir` saves the run",
                     r.name
                 );
             }

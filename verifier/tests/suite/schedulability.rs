@@ -629,3 +629,121 @@ fn an_async_codels_wcet_is_not_its_tasks_demand() {
     let (bound, _) = demands(&system, DemandChoice::Bound);
     assert_eq!(bound, [Some(2000)]);
 }
+
+/// In a timed model a request can interrupt an activity while its codel runs: the codel
+/// ends, and the activity's `stop` runs in the same job. `nav` is alone on its core, so a
+/// job's response is its work: `move` (5 ms) then `stop` (2 ms), 7 ms, which the bound
+/// from the codel automata must cover.
+#[test]
+fn the_bound_counts_a_stop_after_an_interrupted_codel() {
+    let text = r#"System(name: "nav", tick_ms: 10, time: Exact,
+    modules: [(name: "ndd", tasks: [(name: "nav", period: 1)],
+        services: [
+            (name: "GoTo", kind: Activity, task: "nav", interrupts: ["GoTo"], codels: [
+                (state: "start", yields: ["pause::move"], bcet: "1ms", wcet: "1ms"),
+                (state: "move", yields: ["pause::move", "ether"], bcet: "5ms", wcet: "5ms"),
+                (state: "stop", yields: ["ether"], bcet: "2ms", wcet: "2ms")]),
+            (name: "Stop", kind: Function, interrupts: ["GoTo"]),
+        ])],
+)"#;
+    let report = explored(text);
+    let worst = report
+        .properties
+        .iter()
+        .find(|p| p.kind == bip_verifier::CheckKind::WorstResponse)
+        .expect("nav's worst response");
+    assert!(worst.verdict.holds(), "{worst:?}");
+    assert_eq!(worst.note.as_deref(), Some("7 ms"));
+    let system = load_str("nav.ron", text).unwrap();
+    let (bound, _) = demands(&system, DemandChoice::Bound);
+    assert_eq!(bound, vec![Some(7000)]);
+}
+
+/// The activity of [`interruptible`]: per codel (`start`, `a`, `b`, `stop`), its yields
+/// (0: pause to `a`, 1: go on to `a`, 2: go on to `b`, 3: pause to `b`, 4: end) and its
+/// duration in ms.
+type Automaton = [(Vec<u8>, u64); 4];
+
+/// A timed layer of one task alone on its core running one activity that a request can
+/// interrupt at any moment; each codel yields as drawn, or ends, but never to `stop`.
+fn interruptible(codels: &Automaton) -> String {
+    let target = |y: u8| match y {
+        0 => "pause::a",
+        1 => "a",
+        2 => "b",
+        3 => "pause::b",
+        _ => "ether",
+    };
+    // the codels `start` and `stop` reach (the others are an error)
+    let mut reached = [true, false, false, true];
+    for _ in 0..2 {
+        for (k, (yields, _)) in codels.iter().enumerate() {
+            if reached[k] {
+                for &y in yields {
+                    match y {
+                        0 | 1 => reached[1] = true,
+                        2 | 3 => reached[2] = true,
+                        _ => {}
+                    }
+                }
+            }
+        }
+    }
+    let codels: Vec<String> = ["start", "a", "b", "stop"]
+        .iter()
+        .zip(codels)
+        .zip(reached)
+        .filter(|(_, reached)| *reached)
+        .map(|((state, (yields, ms)), _)| {
+            // every codel may end the activity, so that every codel has a way to `ether`
+            let mut yields: Vec<&str> = yields.iter().map(|&y| target(y)).collect();
+            yields.push("ether");
+            yields.sort_unstable();
+            yields.dedup();
+            let yields: Vec<String> = yields.iter().map(|y| format!("{y:?}")).collect();
+            format!(
+                r#"(state: "{state}", yields: [{}], bcet: "{ms}ms", wcet: "{ms}ms")"#,
+                yields.join(", ")
+            )
+        })
+        .collect();
+    format!(
+        r#"System(name: "one", tick_ms: 20, time: Exact,
+    modules: [(name: "m", tasks: [(name: "t", period: 1)],
+        services: [
+            (name: "A", kind: Activity, task: "t", interrupts: ["A"], codels: [{}]),
+            (name: "Stop", kind: Function, interrupts: ["A"]),
+        ])],
+)"#,
+        codels.join(",\n                ")
+    )
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+    /// A task alone on its core responds in a job's work: the exploration's worst
+    /// response is never above the bound from the codel automata, interrupts included.
+    #[test]
+    fn the_bound_covers_every_job_of_an_interruptible_activity(
+        codels in proptest::array::uniform4((
+            proptest::collection::vec(0u8..5, 1..3),
+            1u64..4,
+        ))
+    ) {
+        let text = interruptible(&codels);
+        let system = load_str("one.ron", &text).unwrap();
+        let (bound, _) = demands(&system, DemandChoice::Bound);
+        let report = explored(&text);
+        let worst = report
+            .properties
+            .iter()
+            .find(|p| p.kind == bip_verifier::CheckKind::WorstResponse)
+            .expect("the task's worst response");
+        // a chain that loops has no bound and may run past the period: nothing to compare
+        if let (Some(bound), Some(figure)) = (bound[0], worst.verdict.holds().then_some(&worst.note)) {
+            let figure = figure.as_deref().expect("a figure");
+            let ms: u64 = figure.trim_end_matches(" ms").parse().expect("a figure in ms");
+            proptest::prop_assert!(ms * 1000 <= bound, "{figure} above {bound} µs\n{text}");
+        }
+    }
+}
