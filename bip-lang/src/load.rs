@@ -128,7 +128,7 @@ fn compile_in(def: &SystemDef, text: Option<&str>) -> Result<System, Vec<ModelEr
     if def.has_genom_layer() {
         return genom::expand_in(def, text)?.compile(def);
     }
-    compile_core(def, &[]).map(|(system, _)| system)
+    compile_core(def, &[], None).map(|(system, _)| system)
 }
 
 /// Reads, parses and compiles a model file.

@@ -414,6 +414,14 @@ fn duration_in(
     None
 }
 
+/// `Some` if `c` is written with a unit of time: the duration in microseconds, or why not.
+pub(crate) fn written_duration(c: &ConstExpr) -> Option<Result<u64, String>> {
+    match &c.value {
+        ConstValue::Expr(text) => with_unit(text),
+        _ => None,
+    }
+}
+
 /// `Some` if `text` ends with a unit of time: the duration in microseconds, or why not.
 fn with_unit(text: &str) -> Option<Result<u64, String>> {
     let text = text.trim();

@@ -61,8 +61,12 @@ const MAX_SLOTS: usize = 50_000_000;
 pub(crate) fn compile_core(
     def: &SystemDef,
     extra: &[expr::Expr],
+    time_unit_us: Option<u64>,
 ) -> Result<(System, Vec<eval::Expr>), Vec<ModelError>> {
-    let mut c = Compiler::default();
+    let mut c = Compiler {
+        time_unit_us,
+        ..Compiler::default()
+    };
     c.constants(def);
     c.atoms(def);
     c.components(def);
@@ -72,6 +76,10 @@ pub(crate) fn compile_core(
     }
     let budgets = budgets::check(def, &mut c.errors);
     let priorities = c.priorities(def);
+    c.tick_us = def.tick_ms.as_ref().and_then(|t| match t.value {
+        ConstValue::Int(v) if v > 0 => (v as u64).checked_mul(1000),
+        _ => None,
+    });
     let properties = c.properties(def);
     let extra: Vec<eval::Expr> = extra.iter().filter_map(|e| c.global_bool_tree(e)).collect();
     if !c.errors.is_empty() {
@@ -125,6 +133,11 @@ struct Compiler {
     /// Connectors that failed to compile: a priority naming one says nothing more.
     failed_connectors: HashSet<String>,
     interactions: Vec<Interaction>,
+    /// A tick (`tick_ms`) in microseconds, if the model says.
+    tick_us: Option<u64>,
+    /// A timed model's time unit in microseconds: a `Time` step advances time by units,
+    /// not by ticks.
+    time_unit_us: Option<u64>,
 }
 
 /// Turns an expression error into a model error (trees have their positions in the file).

@@ -3,11 +3,12 @@
 
 use std::collections::HashMap;
 
+use super::budgets::{show_us, written_duration};
 use super::resolve::{Place, Resolver, Ty};
 use super::{expr_error, Compiler};
 use crate::diag::ModelError;
 use crate::expr::{self};
-use crate::source::Span;
+use crate::source::{ConstExpr, Span};
 use crate::syntax::{ExprDef, PropertyDef, SystemDef};
 use bip_model::eval;
 use bip_model::{Property, PropertyKind};
@@ -133,19 +134,27 @@ pub(crate) fn written_text(p: &PropertyDef) -> String {
             response,
             within,
             ..
-        } => format!("{trigger} → {response} within {} ticks", within.value),
+        } => format!("{trigger} → {response} within {}", bound_text(within)),
         PropertyDef::LeadsTo { from, to, .. } => format!("{from} → {to} eventually"),
         PropertyDef::Replies {
             service, within, ..
         } => match within {
             Some(k) => format!(
-                "every accepted request of {service} is replied to within {} ticks",
-                k.value
+                "every accepted request of {service} is replied to within {}",
+                bound_text(k)
             ),
             None => format!("every accepted request of {service} is replied to"),
         },
         PropertyDef::Terminates { service, .. } => {
             format!("every started {service} ends")
         }
+    }
+}
+
+/// A `within` for reports: a duration as written, else its number of ticks.
+fn bound_text(k: &ConstExpr) -> String {
+    match written_duration(k) {
+        Some(Ok(us)) => show_us(us),
+        _ => format!("{} ticks", k.value),
     }
 }

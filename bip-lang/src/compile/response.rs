@@ -4,6 +4,7 @@
 //! holds to one where `after` holds), `fires(c) && changes(b, a)` (both), or a `||` of
 //! these. The GenoM layer's events (`request(m.S)`, …) are expanded into these forms.
 
+use super::budgets::{show_us, written_duration};
 use super::resolve::{one_of, Ty};
 use super::Compiler;
 use crate::diag::ModelError;
@@ -99,21 +100,33 @@ impl Compiler {
         found
     }
 
-    /// `within`: a number of ticks, which needs a `Time` connector to count them.
+    /// `within`: a number of ticks, or a duration (`"200ms"`), which needs a `Time`
+    /// connector to count it; in the units a `Time` step advances: ticks, or a timed
+    /// model's time units.
     pub(super) fn within(&mut self, k: &ConstExpr) -> Option<u64> {
-        let value = match self.const_value(k, Ty::Int, &[]) {
-            Ok(v) => v,
-            Err(e) => {
-                self.errors.push(e);
-                return None;
+        let units = match written_duration(k) {
+            Some(duration) => self.duration_in_steps(k.span, duration)?,
+            None => {
+                let value = match self.const_value(k, Ty::Int, &[]) {
+                    Ok(v) => v,
+                    Err(e) => {
+                        self.errors.push(e);
+                        return None;
+                    }
+                };
+                if value < 0 {
+                    return self.fail(
+                        k.span,
+                        format!("`within` is {value}; it counts ticks, at least 0"),
+                    );
+                }
+                let ticks = value as u64;
+                match (self.time_unit_us, self.tick_us) {
+                    (Some(unit), Some(tick)) => ticks.saturating_mul(tick / unit),
+                    _ => ticks,
+                }
             }
         };
-        if value < 0 {
-            return self.fail(
-                k.span,
-                format!("`within` is {value}; it counts ticks, at least 0"),
-            );
-        }
         if !self.connectors.iter().any(|c| c.role == Role::Time) {
             self.errors.push(
                 ModelError::new(
@@ -126,7 +139,51 @@ impl Compiler {
             );
             return None;
         }
-        Some(value as u64)
+        Some(units)
+    }
+
+    /// A `within` written as a duration, in the steps time passes by: the timed model's
+    /// units, or ticks of `tick_ms`; it must be a whole number of them.
+    fn duration_in_steps(&mut self, span: Span, duration: Result<u64, String>) -> Option<u64> {
+        let us = match duration {
+            Ok(us) => us,
+            Err(why) => {
+                return self.fail(span, format!("`within` must be a duration: {why}"));
+            }
+        };
+        let (step, what) = match (self.time_unit_us, self.tick_us) {
+            (Some(unit), _) => (unit, "the model's time unit"),
+            (None, Some(tick)) => (tick, "a tick (`tick_ms`)"),
+            (None, None) => {
+                self.errors.push(
+                    ModelError::new(
+                        "`within` is a duration, but the model has no `tick_ms` to count it in",
+                        span,
+                    )
+                    .with_help("give the model a `tick_ms`, or write `within` in ticks"),
+                );
+                return None;
+            }
+        };
+        if us % step != 0 {
+            self.errors.push(
+                ModelError::new(
+                    format!(
+                        "`within` of {} is not a whole number of {what}, {}",
+                        show_us(us),
+                        show_us(step)
+                    ),
+                    span,
+                )
+                .with_help(format!(
+                    "write a multiple of {}, such as `\"{}\"`",
+                    show_us(step),
+                    show_us(us / step * step + step).replace(' ', "")
+                )),
+            );
+            return None;
+        }
+        Some(us / step)
     }
 
     fn fail<T>(&mut self, span: Span, message: impl Into<String>) -> Option<T> {

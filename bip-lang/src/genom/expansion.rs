@@ -10,7 +10,7 @@ use crate::compile::{compile_core, written_text, Constants};
 use crate::diag::{Errors, ModelError};
 use crate::expr::{Assign, Expr};
 use crate::syntax::{ActionDef, ExprDef, PropertyDef, SystemDef};
-use bip_model::{PropertyKind, System};
+use bip_model::System;
 use check::ConstraintKind;
 
 /// Expands the GenoM layer of `def` into BIP core. The result has no `modules` or
@@ -227,7 +227,8 @@ impl Expansion {
     /// subtrees in generated expressions kept their positions.
     pub fn compile(&self, def: &SystemDef) -> Result<System, Vec<ModelError>> {
         let conditions = self.recipe.conditions();
-        let (mut system, exprs) = compile_core(&self.def, &conditions).map_err(placed)?;
+        let (mut system, exprs) =
+            compile_core(&self.def, &conditions, self.recipe.time_unit_us).map_err(placed)?;
         let map = self.recipe.resolve(&system, exprs).map_err(|m| {
             vec![ModelError::new(
                 format!(
@@ -240,17 +241,6 @@ impl Expansion {
         // reports show the properties as written, not as rewritten for the core
         for (p, written) in system.properties.iter_mut().zip(&def.properties) {
             p.text = written_text(written);
-        }
-        // a bound counts ticks of `tick_ms`, and a timed model's time steps count units
-        if let (Some(unit), Some(tick)) = (self.recipe.time_unit_us, self.recipe.timing.tick_us) {
-            for p in &mut system.properties {
-                if let PropertyKind::Response {
-                    within: Some(k), ..
-                } = &mut p.kind
-                {
-                    *k = k.saturating_mul(tick / unit);
-                }
-            }
         }
         system.genom = Some(map);
         Ok(system)

@@ -9,11 +9,11 @@ use std::collections::HashMap;
 
 use super::check::Layer;
 use super::timing::Timing;
-use crate::compile::budgets::{duration, show_us};
+use crate::compile::budgets::{duration, show_us, written_duration};
 use crate::compile::Constants;
 use crate::diag::{Errors, ModelError};
 use crate::source::{ConstExpr, Span};
-use crate::syntax::{Policy, Preemption, SystemDef};
+use crate::syntax::{Policy, Preemption, PropertyDef, SystemDef};
 
 /// The common cycle of a timed model's periods is at most this many time units.
 pub(crate) const MAX_HYPERPERIOD: u64 = 1 << 20;
@@ -162,6 +162,17 @@ fn check_in(
                     push(us, w.span, format!("the WCET of {name}"));
                 }
             }
+        }
+    }
+    // a bound in real time is counted in units too
+    for p in &def.properties {
+        let within = match p {
+            PropertyDef::Response { within, .. } => Some(within),
+            PropertyDef::Replies { within, .. } => within.as_ref(),
+            _ => None,
+        };
+        if let Some((Some(Ok(us)), k)) = within.map(|k| (written_duration(k), k)) {
+            push(us, k.span, format!("the bound of `{}`", p.name()));
         }
     }
     let unit_us = match &time.unit {

@@ -196,6 +196,11 @@ fn genom_events_point_at_what_is_wrong() {
             "-1",
         ),
         (
+            r#"Replies(service: "ndd.GoTo", within: "2s")"#,
+            "`within` is a duration, but the model has no `tick_ms` to count it in",
+            "2s",
+        ),
+        (
             r#"LeadsTo(name: "a", from: "fires(tock)", to: "true")"#,
             "no connector `tock`",
             "tock",
@@ -219,6 +224,45 @@ fn genom_events_point_at_what_is_wrong() {
     for (props, words, covered) in cases {
         assert_error(&genom(props), words, covered);
     }
+}
+
+/// A bound in real time counts ticks of `tick_ms`: `"600ms"` with a tick of 100 ms is
+/// the bound of 6 ticks, reported as written; a duration that is not a whole number of
+/// ticks is an error at it, with the nearest bound above.
+#[test]
+fn a_bound_in_real_time_counts_ticks() {
+    let ticked = |props: &str| {
+        genom(props).replacen("name: \"layer\",", "name: \"layer\", tick_ms: 100,", 1)
+    };
+    let bound = |text: &str| {
+        let system = load_str("layer.ron", text).unwrap_or_else(|e| panic!("{}", e.summary()));
+        let p = &system.properties[0];
+        match p.kind {
+            bip_model::PropertyKind::Response { within, .. } => (within, p.text.clone()),
+            _ => panic!("a response property"),
+        }
+    };
+    let (in_ticks, _) = bound(&ticked(r#"Replies(service: "ndd.GoTo", within: 6)"#));
+    let (in_time, text) = bound(&ticked(r#"Replies(service: "ndd.GoTo", within: "600ms")"#));
+    assert_eq!((in_ticks, in_time), (Some(6), Some(6)));
+    assert_eq!(
+        text,
+        "every accepted request of ndd.GoTo is replied to within 600 ms"
+    );
+    let (_, text) = bound(&ticked(
+        r#"Response(name: "r", trigger: "request(ndd.GoTo)", response: "reply(ndd.GoTo)", within: "1.2s")"#,
+    ));
+    assert_eq!(text, "request(ndd.GoTo) → reply(ndd.GoTo) within 1200 ms");
+    assert_error(
+        &ticked(r#"Replies(service: "ndd.GoTo", within: "650ms")"#),
+        "`within` of 650 ms is not a whole number of a tick (`tick_ms`), 100 ms",
+        "650ms",
+    );
+    assert_error(
+        &ticked(r#"Replies(service: "ndd.GoTo", within: "2 hours")"#),
+        "syntax error",
+        "hours",
+    );
 }
 
 #[test]

@@ -317,6 +317,15 @@ fn a_bound_in_ticks_counts_the_units_of_its_ticks() {
         .replacen(r#""500us""#, r#""1ms""#, 1)
         .replacen("time: Exact,", r#"time: Exact(unit: "1ms"),"#, 1);
     assert_eq!(bound(&whole), (Some(1000), Some(3)));
+    // a bound in real time counts units, and takes part in deriving them
+    let in_time = |k: &str| with_response.replacen("within: 3", &format!("within: {k:?}"), 1);
+    assert_eq!(bound(&in_time("3ms")), (Some(500), Some(6)));
+    assert_eq!(bound(&in_time("2500us")), (Some(500), Some(5)));
+    assert_eq!(bound(&in_time("2750us")), (Some(250), Some(11)));
+    let declared = in_time("2500us")
+        .replacen(r#""500us""#, r#""1ms""#, 1)
+        .replacen("time: Exact,", r#"time: Exact(unit: "1ms"),"#, 1);
+    assert_error(&declared, "the bound of `Replies(m0.Run, within: 2500us)`", "2500us");
 }
 
 #[test]

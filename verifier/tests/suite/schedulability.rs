@@ -534,17 +534,17 @@ fn a_timed_model_decides_its_deadlines_by_exploration() {
 /// `robots/tests/timed.ron` (unit 500 µs) runs `Log` on task `log`, period 8 ms, on one of
 /// two cores it never waits for, in 1 to 2 ms. A request that comes just after the release
 /// at a boundary waits for the next one, 8 ms later: the reply comes at most 10 ms after
-/// the request, and 10 ms after it on the worst run.
+/// the request, and 10 ms after it on the worst run; written in ticks or as a duration.
 #[test]
 fn a_timed_models_reply_bound_is_in_real_time() {
-    let text = |k: u32| {
+    let text = |k: &str| {
         include_str!("../../../robots/tests/timed.ron").replacen(
             "    ],\n)",
             &format!("    ],\n    properties: [Replies(service: \"nav.Log\", within: {k})],\n)"),
             1,
         )
     };
-    let verdict = |k: u32| {
+    let verdict = |k: &'static str| {
         let report = explored(&text(k));
         let p = report
             .properties
@@ -554,8 +554,10 @@ fn a_timed_models_reply_bound_is_in_real_time() {
             .clone();
         (k, p.verdict.holds(), p.verdict.fails())
     };
-    assert_eq!(verdict(10), (10, true, false));
-    assert_eq!(verdict(9), (9, false, true));
+    assert_eq!(verdict("10"), ("10", true, false));
+    assert_eq!(verdict("9"), ("9", false, true));
+    assert_eq!(verdict(r#""10ms""#), (r#""10ms""#, true, false));
+    assert_eq!(verdict(r#""9500us""#), (r#""9500us""#, false, true));
 }
 
 /// A timed model whose task can loop on codels that take no time: time stops in that
