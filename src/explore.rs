@@ -35,25 +35,18 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let Some(system) = load::system(&args.file) else {
+    let loaded = match &args.trace {
+        None => load::system(&args.file).map(|system| (system, None)),
+        Some(path) => trace::model_and_trace(&args.file, path)
+            .map(|(system, trace)| (system, Some((path, trace)))),
+    };
+    let Some((system, trace)) = loaded else {
         return exit::ERROR;
     };
     let mut session = session::Session::new(system);
-    if let Some(path) = &args.trace {
-        let loaded = trace::read(path).and_then(|t| {
-            if t.system != session.system().name {
-                eprintln!(
-                    "warning: the trace is of system `{}`, the model is `{}`",
-                    t.system,
-                    session.system().name
-                );
-            }
-            session
-                .load(&t)
-                .map_err(|e| format!("{}: {e}", path.display()))
-        });
-        if let Err(e) = loaded {
-            eprintln!("error: {e}");
+    if let Some((path, trace)) = trace {
+        if let Err(e) = session.load(&trace) {
+            eprintln!("error: {}: {e}", path.display());
             return exit::ERROR;
         }
     }

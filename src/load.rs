@@ -14,6 +14,12 @@ pub fn system(file: &Path) -> Option<System> {
     reported(bip_lang::load_file(file))
 }
 
+/// The model in `file` compiled as a timed model, whether or not it says `time: Exact`
+/// (as `bip sched --exact` explores it); `None` once its diagnostic is printed.
+pub fn timed_system(file: &Path) -> Option<System> {
+    reported(bip_lang::load_file_timed(file))
+}
+
 /// The compiled model in `file`; `None` once its diagnostic is printed on stdout as a
 /// JSON document (for `--format json`: a reader of stdout gets a document either way).
 pub fn system_or_json(file: &Path) -> Option<System> {

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use bip_engine::replay::{replay, End};
 use bip_engine::Stepped;
 
-use crate::{exit, load};
+use crate::{exit, trace};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -25,29 +25,9 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> u8 {
-    let Some(system) = load::system(&args.file) else {
+    let Some((system, trace)) = trace::model_and_trace(&args.file, &args.trace) else {
         return exit::ERROR;
     };
-    let text = match std::fs::read_to_string(&args.trace) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("error: cannot read {}: {e}", args.trace.display());
-            return exit::ERROR;
-        }
-    };
-    let trace = match bip_lang::trace_file::from_ron(&text) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("error: {}: not a trace: {e}", args.trace.display());
-            return exit::ERROR;
-        }
-    };
-    if trace.system != system.name {
-        eprintln!(
-            "warning: the trace is of system `{}`, the model is `{}`",
-            trace.system, system.name
-        );
-    }
     let result = match replay(system.clone(), &trace) {
         Ok(r) => r,
         Err(e) => {

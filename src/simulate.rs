@@ -64,7 +64,7 @@ pub fn run(args: &Args) -> u8 {
     let mut writer = match &args.trace {
         None => None,
         Some(out) => match File::create(out)
-            .and_then(|f| TraceWriter::new(BufWriter::new(f), &system.name))
+            .and_then(|f| TraceWriter::new(BufWriter::new(f), &system.name, system.is_timed()))
         {
             Ok(w) => Some(w),
             Err(e) => {

@@ -59,22 +59,9 @@ pub fn run(args: &Args) -> u8 {
 }
 
 fn run_show(args: &ShowArgs) -> u8 {
-    let Some(system) = load::system(&args.file) else {
+    let Some((system, trace)) = model_and_trace(&args.file, &args.trace) else {
         return exit::ERROR;
     };
-    let trace = match read(&args.trace) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return exit::ERROR;
-        }
-    };
-    if trace.system != system.name {
-        eprintln!(
-            "warning: the trace is of system `{}`, the model is `{}`",
-            trace.system, system.name
-        );
-    }
     let user = match view::user_trace(&system, &trace, args.all_variables) {
         Ok(u) => u,
         Err(e) => {
@@ -120,6 +107,27 @@ fn write_timeline(system: &System, trace: &Trace, svg: &Path) -> Result<(), Stri
     std::fs::write(svg, picture).map_err(|e| format!("cannot write {}: {e}", svg.display()))
 }
 
+/// The trace in `trace_file` and the model in `file` it runs, loaded as the trace says:
+/// as a timed model for a run of the timed semantics (`timed: true`, which `bip sched
+/// --exact` and `bip simulate --codel-time` write for a model without `time: Exact`),
+/// as written otherwise. `None` once the diagnostic is printed; a trace of another system
+/// gets a warning. Every command that reads a trace against a model reads it here.
+pub(crate) fn model_and_trace(file: &Path, trace_file: &Path) -> Option<(System, Trace)> {
+    let trace = read(trace_file).map_err(|e| eprintln!("error: {e}")).ok()?;
+    let system = if trace.timed {
+        load::timed_system(file)?
+    } else {
+        load::system(file)?
+    };
+    if trace.system != system.name {
+        eprintln!(
+            "warning: the trace is of system `{}`, the model is `{}`",
+            trace.system, system.name
+        );
+    }
+    Some((system, trace))
+}
+
 pub(crate) fn read(path: &Path) -> Result<Trace, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
@@ -156,11 +164,7 @@ pub fn save_charts(
         let beside = PathBuf::from(format!("{stem}.svg"));
         std::fs::write(&beside, svg)
             .map_err(|e| format!("cannot write the chart {}: {e}", beside.display()))?;
-        if system
-            .genom
-            .as_ref()
-            .is_some_and(|g| g.time_unit_us.is_some())
-        {
+        if system.is_timed() {
             write_schedule(
                 system,
                 trace,

@@ -133,12 +133,7 @@ impl Recording {
         }
         Window {
             skipped: self.skipped,
-            trace: Trace {
-                system: system.name.clone(),
-                steps: trace_steps,
-                verdict,
-                loop_start: None,
-            },
+            trace: Trace::new(system, verdict, trace_steps),
             start,
         }
     }

@@ -11,7 +11,8 @@
 //! )
 //! ```
 //!
-//! The verdict comes last, so that a run is written as it goes ([`TraceWriter`]); a
+//! A run of a model's timed semantics says `timed: true` after the system's name. The
+//! verdict comes last, so that a run is written as it goes ([`TraceWriter`]); a
 //! lasso (a run that repeats a cycle forever) adds `loop_start: k` after it: the steps
 //! after the first `k` repeat.
 
@@ -23,7 +24,7 @@ use crate::syntax::ron_options;
 
 /// The trace as RON, one line per step.
 pub fn to_ron(trace: &Trace) -> String {
-    let mut w = TraceWriter::new(Vec::new(), &trace.system).expect("writes to memory");
+    let mut w = TraceWriter::new(Vec::new(), &trace.system, trace.timed).expect("writes to memory");
     w.steps(&trace.steps).expect("writes to memory");
     let bytes = w
         .finish_lasso(&trace.verdict, trace.loop_start)
@@ -37,13 +38,14 @@ pub struct TraceWriter<W: Write> {
 }
 
 impl<W: Write> TraceWriter<W> {
-    /// Writes the head of the trace of system `system`.
-    pub fn new(mut out: W, system: &str) -> io::Result<TraceWriter<W>> {
-        writeln!(
-            out,
-            "Trace(\n    system: {},\n    steps: [",
-            value(&system)?
-        )?;
+    /// Writes the head of the trace of system `system`, a run of its timed semantics if
+    /// `timed` (`timed: true`, written only then).
+    pub fn new(mut out: W, system: &str, timed: bool) -> io::Result<TraceWriter<W>> {
+        writeln!(out, "Trace(\n    system: {},", value(&system)?)?;
+        if timed {
+            writeln!(out, "    timed: true,")?;
+        }
+        writeln!(out, "    steps: [")?;
         Ok(TraceWriter { out })
     }
 

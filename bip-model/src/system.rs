@@ -175,6 +175,14 @@ impl System {
         }
     }
 
+    /// True if the system is a timed model (docs/model.md, "Timed semantics"): its codels
+    /// hold its CPUs' cores for their durations.
+    pub fn is_timed(&self) -> bool {
+        self.genom
+            .as_ref()
+            .is_some_and(|g| g.time_unit_us.is_some())
+    }
+
     /// True if the system has connectors with the `Time` role.
     pub fn has_time(&self) -> bool {
         self.connectors.iter().any(|c| c.role == Role::Time)

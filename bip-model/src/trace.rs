@@ -22,6 +22,12 @@ use crate::system::System;
 #[serde(rename = "Trace", deny_unknown_fields)]
 pub struct Trace {
     pub system: String,
+    /// The run is of the model's timed semantics (docs/model.md, "Timed semantics"), as
+    /// `time: Exact` gives it, or as `bip sched --exact` and `bip simulate --codel-time` run
+    /// a model that does not say so: the model is to be loaded timed to read the trace.
+    /// Absent (false) for an untimed run; earlier files have none.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub timed: bool,
     pub steps: Vec<TraceStep>,
     pub verdict: Verdict,
     /// A lasso (a run that goes on forever): the run repeats the steps after the first
@@ -29,6 +35,10 @@ pub struct Trace {
     /// Absent for a finite trace; earlier files have none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loop_start: Option<usize>,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 /// Why a trace was recorded.
@@ -145,6 +155,17 @@ impl System {
 }
 
 impl Trace {
+    /// A finite trace of `system` made of `steps`; timed if the system is.
+    pub fn new(system: &System, verdict: Verdict, steps: Vec<TraceStep>) -> Trace {
+        Trace {
+            system: system.name.clone(),
+            timed: system.is_timed(),
+            steps,
+            verdict,
+            loop_start: None,
+        }
+    }
+
     /// A trace from the initial state along `path` (each step with the state it leads to).
     pub fn from_path(system: &System, verdict: Verdict, path: &[(OwnedStep, State)]) -> Trace {
         Trace::from_path_at(system, &system.initial_state(), verdict, path)
@@ -163,12 +184,7 @@ impl Trace {
             steps.push(TraceStep::between(system, step.label, prev, state));
             prev = state;
         }
-        Trace {
-            system: system.name.clone(),
-            verdict,
-            steps,
-            loop_start: None,
-        }
+        Trace::new(system, verdict, steps)
     }
 
     /// Re-executes the trace with the step relation: each step must be enabled and lead to
@@ -259,6 +275,14 @@ impl Trace {
         start: State,
         out: &mut Vec<(OwnedStep, State)>,
     ) -> Result<(), ReplayError> {
+        if self.timed && !system.is_timed() {
+            return Err(ReplayError {
+                step: 0,
+                message: "the trace is of the model run as a timed model (`timed: true`), \
+                          and the model was loaded untimed"
+                    .into(),
+            });
+        }
         let slots = system.slot_by_name();
         let mut state = start;
         let mut steps = Steps::new();

@@ -45,10 +45,6 @@ impl Session {
         }
     }
 
-    pub fn system(&self) -> &System {
-        &self.system
-    }
-
     pub fn state(&self) -> State {
         match self.position {
             0 => self.system.initial_state(),

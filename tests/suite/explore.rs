@@ -317,6 +317,27 @@ fn explore_steps_through_the_rover_deadlock_and_says_why() {
     assert_eq!(loaded["loaded"], "deadlock");
 }
 
+/// A trace that `bip sched --exact` saved of a model without `time: Exact` (a run of it as
+/// a timed model) is stepped through on the model loaded timed; given to the page of the
+/// model loaded as it says, untimed, it is refused, saying why.
+#[test]
+fn explore_steps_through_a_trace_of_the_model_run_as_timed() {
+    let (_dir, model, miss, _) = crate::trace_timed_run::exact_traces();
+    let model = model.to_str().expect("utf-8");
+    let e = explore(&[model, "--trace", miss.to_str().expect("utf-8")]);
+    let start = ok(&e.address, "GET", "/api/state", Value::Null);
+    assert_eq!(
+        start["loaded"],
+        "violation of arm.servo meets its 4 ms deadline"
+    );
+    assert_ne!(start["timing"], Value::Null, "the model is loaded timed");
+    let e = explore(&[model]);
+    let body = json!({ "trace": std::fs::read_to_string(&miss).expect("saved") });
+    let (status, text) = request(&e.address, "POST", "/api/trace", &body.to_string());
+    assert_eq!(status, 422, "{text}");
+    assert!(text.contains("loaded untimed"), "{text}");
+}
+
 #[test]
 fn explore_answers_bad_requests_with_a_4xx_and_a_message() {
     let e = explore(&["robots/rover-deadlock.ron"]);

@@ -34,12 +34,7 @@ fn ticks_to_reply(trace: &Trace) -> Vec<(u64, bool)> {
 #[test]
 fn a_two_tick_server_is_late_for_a_bound_of_one_after_every_request() {
     let system = load("served.ron");
-    let mut whole = Trace {
-        system: system.name.clone(),
-        steps: Vec::new(),
-        verdict: Verdict::None,
-        loop_start: None,
-    };
+    let mut whole = Trace::new(&system, Verdict::None, Vec::new());
     let mut on_steps = |segment: &Trace| whole.steps.extend(segment.steps.iter().cloned());
     let options = SimulationOptions {
         steps: 60,

@@ -18,12 +18,7 @@ use common::*;
 
 /// A simulation with its whole run, joined from the segments it streams.
 pub(crate) fn streamed(system: System, options: SimulationOptions) -> (Simulation, Trace) {
-    let mut whole = Trace {
-        system: system.name.clone(),
-        steps: Vec::new(),
-        verdict: Verdict::None,
-        loop_start: None,
-    };
+    let mut whole = Trace::new(&system, Verdict::None, Vec::new());
     let mut on_steps = |segment: &Trace| whole.steps.extend(segment.steps.iter().cloned());
     let hooks = Hooks {
         stop: None,

@@ -228,3 +228,35 @@ fn trace_files_read_in_both_formats() {
                (step: \"left[0]\", state: {\"phil[0]\": \"hungry\", \"fork[0]\": \"taken\"}),\n    ],\n)\n";
     assert_eq!(bip_lang::trace_file::from_ron(old), Ok(trace));
 }
+
+/// A run of a timed model says so in its file (`timed: true`, after the system's name) and
+/// reads back the same; the model loaded untimed refuses it, saying why. An untimed run's
+/// file does not say it.
+#[test]
+fn a_timed_run_says_so_and_replays_on_the_timed_model_only() {
+    const TIMED: &str = r#"System(name: "t", tick_ms: 1, time: Exact, cpus: ["c"],
+        modules: [(name: "m", tasks: [(name: "p", period: 2, cpu: "c")],
+            services: [(name: "S", kind: Activity, task: "p", codels: [
+                (state: "start", yields: ["pause::start", "ether"], wcet: "1ms")])])])"#;
+    let timed = system(TIMED);
+    let untimed = system(&TIMED.replacen("time: Exact, ", "", 1));
+    assert!(timed.is_timed() && !untimed.is_timed());
+    // a request, time up to its task's period, the release and the dispatch
+    let run = path(&timed, &["m_S_request", "tick", "release", "m_p_dispatch"]);
+    let trace = Trace::from_path(&timed, Verdict::None, &run);
+    assert!(trace.timed);
+    let text = bip_lang::trace_file::to_ron(&trace);
+    assert!(
+        text.starts_with("Trace(\n    system: \"t\",\n    timed: true,\n    steps: [\n"),
+        "{text}"
+    );
+    assert_eq!(bip_lang::trace_file::from_ron(&text), Ok(trace.clone()));
+    assert_eq!(trace.replay(&timed).expect("replays").len(), 4);
+    let refused = trace.replay(&untimed).expect_err("the untimed model");
+    assert_eq!(refused.step, 0);
+    assert!(refused.message.contains("timed model"), "{refused}");
+
+    let plain = Trace::from_path(&untimed, Verdict::None, &[]);
+    assert!(!plain.timed);
+    assert!(!bip_lang::trace_file::to_ron(&plain).contains("timed"));
+}

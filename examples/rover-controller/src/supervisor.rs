@@ -157,12 +157,7 @@ pub fn run_on(
 
     let mut report = Report {
         system: system.clone(),
-        trace: Trace {
-            system: system.name.clone(),
-            verdict: Verdict::None,
-            steps: Vec::new(),
-            loop_start: None,
-        },
+        trace: Trace::new(&system, Verdict::None, Vec::new()),
         replies: Vec::new(),
         held: Vec::new(),
         goto_ends: Vec::new(),

@@ -137,12 +137,7 @@ pub fn greedy_deadlock(
         if let Ok(Liveness::Deadlock) = sys.liveness(&state, &steps, &mut checker) {
             let excused = terminal.is_some_and(|t| sys.holds(t, &state, "").unwrap_or(false));
             if !excused {
-                return Some(Trace {
-                    system: sys.name.clone(),
-                    verdict: TraceVerdict::Deadlock,
-                    steps: trace_steps,
-                    loop_start: None,
-                });
+                return Some(Trace::new(sys, TraceVerdict::Deadlock, trace_steps));
             }
         }
         // score every step: exactly (by firing) when the model is small, else by the
