@@ -119,6 +119,11 @@ pub fn run(args: &Args) -> u8 {
             println!("result: witness for {property}");
             exit::FAILED
         }
+        Some(End::WorstResponse { property }) => {
+            println!("the run of `{property}`: its last step is where `bip verify` measured it");
+            println!("result: witness for {property}");
+            exit::FAILED
+        }
         Some(End::Unanswered {
             property,
             loop_start,

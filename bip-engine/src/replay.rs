@@ -48,6 +48,10 @@ pub enum End {
     Violation { property: String },
     /// The reachability property holds in the last state.
     Witness { property: String },
+    /// The run of a worst response (`bip verify`'s `m.t worst response`, or a response
+    /// property's): its last step ends the job of the task, or is a step of the model
+    /// where the property's wait ends; the figure is the verifier's.
+    WorstResponse { property: String },
     /// The response property's trigger goes unanswered: on the cycle of a lasso (which
     /// starts after `loop_start` steps and returns to its first state), past the bound on
     /// the last step, or in a last state with no step.
@@ -363,6 +367,12 @@ fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End
                 if matches!(verdict, Verdict::Violation(n) if n == bip_model::TIME_PROGRESS) {
                     return timelock(system, trace, path, state).unwrap_or_else(|why| not(&why));
                 }
+                if let Some(of) = name.strip_suffix(WORST_RESPONSE) {
+                    if matches!(verdict, Verdict::Witness(_)) {
+                        return worst_response(system, trace, name, of)
+                            .unwrap_or_else(|why| not(&why));
+                    }
+                }
                 return not("the model has no such property");
             };
             let expr = match &p.kind {
@@ -392,5 +402,40 @@ fn check_end(engine: &Engine, trace: &Trace, path: &[(OwnedStep, State)]) -> End
             },
             None => not("nothing evaluated from the last state has a range error"),
         },
+    }
+}
+
+/// How the verifier names the witness of a worst response: `m.t worst response`, or a
+/// response property's name and this.
+const WORST_RESPONSE: &str = " worst response";
+
+/// The end of the run of `of`'s worst response: a task's job end, or any last step for a
+/// response property of the model.
+fn worst_response(system: &System, trace: &Trace, name: &str, of: &str) -> Result<End, String> {
+    let end = End::WorstResponse {
+        property: name.to_string(),
+    };
+    if system
+        .properties
+        .iter()
+        .any(|p| p.name == of && matches!(p.kind, PropertyKind::Response { .. }))
+    {
+        return Ok(end);
+    }
+    let task = of.split_once('.').and_then(|(m, t)| {
+        let map = system.genom.as_ref()?;
+        let module = map.modules.iter().find(|x| x.name == m)?;
+        module
+            .tasks
+            .iter()
+            .any(|x| x.name == t)
+            .then(|| format!("{m}_{t}_done"))
+    });
+    let Some(done) = task else {
+        return Err(format!("the model has no task or response property `{of}`"));
+    };
+    match trace.steps.last() {
+        Some(last) if last.step == done => Ok(end),
+        _ => Err(format!("the last step does not end a job of `{of}`")),
     }
 }

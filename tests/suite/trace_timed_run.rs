@@ -93,6 +93,28 @@ fn sched_exact_traces_of_an_untimed_model_are_shown_and_replayed() {
         "{replayed}"
     );
 
+    // so is the worst case, its last step the job end the verifier measured; cut short,
+    // the run no longer ends a job
+    let out = bip(&["replay", model, worst.to_str().expect("utf-8")]);
+    let replayed = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{replayed}");
+    assert!(
+        replayed.contains("result: witness for arm.servo worst response"),
+        "{replayed}"
+    );
+    let mut cut: bip_model::Trace =
+        bip_lang::trace_file::from_ron(&std::fs::read_to_string(&worst).expect("saved"))
+            .expect("a trace");
+    cut.steps.pop();
+    let short = dir.path().join("short.trace.ron");
+    std::fs::write(&short, bip_lang::trace_file::to_ron(&cut)).expect("writes");
+    let out = bip(&["replay", model, short.to_str().expect("utf-8")]);
+    let replayed = text(&out);
+    assert!(
+        replayed.contains("the last step does not end a job of `arm.servo`"),
+        "{replayed}"
+    );
+
     // without the mark, the model is loaded as it says, untimed, and the trace does not fit
     let unmarked = dir.path().join("unmarked.trace.ron");
     let saved = std::fs::read_to_string(&miss).expect("saved");

@@ -325,7 +325,11 @@ fn a_bound_in_ticks_counts_the_units_of_its_ticks() {
     let declared = in_time("2500us")
         .replacen(r#""500us""#, r#""1ms""#, 1)
         .replacen("time: Exact,", r#"time: Exact(unit: "1ms"),"#, 1);
-    assert_error(&declared, "the bound of `Replies(m0.Run, within: 2500us)`", "2500us");
+    assert_error(
+        &declared,
+        "the bound of `Replies(m0.Run, within: 2500us)`",
+        "2500us",
+    );
 }
 
 #[test]
