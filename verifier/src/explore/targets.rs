@@ -262,15 +262,15 @@ impl<K: Keep<Edge = u32, Notes = super::response::watched::Notes>> Explorer<'_, 
         for (k, (t, f)) in self.targets.iter().zip(&self.findings).enumerate() {
             let mut decided = responses.get_mut(k).and_then(Option::take);
             let note = decided.as_ref().and_then(|d| d.note.clone());
-            if matches!(t.check, Check::Response { .. }) && self.system.has_time() {
-                let wait = decided.as_mut().and_then(|d| d.worst.take());
-                worst_waits.push(worst_wait_result(self.system, t, wait, complete));
-            }
+            let wait = decided.as_mut().and_then(|d| d.worst.take());
             let verdict = match (f, decided) {
                 (_, Some(d)) => d.verdict,
                 (Some(f), None) => self.verdict_of(t, f)?,
                 (None, None) => self.open_verdict(t, stopped.as_ref(), states),
             };
+            if matches!(t.check, Check::Response { .. }) && self.system.has_time() {
+                worst_waits.push(worst_wait_result(self.system, t, wait, &verdict));
+            }
             let error_step = verdict.trace().and_then(|tr| error_step(self.system, tr));
             properties.push(PropertyResult {
                 name: t.name.clone(),
@@ -376,24 +376,23 @@ impl<K: Keep<Edge = u32, Notes = super::response::watched::Notes>> Explorer<'_, 
     }
 }
 
-/// The row of response property `t`'s worst response (`wait`, if it was computed) in a
-/// model with time: `NAME worst response`, in microseconds in a timed GenoM layer, in
-/// time units otherwise.
+/// The row of response property `t`'s worst response (`wait`, if it was computed; the
+/// property's verdict is `decided`) in a model with time: `NAME worst response`, in
+/// microseconds in a timed GenoM layer, in time units otherwise.
 fn worst_wait_result(
     system: &System,
     t: &Target<'_>,
     wait: Option<WaitFigure>,
-    complete: bool,
+    decided: &PropertyVerdict,
 ) -> PropertyResult {
     let unit_us = system.genom.as_ref().and_then(|g| g.time_unit_us);
     let (verdict, units, note) = match wait {
         Some(w) => (w.verdict, w.units, w.note),
         None => (
             PropertyVerdict::Inconclusive {
-                reason: if complete {
-                    "not given: the state graph was not searched".into()
-                } else {
-                    "not given: the exploration stopped before every state was seen".into()
+                reason: match decided {
+                    PropertyVerdict::Inconclusive { reason } => format!("not given: {reason}"),
+                    _ => "not given: the state graph was not searched".into(),
                 },
             },
             None,

@@ -42,8 +42,9 @@ const NONE: u32 = u32::MAX;
 /// time, its timelocked states.
 pub(crate) fn longest_wait(g: &Flagged, p: usize, locked: &[bool], watch: &Watch) -> Worst {
     let n = g.len();
-    // the product's parents (8 bytes a state), the components (16), a value per one (8)
-    if watch.stopped().is_some() || !watch.expect(n as u64 * 32) {
+    // the product's parents (8 bytes a state), the components (16), a value per one (8),
+    // the marks of the witness' search (2), the queues
+    if watch.stopped().is_some() || !watch.expect(n as u64 * 40) {
         return Worst::Stopped;
     }
     let Some(parent) = reach(g, p, watch) else {
