@@ -378,7 +378,8 @@ impl<K: Keep<Edge = u32, Notes = super::response::watched::Notes>> Explorer<'_, 
 
 /// The row of response property `t`'s worst response (`wait`, if it was computed; the
 /// property's verdict is `decided`) in a model with time: `NAME worst response`, in
-/// microseconds in a timed GenoM layer, in time units otherwise.
+/// microseconds in a timed GenoM layer, in ticks in an untimed one, in time units
+/// otherwise.
 fn worst_wait_result(
     system: &System,
     t: &Target<'_>,
@@ -399,9 +400,15 @@ fn worst_wait_result(
             None,
         ),
     };
+    // an untimed GenoM layer's time steps are its ticks, as its bounds count them
+    let word = if system.genom.is_some() {
+        "tick"
+    } else {
+        "time unit"
+    };
     let shown = |u: u64| match unit_us {
         Some(us) => bip_sched::show_micros(u.saturating_mul(us)),
-        None => format!("{u} time unit{}", if u == 1 { "" } else { "s" }),
+        None => format!("{u} {word}{}", if u == 1 { "" } else { "s" }),
     };
     let note = match (units, note) {
         (Some(u), Some(n)) => Some(format!("{}, {n}", shown(u))),
