@@ -14,8 +14,6 @@
 //! time, so each strongly connected component is one point in time, and the longest
 //! path is a pass over the components, successors first.
 
-use std::collections::VecDeque;
-
 use super::run::{shortest_path, Run};
 use super::watched::{at_start, on_edge, units, Flagged, TICK};
 use crate::explore::graph::IN_ERROR;
@@ -42,12 +40,12 @@ const NONE: u32 = u32::MAX;
 /// time, its timelocked states.
 pub(crate) fn longest_wait(g: &Flagged, p: usize, locked: &[bool], watch: &Watch) -> Worst {
     let n = g.len();
-    // the product's parents (8 bytes a state), the components (16), a value per one (8),
-    // the marks of the witness' search (2), the queues
+    // the product's parents and breadth-first order (16 bytes a state), the components
+    // (16), a value per one (8)
     if watch.stopped().is_some() || !watch.expect(n as u64 * 40) {
         return Worst::Stopped;
     }
-    let Some(parent) = reach(g, p, watch) else {
+    let Some((parent, order)) = reach(g, p, watch) else {
         return Worst::Stopped;
     };
     let waits = |s: u32| parent[2 * s as usize + 1] != NONE;
@@ -71,22 +69,29 @@ pub(crate) fn longest_wait(g: &Flagged, p: usize, locked: &[bool], watch: &Watch
     // the first product state in breadth-first order that waits with the worst ahead of
     // it: reached from one that does not wait (any waiting parent would have as much
     // ahead, and come first), or the initial one
-    let start = first_reached(g, &parent, |x| x % 2 == 1 && value(x / 2) == worst);
+    let start = *order
+        .iter()
+        .find(|&&x| x % 2 == 1 && value(x / 2) == worst)
+        .expect("a waiting state has the worst wait ahead of it");
+    drop(order);
     let mut run = run_to(g, p, &parent, start);
     follow_longest(g, &scc, &longest, &goes_on, &mut run);
     Worst::Units(worst, run)
 }
 
 /// The product's states reached from the initial one, breadth first: each one's parent
-/// (itself for the initial one), [`NONE`] if it is not reached; `None` once `watch` says
-/// stop.
-fn reach(g: &Flagged, p: usize, watch: &Watch) -> Option<Vec<u32>> {
+/// (itself for the initial one), [`NONE`] if it is not reached, and the reached ones in
+/// breadth-first order; `None` once `watch` says stop.
+fn reach(g: &Flagged, p: usize, watch: &Watch) -> Option<(Vec<u32>, Vec<u32>)> {
     let mut parent = vec![NONE; 2 * g.len()];
     let start = u32::from(at_start(g, p).waits_after(false));
     parent[start as usize] = start;
-    let mut queue = VecDeque::from([start]);
+    // the queue, kept whole: it is the breadth-first order
+    let mut order = vec![start];
+    let mut next = 0;
     let mut work = 0u64;
-    while let Some(x) = queue.pop_front() {
+    while let Some(&x) = order.get(next) {
+        next += 1;
         let (s, waited) = (x / 2, x % 2 == 1);
         for e in g.edges(s) {
             work += 1;
@@ -96,11 +101,11 @@ fn reach(g: &Flagged, p: usize, watch: &Watch) -> Option<Vec<u32>> {
             let y = 2 * g.targets[e] + u32::from(on_edge(g, p, e).waits_after(waited));
             if parent[y as usize] == NONE {
                 parent[y as usize] = x;
-                queue.push_back(y);
+                order.push(y);
             }
         }
     }
-    Some(parent)
+    Some((parent, order))
 }
 
 /// What an edge out of a waiting state adds to the wait: its time units if it is a tick.
@@ -148,32 +153,6 @@ fn longest_per_component(
         longest.push(most);
     }
     Some(longest)
-}
-
-/// The first product state, in breadth-first order, that `goal` accepts.
-fn first_reached(g: &Flagged, parent: &[u32], goal: impl Fn(u32) -> bool) -> u32 {
-    // the breadth-first order again: the parents alone do not keep it
-    let start = (0..parent.len() as u32)
-        .find(|&x| parent[x as usize] == x)
-        .expect("the initial state is reached");
-    let mut seen = vec![false; parent.len()];
-    seen[start as usize] = true;
-    let mut queue = VecDeque::from([start]);
-    while let Some(x) = queue.pop_front() {
-        if goal(x) {
-            return x;
-        }
-        for e in g.edges(x / 2) {
-            let t = g.targets[e];
-            for y in [2 * t, 2 * t + 1] {
-                if parent[y as usize] == x && !seen[y as usize] {
-                    seen[y as usize] = true;
-                    queue.push_back(y);
-                }
-            }
-        }
-    }
-    unreachable!("a waiting state has the worst wait ahead of it")
 }
 
 /// The run to product state `x`, following parents, each step by the first edge that
