@@ -1,4 +1,4 @@
-//! The `bip` command end to end (`aperiodic`, `check`, `codegen`, `engine`, `explore`, `genom`, `genom3`, `graph`, `response`, `sched`, `sched_exact`, `simulate_timed`, `time_progress`, `trace`, `trace_timed`, `trace_timed_run`, `verify`: the binary
+//! The `bip` command end to end (`aperiodic`, `check`, `codegen`, `engine`, `explore`, `genom`, `genom3`, `graph`, `response`, `sched`, `sched_exact`, `simulate_timed`, `time_progress`, `trace`, `trace_timed`, `trace_timed_run`, `verify`, `verify_worst`: the binary
 //! run as a user runs it, with SPIN as a cross-check where it is installed; `limits`: every
 //! limit and Ctrl-C on wide models, in capped child processes; `memory_bounds`: the default
 //! memory limit under `ulimit -v`, loading past the limit in every command, and the
@@ -33,4 +33,5 @@ mod trace;
 mod trace_timed;
 mod trace_timed_run;
 mod verify;
+mod verify_worst;
 mod wide_models;

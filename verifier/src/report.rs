@@ -48,7 +48,9 @@ pub enum CheckKind {
     /// (docs/sched.md); reported after range errors.
     Schedulable,
     /// In a timed model, a task's worst response time over every reachable job end
-    /// (`note`), with the run that reaches it (docs/verify.md).
+    /// (`note`), with the run that reaches it; in a model with time, a response
+    /// property's worst response, the longest wait for its response, with the run that
+    /// waits it (docs/verify.md).
     WorstResponse,
 }
 
@@ -109,7 +111,8 @@ pub struct PropertyResult {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error_step: Option<String>,
     /// For a worst response time: the figure in microseconds, exact when the verdict
-    /// holds, a lower bound when it is inconclusive.
+    /// holds, a lower bound when it is inconclusive (none in a model without a timed
+    /// GenoM layer, whose figure `note` gives in time units).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub worst_us: Option<u64>,
 }

@@ -15,7 +15,7 @@ use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, 
 
 use super::graph::Keep;
 use super::response::watched::{Flagged, Watched, Watching, MAX_WATCHED};
-use super::response::{decide, Decided, Question};
+use super::response::{decide, Decided, Question, WorstWait as WaitFigure};
 use super::trace::trace_to;
 use super::worst::worst_responses;
 use super::{Explorer, Finding, Found};
@@ -141,22 +141,13 @@ pub(super) fn watching<'s, 'a>(
 }
 
 /// Whether the state graph of a run of `system` for `targets` must note each tick's
-/// time units: the system has an `advance`, and a bounded response property is watched.
+/// time units: the system has an `advance`, and a response property is watched (a
+/// bounded one counts them, and every one's worst response sums them).
 pub(super) fn counts_units(system: &System, targets: &[Target<'_>]) -> bool {
     system.has_advance()
         && targets
             .iter()
-            .filter(|t| matches!(t.check, Check::Response { .. }))
-            .take(MAX_WATCHED)
-            .any(|t| {
-                matches!(
-                    t.check,
-                    Check::Response {
-                        within: Some(_),
-                        ..
-                    }
-                )
-            })
+            .any(|t| matches!(t.check, Check::Response { .. }))
 }
 
 /// The range errors, which every run checks.
@@ -267,14 +258,19 @@ impl<K: Keep<Edge = u32, Notes = super::response::watched::Notes>> Explorer<'_, 
             }
         }
         let mut properties = Vec::with_capacity(self.targets.len());
+        let mut worst_waits = Vec::new();
         for (k, (t, f)) in self.targets.iter().zip(&self.findings).enumerate() {
-            let decided = responses.get_mut(k).and_then(Option::take);
+            let mut decided = responses.get_mut(k).and_then(Option::take);
             let note = decided.as_ref().and_then(|d| d.note.clone());
+            let wait = decided.as_mut().and_then(|d| d.worst.take());
             let verdict = match (f, decided) {
                 (_, Some(d)) => d.verdict,
                 (Some(f), None) => self.verdict_of(t, f)?,
                 (None, None) => self.open_verdict(t, stopped.as_ref(), states),
             };
+            if matches!(t.check, Check::Response { .. }) && self.system.has_time() {
+                worst_waits.push(worst_wait_result(self.system, t, wait, &verdict));
+            }
             let error_step = verdict.trace().and_then(|tr| error_step(self.system, tr));
             properties.push(PropertyResult {
                 name: t.name.clone(),
@@ -287,6 +283,7 @@ impl<K: Keep<Edge = u32, Notes = super::response::watched::Notes>> Explorer<'_, 
                 worst_us: None,
             });
         }
+        properties.extend(worst_waits);
         // a timed model's worst responses: exact when every state was seen, else the
         // most the stored states show (none once the user interrupted the run)
         let look = !matches!(run_stopped, Some(Stop::Interrupted));
@@ -376,5 +373,56 @@ impl<K: Keep<Edge = u32, Notes = super::response::watched::Notes>> Explorer<'_, 
             },
             _ => PropertyVerdict::Holds { witness: None },
         }
+    }
+}
+
+/// The row of response property `t`'s worst response (`wait`, if it was computed; the
+/// property's verdict is `decided`) in a model with time: `NAME worst response`, in
+/// microseconds in a timed GenoM layer, in ticks in an untimed one, in time units
+/// otherwise.
+fn worst_wait_result(
+    system: &System,
+    t: &Target<'_>,
+    wait: Option<WaitFigure>,
+    decided: &PropertyVerdict,
+) -> PropertyResult {
+    let unit_us = system.genom.as_ref().and_then(|g| g.time_unit_us);
+    let (verdict, units, note) = match wait {
+        Some(w) => (w.verdict, w.units, w.note),
+        None => (
+            PropertyVerdict::Inconclusive {
+                reason: match decided {
+                    PropertyVerdict::Inconclusive { reason } => format!("not given: {reason}"),
+                    _ => "not given: the state graph was not searched".into(),
+                },
+            },
+            None,
+            None,
+        ),
+    };
+    // an untimed GenoM layer's time steps are its ticks, as its bounds count them
+    let word = if system.genom.is_some() {
+        "tick"
+    } else {
+        "time unit"
+    };
+    let shown = |u: u64| match unit_us {
+        Some(us) => bip_sched::show_micros(u.saturating_mul(us)),
+        None => format!("{u} {word}{}", if u == 1 { "" } else { "s" }),
+    };
+    let note = match (units, note) {
+        (Some(u), Some(n)) => Some(format!("{}, {n}", shown(u))),
+        (Some(u), None) => Some(shown(u)),
+        (None, n) => n,
+    };
+    PropertyResult {
+        name: format!("{} worst response", t.name),
+        kind: CheckKind::WorstResponse,
+        expr: String::new(),
+        verdict,
+        method: Method::Explicit,
+        note,
+        error_step: None,
+        worst_us: units.zip(unit_us).map(|(u, us)| u.saturating_mul(us)),
     }
 }

@@ -7,7 +7,7 @@ use bip_verifier::{verify, Method, Options, PropertyVerdict, Report, RANGE_ERROR
 
 /// A clock whose tick from `k` stands for `advance` units and counts `k` round 0..5,
 /// recording the advance in `last`.
-fn stepper(advance: &str, properties: &str) -> System {
+pub(super) fn stepper(advance: &str, properties: &str) -> System {
     let text = format!(
         r#"
 System(

@@ -5,6 +5,8 @@
 //! - `random_systems`: every worker count gives the same report, equal to a naive search;
 //! - `response`: response properties against a naive search for unanswered triggers, on
 //!   known models and random systems, with the truncation guardrail and vacuity;
+//! - `response_worst`: a response property's worst response against the bounded search,
+//!   on random timed layers;
 //! - `schedulability`: each task's demand per period against an oracle walking every path
 //!   between two ticks, and the analysis on top;
 //! - `symbolic_known_answers`: the symbolic method on models whose answers are known;
@@ -20,6 +22,7 @@ mod advance;
 mod known_answers;
 mod random_systems;
 mod response;
+mod response_worst;
 mod schedulability;
 mod symbolic_known_answers;
 mod symbolic_verdicts;

@@ -2,8 +2,9 @@
 //! the state graph once the exploration is complete (docs/verify.md, "Response and
 //! liveness"): `watched` says what the stored graph (`explore::graph`) keeps for them,
 //! `bounded` searches the product with a tick-counting
-//! observer, `cycles` searches for runs on which the response never comes, `run` holds
-//! the paths both return. `timelock` decides time progress on the same graph: the
+//! observer, `cycles` searches for runs on which the response never comes, `worst`
+//! finds the longest wait for the response in a model with time, `run` holds the paths
+//! they return. `timelock` decides time progress on the same graph: the
 //! liveness verdicts assume that time diverges, and its timelocked states are where it
 //! cannot. A truncated exploration decides none of them.
 
@@ -12,6 +13,7 @@ mod cycles;
 mod run;
 mod timelock;
 pub(super) mod watched;
+mod worst;
 
 use bip_model::{OwnedStep, State, Steps, System, Trace, Verdict};
 
@@ -24,10 +26,24 @@ use cycles::Forever;
 use run::Run;
 use timelock::Timelocks;
 use watched::{Flagged, MAX_WATCHED};
+use worst::Worst;
 
-/// A response property's verdict, with a note when its trigger never happens.
+/// A response property's verdict, with a note when its trigger never happens, and in a
+/// model with time its worst response.
 pub(super) struct Decided {
     pub(super) verdict: PropertyVerdict,
+    pub(super) note: Option<String>,
+    pub(super) worst: Option<WorstWait>,
+}
+
+/// A response property's worst response: the longest time a trigger waits for its
+/// response (docs/verify.md, "Worst responses of services and properties").
+pub(super) struct WorstWait {
+    /// Holds with the run that waits longest, fails where the wait is unbounded.
+    pub(super) verdict: PropertyVerdict,
+    /// The figure in time units, when there is one.
+    pub(super) units: Option<u64>,
+    /// Why no figure, or what the figure is not.
     pub(super) note: Option<String>,
 }
 
@@ -112,6 +128,7 @@ pub(super) fn decide(
                     trace: Some(trace),
                 },
                 note: None,
+                worst: None,
             });
             continue;
         }
@@ -163,6 +180,7 @@ pub(super) fn decide(
             Ok(vacuous) => Decided {
                 verdict: PropertyVerdict::Holds { witness: None },
                 note: vacuous.then(|| "vacuous: its trigger never happens".to_string()),
+                worst: None,
             },
             Err(run) => {
                 let mut trace = run_trace(system, visited, &g, &run)?;
@@ -174,11 +192,74 @@ pub(super) fn decide(
                         trace: Some(trace),
                     },
                     note: None,
+                    worst: None,
                 }
             }
         });
     }
+    if let Some(t) = &timelocks {
+        for (p, &k) in which.iter().enumerate() {
+            watch.rebase();
+            let worst = worst_wait(system, visited, &g, p, questions[k].name, &t.locked, watch)?;
+            if let Some(d) = out[k].as_mut() {
+                d.worst = Some(worst);
+            }
+        }
+    }
     Ok((done(out), progress))
+}
+
+/// The worst response of property `p` (named `name`), from the complete graph `g` of a
+/// model with time whose timelocked states are `locked`.
+fn worst_wait(
+    system: &System,
+    visited: &Visited,
+    g: &Flagged,
+    p: usize,
+    name: &str,
+    locked: &[bool],
+    watch: &Watch,
+) -> Result<WorstWait, VerifyError> {
+    if g.notes.failures[p].is_some() {
+        return Ok(WorstWait {
+            verdict: PropertyVerdict::Inconclusive {
+                reason: "not given: evaluating the property makes a range error".into(),
+            },
+            units: None,
+            note: None,
+        });
+    }
+    Ok(match worst::longest_wait(g, p, locked, watch) {
+        Worst::NoWait => WorstWait {
+            verdict: PropertyVerdict::Holds { witness: None },
+            units: Some(0),
+            note: Some("no trigger ever waits".into()),
+        },
+        Worst::Units(units, run) => {
+            let mut trace = run_trace(system, visited, g, &run)?;
+            trace.verdict = Verdict::Witness(format!("{name} worst response"));
+            WorstWait {
+                verdict: PropertyVerdict::Holds {
+                    witness: Some(trace),
+                },
+                units: Some(units),
+                note: None,
+            }
+        }
+        Worst::Unbounded => WorstWait {
+            verdict: PropertyVerdict::Fails {
+                reason: "unbounded: a trigger can wait for ever, or longer than any bound (the property without a bound fails)".into(),
+                trace: None,
+            },
+            units: None,
+            note: None,
+        },
+        Worst::Stopped => WorstWait {
+            verdict: stopped(watch).verdict,
+            units: None,
+            note: None,
+        },
+    })
 }
 
 /// The verdict of time progress: fails with a shortest trace to the first timelocked
@@ -225,6 +306,7 @@ fn time_progress_verdict(
             trace: Some(trace),
         },
         note: None,
+        worst: None,
     })
 }
 
@@ -242,6 +324,7 @@ fn busy_loop_verdict(
             return Ok(Decided {
                 verdict: PropertyVerdict::Holds { witness: None },
                 note: None,
+                worst: None,
             })
         }
         Some(Some(run)) => run,
@@ -265,6 +348,7 @@ fn busy_loop_verdict(
             trace: Some(trace),
         },
         note: None,
+        worst: None,
     })
 }
 
@@ -280,6 +364,7 @@ fn inconclusive(reason: String) -> Decided {
     Decided {
         verdict: PropertyVerdict::Inconclusive { reason },
         note: None,
+        worst: None,
     }
 }
 
