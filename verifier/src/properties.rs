@@ -15,6 +15,15 @@ pub const RANGE_ERRORS: &str = "RangeErrors";
 /// progress"): from every reachable state, some run fires a step of a `Time` connector.
 pub use bip_model::TIME_PROGRESS;
 
+/// `units` of `system`'s time steps, as its bounds are written of: a duration in a timed
+/// model, whose steps are units of its time; ticks otherwise.
+pub(crate) fn time_words(system: &System, units: u64) -> String {
+    match system.genom.as_ref().and_then(|g| g.time_unit_us) {
+        Some(us) => bip_sched::show_micros(units.saturating_mul(us)),
+        None => format!("{units} tick{}", if units == 1 { "" } else { "s" }),
+    }
+}
+
 /// True if a verification of `system` checks [`TIME_PROGRESS`]: it has `Time` connectors.
 /// It is reported after the model's properties, before range errors.
 pub(crate) fn checks_time_progress(system: &System) -> bool {

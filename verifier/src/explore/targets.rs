@@ -1,6 +1,7 @@
 //! What a run checks and what it concludes: the properties as targets, and the findings
 //! made verdicts, with the trace to the state each was found in.
 
+use crate::properties::time_words;
 use std::borrow::Cow;
 
 use bip_model::eval::Expr;
@@ -15,7 +16,7 @@ use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict, Report, 
 
 use super::graph::Keep;
 use super::response::watched::{Flagged, Watched, Watching, MAX_WATCHED};
-use super::response::{decide, Decided, Question, WorstWait as WaitFigure};
+use super::response::{decide, gives_worst_waits, Decided, Question, WorstWait as WaitFigure};
 use super::trace::trace_to;
 use super::worst::worst_responses;
 use super::{Explorer, Finding, Found};
@@ -141,13 +142,25 @@ pub(super) fn watching<'s, 'a>(
 }
 
 /// Whether the state graph of a run of `system` for `targets` must note each tick's
-/// time units: the system has an `advance`, and a response property is watched (a
-/// bounded one counts them, and every one's worst response sums them).
+/// time units: the system has an `advance`, and a bounded response property is watched,
+/// or any response property where it gets its worst response (which sums them).
 pub(super) fn counts_units(system: &System, targets: &[Target<'_>]) -> bool {
+    let timed = gives_worst_waits(system);
     system.has_advance()
         && targets
             .iter()
-            .any(|t| matches!(t.check, Check::Response { .. }))
+            .filter(|t| matches!(t.check, Check::Response { .. }))
+            .take(MAX_WATCHED)
+            .any(|t| {
+                timed
+                    || matches!(
+                        t.check,
+                        Check::Response {
+                            within: Some(_),
+                            ..
+                        }
+                    )
+            })
 }
 
 /// The range errors, which every run checks.
@@ -268,7 +281,7 @@ impl<K: Keep<Edge = u32, Notes = super::response::watched::Notes>> Explorer<'_, 
                 (Some(f), None) => self.verdict_of(t, f)?,
                 (None, None) => self.open_verdict(t, stopped.as_ref(), states),
             };
-            if matches!(t.check, Check::Response { .. }) && self.system.has_time() {
+            if matches!(t.check, Check::Response { .. }) && gives_worst_waits(self.system) {
                 worst_waits.push(worst_wait_result(self.system, t, wait, &verdict));
             }
             let error_step = verdict.trace().and_then(|tr| error_step(self.system, tr));
@@ -377,9 +390,8 @@ impl<K: Keep<Edge = u32, Notes = super::response::watched::Notes>> Explorer<'_, 
 }
 
 /// The row of response property `t`'s worst response (`wait`, if it was computed; the
-/// property's verdict is `decided`) in a model with time: `NAME worst response`, in
-/// microseconds in a timed GenoM layer, in ticks in an untimed one, in time units
-/// otherwise.
+/// property's verdict is `decided`): `NAME worst response`, in microseconds in a timed
+/// model, in time units otherwise.
 fn worst_wait_result(
     system: &System,
     t: &Target<'_>,
@@ -400,15 +412,10 @@ fn worst_wait_result(
             None,
         ),
     };
-    // an untimed GenoM layer's time steps are its ticks, as its bounds count them
-    let word = if system.genom.is_some() {
-        "tick"
-    } else {
-        "time unit"
-    };
+    // a model without a GenoM layer counts time units, which its `advance`s give
     let shown = |u: u64| match unit_us {
-        Some(us) => bip_sched::show_micros(u.saturating_mul(us)),
-        None => format!("{u} {word}{}", if u == 1 { "" } else { "s" }),
+        Some(_) => time_words(system, u),
+        None => format!("{u} time unit{}", if u == 1 { "" } else { "s" }),
     };
     let note = match (units, note) {
         (Some(u), Some(n)) => Some(format!("{}, {n}", shown(u))),

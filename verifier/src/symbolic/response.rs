@@ -13,6 +13,7 @@
 //! `System::shows_unanswered` confirms it on the run the step relation gives; k-induction,
 //! strengthened with the invariants on every frame, proves that none is reachable.
 
+use crate::properties::time_words;
 use bip_model::{Happens, Label, ResponseSpec, ResponseWatch, Role, State, System, Trace, Verdict};
 use z3::ast::{Bool, Int};
 use z3::{Model, Solver};
@@ -439,13 +440,14 @@ fn confirm(
     let n = path.len();
     let reason = if passes_bound(sys, spec, &path, name) {
         format!(
-            "the response does not come within {within} tick{}: the tick of step {n} passes the bound",
-            if within == 1 { "" } else { "s" }
+            "the response does not come within {}: the tick of step {n} passes the bound",
+            time_words(sys, within)
         )
     } else {
         format!(
-            "the response never comes: the run stops after {n} step{} with the trigger unanswered (bound {within} ticks)",
-            if n == 1 { "" } else { "s" }
+            "the response never comes: the run stops after {n} step{} with the trigger unanswered (bound {})",
+            if n == 1 { "" } else { "s" },
+            time_words(sys, within)
         )
     };
     replayed(sys, trace, reason)

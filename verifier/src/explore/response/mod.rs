@@ -15,6 +15,7 @@ mod timelock;
 pub(super) mod watched;
 mod worst;
 
+use crate::properties::time_words;
 use bip_model::{OwnedStep, State, Steps, System, Trace, Verdict};
 
 use crate::error::VerifyError;
@@ -185,7 +186,7 @@ pub(super) fn decide(
             Err(run) => {
                 let mut trace = run_trace(system, visited, &g, &run)?;
                 trace.verdict = Verdict::Violation(t.name.to_string());
-                let reason = reason(&g, &run, within, locked);
+                let reason = reason(system, &g, &run, within, locked);
                 Decided {
                     verdict: PropertyVerdict::Fails {
                         reason,
@@ -197,7 +198,7 @@ pub(super) fn decide(
             }
         });
     }
-    if let Some(t) = &timelocks {
+    if let Some(t) = timelocks.as_ref().filter(|_| gives_worst_waits(system)) {
         for (p, &k) in which.iter().enumerate() {
             watch.rebase();
             let worst = worst_wait(system, visited, &g, p, questions[k].name, &t.locked, watch)?;
@@ -207,6 +208,14 @@ pub(super) fn decide(
         }
     }
     Ok((done(out), progress))
+}
+
+/// Whether `system`'s response properties get their worst responses: in a timed model,
+/// and in a model without a GenoM layer whose time steps say how much time they
+/// `advance`. An untimed GenoM layer's bounds count ticks, which `within` already asks
+/// about; the search would cost each of its runs a pass over the graph per property.
+pub(super) fn gives_worst_waits(system: &System) -> bool {
+    system.is_timed() || (system.genom.is_none() && system.has_advance())
 }
 
 /// The worst response of property `p` (named `name`), from the complete graph `g` of a
@@ -369,7 +378,13 @@ fn inconclusive(reason: String) -> Decided {
 }
 
 /// How the counterexample `run` fails (`locked`: the timelocked states).
-fn reason(g: &Flagged, run: &Run, within: Option<u64>, locked: Option<&[bool]>) -> String {
+fn reason(
+    system: &System,
+    g: &Flagged,
+    run: &Run,
+    within: Option<u64>,
+    locked: Option<&[bool]>,
+) -> String {
     let n = run.edges.len();
     let steps = |n: usize| format!("{n} step{}", if n == 1 { "" } else { "s" });
     match (run.loop_start, within) {
@@ -384,12 +399,13 @@ fn reason(g: &Flagged, run: &Run, within: Option<u64>, locked: Option<&[bool]>) 
             steps(n - k)
         ),
         (None, Some(bound)) if g.edges(run.last()).is_empty() => format!(
-            "the response never comes: the run stops after {} with the trigger unanswered (bound {bound} ticks)",
-            steps(n)
+            "the response never comes: the run stops after {} with the trigger unanswered (bound {})",
+            steps(n),
+            time_words(system, bound)
         ),
         (None, Some(bound)) => format!(
-            "the response does not come within {bound} tick{}: the tick of step {n} passes the bound",
-            if bound == 1 { "" } else { "s" }
+            "the response does not come within {}: the tick of step {n} passes the bound",
+            time_words(system, bound)
         ),
         (None, None) => format!(
             "the response never comes: the run stops after {} with the trigger unanswered",
