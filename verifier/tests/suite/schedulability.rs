@@ -558,6 +558,21 @@ fn a_timed_models_reply_bound_is_in_real_time() {
     assert_eq!(verdict("9"), ("9", false, true));
     assert_eq!(verdict(r#""10ms""#), (r#""10ms""#, true, false));
     assert_eq!(verdict(r#""9500us""#), (r#""9500us""#, false, true));
+    // the failure says the bound in real time, as written, not in the model's units
+    let report = explored(&text(r#""9500us""#));
+    let failed = report
+        .properties
+        .iter()
+        .find(|p| p.name.contains("Log"))
+        .expect("the bound");
+    let reason = match &failed.verdict {
+        bip_verifier::PropertyVerdict::Fails { reason, .. } => reason.clone(),
+        other => panic!("{other:?}"),
+    };
+    assert!(
+        reason.starts_with("the response does not come within 9.5 ms: "),
+        "{reason}"
+    );
 }
 
 /// A timed model whose task can loop on codels that take no time: time stops in that
