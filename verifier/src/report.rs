@@ -117,6 +117,28 @@ pub struct PropertyResult {
     pub worst_us: Option<u64>,
 }
 
+impl PropertyResult {
+    /// The explicit method's row of the worst response of `of` (a task `m.t`, or a
+    /// response property's name): `of worst response`.
+    pub(crate) fn worst_response(
+        of: &str,
+        verdict: PropertyVerdict,
+        note: Option<String>,
+        worst_us: Option<u64>,
+    ) -> PropertyResult {
+        PropertyResult {
+            name: format!("{of} worst response"),
+            kind: CheckKind::WorstResponse,
+            expr: String::new(),
+            verdict,
+            method: Method::Explicit,
+            note,
+            error_step: None,
+            worst_us,
+        }
+    }
+}
+
 /// Why a run ended before it had looked at every reachable state.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(tag = "reason", rename_all = "snake_case")]

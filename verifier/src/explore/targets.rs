@@ -422,14 +422,6 @@ fn worst_wait_result(
         (Some(u), None) => Some(shown(u)),
         (None, n) => n,
     };
-    PropertyResult {
-        name: format!("{} worst response", t.name),
-        kind: CheckKind::WorstResponse,
-        expr: String::new(),
-        verdict,
-        method: Method::Explicit,
-        note,
-        error_step: None,
-        worst_us: units.zip(unit_us).map(|(u, us)| u.saturating_mul(us)),
-    }
+    let worst_us = units.zip(unit_us).map(|(u, us)| u.saturating_mul(us));
+    PropertyResult::worst_response(&t.name, verdict, note, worst_us)
 }

@@ -16,7 +16,7 @@ use bip_model::{Label, OwnedStep, State, Steps, System, Verdict as TraceVerdict}
 use bip_sched::show_micros;
 
 use crate::error::VerifyError;
-use crate::report::{CheckKind, Method, PropertyResult, PropertyVerdict};
+use crate::report::{PropertyResult, PropertyVerdict};
 use crate::visited::{StateId, Visited};
 
 use super::trace::trace_to;
@@ -140,15 +140,8 @@ pub(super) fn worst_responses(
         .and_then(|g| g.time_unit_us)
         .unwrap_or(1);
     let micros = |units: i64| units.max(0) as u64 * unit_us;
-    let result = |t: &TaskClock, verdict, note, worst_us| PropertyResult {
-        name: format!("{} worst response", t.name),
-        kind: CheckKind::WorstResponse,
-        expr: String::new(),
-        verdict,
-        method: Method::Explicit,
-        note,
-        error_step: None,
-        worst_us,
+    let result = |t: &TaskClock, verdict, note, worst_us| {
+        PropertyResult::worst_response(&t.name, verdict, note, worst_us)
     };
     // a complete exploration expanded every stored state once, in the order read_states
     // reads them; a stopped one stored states it did not expand, whose job ends are not

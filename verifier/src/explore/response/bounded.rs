@@ -4,7 +4,7 @@
 //! liveness"). The first product state found that takes a tick past the bound, or stops
 //! with a trigger unanswered, ends a shortest counterexample.
 
-use super::run::Run;
+use super::run::{product_run, Run};
 use super::watched::{at_start, on_edge, trigger_bit, units, Flagged, TICK};
 use crate::explore::graph::IN_ERROR;
 use crate::watch::Watch;
@@ -126,28 +126,10 @@ pub(crate) fn search(g: &Flagged, p: usize, within: u64, watch: &Watch) -> Found
     Found::Holds { vacuous: false }
 }
 
-/// The run to product state `x`, following parents, each step by the first edge that
-/// leads the observer from the parent's value to the child's.
+/// The run to product state `x`, following parents.
 fn run_to(g: &Flagged, parent: &[u32], width: u32, x: u32, obs: &Observer) -> Run {
-    let mut chain = vec![x];
-    let mut cur = x;
-    while parent[cur as usize] != cur {
-        cur = parent[cur as usize];
-        chain.push(cur);
-    }
-    chain.reverse();
-    let mut run = Run {
-        states: vec![chain[0] / width],
-        ..Run::default()
-    };
-    for pair in chain.windows(2) {
-        let (s, o) = (pair[0] / width, pair[0] % width);
-        let (t, o2) = (pair[1] / width, pair[1] % width);
-        let e = g
-            .edges(s)
-            .find(|&e| g.targets[e] == t && matches!(obs.next(o, e), Next::To(v) if v == o2))
-            .expect("a parent reaches its child by some edge");
-        run.push(g, e);
-    }
-    run
+    product_run(g, parent, width, x, |o, e| match obs.next(o, e) {
+        Next::To(v) => Some(v),
+        Next::Late => None,
+    })
 }

@@ -33,6 +33,41 @@ impl Run {
     }
 }
 
+/// The run to product state `x` of a search of the graph's product with an observer that
+/// kept each product state's `parent` (the initial one its own): product state `y` is
+/// graph state `y / width` with observer value `y % width`, and each step is the first
+/// edge out of the parent's state that `leads(value, e)` says takes the observer from the
+/// parent's value to the child's.
+pub(crate) fn product_run(
+    g: &Flagged,
+    parent: &[u32],
+    width: u32,
+    x: u32,
+    leads: impl Fn(u32, usize) -> Option<u32>,
+) -> Run {
+    let mut chain = vec![x];
+    let mut cur = x;
+    while parent[cur as usize] != cur {
+        cur = parent[cur as usize];
+        chain.push(cur);
+    }
+    chain.reverse();
+    let mut run = Run {
+        states: vec![chain[0] / width],
+        ..Run::default()
+    };
+    for pair in chain.windows(2) {
+        let (s, o) = (pair[0] / width, pair[0] % width);
+        let (t, o2) = (pair[1] / width, pair[1] % width);
+        let e = g
+            .edges(s)
+            .find(|&e| g.targets[e] == t && leads(o, e) == Some(o2))
+            .expect("a parent reaches its child by some edge");
+        run.push(g, e);
+    }
+    run
+}
+
 /// The edges of a shortest path from `from` to the first state (in breadth-first order)
 /// that `goal` accepts, following only the edges `follow` accepts; `None` if there is none.
 pub(crate) fn shortest_path(

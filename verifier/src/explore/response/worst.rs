@@ -14,7 +14,7 @@
 //! time, so each strongly connected component is one point in time, and the longest
 //! path is a pass over the components, successors first.
 
-use super::run::{shortest_path, Run};
+use super::run::{product_run, shortest_path, Run};
 use super::watched::{at_start, on_edge, units, Flagged, TICK};
 use crate::explore::graph::IN_ERROR;
 use crate::explore::scc::{self, Components};
@@ -155,31 +155,11 @@ fn longest_per_component(
     Some(longest)
 }
 
-/// The run to product state `x`, following parents, each step by the first edge that
-/// leads from the parent to the child.
+/// The run to product state `x`, following parents.
 fn run_to(g: &Flagged, p: usize, parent: &[u32], x: u32) -> Run {
-    let mut chain = vec![x];
-    let mut cur = x;
-    while parent[cur as usize] != cur {
-        cur = parent[cur as usize];
-        chain.push(cur);
-    }
-    chain.reverse();
-    let mut run = Run {
-        states: vec![chain[0] / 2],
-        ..Run::default()
-    };
-    for pair in chain.windows(2) {
-        let (s, waited) = (pair[0] / 2, pair[0] % 2 == 1);
-        let e = g
-            .edges(s)
-            .find(|&e| {
-                2 * g.targets[e] + u32::from(on_edge(g, p, e).waits_after(waited)) == pair[1]
-            })
-            .expect("a parent reaches its child by some edge");
-        run.push(g, e);
-    }
-    run
+    product_run(g, parent, 2, x, |waited, e| {
+        Some(u32::from(on_edge(g, p, e).waits_after(waited == 1)))
+    })
 }
 
 /// Extends `run`, whose last state waits, along a longest wait to its answer: in each
