@@ -85,7 +85,7 @@ pub fn run(args: &Args) -> u8 {
         return exit::ERROR;
     };
     memory_guard::release();
-    if bip_verifier::is_timed(&system) {
+    if system.is_timed() {
         eprintln!(
             "error: {}: a timed model (`time: Exact`): the response-time analysis assumes preemptive single-core CPUs; `bip sched --exact` explores it, beside the analysis where it applies",
             args.file.display()

@@ -43,8 +43,8 @@ pub use report::{
     SymbolicStats, VerifyOutcome,
 };
 pub use schedulability::{
-    has_time_budgets, is_timed, schedulability, DemandChoice, DemandMethod, LayerTask,
-    Schedulability, TaskKind, SCHEDULABLE,
+    has_time_budgets, schedulability, DemandChoice, DemandMethod, LayerTask, Schedulability,
+    TaskKind, SCHEDULABLE,
 };
 
 /// Verifies every property of `system` (deadlock freedom if it declares none, range

@@ -24,7 +24,7 @@ fn is_deadline(system: &System, name: &str) -> bool {
 /// Makes the holding deadlines and worst responses of a timed model inconclusive where
 /// its `TimeProgress` fails.
 pub(crate) fn qualify(system: &System, properties: &mut [PropertyResult]) {
-    if system.genom.as_ref().and_then(|g| g.time_unit_us).is_none() {
+    if !system.is_timed() {
         return;
     }
     let stops = properties

@@ -122,19 +122,10 @@ impl Schedulability {
     }
 }
 
-/// True if `system` is a timed model (`time: Exact`): its codels take time on its cores
-/// in the model itself, which the response-time analysis does not describe.
-pub fn is_timed(system: &System) -> bool {
-    system
-        .genom
-        .as_ref()
-        .is_some_and(|g| g.time_unit_us.is_some())
-}
-
 /// True if `system` declares time budgets that a verification checks as `Schedulable`
 /// (a timed model checks its deadlines as invariants instead).
 pub fn has_time_budgets(system: &System) -> bool {
-    !is_timed(system) && tasks::TaskTable::new(system).is_some()
+    !system.is_timed() && tasks::TaskTable::new(system).is_some()
 }
 
 /// `Schedulable` as a property of a verification: `None` if the model declares no WCET.
@@ -148,7 +139,7 @@ pub(crate) fn as_property(
 ) -> Option<PropertyResult> {
     // a timed model decides it by exploration: its expansion states each task's
     // deadline as an invariant (docs/verify.md, "Timed models")
-    if is_timed(system) {
+    if system.is_timed() {
         return None;
     }
     let result = |verdict, method, note: String| PropertyResult {
